@@ -1,0 +1,17 @@
+// Sub-commands of the `peakcast` executable; each registers itself on the CLI11 app.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace peakcast::app {
+
+// A command's body runs after parsing and returns the process exit code.
+using Runner = std::function<int()>;
+
+void add_volume_commands(CLI::App& app, Runner& run);  // make-volume, info
+
+// Exit codes: 0 ok, 1 failure of the job, 2 bad input (file, scene, arguments).
+constexpr int kExitBadInput = 2;
+
+}  // namespace peakcast::app

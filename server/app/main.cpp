@@ -1,0 +1,23 @@
+// peakcast: remote volume visualisation. `peakcast --help` lists the sub-commands.
+#include <cstdio>
+#include <exception>
+
+#include "app/commands.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"peakcast " PEAKCAST_VERSION " - peak-finding volume ray caster and render server"};
+  app.require_subcommand(1);
+  peakcast::app::Runner run;
+  peakcast::app::add_volume_commands(app, run);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    return run ? run() : 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "peakcast: error: %s\n", e.what());
+    return peakcast::app::kExitBadInput;
+  }
+}

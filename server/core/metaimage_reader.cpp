@@ -1,0 +1,96 @@
+// MetaImage (ITK/VTK): .mhd + detached data, .mha with LOCAL data; raw or zlib-compressed.
+#include <fstream>
+#include <map>
+
+#include "core/volume_io_detail.h"
+
+namespace fs = std::filesystem;
+
+namespace peakcast::detail {
+
+Volume read_metaimage(const fs::path& path, const LoadOptions& options) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw VolumeError(path, "cannot open");
+  std::map<std::string, std::string> fields;
+  std::string line;
+  bool local = false;
+  for (int lines = 0; std::getline(in, line); ++lines) {
+    if (lines > 1000) throw VolumeError(path, "header too long (no ElementDataFile)");
+    auto eq = line.find('=');
+    if (eq == std::string::npos) {
+      if (trim(line).empty()) continue;
+      throw VolumeError(path, "malformed header line '" + trim(line) + "'");
+    }
+    std::string key = lower(trim(line.substr(0, eq))), value = trim(line.substr(eq + 1));
+    fields[key] = value;
+    if (key == "elementdatafile") {  // always the last field
+      local = lower(value) == "local";
+      break;
+    }
+  }
+  const int64_t header_bytes = in.tellg();
+  auto need = [&](const std::string& key) {
+    auto it = fields.find(key);
+    if (it == fields.end()) throw VolumeError(path, "missing field '" + key + "'");
+    return it->second;
+  };
+  auto numbers = [&](const std::string& key) {
+    auto parts = split_ws(fields[key]);
+    if (parts.size() != 3) throw VolumeError(path, "field '" + key + "' must list 3 values");
+    return parts;
+  };
+  if (parse_int(path, "NDims", need("ndims")) != 3)
+    throw VolumeError(path, "NDims " + fields["ndims"] + " is not supported (need 3)");
+  if (fields.count("elementnumberofchannels") &&
+      parse_int(path, "ElementNumberOfChannels", fields["elementnumberofchannels"]) != 1)
+    throw VolumeError(path, "only single-channel images are supported");
+
+  VolumeHeader h;
+  need("dimsize");
+  auto dims = numbers("dimsize");
+  for (int a = 0; a < 3; ++a) h.dims[a] = parse_int(path, "DimSize", dims[a]);
+  const std::string spacing_key = fields.count("elementspacing") ? "elementspacing"
+                                  : fields.count("elementsize")  ? "elementsize"
+                                                                 : "";
+  if (!spacing_key.empty()) {
+    auto s = numbers(spacing_key);
+    for (int a = 0; a < 3; ++a) h.spacing[a] = parse_double(path, spacing_key, s[a]);
+  }
+  for (const char* key : {"offset", "position", "origin"})
+    if (fields.count(key)) {
+      auto o = numbers(key);
+      for (int a = 0; a < 3; ++a) h.origin[a] = parse_double(path, key, o[a]);
+      break;
+    }
+  if (fields.count("transformmatrix")) {
+    auto m = split_ws(fields["transformmatrix"]);
+    const char* identity[] = {"1", "0", "0", "0", "1", "0", "0", "0", "1"};
+    for (size_t i = 0; i < m.size() && i < 9; ++i)
+      if (parse_double(path, "TransformMatrix", m[i]) != std::stod(identity[i]))
+        throw VolumeError(path, "non-identity TransformMatrix (oblique grids are not supported)");
+  }
+  try {
+    h.source = parse_source_type(need("elementtype"));
+  } catch (const std::invalid_argument& e) {
+    throw VolumeError(path, e.what());
+  }
+  for (const char* key : {"elementbyteordermsb", "binarydatabyteordermsb"})
+    if (fields.count(key)) h.big_endian = lower(fields[key]) == "true";
+
+  PayloadSpec payload;
+  if (fields.count("compresseddata") && lower(fields["compresseddata"]) == "true")
+    payload.encoding = Encoding::Zlib;
+  std::string data_file = need("elementdatafile");
+  if (local) {
+    payload.files = {path};
+    payload.byte_skip = header_bytes;
+  } else {
+    if (split_ws(data_file).size() != 1 || lower(data_file) == "list")
+      throw VolumeError(path, "ElementDataFile lists/patterns are not supported");
+    payload.files = {path.parent_path() / data_file};
+    if (fields.count("headersize")) payload.byte_skip = parse_int(path, "HeaderSize", fields["headersize"]);
+  }
+  return read_payload(path, h, payload, options);
+}
+
+}  // namespace peakcast::detail

@@ -1,0 +1,185 @@
+// NRRD (teem's format): attached .nrrd and detached .nhdr headers, raw and gzip encodings,
+// `spacings` or axis-aligned `space directions`, single, LIST and printf-style `data file`s.
+#include <cmath>
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+
+#include "core/volume_io_detail.h"
+
+namespace fs = std::filesystem;
+
+namespace peakcast::detail {
+namespace {
+
+// "(3.2,0,0)" -> three numbers; "none" -> empty.
+std::vector<double> parse_vector(const fs::path& file, const std::string& text) {
+  std::string t = trim(text);
+  if (t == "none") return {};
+  if (t.size() < 2 || t.front() != '(' || t.back() != ')')
+    throw VolumeError(file, "malformed vector '" + t + "'");
+  std::vector<double> out;
+  std::string item;
+  for (char c : t.substr(1, t.size() - 2) + ",") {
+    if (c == ',') {
+      out.push_back(parse_double(file, "space directions", trim(item)));
+      item.clear();
+    } else {
+      item += c;
+    }
+  }
+  return out;
+}
+
+std::vector<std::string> split_vectors(const std::string& s) {
+  std::vector<std::string> out;
+  std::string cur;
+  int depth = 0;
+  for (char c : s) {
+    if (c == '(') depth++;
+    if (c == ')') depth--;
+    if (std::isspace(static_cast<unsigned char>(c)) && depth == 0) {
+      if (!cur.empty()) out.push_back(cur);
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  if (!cur.empty()) out.push_back(cur);
+  return out;
+}
+
+std::string format_name(const fs::path& file, const std::string& fmt, long long value) {
+  if (std::count(fmt.begin(), fmt.end(), '%') != 1 || fmt.find("%n") != std::string::npos)
+    throw VolumeError(file, "data file pattern must hold exactly one integer conversion");
+  char buf[4096];
+  std::snprintf(buf, sizeof buf, fmt.c_str(), value);
+  return buf;
+}
+
+}  // namespace
+
+Volume read_nrrd(const fs::path& path, const LoadOptions& options) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw VolumeError(path, "cannot open");
+  std::string line;
+  std::getline(in, line);
+  if (line.rfind("NRRD000", 0) != 0) throw VolumeError(path, "not a NRRD file (no NRRD000x magic)");
+
+  VolumeHeader h;
+  PayloadSpec payload;
+  std::string type, encoding = "raw", data_file;
+  std::vector<std::string> list_files;
+  bool have_sizes = false, list_mode = false;
+  int dimension = 0;
+  int64_t line_skip = 0;
+  const fs::path dir = path.parent_path();
+  int64_t header_bytes = 0;
+  for (int lines = 0; std::getline(in, line); ++lines) {
+    if (lines > 10000) throw VolumeError(path, "header too long");
+    if (list_mode) {
+      if (!trim(line).empty()) list_files.push_back(trim(line));
+      continue;
+    }
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty()) break;  // attached data follows
+    if (line[0] == '#') continue;
+    if (line.find(":=") != std::string::npos) continue;  // key/value pairs: not ours
+    auto colon = line.find(": ");
+    if (colon == std::string::npos) throw VolumeError(path, "malformed header line '" + line + "'");
+    std::string field = lower(trim(line.substr(0, colon)));
+    std::string value = trim(line.substr(colon + 2));
+    if (field == "type") {
+      type = value;
+    } else if (field == "dimension") {
+      dimension = int(parse_int(path, field, value));
+      if (dimension != 3)
+        throw VolumeError(path, "dimension " + value + " is not supported (need a 3D scalar volume)");
+    } else if (field == "sizes") {
+      auto parts = split_ws(value);
+      if (parts.size() != 3) throw VolumeError(path, "sizes must list 3 values");
+      for (int a = 0; a < 3; ++a) h.dims[a] = parse_int(path, field, parts[a]);
+      have_sizes = true;
+    } else if (field == "spacings") {
+      auto parts = split_ws(value);
+      if (parts.size() != 3) throw VolumeError(path, "spacings must list 3 values");
+      for (int a = 0; a < 3; ++a)
+        h.spacing[a] = lower(parts[a]) == "nan" ? 1.0 : parse_double(path, field, parts[a]);
+    } else if (field == "space directions") {
+      auto vecs = split_vectors(value);
+      if (vecs.size() != 3) throw VolumeError(path, "space directions must list 3 vectors");
+      for (int a = 0; a < 3; ++a) {
+        auto v = parse_vector(path, vecs[a]);
+        if (v.empty()) continue;
+        if (v.size() != 3) throw VolumeError(path, "space directions: need 3D vectors");
+        for (int b = 0; b < 3; ++b)
+          if (b != a && v[b] != 0.0)
+            throw VolumeError(path, "space directions are not axis-aligned (oblique grids are not supported)");
+        h.spacing[a] = std::abs(v[a]);
+      }
+    } else if (field == "space origin") {
+      auto v = parse_vector(path, value);
+      if (v.size() != 3) throw VolumeError(path, "space origin must be a 3D vector");
+      h.origin = {v[0], v[1], v[2]};
+    } else if (field == "axis mins" || field == "axismins") {
+      auto parts = split_ws(value);
+      for (size_t a = 0; a < 3 && a < parts.size(); ++a)
+        if (lower(parts[a]) != "nan") h.origin[a] = parse_double(path, field, parts[a]);
+    } else if (field == "encoding") {
+      encoding = lower(value);
+    } else if (field == "endian") {
+      h.big_endian = lower(value) == "big";
+    } else if (field == "byte skip") {
+      payload.byte_skip = parse_int(path, field, value);
+    } else if (field == "line skip") {
+      line_skip = parse_int(path, field, value);
+    } else if (field == "data file" || field == "datafile") {
+      data_file = value;
+      if (lower(split_ws(value).empty() ? "" : split_ws(value)[0]) == "list") list_mode = true;
+    }
+    // Other fields (space, kinds, centers, content, ...) do not change the voxels.
+  }
+  header_bytes = in.tellg();
+  if (type.empty()) throw VolumeError(path, "missing field 'type'");
+  if (dimension == 0) throw VolumeError(path, "missing field 'dimension'");
+  if (!have_sizes) throw VolumeError(path, "missing field 'sizes'");
+  try {
+    h.source = parse_source_type(type);
+  } catch (const std::invalid_argument& e) {
+    throw VolumeError(path, e.what());
+  }
+  if (encoding == "raw") {
+    payload.encoding = Encoding::Raw;
+  } else if (encoding == "gzip" || encoding == "gz") {
+    payload.encoding = Encoding::Gzip;
+  } else {
+    throw VolumeError(path, "unsupported encoding '" + encoding + "' (supported: raw, gzip)");
+  }
+  if (line_skip != 0) throw VolumeError(path, "'line skip' is not supported");
+
+  if (data_file.empty()) {
+    payload.files = {path};
+    if (payload.byte_skip == -1 && payload.encoding == Encoding::Raw) {
+      // data is the last bytes of the file
+    } else {
+      payload.byte_skip = header_bytes + std::max<int64_t>(payload.byte_skip, 0);
+    }
+  } else if (list_mode) {
+    for (auto& f : list_files) payload.files.push_back(dir / f);
+  } else {
+    auto parts = split_ws(data_file);
+    if (parts.size() >= 4) {  // printf-style: fmt min max step [subdim]
+      long long lo = parse_int(path, "data file", parts[1]), hi = parse_int(path, "data file", parts[2]);
+      long long step = parse_int(path, "data file", parts[3]);
+      if (step == 0 || (hi - lo) / step < 0 || (hi - lo) / step > 1000000)
+        throw VolumeError(path, "data file: bad range '" + data_file + "'");
+      for (long long i = lo; step > 0 ? i <= hi : i >= hi; i += step)
+        payload.files.push_back(dir / format_name(path, parts[0], i));
+    } else {
+      payload.files = {dir / data_file};
+    }
+  }
+  return read_payload(path, h, payload, options);
+}
+
+}  // namespace peakcast::detail

@@ -1,0 +1,84 @@
+// Raw voxels with a JSON sidecar: {"dims": [x,y,z], "dtype": "uint16", "spacing": [..],
+// "origin": [..], "endian": "little"|"big", "data_file": "v.raw", "encoding": "raw"|"gzip"}.
+// Open either the .json or the data file (its sidecar is `<file>.json` or `<stem>.json`).
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "core/volume_io_detail.h"
+
+namespace fs = std::filesystem;
+
+namespace peakcast::detail {
+
+Volume read_raw_json(const fs::path& path, const LoadOptions& options) {
+  fs::path sidecar = path;
+  if (lower(path.extension().string()) != ".json") {
+    std::error_code ec;
+    fs::path a = path.string() + ".json", b = fs::path(path).replace_extension(".json");
+    if (fs::exists(a, ec)) sidecar = a;
+    else if (fs::exists(b, ec)) sidecar = b;
+    else throw VolumeError(path, "raw data needs a JSON sidecar (" + a.filename().string() + " or " +
+                                     b.filename().string() + ") with dims and dtype");
+  }
+  nlohmann::json j;
+  try {
+    std::ifstream in(sidecar);
+    if (!in) throw VolumeError(sidecar, "cannot open");
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw VolumeError(sidecar, std::string("invalid JSON: ") + e.what());
+  }
+  if (!j.is_object()) throw VolumeError(sidecar, "sidecar must be a JSON object");
+  static const char* known[] = {"dims", "dtype", "spacing", "origin", "endian", "data_file", "encoding", "byte_skip"};
+  for (auto& [key, _] : j.items())
+    if (std::find(std::begin(known), std::end(known), key) == std::end(known))
+      throw VolumeError(sidecar, "unknown key '" + key + "'");
+  auto vec3 = [&](const char* key, bool integer) {
+    const auto& v = j.at(key);
+    if (!v.is_array() || v.size() != 3) throw VolumeError(sidecar, std::string("'") + key + "' must be an array of 3 numbers");
+    for (auto& x : v)
+      if (!x.is_number() || (integer && !x.is_number_integer()))
+        throw VolumeError(sidecar, std::string("'") + key + "' must hold " + (integer ? "integers" : "numbers"));
+    return v;
+  };
+  VolumeHeader h;
+  PayloadSpec payload;
+  try {
+    if (!j.contains("dims")) throw VolumeError(sidecar, "missing key 'dims'");
+    if (!j.contains("dtype")) throw VolumeError(sidecar, "missing key 'dtype'");
+    auto d = vec3("dims", true);
+    for (int a = 0; a < 3; ++a) h.dims[a] = d[a].get<int64_t>();
+    if (j.contains("spacing")) {
+      auto s = vec3("spacing", false);
+      for (int a = 0; a < 3; ++a) h.spacing[a] = s[a].get<double>();
+    }
+    if (j.contains("origin")) {
+      auto o = vec3("origin", false);
+      for (int a = 0; a < 3; ++a) h.origin[a] = o[a].get<double>();
+    }
+    h.source = parse_source_type(j.at("dtype").get<std::string>());
+    std::string endian = j.value("endian", "little");
+    if (endian != "little" && endian != "big") throw VolumeError(sidecar, "endian must be 'little' or 'big'");
+    h.big_endian = endian == "big";
+    std::string enc = j.value("encoding", "raw");
+    if (enc == "gzip") payload.encoding = Encoding::Gzip;
+    else if (enc != "raw") throw VolumeError(sidecar, "unsupported encoding '" + enc + "' (raw, gzip)");
+    payload.byte_skip = j.value("byte_skip", int64_t(0));
+    if (payload.byte_skip < 0) throw VolumeError(sidecar, "byte_skip must be >= 0");
+    if (j.contains("data_file")) {
+      payload.files = {sidecar.parent_path() / j.at("data_file").get<std::string>()};
+    } else if (sidecar != path) {
+      payload.files = {path};
+    } else {
+      fs::path stem = path.parent_path() / path.stem();  // v.raw.json -> v.raw; v.json -> v.raw
+      payload.files = {stem.has_extension() ? stem : fs::path(stem.string() + ".raw")};
+    }
+  } catch (const nlohmann::json::exception& e) {
+    throw VolumeError(sidecar, std::string("bad sidecar: ") + e.what());
+  } catch (const std::invalid_argument& e) {
+    throw VolumeError(sidecar, e.what());
+  }
+  return read_payload(sidecar, h, payload, options);
+}
+
+}  // namespace peakcast::detail

@@ -1,0 +1,117 @@
+// TIFF stacks through OpenImageIO: a multi-page TIFF (one page per z slice) or a directory of
+// numbered 2D TIFFs (sorted by the number in the name, so slice_2 comes before slice_10).
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <regex>
+
+#include "core/volume_io_detail.h"
+
+namespace fs = std::filesystem;
+OIIO_NAMESPACE_USING
+
+namespace peakcast::detail {
+namespace {
+
+SourceType source_from(const fs::path& file, TypeDesc t) {
+  if (t == TypeDesc::UINT8) return SourceType::U8;
+  if (t == TypeDesc::INT8) return SourceType::I8;
+  if (t == TypeDesc::UINT16) return SourceType::U16;
+  if (t == TypeDesc::INT16) return SourceType::I16;
+  if (t == TypeDesc::FLOAT) return SourceType::F32;
+  throw VolumeError(file, std::string("unsupported TIFF sample type ") + t.c_str());
+}
+
+// Natural order: compares embedded numbers by value.
+bool natural_less(const std::string& a, const std::string& b) {
+  size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    if (std::isdigit(static_cast<unsigned char>(a[i])) && std::isdigit(static_cast<unsigned char>(b[j]))) {
+      size_t i2 = i, j2 = j;
+      while (i2 < a.size() && std::isdigit(static_cast<unsigned char>(a[i2]))) ++i2;
+      while (j2 < b.size() && std::isdigit(static_cast<unsigned char>(b[j2]))) ++j2;
+      std::string na = a.substr(i, i2 - i), nb = b.substr(j, j2 - j);
+      na.erase(0, std::min(na.find_first_not_of('0'), na.size()));
+      nb.erase(0, std::min(nb.find_first_not_of('0'), nb.size()));
+      if (na.size() != nb.size()) return na.size() < nb.size();
+      if (na != nb) return na < nb;
+      i = i2;
+      j = j2;
+    } else {
+      if (a[i] != b[j]) return a[i] < b[j];
+      ++i;
+      ++j;
+    }
+  }
+  return a.size() - i < b.size() - j;
+}
+
+std::unique_ptr<ImageInput> open_image(const fs::path& file) {
+  auto in = ImageInput::open(file.string());
+  if (!in) throw VolumeError(file, "cannot read TIFF: " + OIIO::geterror());
+  return in;
+}
+
+void check_slice(const fs::path& file, const ImageSpec& spec, const VolumeHeader& h) {
+  if (spec.nchannels != 1) throw VolumeError(file, "TIFF slice has " + std::to_string(spec.nchannels) + " channels; need 1");
+  if (spec.width != h.dims[0] || spec.height != h.dims[1] || spec.depth != 1)
+    throw VolumeError(file, "TIFF slice is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                                ", the first was " + std::to_string(h.dims[0]) + "x" + std::to_string(h.dims[1]));
+  if (source_from(file, spec.format) != h.source) throw VolumeError(file, "TIFF slices differ in sample type");
+}
+
+void read_slice(const fs::path& file, ImageInput& in, int subimage, const VolumeHeader& h, uint8_t* dst) {
+  static const TypeDesc formats[] = {TypeDesc::UINT8, TypeDesc::INT8, TypeDesc::UINT16, TypeDesc::INT16, TypeDesc::FLOAT};
+  if (!in.read_image(subimage, 0, 0, 1, formats[int(h.source)], dst))
+    throw VolumeError(file, "cannot read TIFF data: " + in.geterror());
+}
+
+}  // namespace
+
+Volume read_tiff(const fs::path& path, const LoadOptions& options) {
+  std::error_code ec;
+  std::vector<fs::path> slices;
+  if (fs::is_directory(path, ec)) {
+    for (auto& e : fs::directory_iterator(path, ec)) {
+      std::string ext = lower(e.path().extension().string());
+      if (e.is_regular_file() && (ext == ".tif" || ext == ".tiff")) slices.push_back(e.path());
+    }
+    if (slices.empty()) throw VolumeError(path, "directory holds no .tif/.tiff slices");
+    std::sort(slices.begin(), slices.end(), [](const fs::path& a, const fs::path& b) {
+      return natural_less(a.filename().string(), b.filename().string());
+    });
+  }
+  VolumeHeader h;
+  const fs::path first = slices.empty() ? path : slices.front();
+  auto in = open_image(first);
+  const ImageSpec spec0 = in->spec();
+  h.dims = {spec0.width, spec0.height, 0};
+  h.source = source_from(first, spec0.format);
+  if (slices.empty()) {  // multi-page: count the subimages
+    int pages = 0;
+    while (in->seek_subimage(pages, 0)) ++pages;
+    h.dims[2] = pages;
+  } else {
+    h.dims[2] = int64_t(slices.size());
+  }
+  check_header(path, h, options);
+  Volume v(h);
+  const size_t slice_bytes = size_t(h.dims[0] * h.dims[1]) * source_bytes(h.source);
+  for (int64_t z = 0; z < h.dims[2]; ++z) {
+    uint8_t* dst = v.data() + size_t(z) * slice_bytes;
+    if (slices.empty()) {
+      if (!in->seek_subimage(int(z), 0)) throw VolumeError(path, "cannot seek to page " + std::to_string(z));
+      check_slice(path, in->spec(), h);
+      read_slice(path, *in, int(z), h, dst);
+    } else {
+      auto slice = z == 0 ? std::move(in) : open_image(slices[z]);
+      check_slice(slices[z], slice->spec(), h);
+      read_slice(slices[z], *slice, 0, h, dst);
+    }
+  }
+  // OIIO delivers native-endian samples; signed ones still need the shift.
+  finish_volume(path, v, std::endian::native == std::endian::big, options);
+  return v;
+}
+
+}  // namespace peakcast::detail

@@ -1,0 +1,129 @@
+#include "core/volume.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "core/parallel.h"
+
+namespace peakcast {
+
+const char* to_string(VoxelType t) {
+  switch (t) {
+    case VoxelType::U8: return "uint8";
+    case VoxelType::U16: return "uint16";
+    case VoxelType::F32: return "float32";
+  }
+  return "?";
+}
+
+const char* to_string(SourceType t) {
+  switch (t) {
+    case SourceType::U8: return "uint8";
+    case SourceType::I8: return "int8";
+    case SourceType::U16: return "uint16";
+    case SourceType::I16: return "int16";
+    case SourceType::F32: return "float32";
+  }
+  return "?";
+}
+
+size_t voxel_bytes(VoxelType t) { return t == VoxelType::U8 ? 1 : t == VoxelType::U16 ? 2 : 4; }
+
+size_t source_bytes(SourceType t) { return voxel_bytes(storage_type(t)); }
+
+VoxelType storage_type(SourceType t) {
+  switch (t) {
+    case SourceType::U8:
+    case SourceType::I8: return VoxelType::U8;
+    case SourceType::U16:
+    case SourceType::I16: return VoxelType::U16;
+    case SourceType::F32: return VoxelType::F32;
+  }
+  return VoxelType::U8;
+}
+
+double storage_offset(SourceType t) {
+  return t == SourceType::I8 ? -128.0 : t == SourceType::I16 ? -32768.0 : 0.0;
+}
+
+SourceType parse_source_type(const std::string& raw) {
+  std::string n;
+  for (char c : raw) n += char(std::tolower(static_cast<unsigned char>(c)));
+  // NRRD spellings (spec: "Basic type names"), MetaImage MET_* and the short forms.
+  if (n == "uint8" || n == "uchar" || n == "unsigned char" || n == "uint8_t" || n == "met_uchar")
+    return SourceType::U8;
+  if (n == "int8" || n == "signed char" || n == "int8_t" || n == "met_char") return SourceType::I8;
+  if (n == "uint16" || n == "ushort" || n == "unsigned short" || n == "unsigned short int" ||
+      n == "uint16_t" || n == "met_ushort")
+    return SourceType::U16;
+  if (n == "int16" || n == "short" || n == "short int" || n == "signed short" ||
+      n == "signed short int" || n == "int16_t" || n == "met_short")
+    return SourceType::I16;
+  if (n == "float32" || n == "float" || n == "met_float") return SourceType::F32;
+  throw std::invalid_argument("unsupported voxel type '" + raw +
+                              "' (supported: uint8, int8, uint16, int16, float32)");
+}
+
+Volume::Volume(const VolumeHeader& h)
+    : spacing(h.spacing),
+      origin(h.origin),
+      value_offset(storage_offset(h.source)),
+      dims_(h.dims),
+      type_(storage_type(h.source)),
+      source_(h.source),
+      data_(new uint8_t[size_t(h.voxel_count()) * voxel_bytes(storage_type(h.source))]) {}
+
+void Volume::finalize_statistics() {
+  const size_t n = size_t(voxel_count());
+  struct Partial {
+    double lo = std::numeric_limits<double>::infinity();
+    double hi = -std::numeric_limits<double>::infinity();
+  };
+  std::vector<Partial> parts(hardware_threads());
+  parallel_chunks(n, [&](size_t begin, size_t end, int worker) {
+    Partial p;
+    for (size_t i = begin; i < end; ++i) {
+      double v = stored(i);
+      p.lo = std::min(p.lo, v);
+      p.hi = std::max(p.hi, v);
+    }
+    parts[worker].lo = std::min(parts[worker].lo, p.lo);
+    parts[worker].hi = std::max(parts[worker].hi, p.hi);
+  });
+  Partial all;
+  for (auto& p : parts) {
+    all.lo = std::min(all.lo, p.lo);
+    all.hi = std::max(all.hi, p.hi);
+  }
+  if (n == 0) all.lo = all.hi = 0.0;
+  min_value = all.lo + value_offset;
+  max_value = all.hi + value_offset;
+
+  std::vector<std::vector<uint64_t>> hist(parts.size(), std::vector<uint64_t>(kHistogramBins, 0));
+  const double lo = all.lo, span = all.hi - all.lo;
+  const double scale = span > 0 ? kHistogramBins / span : 0.0;
+  parallel_chunks(n, [&](size_t begin, size_t end, int worker) {
+    auto& h = hist[worker];
+    for (size_t i = begin; i < end; ++i) {
+      int b = int((stored(i) - lo) * scale);
+      h[std::clamp(b, 0, kHistogramBins - 1)]++;
+    }
+  });
+  histogram.assign(kHistogramBins, 0);
+  for (auto& h : hist)
+    for (int b = 0; b < kHistogramBins; ++b) histogram[b] += h[b];
+}
+
+std::string Volume::to_string() const {
+  std::ostringstream s;
+  s << "Volume{" << (name.empty() ? "" : name + " ") << dims_[0] << "x" << dims_[1] << "x"
+    << dims_[2] << " " << peakcast::to_string(source_) << " spacing (" << spacing.x << ","
+    << spacing.y << "," << spacing.z << ") origin (" << origin.x << "," << origin.y << ","
+    << origin.z << ") range [" << min_value << "," << max_value << "]}";
+  return s.str();
+}
+
+}  // namespace peakcast

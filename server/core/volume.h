@@ -1,0 +1,95 @@
+// A scalar volume held in its native voxel type (DESIGN §3, §4a).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+namespace peakcast {
+
+// How voxels are kept in memory and on the GPU (R8 / R16 / R32F).
+enum class VoxelType { U8, U16, F32 };
+
+// How voxels were stored in the file; signed integers are shifted to unsigned on load and the
+// shift is kept in Volume::value_offset so that physical values keep their meaning.
+enum class SourceType { U8, I8, U16, I16, F32 };
+
+const char* to_string(VoxelType t);
+const char* to_string(SourceType t);
+size_t voxel_bytes(VoxelType t);
+size_t source_bytes(SourceType t);
+VoxelType storage_type(SourceType t);
+double storage_offset(SourceType t);  // physical = stored + offset
+// Parses "uint8", "int16", "float32", ... (NRRD, JSON sidecar and CLI spellings). Throws.
+SourceType parse_source_type(const std::string& name);
+
+using Dims = std::array<int64_t, 3>;
+
+struct VolumeHeader {
+  Dims dims{0, 0, 0};
+  glm::dvec3 spacing{1.0, 1.0, 1.0};
+  glm::dvec3 origin{0.0, 0.0, 0.0};
+  SourceType source = SourceType::U8;
+  bool big_endian = false;
+  int64_t voxel_count() const { return dims[0] * dims[1] * dims[2]; }
+};
+
+class Volume {
+ public:
+  Volume() = default;
+  // Allocates uninitialised storage for the header's dims in storage_type(header.source).
+  explicit Volume(const VolumeHeader& header);
+
+  const Dims& dims() const { return dims_; }
+  int64_t voxel_count() const { return dims_[0] * dims_[1] * dims_[2]; }
+  VoxelType type() const { return type_; }
+  SourceType source_type() const { return source_; }
+  size_t byte_size() const { return size_t(voxel_count()) * voxel_bytes(type_); }
+  uint8_t* data() { return data_.get(); }
+  const uint8_t* data() const { return data_.get(); }
+
+  glm::dvec3 spacing{1.0, 1.0, 1.0};
+  glm::dvec3 origin{0.0, 0.0, 0.0};
+  double value_offset = 0.0;  // physical value = stored value + value_offset
+
+  // Physical value of voxel (i, j, k); no bounds check.
+  double value(int64_t i, int64_t j, int64_t k) const {
+    return stored(size_t(i + dims_[0] * (j + dims_[1] * k))) + value_offset;
+  }
+  double stored(size_t index) const {
+    switch (type_) {
+      case VoxelType::U8: return data_[index];
+      case VoxelType::U16: return reinterpret_cast<const uint16_t*>(data_.get())[index];
+      case VoxelType::F32: return reinterpret_cast<const float*>(data_.get())[index];
+    }
+    return 0.0;
+  }
+  glm::dvec3 extent() const {  // world size of the box: (n-1) * spacing
+    return glm::dvec3(dims_[0] - 1, dims_[1] - 1, dims_[2] - 1) * spacing;
+  }
+
+  // Computed by finalize(): physical value range, histogram, non-finite count.
+  double min_value = 0.0, max_value = 0.0;
+  std::vector<uint64_t> histogram;  // kHistogramBins bins over [min_value, max_value]
+  int64_t nonfinite_replaced = 0;
+  double load_ms = 0.0;
+  std::string name;
+
+  static constexpr int kHistogramBins = 1024;
+
+  // Computes range and histogram (and nothing else); loaders call it once voxels are in.
+  void finalize_statistics();
+  std::string to_string() const;
+
+ private:
+  Dims dims_{0, 0, 0};
+  VoxelType type_ = VoxelType::U8;
+  SourceType source_ = SourceType::U8;
+  std::unique_ptr<uint8_t[]> data_;
+};
+
+}  // namespace peakcast

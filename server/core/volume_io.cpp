@@ -1,0 +1,303 @@
+#include "core/volume_io.h"
+
+#include <zlib.h>
+
+#include <algorithm>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <memory>
+
+#include "core/volume_io_detail.h"
+
+namespace fs = std::filesystem;
+
+namespace peakcast {
+namespace detail {
+
+std::string trim(const std::string& s) {
+  size_t b = s.find_first_not_of(" \t\r\n"), e = s.find_last_not_of(" \t\r\n");
+  return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
+}
+
+std::string lower(std::string s) {
+  for (auto& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+std::vector<std::string> split_ws(const std::string& s) {
+  std::vector<std::string> out;
+  size_t i = 0;
+  while (i < s.size()) {
+    while (i < s.size() && std::isspace(static_cast<unsigned char>(s[i]))) ++i;
+    size_t j = i;
+    while (j < s.size() && !std::isspace(static_cast<unsigned char>(s[j]))) ++j;
+    if (j > i) out.push_back(s.substr(i, j - i));
+    i = j;
+  }
+  return out;
+}
+
+double parse_double(const fs::path& file, const std::string& field, const std::string& text) {
+  try {
+    size_t used = 0;
+    double v = std::stod(text, &used);
+    if (used != text.size() || !std::isfinite(v)) throw std::invalid_argument("");
+    return v;
+  } catch (const std::exception&) {
+    throw VolumeError(file, "field '" + field + "': '" + text + "' is not a finite number");
+  }
+}
+
+int64_t parse_int(const fs::path& file, const std::string& field, const std::string& text) {
+  try {
+    size_t used = 0;
+    long long v = std::stoll(text, &used);
+    if (used != text.size()) throw std::invalid_argument("");
+    return v;
+  } catch (const std::exception&) {
+    throw VolumeError(file, "field '" + field + "': '" + text + "' is not an integer");
+  }
+}
+
+void check_header(const fs::path& file, const VolumeHeader& h, const LoadOptions& options) {
+  int64_t count = 1;
+  for (int a = 0; a < 3; ++a) {
+    if (h.dims[a] <= 0)
+      throw VolumeError(file, "dimension " + std::to_string(a) + " is " +
+                                  std::to_string(h.dims[a]) + "; every size must be >= 1");
+    if (__builtin_mul_overflow(count, h.dims[a], &count))
+      throw VolumeError(file, "sizes overflow 64-bit voxel count");
+  }
+  int64_t bytes = 0;
+  if (__builtin_mul_overflow(count, int64_t(source_bytes(h.source)), &bytes))
+    throw VolumeError(file, "sizes overflow 64-bit byte count");
+  if (count > options.max_voxels)
+    throw VolumeError(file, std::to_string(h.dims[0]) + "x" + std::to_string(h.dims[1]) + "x" +
+                                std::to_string(h.dims[2]) + " = " + std::to_string(count) +
+                                " voxels exceeds the limit of " +
+                                std::to_string(options.max_voxels));
+  for (int a = 0; a < 3; ++a)
+    if (!(h.spacing[a] > 0) || !std::isfinite(h.spacing[a]))
+      throw VolumeError(file, "spacing must be finite and > 0");
+}
+
+namespace {
+
+struct FileCloser {
+  void operator()(FILE* f) const { std::fclose(f); }
+};
+using File = std::unique_ptr<FILE, FileCloser>;
+
+File open_file(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec)) throw VolumeError(path, "no such file");
+  File f(std::fopen(path.c_str(), "rb"));
+  if (!f) throw VolumeError(path, std::string("cannot open: ") + std::strerror(errno));
+  return f;
+}
+
+// Reads up to `want` bytes of raw data into dst; returns the count read.
+size_t read_raw(const fs::path& path, int64_t skip, uint8_t* dst, size_t want, bool last) {
+  File f = open_file(path);
+  std::error_code ec;
+  const auto size = int64_t(fs::file_size(path, ec));
+  int64_t offset = skip;
+  if (skip < 0) offset = std::max<int64_t>(0, size - int64_t(want));
+  if (offset > size) throw VolumeError(path, "byte skip beyond the end of the file");
+  // Refuse truncated files before touching the data (the only file, or the last of several).
+  if (last && size - offset < int64_t(want))
+    throw VolumeError(path, "truncated: header promises " + std::to_string(want) +
+                                " data bytes, file holds " + std::to_string(size - offset));
+  std::fseek(f.get(), long(offset), SEEK_SET);
+  return std::fread(dst, 1, want, f.get());
+}
+
+// Inflates gzip or zlib streams (auto-detected) into dst, 1 MiB of input at a time.
+size_t read_compressed(const fs::path& path, int64_t skip, Encoding enc, uint8_t* dst,
+                       size_t want) {
+  File f = open_file(path);
+  if (skip > 0) std::fseek(f.get(), long(skip), SEEK_SET);
+  if (enc == Encoding::Gzip) {
+    unsigned char magic[2] = {0, 0};
+    if (std::fread(magic, 1, 2, f.get()) != 2 || magic[0] != 0x1f || magic[1] != 0x8b)
+      throw VolumeError(path, "gzip stream corrupt: missing gzip magic bytes");
+    std::fseek(f.get(), long(std::max<int64_t>(skip, 0)), SEEK_SET);
+  }
+  z_stream z{};
+  if (inflateInit2(&z, 15 + 32) != Z_OK) throw VolumeError(path, "zlib init failed");
+  std::unique_ptr<z_stream, int (*)(z_stream*)> guard(&z, inflateEnd);
+  std::vector<unsigned char> in(1 << 20);
+  size_t produced = 0;
+  bool done = false;
+  while (!done && produced < want) {
+    z.avail_in = uInt(std::fread(in.data(), 1, in.size(), f.get()));
+    if (z.avail_in == 0) break;
+    z.next_in = in.data();
+    while (z.avail_in > 0 && produced < want) {
+      z.next_out = dst + produced;
+      z.avail_out = uInt(std::min<size_t>(want - produced, 1u << 30));
+      int rc = inflate(&z, Z_NO_FLUSH);
+      produced = size_t(z.next_out - dst);
+      if (rc == Z_STREAM_END) {
+        if (z.avail_in > 0 || !std::feof(f.get())) {
+          inflateReset(&z);  // concatenated gzip members
+          continue;
+        }
+        done = true;
+        break;
+      }
+      if (rc != Z_OK && rc != Z_BUF_ERROR)
+        throw VolumeError(path, std::string("gzip stream corrupt: ") + (z.msg ? z.msg : "inflate error"));
+      if (rc == Z_BUF_ERROR) break;
+    }
+  }
+  return produced;
+}
+
+template <typename T>
+void byteswap_all(uint8_t* data, size_t count) {
+  for (size_t i = 0; i < count; ++i) {
+    uint8_t* p = data + i * sizeof(T);
+    std::reverse(p, p + sizeof(T));
+  }
+}
+
+}  // namespace
+
+void finish_volume(const fs::path& file, Volume& v, bool big_endian, const LoadOptions& options) {
+  const size_t n = size_t(v.voxel_count());
+  const bool host_big = (std::endian::native == std::endian::big);
+  if (big_endian != host_big) {
+    if (v.type() == VoxelType::U16) byteswap_all<uint16_t>(v.data(), n);
+    if (v.type() == VoxelType::F32) byteswap_all<float>(v.data(), n);
+  }
+  if (v.source_type() == SourceType::I8)
+    for (size_t i = 0; i < n; ++i) v.data()[i] ^= 0x80;  // int8 + 128 as uint8
+  if (v.source_type() == SourceType::I16) {
+    auto* p = reinterpret_cast<uint16_t*>(v.data());
+    for (size_t i = 0; i < n; ++i) p[i] ^= 0x8000;  // int16 + 32768 as uint16
+  }
+  if (v.type() == VoxelType::F32) {
+    auto* p = reinterpret_cast<float*>(v.data());
+    float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+    int64_t bad = 0;
+    for (size_t i = 0; i < n; ++i) {
+      if (std::isfinite(p[i])) {
+        lo = std::min(lo, p[i]);
+        hi = std::max(hi, p[i]);
+      } else {
+        ++bad;
+      }
+    }
+    if (bad > 0) {
+      if (options.nonfinite == NonFinitePolicy::Refuse)
+        throw VolumeError(file, std::to_string(bad) + " NaN/Inf voxels (policy: refuse)");
+      if (!std::isfinite(lo)) lo = hi = 0.0f;  // nothing finite at all
+      for (size_t i = 0; i < n; ++i)
+        if (!std::isfinite(p[i])) p[i] = (p[i] > 0) ? hi : lo;  // NaN compares false: lo
+      v.nonfinite_replaced = bad;
+    }
+  }
+  v.finalize_statistics();
+}
+
+Volume read_payload(const fs::path& header_file, const VolumeHeader& h, const PayloadSpec& payload,
+                    const LoadOptions& options) {
+  check_header(header_file, h, options);
+  if (payload.files.empty()) throw VolumeError(header_file, "no data file");
+  const size_t total = size_t(h.voxel_count()) * source_bytes(h.source);
+  // Raw data: refuse a short file before allocating anything.
+  if (payload.encoding == Encoding::Raw) {
+    int64_t available = 0;
+    for (size_t i = 0; i < payload.files.size(); ++i) {
+      std::error_code ec;
+      if (!fs::is_regular_file(payload.files[i], ec))
+        throw VolumeError(payload.files[i], "no such file (data of " + header_file.filename().string() + ")");
+      int64_t size = int64_t(fs::file_size(payload.files[i], ec));
+      if (i == 0 && payload.byte_skip > 0) size -= payload.byte_skip;
+      available += std::max<int64_t>(size, 0);
+    }
+    if (available < int64_t(total))
+      throw VolumeError(payload.files.back(),
+                        "truncated: header " + header_file.filename().string() + " promises " +
+                            std::to_string(total) + " data bytes, the data holds " +
+                            std::to_string(available));
+  }
+  Volume v(h);
+  size_t got = 0;
+  for (size_t i = 0; i < payload.files.size() && got < total; ++i) {
+    const bool last = (i + 1 == payload.files.size());
+    const int64_t skip = (i == 0) ? payload.byte_skip : 0;
+    size_t want = total - got;
+    if (payload.encoding == Encoding::Raw) {
+      std::error_code ec;
+      int64_t fsize = int64_t(fs::file_size(payload.files[i], ec)) - std::max<int64_t>(skip, 0);
+      if (!last) want = std::min<size_t>(want, size_t(std::max<int64_t>(fsize, 0)));
+      got += read_raw(payload.files[i], skip, v.data() + got, want, last);
+    } else {
+      got += read_compressed(payload.files[i], skip, payload.encoding, v.data() + got, want);
+    }
+  }
+  if (got < total)
+    throw VolumeError(payload.files.back(), "truncated: expected " + std::to_string(total) +
+                                                " data bytes, got " + std::to_string(got));
+  finish_volume(header_file, v, h.big_endian, options);
+  return v;
+}
+
+}  // namespace detail
+
+Volume load_volume(const fs::path& path, const LoadOptions& options) {
+  using namespace detail;
+  const auto t0 = std::chrono::steady_clock::now();
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw VolumeError(path, "no such file");
+  const std::string ext = lower(path.extension().string());
+  Volume v;
+  if (fs::is_directory(path, ec) || ext == ".tif" || ext == ".tiff") {
+    v = read_tiff(path, options);
+  } else if (ext == ".nrrd" || ext == ".nhdr") {
+    v = read_nrrd(path, options);
+  } else if (ext == ".mhd" || ext == ".mha") {
+    v = read_metaimage(path, options);
+  } else if (ext == ".json" || ext == ".raw" || ext == ".gz") {
+    v = read_raw_json(path, options);
+  } else {
+    throw VolumeError(path, "unknown volume format '" + ext +
+                                "' (expected .nrrd .nhdr .mhd .mha .raw+.json .tif or a "
+                                "directory of TIFF slices)");
+  }
+  v.name = path.filename().string();
+  v.load_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return v;
+}
+
+fs::path resolve_in_roots(const fs::path& requested, const std::vector<fs::path>& roots) {
+  if (roots.empty()) throw VolumeError(requested, "no data directory is configured");
+  auto inside = [](const fs::path& p, const fs::path& root) {
+    auto rel = p.lexically_relative(root);
+    return !rel.empty() && *rel.begin() != "..";
+  };
+  for (const auto& root : roots) {
+    std::error_code ec;
+    fs::path r = fs::weakly_canonical(root, ec);
+    fs::path candidate = requested.is_absolute() ? requested : r / requested;
+    fs::path c = fs::weakly_canonical(candidate, ec);  // resolves .. and symlinks
+    if (ec || !inside(c, r)) continue;
+    if (fs::exists(c, ec)) return c;
+  }
+  for (const auto& root : roots) {
+    std::error_code ec;
+    fs::path r = fs::weakly_canonical(root, ec);
+    fs::path c = fs::weakly_canonical(requested.is_absolute() ? requested : r / requested, ec);
+    if (inside(c, r)) throw VolumeError(requested, "no such file in the data directories");
+  }
+  throw VolumeError(requested, "path is outside the configured data directories");
+}
+
+}  // namespace peakcast

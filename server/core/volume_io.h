@@ -1,0 +1,41 @@
+// Loading volumes from files (DESIGN §3, §6). Every refusal is a VolumeError whose message
+// names the file and the reason; nothing larger than the configured limit is ever allocated.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/volume.h"
+
+namespace peakcast {
+
+class VolumeError : public std::runtime_error {
+ public:
+  VolumeError(const std::filesystem::path& file, const std::string& reason)
+      : std::runtime_error(file.string() + ": " + reason) {}
+};
+
+// What to do with NaN/Inf voxels in float volumes. Default: replace (NaN -> the finite minimum,
+// +Inf -> finite maximum, -Inf -> finite minimum) and report the count, as ParaView users expect
+// a volume with a few masked voxels to open; `refuse` for pipelines that want to stop instead.
+enum class NonFinitePolicy { Replace, Refuse };
+
+struct LoadOptions {
+  int64_t max_voxels = int64_t(1) << 32;
+  NonFinitePolicy nonfinite = NonFinitePolicy::Replace;
+};
+
+// Format by name: .nrrd/.nhdr, .mhd/.mha, .json (sidecar) or .raw with a sidecar,
+// .tif/.tiff (multi-page), or a directory of numbered 2D TIFFs.
+Volume load_volume(const std::filesystem::path& path, const LoadOptions& options = {});
+
+// Resolves `requested` inside one of `roots` (the server's data directories). Relative paths
+// are tried against each root in order; absolute ones must lie inside a root. Throws
+// VolumeError on traversal outside every root or when nothing exists.
+std::filesystem::path resolve_in_roots(const std::filesystem::path& requested,
+                                       const std::vector<std::filesystem::path>& roots);
+
+}  // namespace peakcast

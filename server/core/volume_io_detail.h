@@ -1,0 +1,46 @@
+// Shared by the format readers: where the voxel bytes are and how they are encoded.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/volume_io.h"
+
+namespace peakcast::detail {
+
+enum class Encoding { Raw, Gzip, Zlib };
+
+struct PayloadSpec {
+  std::vector<std::filesystem::path> files;  // concatenated in order
+  Encoding encoding = Encoding::Raw;
+  int64_t byte_skip = 0;  // in the first file (raw: -1 = the data is the last bytes)
+};
+
+// Checks dims and the voxel limit (overflow-safe); throws VolumeError naming `file`.
+void check_header(const std::filesystem::path& file, const VolumeHeader& h,
+                  const LoadOptions& options);
+
+// Allocates the volume and streams the payload straight into it (no second copy), then byte
+// swaps, shifts signed types, applies the non-finite policy and computes the statistics.
+Volume read_payload(const std::filesystem::path& header_file, const VolumeHeader& h,
+                    const PayloadSpec& payload, const LoadOptions& options);
+
+// Post-processing shared with the TIFF reader.
+void finish_volume(const std::filesystem::path& file, Volume& v, bool big_endian,
+                   const LoadOptions& options);
+
+Volume read_nrrd(const std::filesystem::path& path, const LoadOptions& options);
+Volume read_metaimage(const std::filesystem::path& path, const LoadOptions& options);
+Volume read_raw_json(const std::filesystem::path& path, const LoadOptions& options);
+Volume read_tiff(const std::filesystem::path& path, const LoadOptions& options);
+
+std::string trim(const std::string& s);
+std::string lower(std::string s);
+std::vector<std::string> split_ws(const std::string& s);
+double parse_double(const std::filesystem::path& file, const std::string& field,
+                    const std::string& text);
+int64_t parse_int(const std::filesystem::path& file, const std::string& field,
+                  const std::string& text);
+
+}  // namespace peakcast::detail

@@ -1,0 +1,55 @@
+#include "unit/test_util.h"
+
+#include <fstream>
+#include <random>
+
+namespace fs = std::filesystem;
+
+namespace peakcast::test {
+
+TempDir::TempDir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::string name = info ? std::string(info->test_suite_name()) + "." + info->name() : "peakcast";
+  for (auto& c : name)
+    if (c == '/') c = '_';
+  path_ = fs::temp_directory_path() / ("peakcast_test_" + name + "_" + std::to_string(std::random_device{}()));
+  fs::create_directories(path_);
+}
+
+TempDir::~TempDir() {
+  std::error_code ec;
+  fs::remove_all(path_, ec);
+}
+
+fs::path data_dir() { return PEAKCAST_TEST_DATA; }
+
+uint64_t fnv1a(const void* data, size_t bytes) {
+  uint64_t h = 1469598103934665603ull;
+  const auto* p = static_cast<const uint8_t*>(data);
+  for (size_t i = 0; i < bytes; ++i) h = (h ^ p[i]) * 1099511628211ull;
+  return h;
+}
+
+void write_file(const fs::path& p, const std::string& bytes) {
+  std::ofstream out(p, std::ios::binary);
+  out << bytes;
+}
+
+::testing::AssertionResult same_volume(const Volume& a, const Volume& b) {
+  if (a.dims() != b.dims()) return ::testing::AssertionFailure() << "dims differ";
+  if (a.source_type() != b.source_type())
+    return ::testing::AssertionFailure() << "types differ: " << to_string(a.source_type()) << " vs "
+                                         << to_string(b.source_type());
+  if (a.spacing != b.spacing) return ::testing::AssertionFailure() << "spacing differs";
+  if (a.origin != b.origin) return ::testing::AssertionFailure() << "origin differs";
+  const auto& d = a.dims();
+  for (int64_t k = 0; k < d[2]; ++k)
+    for (int64_t j = 0; j < d[1]; ++j)
+      for (int64_t i = 0; i < d[0]; ++i)
+        if (a.value(i, j, k) != b.value(i, j, k))
+          return ::testing::AssertionFailure() << "voxel (" << i << "," << j << "," << k << "): " << a.value(i, j, k)
+                                               << " vs " << b.value(i, j, k);
+  return ::testing::AssertionSuccess();
+}
+
+}  // namespace peakcast::test

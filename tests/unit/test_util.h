@@ -1,0 +1,32 @@
+// Helpers shared by the unit tests.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "core/volume.h"
+
+namespace peakcast::test {
+
+// A fresh directory per test under the build tree's temp area, removed by the destructor.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+std::filesystem::path data_dir();  // tests/data
+uint64_t fnv1a(const void* data, size_t bytes);
+void write_file(const std::filesystem::path& p, const std::string& bytes);
+// True when both volumes hold the same dims, spacing, origin, types and physical values.
+::testing::AssertionResult same_volume(const Volume& a, const Volume& b);
+
+}  // namespace peakcast::test
