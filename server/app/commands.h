@@ -10,6 +10,7 @@ namespace peakcast::app {
 using Runner = std::function<int()>;
 
 void add_volume_commands(CLI::App& app, Runner& run);  // make-volume, info
+void add_render_commands(CLI::App& app, Runner& run);  // render, reference, compare
 
 // Exit codes: 0 ok, 1 failure of the job, 2 bad input (file, scene, arguments).
 constexpr int kExitBadInput = 2;

@@ -9,6 +9,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   peakcast::app::Runner run;
   peakcast::app::add_volume_commands(app, run);
+  peakcast::app::add_render_commands(app, run);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,110 @@
+// `render`, `reference` and `compare`.
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "app/commands.h"
+#include "app/scene_file.h"
+#include "encode/png.h"
+#include "gpu/egl_context.h"
+#include "gpu/shader_cache.h"
+#include "reference/cpu_raycaster.h"
+#include "reference/metrics.h"
+#include "render/raycaster.h"
+
+namespace peakcast::app {
+namespace {
+
+struct RenderArgs {
+  std::string scene, out, stats, path = "fragment";
+};
+
+struct ReferenceArgs {
+  std::string scene, out;
+  double step = 0;
+  bool converged = false;
+};
+
+struct CompareArgs {
+  std::string a, b;
+};
+
+}  // namespace
+
+void add_render_commands(CLI::App& app, Runner& run) {
+  auto ra = std::make_shared<RenderArgs>();
+  auto* render = app.add_subcommand("render", "Render a scene file on the GPU (EGL) to a PNG");
+  render->add_option("scene", ra->scene, "scene JSON (proto/scene.schema.json)")->required()->check(CLI::ExistingFile);
+  render->add_option("-o,--out", ra->out, "output PNG")->required();
+  render->add_option("--stats", ra->stats, "write render stats as JSON here");
+  render->add_option("--path", ra->path, "fragment | compute")->check(CLI::IsMember({"fragment", "compute"}));
+  render->callback([ra, &run] {
+    run = [ra] {
+      LoadedScene ls = load_scene_file(ra->scene);
+      auto ctx = gpu::EglContext::create();
+      gpu::ShaderCache shaders(gpu::default_shader_dir());
+      render::GpuVolume gv(ls.volume);
+      render::Raycaster caster(shaders);
+      render::RenderStats st;
+      const auto path = ra->path == "compute" ? render::GpuPath::Compute : render::GpuPath::Fragment;
+      Image img = caster.render(gv, ls.scene, path, &st);
+      encode::write_png(img, ra->out);
+      std::printf("wrote %s: %dx%d, %.1f ms, %.1f samples/ray, variant %s, %s\n", ra->out.c_str(), img.width,
+                  img.height, st.render_ms, st.samples_mean, st.variant.c_str(), ctx->info().renderer.c_str());
+      if (!ra->stats.empty()) {
+        nlohmann::json j = {{"render_ms", st.render_ms},       {"readback_ms", st.readback_ms},
+                            {"samples_per_ray_mean", st.samples_mean}, {"samples_per_ray_max", st.samples_max},
+                            {"rays", st.rays_hit},             {"empty_macrocells", st.empty_cells},
+                            {"variant", st.variant},           {"gl_renderer", ctx->info().renderer},
+                            {"gl_version", ctx->info().version}, {"egl_platform", ctx->info().platform}};
+        std::ofstream(ra->stats) << j.dump(2) << "\n";
+      }
+      return 0;
+    };
+  });
+
+  auto fa = std::make_shared<ReferenceArgs>();
+  auto* ref = app.add_subcommand("reference", "Render a scene on the CPU in double precision (the reference)");
+  ref->add_option("scene", fa->scene, "scene JSON")->required()->check(CLI::ExistingFile);
+  ref->add_option("-o,--out", fa->out, "output PNG")->required();
+  auto* step = ref->add_option("--step", fa->step, "sampling step in world units (default: the scene's)");
+  ref->add_flag("--converged", fa->converged, "refine the step until the image changes < 1e-4")->excludes(step);
+  ref->callback([fa, &run] {
+    run = [fa] {
+      LoadedScene ls = load_scene_file(fa->scene);
+      const auto t0 = std::chrono::steady_clock::now();
+      Image img;
+      std::string how;
+      if (fa->converged) {
+        auto c = reference::render_converged(*ls.volume, ls.scene);
+        img = std::move(c.image);
+        how = "converged=" + std::string(c.converged ? "yes" : "no") + " step " + std::to_string(c.step) +
+              " last change " + std::to_string(c.last_change);
+      } else {
+        reference::ReferenceOptions opt;
+        opt.step = fa->step;
+        img = reference::render_reference(*ls.volume, ls.scene, opt);
+        how = "step " + std::to_string(fa->step > 0 ? fa->step : ls.scene.step);
+      }
+      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      encode::write_png(img, fa->out);
+      std::printf("wrote %s: %dx%d, %.0f ms, %s\n", fa->out.c_str(), img.width, img.height, ms, how.c_str());
+      return 0;
+    };
+  });
+
+  auto ca = std::make_shared<CompareArgs>();
+  auto* cmp = app.add_subcommand("compare", "Print RMSE, PSNR, max abs error and share of pixels off by > 1/255");
+  cmp->add_option("a", ca->a, "image")->required()->check(CLI::ExistingFile);
+  cmp->add_option("b", ca->b, "image")->required()->check(CLI::ExistingFile);
+  cmp->callback([ca, &run] {
+    run = [ca] {
+      std::printf("%s\n", reference::compare(encode::read_png(ca->a), encode::read_png(ca->b)).to_json().c_str());
+      return 0;
+    };
+  });
+}
+
+}  // namespace peakcast::app

@@ -1,0 +1,35 @@
+#include "app/scene_file.h"
+
+#include <fstream>
+#include <sstream>
+
+#include "core/volume_io.h"
+
+namespace fs = std::filesystem;
+
+namespace peakcast::app {
+
+LoadedScene load_scene_file(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path.string() + ": cannot open scene file");
+  std::stringstream text;
+  text << in.rdbuf();
+  Scene scene;
+  try {
+    scene = parse_scene_text(text.str());
+  } catch (const SceneError& e) {
+    throw SceneError(path.string() + ": " + e.what());
+  }
+  fs::path vol = scene.volume;
+  if (vol.is_relative()) vol = path.parent_path() / vol;
+  LoadedScene out;
+  out.volume = std::make_shared<Volume>(load_volume(vol));
+  try {
+    out.scene = resolve_scene(scene, *out.volume);
+  } catch (const SceneError& e) {
+    throw SceneError(path.string() + ": " + e.what());
+  }
+  return out;
+}
+
+}  // namespace peakcast::app

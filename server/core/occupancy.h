@@ -1,0 +1,25 @@
+// Which macrocells can contribute under the current TF (DESIGN §3): a cell is empty when the
+// TF's opacity is zero over its whole [min, max]. Rebuilt on every TF edit: a range-max query
+// per cell over the baked 8192-entry opacity table (sparse table, O(1) per cell).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/macrocells.h"
+#include "core/transfer_function.h"
+
+namespace peakcast {
+
+struct Occupancy {
+  std::vector<uint8_t> occupied;  // per cell, MacrocellGrid order
+  int64_t empty_cells = 0;
+  double build_ms = 0.0;
+};
+
+// `lo`, `hi`: the TF table's domain (the volume's value range). The table is sampled with
+// linear filtering, so each cell's range is widened by one table entry on each side.
+Occupancy classify_cells(const MacrocellGrid& grid, const TransferFunction& tf, double lo, double hi,
+                         int table_size = TransferFunction::kTableSize);
+
+}  // namespace peakcast

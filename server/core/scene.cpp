@@ -1,0 +1,251 @@
+#include "core/scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+namespace peakcast {
+namespace {
+
+using json = nlohmann::json;
+
+[[noreturn]] void fail(const std::string& key, const std::string& what) { throw SceneError(key + ": " + what); }
+
+void only_keys(const json& j, const std::string& where, std::initializer_list<const char*> allowed) {
+  if (!j.is_object()) fail(where.empty() ? "scene" : where, "must be an object");
+  for (auto& [k, _] : j.items()) {
+    bool ok = std::any_of(allowed.begin(), allowed.end(), [&](const char* a) { return k == a; });
+    if (!ok) {
+      std::string list;
+      for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
+      fail(where.empty() ? k : where + "." + k, "unknown key (allowed: " + list + ")");
+    }
+  }
+}
+
+double number(const json& j, const std::string& key) {
+  if (!j.is_number()) fail(key, "must be a number");
+  const double v = j.get<double>();
+  if (!std::isfinite(v)) fail(key, "must be finite");
+  return v;
+}
+
+int integer(const json& j, const std::string& key, int lo, int hi) {
+  if (!j.is_number_integer() && !(j.is_number() && std::floor(j.get<double>()) == j.get<double>()))
+    fail(key, "must be an integer");
+  const double v = j.get<double>();
+  if (v < lo || v > hi) fail(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  return int(v);
+}
+
+bool boolean(const json& j, const std::string& key) {
+  if (!j.is_boolean()) fail(key, "must be true or false");
+  return j.get<bool>();
+}
+
+glm::dvec3 vec3(const json& j, const std::string& key) {
+  if (!j.is_array() || j.size() != 3) fail(key, "must be an array of 3 numbers");
+  return {number(j[0], key + "[0]"), number(j[1], key + "[1]"), number(j[2], key + "[2]")};
+}
+
+template <typename E>
+E choice(const json& j, const std::string& key, std::initializer_list<std::pair<const char*, E>> options) {
+  if (!j.is_string()) fail(key, "must be a string");
+  std::string list;
+  for (auto& [name, value] : options) {
+    if (j.get<std::string>() == name) return value;
+    list += std::string(list.empty() ? "" : ", ") + name;
+  }
+  fail(key, "'" + j.get<std::string>() + "' is not one of " + list);
+}
+
+Camera parse_camera(const json& j) {
+  only_keys(j, "camera", {"eye", "center", "up", "fov_y", "projection", "height"});
+  Camera c;
+  if (!j.contains("eye") || !j.contains("center")) fail("camera", "needs eye and center");
+  c.eye = vec3(j["eye"], "camera.eye");
+  c.center = vec3(j["center"], "camera.center");
+  if (j.contains("up")) c.up = vec3(j["up"], "camera.up");
+  if (j.contains("fov_y")) c.fov_y = number(j["fov_y"], "camera.fov_y");
+  if (j.contains("projection"))
+    c.orthographic = choice<bool>(j["projection"], "camera.projection", {{"perspective", false}, {"orthographic", true}});
+  if (j.contains("height")) c.height = number(j["height"], "camera.height");
+  if (c.orthographic && !j.contains("height")) fail("camera.height", "required with an orthographic projection");
+  try {
+    validate_camera(c);
+  } catch (const std::invalid_argument& e) {
+    throw SceneError(e.what());
+  }
+  return c;
+}
+
+TransferFunction parse_tf(const json& j, double& opacity_unit) {
+  only_keys(j, "tf", {"points", "opacity_unit"});
+  TransferFunction tf;
+  if (!j.contains("points")) fail("tf.points", "required");
+  const json& pts = j["points"];
+  if (!pts.is_array() || pts.empty()) fail("tf.points", "must be a non-empty array of [value, r, g, b, a]");
+  if (pts.size() > kMaxTfPoints) fail("tf.points", "more than " + std::to_string(kMaxTfPoints) + " points");
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const std::string key = "tf.points[" + std::to_string(i) + "]";
+    if (!pts[i].is_array() || pts[i].size() != 5) fail(key, "must be [value, r, g, b, a]");
+    TfPoint p{number(pts[i][0], key + "[0]"), number(pts[i][1], key + "[1]"), number(pts[i][2], key + "[2]"),
+              number(pts[i][3], key + "[3]"), number(pts[i][4], key + "[4]")};
+    for (double c : {p.r, p.g, p.b, p.a})
+      if (c < 0 || c > 1) fail(key, "colour and opacity must lie in [0, 1]");
+    if (!tf.points.empty() && p.value < tf.points.back().value) fail(key, "values must be sorted ascending");
+    if (tf.points.size() >= 2 && p.value == tf.points.back().value && p.value == tf.points[tf.points.size() - 2].value)
+      fail(key, "at most two points may share a value");
+    tf.points.push_back(p);
+  }
+  if (j.contains("opacity_unit")) {
+    opacity_unit = number(j["opacity_unit"], "tf.opacity_unit");
+    if (!(opacity_unit > 0)) fail("tf.opacity_unit", "must be > 0");
+  }
+  return tf;
+}
+
+RenderSettings parse_render(const json& j) {
+  only_keys(j, "render", {"classification", "peak_mode", "max_peaks", "sampling", "step", "s_k", "filter",
+                          "virtual_samples", "shading", "early_termination", "space_skipping", "adaptive",
+                          "ray_texture"});
+  RenderSettings r;
+  if (j.contains("classification"))
+    r.classification = choice<Classification>(j["classification"], "render.classification",
+                                              {{"post", Classification::Post}, {"preint", Classification::Preint},
+                                               {"peaks", Classification::Peaks}});
+  if (j.contains("peak_mode"))
+    r.peak_mode = choice<PeakMode>(j["peak_mode"], "render.peak_mode",
+                                   {{"dvr+peaks", PeakMode::DvrPlusPeaks}, {"xor", PeakMode::Xor},
+                                    {"peaks_only", PeakMode::PeaksOnly}, {"dvr_only", PeakMode::DvrOnly}});
+  if (j.contains("max_peaks")) r.max_peaks = integer(j["max_peaks"], "render.max_peaks", 1, 4);
+  if (j.contains("sampling"))
+    r.sampling = choice<Sampling>(j["sampling"], "render.sampling",
+                                  {{"uniform", Sampling::Uniform}, {"differential", Sampling::Differential}});
+  if (j.contains("step")) {
+    r.step = number(j["step"], "render.step");
+    if (!(r.step > 0)) fail("render.step", "must be > 0");
+  }
+  if (j.contains("s_k")) {
+    r.s_k = number(j["s_k"], "render.s_k");
+    if (!(r.s_k > 0)) fail("render.s_k", "must be > 0");
+  }
+  if (j.contains("filter"))
+    r.filter = choice<Filter>(j["filter"], "render.filter", {{"trilinear", Filter::Trilinear}, {"tricubic", Filter::Tricubic}});
+  if (j.contains("virtual_samples")) {
+    r.virtual_samples = integer(j["virtual_samples"], "render.virtual_samples", 0, 7);
+    if (r.virtual_samples != 0 && r.virtual_samples != 3 && r.virtual_samples != 7)
+      fail("render.virtual_samples", "must be 0, 3 or 7");
+  }
+  if (j.contains("shading")) r.shading = boolean(j["shading"], "render.shading");
+  if (j.contains("early_termination")) {
+    r.early_termination = number(j["early_termination"], "render.early_termination");
+    if (!(r.early_termination > 0 && r.early_termination <= 1)) fail("render.early_termination", "must be in (0, 1]");
+  }
+  if (j.contains("space_skipping")) r.space_skipping = boolean(j["space_skipping"], "render.space_skipping");
+  if (j.contains("adaptive")) r.adaptive = boolean(j["adaptive"], "render.adaptive");
+  if (j.contains("ray_texture")) r.ray_texture = j["ray_texture"];
+  return r;
+}
+
+}  // namespace
+
+Scene parse_scene(const json& j) {
+  only_keys(j, "", {"volume", "camera", "image", "tf", "background", "render"});
+  Scene s;
+  if (!j.contains("volume") || !j["volume"].is_string() || j["volume"].get<std::string>().empty())
+    fail("volume", "required: a volume id or path");
+  s.volume = j["volume"].get<std::string>();
+  if (j.contains("camera")) s.camera = parse_camera(j["camera"]);
+  if (j.contains("image")) {
+    only_keys(j["image"], "image", {"width", "height"});
+    if (j["image"].contains("width")) s.width = integer(j["image"]["width"], "image.width", 1, kMaxImageSide);
+    if (j["image"].contains("height")) s.height = integer(j["image"]["height"], "image.height", 1, kMaxImageSide);
+    if (int64_t(s.width) * s.height > kMaxImagePixels)
+      fail("image", "more than " + std::to_string(kMaxImagePixels) + " pixels");
+  }
+  if (j.contains("tf")) s.tf = parse_tf(j["tf"], s.opacity_unit);
+  if (j.contains("background")) {
+    s.background = vec3(j["background"], "background");
+    for (int c = 0; c < 3; ++c)
+      if (s.background[c] < 0 || s.background[c] > 1) fail("background", "components must lie in [0, 1]");
+  }
+  if (j.contains("render")) s.render = parse_render(j["render"]);
+  return s;
+}
+
+Scene parse_scene_text(const std::string& text) {
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw SceneError(std::string("scene is not valid JSON: ") + e.what());
+  }
+  return parse_scene(j);
+}
+
+const char* to_string(Classification c) {
+  return c == Classification::Post ? "post" : c == Classification::Preint ? "preint" : "peaks";
+}
+const char* to_string(PeakMode m) {
+  static const char* n[] = {"dvr+peaks", "xor", "peaks_only", "dvr_only"};
+  return n[int(m)];
+}
+const char* to_string(Sampling s) { return s == Sampling::Uniform ? "uniform" : "differential"; }
+const char* to_string(Filter f) { return f == Filter::Trilinear ? "trilinear" : "tricubic"; }
+
+json scene_to_json(const Scene& s) {
+  json j;
+  j["volume"] = s.volume;
+  if (s.camera) {
+    const Camera& c = *s.camera;
+    j["camera"] = {{"eye", {c.eye.x, c.eye.y, c.eye.z}},
+                   {"center", {c.center.x, c.center.y, c.center.z}},
+                   {"up", {c.up.x, c.up.y, c.up.z}}};
+    if (c.orthographic) {
+      j["camera"]["projection"] = "orthographic";
+      j["camera"]["height"] = c.height;
+    } else {
+      j["camera"]["fov_y"] = c.fov_y;
+    }
+  }
+  j["image"] = {{"width", s.width}, {"height", s.height}};
+  if (s.tf) {
+    json pts = json::array();
+    for (const auto& p : s.tf->points) pts.push_back({p.value, p.r, p.g, p.b, p.a});
+    j["tf"] = {{"points", pts}};
+    if (s.opacity_unit > 0) j["tf"]["opacity_unit"] = s.opacity_unit;
+  }
+  j["background"] = {s.background.x, s.background.y, s.background.z};
+  const RenderSettings& r = s.render;
+  j["render"] = {{"classification", to_string(r.classification)}, {"peak_mode", to_string(r.peak_mode)},
+                 {"max_peaks", r.max_peaks}, {"sampling", to_string(r.sampling)}, {"s_k", r.s_k},
+                 {"filter", to_string(r.filter)}, {"virtual_samples", r.virtual_samples}, {"shading", r.shading},
+                 {"early_termination", r.early_termination}, {"space_skipping", r.space_skipping},
+                 {"adaptive", r.adaptive}};
+  if (r.step > 0) j["render"]["step"] = r.step;
+  if (!r.ray_texture.is_null()) j["render"]["ray_texture"] = r.ray_texture;
+  return j;
+}
+
+std::string Scene::to_string() const { return "Scene" + scene_to_json(*this).dump(); }
+
+ResolvedScene resolve_scene(const Scene& s, const Volume& v) {
+  ResolvedScene r;
+  r.scene = s;
+  for (int a = 0; a < 3; ++a)
+    if (v.dims()[a] < 2) throw SceneError("volume: every dimension must be >= 2 to render (got a single slice)");
+  r.box_min = v.origin;
+  r.box_max = v.origin + v.extent();
+  r.camera = s.camera ? *s.camera : default_camera(r.box_min, r.box_max);
+  r.tf = s.tf ? *s.tf : TransferFunction::grey_ramp(v.min_value, v.max_value);
+  const double min_spacing = std::min({v.spacing.x, v.spacing.y, v.spacing.z});
+  r.tf.opacity_unit = s.opacity_unit > 0 ? s.opacity_unit : min_spacing;
+  r.step = s.render.step > 0 ? s.render.step : min_spacing;
+  if (r.step < kMinStepFraction * min_spacing)
+    throw SceneError("render.step: " + std::to_string(r.step) + " is below " + std::to_string(kMinStepFraction) +
+                     " x the smallest spacing");
+  return r;
+}
+
+}  // namespace peakcast

@@ -1,0 +1,80 @@
+// A scene: volume, camera, image size, TF, background and render settings (DESIGN §4a,
+// proto/scene.schema.json). Parsing refuses unknown keys, wrong types, NaN/Inf, unsorted TFs,
+// zero or oversized images and degenerate cameras, naming the key.
+#pragma once
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "core/camera.h"
+#include "core/transfer_function.h"
+#include "core/volume.h"
+
+namespace peakcast {
+
+class SceneError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Limits at the edge, with units.
+constexpr int kMaxImageSide = 8192;                 // pixels per side
+constexpr int64_t kMaxImagePixels = 4096ll * 4096;  // pixels per image
+constexpr size_t kMaxTfPoints = 1024;               // TF control points
+constexpr double kMinStepFraction = 1e-3;           // step >= this x smallest spacing
+
+enum class Classification { Post, Preint, Peaks };
+enum class PeakMode { DvrPlusPeaks, Xor, PeaksOnly, DvrOnly };
+enum class Sampling { Uniform, Differential };
+enum class Filter { Trilinear, Tricubic };
+
+struct RenderSettings {
+  Classification classification = Classification::Post;
+  PeakMode peak_mode = PeakMode::DvrPlusPeaks;
+  int max_peaks = 4;
+  Sampling sampling = Sampling::Uniform;
+  double step = 0.0;  // world units; 0: the smallest spacing
+  double s_k = 4.0;
+  Filter filter = Filter::Trilinear;
+  int virtual_samples = 0;
+  bool shading = false;
+  double early_termination = 1.0 - 1.0 / 255.0;
+  bool space_skipping = true;
+  bool adaptive = false;
+  nlohmann::json ray_texture;  // null when absent
+};
+
+struct Scene {
+  std::string volume;
+  std::optional<Camera> camera;  // default: default_camera() of the volume box
+  int width = 512, height = 512;
+  std::optional<TransferFunction> tf;  // default: grey ramp over the value range
+  double opacity_unit = 0.0;
+  glm::dvec3 background{0, 0, 0};
+  RenderSettings render;
+  std::string to_string() const;
+};
+
+Scene parse_scene(const nlohmann::json& j);  // throws SceneError
+Scene parse_scene_text(const std::string& text);
+nlohmann::json scene_to_json(const Scene& s);
+
+// A scene with every default filled in for a given volume.
+struct ResolvedScene {
+  Scene scene;
+  Camera camera;
+  TransferFunction tf;  // with opacity_unit set
+  double step = 1.0;
+  glm::dvec3 box_min, box_max;
+};
+ResolvedScene resolve_scene(const Scene& s, const Volume& v);
+
+const char* to_string(Classification c);
+const char* to_string(PeakMode m);
+const char* to_string(Sampling s);
+const char* to_string(Filter f);
+
+}  // namespace peakcast

@@ -1,0 +1,48 @@
+#include "encode/png.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+OIIO_NAMESPACE_USING
+
+namespace peakcast::encode {
+
+std::vector<unsigned char> to_rgb8(const Image& img) {
+  std::vector<unsigned char> out(size_t(img.width) * img.height * 3);
+  for (size_t p = 0; p < size_t(img.width) * img.height; ++p)
+    for (int c = 0; c < 3; ++c) {
+      const float v = img.rgba[p * 4 + c];
+      out[p * 3 + c] = (unsigned char)std::lround(std::clamp(std::isfinite(v) ? v : 0.f, 0.f, 1.f) * 255.f);
+    }
+  return out;
+}
+
+void write_png(const Image& img, const std::filesystem::path& path) {
+  auto out = ImageOutput::create(path.string());
+  if (!out) throw std::runtime_error(path.string() + ": cannot create PNG writer");
+  ImageSpec spec(img.width, img.height, 3, TypeDesc::UINT8);
+  if (!out->open(path.string(), spec)) throw std::runtime_error(path.string() + ": " + out->geterror());
+  const auto bytes = to_rgb8(img);
+  if (!out->write_image(TypeDesc::UINT8, bytes.data())) throw std::runtime_error(path.string() + ": " + out->geterror());
+  out->close();
+}
+
+Image read_png(const std::filesystem::path& path) {
+  auto in = ImageInput::open(path.string());
+  if (!in) throw std::runtime_error(path.string() + ": cannot read image: " + OIIO::geterror());
+  const ImageSpec& spec = in->spec();
+  Image img(spec.width, spec.height);
+  std::vector<float> buf(size_t(spec.width) * spec.height * spec.nchannels);
+  if (!in->read_image(0, 0, 0, spec.nchannels, TypeDesc::FLOAT, buf.data()))
+    throw std::runtime_error(path.string() + ": " + in->geterror());
+  for (size_t p = 0; p < size_t(spec.width) * spec.height; ++p) {
+    for (int c = 0; c < 3; ++c) img.rgba[p * 4 + c] = buf[p * spec.nchannels + std::min(c, spec.nchannels - 1)];
+    img.rgba[p * 4 + 3] = 1.f;
+  }
+  return img;
+}
+
+}  // namespace peakcast::encode

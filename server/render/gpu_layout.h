@@ -1,0 +1,34 @@
+// Host mirror of the std140 block in shaders/uniforms.glsl. Only vec4/ivec4 members, so the
+// std140 offsets are 16 * index; a gpu test compares them with what GL reports.
+#pragma once
+
+#include <cstddef>
+#include <map>
+#include <string>
+
+#include <glm/vec4.hpp>
+
+namespace peakcast::render {
+
+struct RayUniforms {
+  glm::vec4 p0;
+  glm::vec4 right;
+  glm::vec4 up;
+  glm::vec4 forward;
+  glm::vec4 box_half;
+  glm::vec4 spacing;
+  glm::vec4 dims;
+  glm::vec4 value_map;
+  glm::vec4 background;
+  glm::vec4 cells;
+  glm::ivec4 image;
+};
+
+static_assert(sizeof(RayUniforms) == 11 * 16, "std140 block size");
+static_assert(offsetof(RayUniforms, value_map) == 7 * 16, "std140 offset");
+static_assert(offsetof(RayUniforms, image) == 10 * 16, "std140 offset");
+
+// Member name (as in GLSL) -> byte offset, for the layout test.
+std::map<std::string, size_t> host_uniform_offsets();
+
+}  // namespace peakcast::render

@@ -1,0 +1,54 @@
+#include "render/gpu_volume.h"
+
+#include <stdexcept>
+
+namespace peakcast::render {
+
+GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume) : volume_(std::move(volume)) {
+  const Volume& v = *volume_;
+  const auto& d = v.dims();
+  GLenum internal = GL_R8, type = GL_UNSIGNED_BYTE;
+  double texel_to_stored = 255.0;
+  if (v.type() == VoxelType::U16) {
+    internal = GL_R16;
+    type = GL_UNSIGNED_SHORT;
+    texel_to_stored = 65535.0;
+  } else if (v.type() == VoxelType::F32) {
+    internal = GL_R32F;
+    type = GL_FLOAT;
+    texel_to_stored = 1.0;
+  }
+  GLint max_size = 0;
+  glGetIntegerv(GL_MAX_3D_TEXTURE_SIZE, &max_size);
+  for (int a = 0; a < 3; ++a)
+    if (d[a] > max_size)
+      throw std::runtime_error("volume dimension " + std::to_string(d[a]) + " exceeds the GPU's 3D texture limit " +
+                               std::to_string(max_size));
+  texture_ = gpu::make_texture(GL_TEXTURE_3D);
+  glTextureStorage3D(texture_.id(), 1, internal, GLsizei(d[0]), GLsizei(d[1]), GLsizei(d[2]));
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  // Upload in slabs of 64 slices so the driver's staging copy stays small.
+  const size_t slice = size_t(d[0] * d[1]) * voxel_bytes(v.type());
+  for (int64_t z = 0; z < d[2]; z += 64) {
+    const int64_t n = std::min<int64_t>(64, d[2] - z);
+    glTextureSubImage3D(texture_.id(), 0, 0, 0, GLint(z), GLsizei(d[0]), GLsizei(d[1]), GLsizei(n), GL_RED, type,
+                        v.data() + size_t(z) * slice);
+  }
+  if (glGetError() == GL_OUT_OF_MEMORY) throw std::runtime_error("GPU out of memory uploading the volume");
+  glTextureParameteri(texture_.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTextureParameteri(texture_.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  for (GLenum wrap : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R})
+    glTextureParameteri(texture_.id(), wrap, GL_CLAMP_TO_EDGE);
+  gpu::check_gl("volume upload");
+
+  lo_ = v.min_value;
+  hi_ = v.max_value > v.min_value ? v.max_value : v.min_value + 1.0;
+  scale_ = float(texel_to_stored / (hi_ - lo_));
+  bias_ = float((v.value_offset - lo_) / (hi_ - lo_));
+  cells_trilinear_ = build_macrocells(v, 0, FilterSupport::Trilinear);
+  cells_tricubic_ = build_macrocells(v, 0, FilterSupport::Tricubic);
+}
+
+void GpuVolume::bind(unsigned unit) const { glBindTextureUnit(unit, texture_.id()); }
+
+}  // namespace peakcast::render

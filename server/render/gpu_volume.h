@@ -1,0 +1,39 @@
+// A volume resident on the GPU in its native type (R8 / R16 / R32F), with its macrocell grids.
+// One per loaded volume, shared by every session that views it (DESIGN §2).
+#pragma once
+
+#include <memory>
+
+#include "core/macrocells.h"
+#include "core/scene.h"
+#include "core/volume.h"
+#include "gpu/gl_objects.h"
+
+namespace peakcast::render {
+
+class GpuVolume {
+ public:
+  explicit GpuVolume(std::shared_ptr<const Volume> volume);
+
+  const Volume& volume() const { return *volume_; }
+  std::shared_ptr<const Volume> shared() const { return volume_; }
+  const MacrocellGrid& macrocells(Filter filter) const {
+    return filter == Filter::Tricubic ? cells_tricubic_ : cells_trilinear_;
+  }
+  size_t gpu_bytes() const { return volume_->byte_size(); }
+  // TF coordinate of a texel value: a * texel + b (the TF table spans [min_value, max_value]).
+  float value_scale() const { return scale_; }
+  float value_bias() const { return bias_; }
+  double tf_lo() const { return lo_; }
+  double tf_hi() const { return hi_; }
+  void bind(unsigned unit) const;
+
+ private:
+  std::shared_ptr<const Volume> volume_;
+  gpu::Texture texture_;
+  MacrocellGrid cells_trilinear_, cells_tricubic_;
+  float scale_ = 1.f, bias_ = 0.f;
+  double lo_ = 0, hi_ = 1;
+};
+
+}  // namespace peakcast::render

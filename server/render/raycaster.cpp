@@ -1,0 +1,163 @@
+#include "render/raycaster.h"
+
+#include <algorithm>
+#include <chrono>
+#include <sstream>
+
+#include "core/occupancy.h"
+#include "render/gpu_layout.h"
+
+namespace peakcast::render {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const MacrocellGrid& cells) {
+  const Volume& v = gv.volume();
+  const glm::dvec3 center = (s.box_min + s.box_max) * 0.5;
+  const ViewSetup view = setup_view(s.camera, center, s.scene.width, s.scene.height);
+  RayUniforms u{};
+  u.p0 = glm::vec4(glm::vec3(view.p0), 0.f);
+  u.right = glm::vec4(glm::vec3(view.right), float(view.half_w));
+  u.up = glm::vec4(glm::vec3(view.up), float(view.half_h));
+  u.forward = glm::vec4(glm::vec3(view.forward), float(view.dist));
+  u.box_half = glm::vec4(glm::vec3((s.box_max - s.box_min) * 0.5), float(s.step));
+  u.spacing = glm::vec4(glm::vec3(v.spacing), float(s.tf.opacity_unit));
+  u.dims = glm::vec4(float(v.dims()[0]), float(v.dims()[1]), float(v.dims()[2]), float(s.scene.render.early_termination));
+  u.value_map = glm::vec4(gv.value_scale(), gv.value_bias(), float(TransferFunction::kTableSize), float(kMaxSamplesPerRay));
+  u.background = glm::vec4(glm::vec3(s.scene.background), 1.f);
+  u.cells = glm::vec4(float(cells.grid[0]), float(cells.grid[1]), float(cells.grid[2]), float(cells.cell));
+  u.image = glm::ivec4(s.scene.width, s.scene.height, 0, 0);
+  return u;
+}
+
+}  // namespace
+
+std::map<std::string, size_t> host_uniform_offsets() {
+  return {{"u_p0", offsetof(RayUniforms, p0)},           {"u_right", offsetof(RayUniforms, right)},
+          {"u_up", offsetof(RayUniforms, up)},           {"u_forward", offsetof(RayUniforms, forward)},
+          {"u_box_half", offsetof(RayUniforms, box_half)}, {"u_spacing", offsetof(RayUniforms, spacing)},
+          {"u_dims", offsetof(RayUniforms, dims)},       {"u_value_map", offsetof(RayUniforms, value_map)},
+          {"u_background", offsetof(RayUniforms, background)}, {"u_cells", offsetof(RayUniforms, cells)},
+          {"u_image", offsetof(RayUniforms, image)}};
+}
+
+std::string RenderStats::to_string() const {
+  std::ostringstream s;
+  s << "RenderStats{" << variant << ", " << render_ms << " ms, samples/ray mean " << samples_mean << " max "
+    << samples_max << ", rays " << rays_hit << ", empty cells " << empty_cells << "}";
+  return s.str();
+}
+
+Raycaster::Raycaster(gpu::ShaderCache& shaders) : shaders_(shaders) {
+  ubo_ = gpu::make_buffer();
+  glNamedBufferStorage(ubo_.id(), sizeof(RayUniforms), nullptr, GL_DYNAMIC_STORAGE_BIT);
+  vao_ = gpu::make_vertex_array();
+  tf_texture_ = gpu::make_texture(GL_TEXTURE_1D);
+  glTextureStorage1D(tf_texture_.id(), 1, GL_RGBA32F, TransferFunction::kTableSize);
+  glTextureParameteri(tf_texture_.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+  glTextureParameteri(tf_texture_.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+  glTextureParameteri(tf_texture_.id(), GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+}
+
+const gpu::Program& Raycaster::program(const VariantKey& key) {
+  if (key.path == GpuPath::Compute) return shaders_.get(key.name(), {"raycast.comp"}, key.defines());
+  return shaders_.get(key.name(), {"fullscreen.vert", "raycast.frag"}, key.defines());
+}
+
+void Raycaster::ensure_targets(int w, int h) {
+  if (w == target_w_ && h == target_h_) return;
+  color_ = gpu::make_texture(GL_TEXTURE_2D);
+  glTextureStorage2D(color_.id(), 1, GL_RGBA32F, w, h);
+  samples_ = gpu::make_texture(GL_TEXTURE_2D);
+  glTextureStorage2D(samples_.id(), 1, GL_R32F, w, h);
+  fbo_ = gpu::make_framebuffer();
+  glNamedFramebufferTexture(fbo_.id(), GL_COLOR_ATTACHMENT0, color_.id(), 0);
+  glNamedFramebufferTexture(fbo_.id(), GL_COLOR_ATTACHMENT1, samples_.id(), 0);
+  const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+  glNamedFramebufferDrawBuffers(fbo_.id(), 2, bufs);
+  if (glCheckNamedFramebufferStatus(fbo_.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+    throw std::runtime_error("render target incomplete");
+  target_w_ = w;
+  target_h_ = h;
+}
+
+Image Raycaster::render(const GpuVolume& gv, const ResolvedScene& s, GpuPath path, RenderStats* stats) {
+  const int w = s.scene.width, h = s.scene.height;
+  const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
+
+  // Per-frame state that depends on the TF: table and macrocell occupancy.
+  const std::vector<float> table = s.tf.bake(TransferFunction::kTableSize, gv.tf_lo(), gv.tf_hi());
+  glTextureSubImage1D(tf_texture_.id(), 0, 0, TransferFunction::kTableSize, GL_RGBA, GL_FLOAT, table.data());
+  Occupancy occ;
+  if (s.scene.render.space_skipping) occ = classify_cells(cells, s.tf, gv.tf_lo(), gv.tf_hi());
+  const VariantKey key = choose_variant(s, occ.empty_cells, path);
+  if (key.space_skipping) {
+    occupancy_texture_ = gpu::make_texture(GL_TEXTURE_3D);
+    glTextureStorage3D(occupancy_texture_.id(), 1, GL_R8UI, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]),
+                       GLsizei(cells.grid[2]));
+    // Integer textures are complete only with NEAREST filtering.
+    glTextureParameteri(occupancy_texture_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(occupancy_texture_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTextureSubImage3D(occupancy_texture_.id(), 0, 0, 0, 0, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]),
+                        GLsizei(cells.grid[2]), GL_RED_INTEGER, GL_UNSIGNED_BYTE, occ.occupied.data());
+    glBindTextureUnit(2, occupancy_texture_.id());
+  }
+  const gpu::Program& prog = program(key);
+  const RayUniforms u = make_uniforms(gv, s, cells);
+  glNamedBufferSubData(ubo_.id(), 0, sizeof u, &u);
+  glBindBufferBase(GL_UNIFORM_BUFFER, 0, ubo_.id());
+  gv.bind(0);
+  glBindTextureUnit(1, tf_texture_.id());
+  ensure_targets(w, h);
+  glUseProgram(prog.id());
+
+  glFinish();
+  const auto t0 = Clock::now();
+  if (path == GpuPath::Compute) {
+    glBindImageTexture(0, color_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    glBindImageTexture(1, samples_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+    glDispatchCompute(GLuint((w + 7) / 8), GLuint((h + 7) / 8), 1);
+    glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
+  } else {
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo_.id());
+    glViewport(0, 0, w, h);
+    glDisable(GL_BLEND);
+    glDisable(GL_DEPTH_TEST);
+    glBindVertexArray(vao_.id());
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+  }
+  glFinish();
+  const double render_ms = ms_since(t0);
+  gpu::check_gl("ray cast");
+
+  const auto t1 = Clock::now();
+  Image img(w, h);
+  std::vector<float> color(size_t(w) * h * 4), samples(size_t(w) * h);
+  glPixelStorei(GL_PACK_ALIGNMENT, 4);
+  glGetTextureImage(color_.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(color.size() * 4), color.data());
+  glGetTextureImage(samples_.id(), 0, GL_RED, GL_FLOAT, GLsizei(samples.size() * 4), samples.data());
+  for (int y = 0; y < h; ++y) {  // GL rows count from the bottom
+    std::copy_n(&color[size_t(h - 1 - y) * w * 4], size_t(w) * 4, img.pixel(0, y));
+    std::copy_n(&samples[size_t(h - 1 - y) * w], size_t(w), &img.samples[size_t(y) * w]);
+  }
+  if (stats) {
+    *stats = RenderStats{};
+    stats->render_ms = render_ms;
+    stats->readback_ms = ms_since(t1);
+    stats->variant = key.name();
+    stats->empty_cells = occ.empty_cells;
+    for (float n : img.samples) {
+      if (n <= 0) continue;
+      stats->samples_total += n;
+      stats->samples_max = std::max<double>(stats->samples_max, n);
+      stats->rays_hit++;
+    }
+    stats->samples_mean = stats->rays_hit ? stats->samples_total / double(stats->rays_hit) : 0.0;
+  }
+  return img;
+}
+
+}  // namespace peakcast::render

@@ -1,0 +1,49 @@
+// The GL ray caster (DESIGN §3, §4a): one fullscreen draw (fragment path) or one dispatch
+// (compute path) per frame, into float targets read back as an Image (row 0 at the top).
+#pragma once
+
+#include <string>
+
+#include "core/image.h"
+#include "core/scene.h"
+#include "gpu/gl_objects.h"
+#include "gpu/shader_cache.h"
+#include "render/gpu_volume.h"
+#include "render/variant.h"
+
+namespace peakcast::render {
+
+struct RenderStats {
+  double render_ms = 0.0;      // GPU work, draw to glFinish
+  double readback_ms = 0.0;
+  double samples_mean = 0.0;   // per ray that hit the box
+  double samples_max = 0.0;
+  double samples_total = 0.0;
+  int64_t rays_hit = 0;
+  int64_t empty_cells = 0;
+  std::string variant;
+  std::string to_string() const;
+};
+
+class Raycaster {
+ public:
+  explicit Raycaster(gpu::ShaderCache& shaders);
+  Image render(const GpuVolume& volume, const ResolvedScene& scene, GpuPath path, RenderStats* stats = nullptr);
+  // For the layout test: the linked program of a variant.
+  const gpu::Program& program(const VariantKey& key);
+
+ private:
+  void ensure_targets(int w, int h);
+
+  gpu::ShaderCache& shaders_;
+  gpu::Buffer ubo_;
+  gpu::VertexArray vao_;
+  gpu::Texture tf_texture_, occupancy_texture_, color_, samples_;
+  gpu::Framebuffer fbo_;
+  int target_w_ = 0, target_h_ = 0;
+};
+
+// Maximum samples per ray the shader will take (guards runaway loops).
+constexpr int kMaxSamplesPerRay = 1 << 20;
+
+}  // namespace peakcast::render

@@ -1,0 +1,34 @@
+#include "render/variant.h"
+
+namespace peakcast::render {
+
+std::vector<std::string> VariantKey::defines() const {
+  std::vector<std::string> d;
+  if (path == GpuPath::Compute) d.push_back("COMPUTE");
+  if (tricubic) d.push_back("TRICUBIC");
+  if (shading) d.push_back("SHADING");
+  if (space_skipping) d.push_back("SPACE_SKIPPING");
+  if (orthographic) d.push_back("ORTHOGRAPHIC");
+  return d;
+}
+
+std::string VariantKey::name() const {
+  std::string n = path == GpuPath::Compute ? "comp" : "frag";
+  n += tricubic ? "+tricubic" : "+trilinear";
+  if (shading) n += "+shade";
+  if (space_skipping) n += "+skip";
+  if (orthographic) n += "+ortho";
+  return n;
+}
+
+VariantKey choose_variant(const ResolvedScene& s, int64_t empty_cells, GpuPath path) {
+  VariantKey k;
+  k.path = path;
+  k.tricubic = s.scene.render.filter == Filter::Tricubic;
+  k.shading = s.scene.render.shading;
+  k.space_skipping = s.scene.render.space_skipping && empty_cells > 0;
+  k.orthographic = s.camera.orthographic;
+  return k;
+}
+
+}  // namespace peakcast::render

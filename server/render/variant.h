@@ -1,0 +1,27 @@
+// The ray-cast shader variant for a scene (DESIGN §3 "leave out what a scene does not need").
+// Derived from the scene, never set by hand; reported in the frame stats.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/scene.h"
+
+namespace peakcast::render {
+
+enum class GpuPath { Fragment, Compute };
+
+struct VariantKey {
+  GpuPath path = GpuPath::Fragment;
+  bool tricubic = false;
+  bool shading = false;
+  bool space_skipping = false;  // only when the TF leaves some macrocell empty
+  bool orthographic = false;
+
+  std::vector<std::string> defines() const;
+  std::string name() const;  // e.g. "frag+tricubic+skip"
+};
+
+VariantKey choose_variant(const ResolvedScene& scene, int64_t empty_cells, GpuPath path);
+
+}  // namespace peakcast::render

@@ -1,0 +1,91 @@
+// The ray caster shared by the fragment and compute entry points (raycast.frag, raycast.comp).
+// Samples lie on the lattice t_i = t_enter + i * step, i = 0..floor((t_exit - t_enter) / step),
+// computed from i (no accumulated t += dt drift). Space skipping visits only the lattice points
+// inside occupied macrocells, so it changes no sample that contributes.
+
+#ifdef SPACE_SKIPPING
+layout(binding = 2) uniform usampler3D u_occupancy;  // 1 = some voxel of the cell is visible
+#endif
+
+struct RayResult {
+  vec4 acc;
+  float samples;
+};
+
+vec3 voxel_coords(vec3 p) { return (p + u_box_half.xyz) / u_spacing.xyz; }
+
+// One sample at lattice index i; returns true when the ray is opaque enough to stop.
+bool take_sample(Ray r, float t_enter, int i, inout RayResult res) {
+  float dt = u_box_half.w;
+  vec3 p = r.o + (t_enter + float(i) * dt) * r.d;
+  vec3 x = voxel_coords(p);
+  float s = sample_field(x);
+  vec4 c = tf_lookup(s);
+  res.samples += 1.0;
+  if (c.a > 0.0) {
+    vec3 rgb = c.rgb;
+#ifdef SHADING
+    rgb = shade(rgb, field_gradient(x), r.d);
+#endif
+    composite(res.acc, rgb, correct_opacity(c.a, dt));
+  }
+  return res.acc.a >= u_dims.w;
+}
+
+RayResult cast_ray(vec2 pixel) {
+  RayResult res;
+  res.acc = vec4(0.0);
+  res.samples = 0.0;
+  Ray r = make_ray(pixel);
+  vec2 span = intersect_box(r);
+  if (!(span.x <= span.y)) return res;  // also false for NaN
+  float dt = u_box_half.w;
+  int last = int(min(floor((span.y - span.x) / dt), u_value_map.w - 1.0));
+#ifndef SPACE_SKIPPING
+  for (int i = 0; i <= last; ++i)
+    if (take_sample(r, span.x, i, res)) break;
+#else
+  // 3D-DDA over the macrocell grid (Amanatides & Woo) in voxel coordinates.
+  float edge = u_cells.w;
+  vec3 x0 = voxel_coords(r.o + span.x * r.d);
+  vec3 dv = r.d / u_spacing.xyz;
+  ivec3 grid = ivec3(u_cells.xyz);
+  ivec3 cell = clamp(ivec3(floor(x0 / edge)), ivec3(0), grid - 1);
+  ivec3 stp = ivec3(sign(dv));
+  vec3 t_max, t_delta;
+  for (int a = 0; a < 3; ++a) {
+    if (abs(dv[a]) < 1e-20) {  // axis-parallel: never crosses a face on this axis
+      t_max[a] = 3.0e38;
+      t_delta[a] = 3.0e38;
+    } else {
+      float face = (float(cell[a]) + (dv[a] > 0.0 ? 1.0 : 0.0)) * edge;
+      t_max[a] = span.x + (face - x0[a]) / dv[a];
+      t_delta[a] = edge / abs(dv[a]);
+    }
+  }
+  float t_in = span.x;
+  int next = 0;  // first lattice index not yet visited
+  for (int guard = 0; guard < 4 * (grid.x + grid.y + grid.z) + 4; ++guard) {
+    float t_out = min(min(t_max.x, t_max.y), t_max.z);
+    bool final_cell = t_out >= span.y || any(lessThan(cell, ivec3(0))) || any(greaterThanEqual(cell, grid));
+    // Lattice points with t in [t_in, t_out): i < ceil((t_out - t_enter) / dt); all of them in the last cell.
+    int end = final_cell ? last : min(last, int(ceil((t_out - span.x) / dt)) - 1);
+    bool occupied = texelFetch(u_occupancy, clamp(cell, ivec3(0), grid - 1), 0).r != 0u;
+    if (occupied) {
+      for (int i = next; i <= end; ++i)
+        if (take_sample(r, span.x, i, res)) return res;
+    }
+    next = max(next, end + 1);
+    if (final_cell || next > last) break;
+    // Step to the neighbour across the nearest face; ties step every tied axis at once.
+    bvec3 hit = lessThanEqual(t_max, vec3(t_out));
+    for (int a = 0; a < 3; ++a)
+      if (hit[a]) {
+        cell[a] += stp[a];
+        t_max[a] += t_delta[a];
+      }
+    t_in = t_out;
+  }
+#endif
+  return res;
+}

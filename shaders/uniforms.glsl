@@ -1,0 +1,16 @@
+// The ray-cast uniform block. Mirrored by server/render/gpu_layout.h (std140; a test compares
+// the offsets GL reports with the C++ struct). Positions are relative to the box centre so
+// that a camera far away keeps float precision (see ray_setup.glsl).
+layout(std140, binding = 0) uniform RayUniforms {
+  vec4 u_p0;         // xyz: point of the view axis nearest the box centre; w: unused
+  vec4 u_right;      // xyz: camera right; w: half width of the image plane per unit depth (or world units, ortho)
+  vec4 u_up;         // xyz: camera up; w: half height likewise
+  vec4 u_forward;    // xyz: view direction; w: distance eye -> p0 along it
+  vec4 u_box_half;   // xyz: half the box extent (world); w: step (world units)
+  vec4 u_spacing;    // xyz: voxel spacing; w: opacity unit (world units)
+  vec4 u_dims;       // xyz: voxels per axis; w: early-termination opacity
+  vec4 u_value_map;  // x, y: texel value -> TF coordinate (a*v + b); z: TF size; w: max samples
+  vec4 u_background; // rgb background
+  vec4 u_cells;      // xyz: macrocell grid; w: cell edge in voxels
+  ivec4 u_image;     // x, y: image size in pixels
+};
