@@ -38,7 +38,10 @@ RayResult cast_ray(vec2 pixel) {
   res.samples = 0.0;
   Ray r = make_ray(pixel);
   vec2 span = intersect_box(r);
-  if (!(span.x <= span.y)) return res;  // also false for NaN
+  if (!(span.x <= span.y)) {  // missed (also false for NaN): -1 tells misses from skipped rays
+    res.samples = -1.0;
+    return res;
+  }
   float dt = u_box_half.w;
   int last = int(min(floor((span.y - span.x) / dt), u_value_map.w - 1.0));
 #ifndef SPACE_SKIPPING

@@ -9,7 +9,7 @@ namespace peakcast {
 struct Image {
   int width = 0, height = 0;
   std::vector<float> rgba;     // width * height * 4, rgb = final colour over the background, a = opacity
-  std::vector<float> samples;  // samples taken per pixel's ray (may be empty)
+  std::vector<float> samples;  // samples taken per pixel's ray; -1 where the ray misses the box
 
   Image() = default;
   Image(int w, int h) : width(w), height(h), rgba(size_t(w) * h * 4, 0.f), samples(size_t(w) * h, 0.f) {}

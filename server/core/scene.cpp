@@ -178,7 +178,7 @@ Scene parse_scene_text(const std::string& text) {
   json j;
   try {
     j = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse errors and number overflow (1e999)
     throw SceneError(std::string("scene is not valid JSON: ") + e.what());
   }
   return parse_scene(j);

@@ -27,12 +27,16 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
       const Ray r = make_ray(view, x, y);
       double t0, t1;
       glm::dvec3 rgb(0.0);
-      double alpha = 0.0, samples = 0.0;
+      double alpha = 0.0, samples = -1.0;  // -1: the ray misses the box
       if (intersect_box(r, half, t0, t1)) {
-        const int64_t last = opt.midpoint ? int64_t(std::floor((t1 - t0) / dt - 0.5))
-                                          : int64_t(std::floor((t1 - t0) / dt));
+        samples = 0.0;
+        // Lattice: t0 + i*dt up to t1 (the GPU's). Midpoint: the segment split into n equal
+        // pieces of at most dt, sampled at their centres (second order, covers [t0, t1] exactly).
+        const int64_t pieces = std::max<int64_t>(1, int64_t(std::ceil((t1 - t0) / dt)));
+        const double h = opt.midpoint ? (t1 - t0) / double(pieces) : dt;
+        const int64_t last = opt.midpoint ? pieces - 1 : int64_t(std::floor((t1 - t0) / dt));
         for (int64_t i = 0; i <= last; ++i) {
-          const double t = t0 + (double(i) + (opt.midpoint ? 0.5 : 0.0)) * dt;
+          const double t = t0 + (double(i) + (opt.midpoint ? 0.5 : 0.0)) * h;
           const glm::dvec3 p = r.o + t * r.d;
           const glm::dvec3 xv = (p + half) / v.spacing;
           const glm::dvec4 c = s.tf.eval(sample(v, xv, filter));
@@ -40,7 +44,7 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
           if (c.a > 0) {
             glm::dvec3 col(c);
             if (shading) col = shade(col, gradient(v, xv, filter) / (hi - lo), r.d, min_spacing);
-            const double a = correct_opacity(c.a, dt, unit);
+            const double a = correct_opacity(c.a, h, unit);
             const double wgt = (1.0 - alpha) * a;
             rgb += wgt * col;
             alpha += wgt;

@@ -4,9 +4,12 @@
 
 #include <cstddef>
 #include <map>
+#include <vector>
 #include <string>
 
 #include <glm/vec4.hpp>
+
+#include "gpu/gl_objects.h"
 
 namespace peakcast::render {
 
@@ -30,5 +33,9 @@ static_assert(offsetof(RayUniforms, image) == 10 * 16, "std140 offset");
 
 // Member name (as in GLSL) -> byte offset, for the layout test.
 std::map<std::string, size_t> host_uniform_offsets();
+
+// What GL reports for the linked program's RayUniforms block.
+std::map<std::string, size_t> gl_uniform_offsets(const gpu::Program& program);
+size_t gl_uniform_block_size(const gpu::Program& program);
 
 }  // namespace peakcast::render

@@ -34,15 +34,6 @@ RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const Mac
 
 }  // namespace
 
-std::map<std::string, size_t> host_uniform_offsets() {
-  return {{"u_p0", offsetof(RayUniforms, p0)},           {"u_right", offsetof(RayUniforms, right)},
-          {"u_up", offsetof(RayUniforms, up)},           {"u_forward", offsetof(RayUniforms, forward)},
-          {"u_box_half", offsetof(RayUniforms, box_half)}, {"u_spacing", offsetof(RayUniforms, spacing)},
-          {"u_dims", offsetof(RayUniforms, dims)},       {"u_value_map", offsetof(RayUniforms, value_map)},
-          {"u_background", offsetof(RayUniforms, background)}, {"u_cells", offsetof(RayUniforms, cells)},
-          {"u_image", offsetof(RayUniforms, image)}};
-}
-
 std::string RenderStats::to_string() const {
   std::ostringstream s;
   s << "RenderStats{" << variant << ", " << render_ms << " ms, samples/ray mean " << samples_mean << " max "
@@ -150,7 +141,7 @@ Image Raycaster::render(const GpuVolume& gv, const ResolvedScene& s, GpuPath pat
     stats->variant = key.name();
     stats->empty_cells = occ.empty_cells;
     for (float n : img.samples) {
-      if (n <= 0) continue;
+      if (n < 0) continue;  // missed the box
       stats->samples_total += n;
       stats->samples_max = std::max<double>(stats->samples_max, n);
       stats->rays_hit++;

@@ -16,7 +16,7 @@ namespace peakcast::render {
 struct RenderStats {
   double render_ms = 0.0;      // GPU work, draw to glFinish
   double readback_ms = 0.0;
-  double samples_mean = 0.0;   // per ray that hit the box
+  double samples_mean = 0.0;   // per ray that hits the box (skipped rays count with 0)
   double samples_max = 0.0;
   double samples_total = 0.0;
   int64_t rays_hit = 0;

@@ -17,6 +17,8 @@ struct Expect {
   double min, max;
 };
 
+void PrintTo(const Expect& e, std::ostream* os) { *os << e.file; }
+
 class SampleData : public ::testing::TestWithParam<Expect> {};
 
 TEST_P(SampleData, LoadsWithTheRightHeaderAndRange) {

@@ -30,6 +30,8 @@ struct Case {
   bool gzip;
 };
 
+void PrintTo(const Case& c, std::ostream* os) { *os << to_string(c.type) << c.ext; }
+
 class RoundTrip : public ::testing::TestWithParam<Case> {};
 
 TEST_P(RoundTrip, WriteThenLoadGivesTheSameVoxels) {

@@ -1,0 +1,43 @@
+// Error against the converged DVR reference falls as the step halves (issue 3, point 6); the
+// converged reference itself converges (change < 1e-4 between refinements).
+#include <cmath>
+
+#include "gpu/gpu_fixture.h"
+#include "reference/cpu_raycaster.h"
+
+using namespace peakcast;
+
+namespace {
+
+TEST(Convergence, GpuErrorFallsAsTheStepHalves) {
+  auto v = test::make_volume(GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32);
+  render::GpuVolume gv(v);
+  nlohmann::json over = {
+      {"image", {{"width", 64}, {"height", 64}}},
+      {"camera", {{"eye", {75, 55, 95}}, {"center", {20, 20, 20}}, {"up", {0, 1, 0}}, {"fov_y", 30}}},
+      {"tf", {{"points", {{0.0, 0.1, 0.2, 0.8, 0.0}, {0.5, 0.9, 0.6, 0.3, 0.25}, {1.0, 1.0, 1.0, 1.0, 0.0}}}}},
+      {"render", {{"early_termination", 1.0}}}};
+  ResolvedScene s = test::make_scene(*v, over);
+  auto conv = reference::render_converged(*v, s, 1e-4);
+  std::printf("converged reference: step %.5f after %d refinements, last change %.2e\n", conv.step, conv.refinements,
+              conv.last_change);
+  ASSERT_TRUE(conv.converged);
+  EXPECT_LT(conv.last_change, 1e-4);
+
+  std::vector<double> errors;
+  for (double step : {2.0, 1.0, 0.5, 0.25}) {
+    over["render"]["step"] = step;
+    ResolvedScene si = test::make_scene(*v, over);
+    Image g = test::render_gpu(gv, si, render::GpuPath::Fragment);
+    const auto e = reference::compare(g, conv.image);
+    errors.push_back(e.rmse);
+    std::printf("step %.3f: RMSE %.3e, PSNR %.1f dB", step, e.rmse, e.psnr);
+    if (errors.size() > 1) std::printf(", observed order %.2f", std::log2(errors[errors.size() - 2] / e.rmse));
+    std::printf("\n");
+  }
+  for (size_t i = 1; i < errors.size(); ++i) EXPECT_LT(errors[i], errors[i - 1] * 0.75) << "step index " << i;
+  // First-order method (samples start at the entry point): order about 1.
+  EXPECT_GT(std::log2(errors[0] / errors.back()) / 3.0, 0.7);
+}
+
+}  // namespace

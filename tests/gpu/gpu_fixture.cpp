@@ -1,0 +1,71 @@
+#include "gpu/gpu_fixture.h"
+
+#include <cmath>
+#include <filesystem>
+
+#include "encode/png.h"
+
+namespace peakcast::test {
+
+Gpu& gpu() {
+  static Gpu g = [] {
+    Gpu x;
+    x.context = gpu::EglContext::create();
+    x.shaders = std::make_unique<gpu::ShaderCache>(std::filesystem::path(PEAKCAST_SOURCE_DIR) / "shaders");
+    x.caster = std::make_unique<render::Raycaster>(*x.shaders);
+    std::printf("GL: %s\n", x.context->info().to_string().c_str());
+    return x;
+  }();
+  return g;
+}
+
+ResolvedScene make_scene(const Volume& v, const nlohmann::json& overrides) {
+  nlohmann::json j = {{"volume", "test"}, {"image", {{"width", 96}, {"height", 80}}}};
+  j.merge_patch(overrides);
+  return resolve_scene(parse_scene(j), v);
+}
+
+std::shared_ptr<Volume> make_volume(GeneratorKind kind, Dims dims, SourceType type, glm::dvec3 spacing) {
+  GeneratorSpec s;
+  s.kind = kind;
+  s.dims = dims;
+  s.type = type;
+  s.spacing = spacing;
+  return std::make_shared<Volume>(generate_volume(s));
+}
+
+Image render_gpu(const render::GpuVolume& gv, const ResolvedScene& s, render::GpuPath path, render::RenderStats* st) {
+  return gpu().caster->render(gv, s, path, st);
+}
+
+void save_artifacts(const Image& actual, const Image& expected, const std::string& tag) {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::string name = std::string(info->test_suite_name()) + "." + info->name() + "." + tag;
+  for (auto& c : name)
+    if (c == '/') c = '_';
+  const std::filesystem::path dir = PEAKCAST_ARTIFACT_DIR;
+  std::filesystem::create_directories(dir);
+  encode::write_png(actual, dir / (name + ".actual.png"));
+  encode::write_png(expected, dir / (name + ".expected.png"));
+  Image diff(actual.width, actual.height);
+  for (size_t i = 0; i < diff.rgba.size(); ++i)
+    diff.rgba[i] = i % 4 == 3 ? 1.f : std::min(1.f, 10.f * std::abs(actual.rgba[i] - expected.rgba[i]));
+  encode::write_png(diff, dir / (name + ".diff_x10.png"));
+}
+
+bool all_finite(const Image& img) {
+  for (float v : img.rgba)
+    if (!std::isfinite(v)) return false;
+  return true;
+}
+
+}  // namespace peakcast::test
+
+namespace {
+// Every test in a GPU binary needs the context current before it creates GL objects.
+class GpuEnvironment : public ::testing::Environment {
+ public:
+  void SetUp() override { peakcast::test::gpu(); }
+};
+[[maybe_unused]] auto* const kGpuEnvironment = ::testing::AddGlobalTestEnvironment(new GpuEnvironment);
+}  // namespace

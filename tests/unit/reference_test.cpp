@@ -1,0 +1,74 @@
+// The CPU reference against closed forms: a constant TF through a box seen orthographically
+// along an axis has alpha = 1 - (1 - a)^(samples * step / unit) exactly.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/generators.h"
+#include "reference/cpu_raycaster.h"
+#include "reference/field.h"
+#include "reference/metrics.h"
+
+using namespace peakcast;
+
+namespace {
+
+ResolvedScene constant_tf_scene(const Volume& v, double step) {
+  nlohmann::json j = {
+      {"volume", "x"},
+      {"image", {{"width", 8}, {"height", 8}}},
+      {"camera", {{"eye", {100, 8, 8}}, {"center", {16, 8, 8}}, {"up", {0, 0, 1}}, {"projection", "orthographic"}, {"height", 8}}},
+      {"tf", {{"points", {{0.0, 1.0, 0.5, 0.25, 0.05}}}}},
+      {"render", {{"step", step}, {"early_termination", 1.0}}}};
+  return resolve_scene(parse_scene(j), v);
+}
+
+Volume ramp() {
+  GeneratorSpec g;
+  g.kind = GeneratorKind::Ramp;
+  g.dims = {33, 17, 17};  // box [0,32] x [0,16] x [0,16]
+  g.type = SourceType::F32;
+  return generate_volume(g);
+}
+
+TEST(Reference, LatticeSamplesIncludeEntryAndExit) {
+  Volume v = ramp();
+  for (double step : {1.0, 0.5, 4.0}) {
+    Image img = reference::render_reference(v, constant_tf_scene(v, step));
+    const double n = 32.0 / step + 1.0;  // t = 0, step, ..., 32
+    const double alpha = 1.0 - std::pow(0.95, n * step);
+    EXPECT_NEAR(img.pixel(4, 4)[3], alpha, 1e-6) << step;
+    EXPECT_NEAR(img.pixel(4, 4)[0], alpha * 1.0, 1e-6);
+    EXPECT_NEAR(img.pixel(4, 4)[1], alpha * 0.5, 1e-6);
+    EXPECT_EQ(img.samples[4 * 8 + 4], float(n));
+  }
+}
+
+TEST(Reference, ConvergedEqualsTheContinuousIntegral) {
+  Volume v = ramp();
+  auto c = reference::render_converged(v, constant_tf_scene(v, 1.0), 1e-6);
+  EXPECT_NEAR(c.image.pixel(4, 4)[3], 1.0 - std::pow(0.95, 32.0), 1e-6);
+}
+
+TEST(Reference, TrilinearIsExactOnARampAndBSplineKeepsLinear) {
+  Volume v = ramp();
+  for (double x : {0.0, 3.25, 17.5, 31.99, 32.0}) {
+    EXPECT_NEAR(reference::trilinear(v, {x, 5.5, 7.25}), x / 32.0, 1e-7);
+    if (x > 1 && x < 31) {  // away from the clamped border the B-spline reproduces linears
+      EXPECT_NEAR(reference::bspline(v, {x, 5.5, 7.25}), x / 32.0, 1e-6);
+    }
+  }
+}
+
+TEST(Metrics, PsnrOfKnownError) {
+  Image a(4, 4), b(4, 4);
+  for (size_t i = 0; i < b.rgba.size(); ++i) b.rgba[i] = i % 4 == 3 ? 0.f : 0.1f;
+  auto e = reference::compare(a, b);
+  EXPECT_NEAR(e.rmse, 0.1, 1e-7);
+  EXPECT_NEAR(e.psnr, 20.0, 1e-5);
+  EXPECT_NEAR(e.max_abs, 0.1, 1e-7);
+  EXPECT_EQ(e.share_off, 1.0);
+  EXPECT_THROW(reference::compare(a, Image(3, 4)), std::invalid_argument);
+}
+
+}  // namespace
