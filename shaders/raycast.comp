@@ -16,8 +16,8 @@ void main() {
   ivec2 id = ivec2(gl_GlobalInvocationID.xy);
   if (id.x >= u_image.x || id.y >= u_image.y) return;
   vec2 pixel = vec2(id) + 0.5;  // id.y counts rows from the top
-  RayResult res = cast_ray(pixel);
   ivec2 store = ivec2(id.x, u_image.y - 1 - id.y);
+  RayResult res = CAST_RAY(pixel, store);
   imageStore(u_out_color, store, vec4(finish_pixel(res.acc), res.acc.a));
   imageStore(u_out_samples, store, vec4(res.samples));
 }

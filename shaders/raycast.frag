@@ -14,7 +14,7 @@ layout(location = 1) out float out_samples;
 void main() {
   // gl_FragCoord.y counts from the bottom; the ray generator counts rows from the top.
   vec2 pixel = vec2(gl_FragCoord.x, float(u_image.y) - gl_FragCoord.y);
-  RayResult res = cast_ray(pixel);
+  RayResult res = CAST_RAY(pixel, ivec2(gl_FragCoord.xy));
   out_color = vec4(finish_pixel(res.acc), res.acc.a);
   out_samples = res.samples;
 }

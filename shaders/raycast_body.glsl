@@ -92,3 +92,26 @@ RayResult cast_ray(vec2 pixel) {
 #endif
   return res;
 }
+
+#ifdef BARE_SAMPLING
+// Benchmark baseline: the same rays and the same number of samples as a full render (its
+// per-pixel sample counts arrive in u_budget), reconstruction only: no TF, no compositing.
+layout(binding = 3) uniform sampler2D u_budget;
+
+RayResult cast_ray_bare(vec2 pixel, ivec2 texel) {
+  RayResult res;
+  res.acc = vec4(0.0);
+  res.samples = 0.0;
+  Ray r = make_ray(pixel);
+  vec2 span = intersect_box(r);
+  int budget = int(texelFetch(u_budget, texel, 0).r);
+  float sum = 0.0;
+  for (int i = 0; i < budget; ++i) sum += sample_field(voxel_coords(r.o + (span.x + float(i) * u_box_half.w) * r.d));
+  res.acc = vec4(sum * 1e-9);  // keeps the loop from being optimised away
+  res.samples = float(budget);
+  return res;
+}
+#define CAST_RAY(pixel, texel) cast_ray_bare(pixel, texel)
+#else
+#define CAST_RAY(pixel, texel) cast_ray(pixel)
+#endif

@@ -11,6 +11,7 @@ using Runner = std::function<int()>;
 
 void add_volume_commands(CLI::App& app, Runner& run);  // make-volume, info
 void add_render_commands(CLI::App& app, Runner& run);  // render, reference, compare
+void add_bench_commands(CLI::App& app, Runner& run);   // bench raycast
 
 // Exit codes: 0 ok, 1 failure of the job, 2 bad input (file, scene, arguments).
 constexpr int kExitBadInput = 2;

@@ -75,7 +75,6 @@ void Raycaster::ensure_targets(int w, int h) {
 }
 
 Image Raycaster::render(const GpuVolume& gv, const ResolvedScene& s, GpuPath path, RenderStats* stats) {
-  const int w = s.scene.width, h = s.scene.height;
   const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
 
   // Per-frame state that depends on the TF: table and macrocell occupancy.
@@ -96,6 +95,34 @@ Image Raycaster::render(const GpuVolume& gv, const ResolvedScene& s, GpuPath pat
                         GLsizei(cells.grid[2]), GL_RED_INTEGER, GL_UNSIGNED_BYTE, occ.occupied.data());
     glBindTextureUnit(2, occupancy_texture_.id());
   }
+  Image img = draw(gv, s, key, stats);
+  if (stats) stats->empty_cells = occ.empty_cells;
+  return img;
+}
+
+Image Raycaster::render_bare(const GpuVolume& gv, const ResolvedScene& s, GpuPath path, const Image& full,
+                             RenderStats* stats) {
+  const int w = s.scene.width, h = s.scene.height;
+  if (full.width != w || full.height != h) throw std::invalid_argument("render_bare: image size differs");
+  std::vector<float> budget(size_t(w) * h);
+  for (int y = 0; y < h; ++y)  // GL rows count from the bottom
+    for (int x = 0; x < w; ++x) budget[size_t(h - 1 - y) * w + x] = std::max(0.f, full.samples[size_t(y) * w + x]);
+  budget_texture_ = gpu::make_texture(GL_TEXTURE_2D);
+  glTextureStorage2D(budget_texture_.id(), 1, GL_R32F, w, h);
+  glTextureSubImage2D(budget_texture_.id(), 0, 0, 0, w, h, GL_RED, GL_FLOAT, budget.data());
+  glTextureParameteri(budget_texture_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTextureParameteri(budget_texture_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glBindTextureUnit(3, budget_texture_.id());
+  VariantKey key = choose_variant(s, 0, path);
+  key.shading = false;
+  key.bare_sampling = true;
+  return draw(gv, s, key, stats);
+}
+
+Image Raycaster::draw(const GpuVolume& gv, const ResolvedScene& s, const VariantKey& key, RenderStats* stats) {
+  const int w = s.scene.width, h = s.scene.height;
+  const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
+  const GpuPath path = key.path;
   const gpu::Program& prog = program(key);
   const RayUniforms u = make_uniforms(gv, s, cells);
   glNamedBufferSubData(ubo_.id(), 0, sizeof u, &u);
@@ -139,7 +166,6 @@ Image Raycaster::render(const GpuVolume& gv, const ResolvedScene& s, GpuPath pat
     stats->render_ms = render_ms;
     stats->readback_ms = ms_since(t1);
     stats->variant = key.name();
-    stats->empty_cells = occ.empty_cells;
     for (float n : img.samples) {
       if (n < 0) continue;  // missed the box
       stats->samples_total += n;

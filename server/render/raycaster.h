@@ -29,16 +29,21 @@ class Raycaster {
  public:
   explicit Raycaster(gpu::ShaderCache& shaders);
   Image render(const GpuVolume& volume, const ResolvedScene& scene, GpuPath path, RenderStats* stats = nullptr);
+  // Benchmark baseline: the rays of `full` (an image this caster rendered of the same scene)
+  // with its per-pixel sample counts, reconstruction only.
+  Image render_bare(const GpuVolume& volume, const ResolvedScene& scene, GpuPath path, const Image& full,
+                    RenderStats* stats = nullptr);
   // For the layout test: the linked program of a variant.
   const gpu::Program& program(const VariantKey& key);
 
  private:
   void ensure_targets(int w, int h);
+  Image draw(const GpuVolume& volume, const ResolvedScene& scene, const VariantKey& key, RenderStats* stats);
 
   gpu::ShaderCache& shaders_;
   gpu::Buffer ubo_;
   gpu::VertexArray vao_;
-  gpu::Texture tf_texture_, occupancy_texture_, color_, samples_;
+  gpu::Texture tf_texture_, occupancy_texture_, budget_texture_, color_, samples_;
   gpu::Framebuffer fbo_;
   int target_w_ = 0, target_h_ = 0;
 };

@@ -9,6 +9,7 @@ std::vector<std::string> VariantKey::defines() const {
   if (shading) d.push_back("SHADING");
   if (space_skipping) d.push_back("SPACE_SKIPPING");
   if (orthographic) d.push_back("ORTHOGRAPHIC");
+  if (bare_sampling) d.push_back("BARE_SAMPLING");
   return d;
 }
 
@@ -18,6 +19,7 @@ std::string VariantKey::name() const {
   if (shading) n += "+shade";
   if (space_skipping) n += "+skip";
   if (orthographic) n += "+ortho";
+  if (bare_sampling) n += "+bare";
   return n;
 }
 

@@ -17,6 +17,7 @@ struct VariantKey {
   bool shading = false;
   bool space_skipping = false;  // only when the TF leaves some macrocell empty
   bool orthographic = false;
+  bool bare_sampling = false;  // benchmark baseline only
 
   std::vector<std::string> defines() const;
   std::string name() const;  // e.g. "frag+tricubic+skip"

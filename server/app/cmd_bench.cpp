@@ -1,0 +1,126 @@
+// `bench raycast`: frame time and sampling throughput of the GL ray caster against a bare
+// sampling loop (same rays, same per-ray sample counts, reconstruction only), measured in the
+// same run. A benchmark command, not a test: the em volume alone is 837 MB.
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <sstream>
+
+#include "app/commands.h"
+#include "core/generators.h"
+#include "core/volume_io.h"
+#include "gpu/egl_context.h"
+#include "gpu/shader_cache.h"
+#include "render/raycaster.h"
+
+namespace fs = std::filesystem;
+
+namespace peakcast::app {
+namespace {
+
+struct BenchArgs {
+  std::vector<std::string> volumes{"blobs", "marschner-lobb", "em"};
+  std::vector<int> sizes{512, 1024};
+  std::vector<std::string> paths{"fragment", "compute"};
+  int frames = 5;
+  std::string data_dir = "bench-data";
+};
+
+struct BenchVolume {
+  std::string name;
+  GeneratorSpec spec;
+};
+
+BenchVolume bench_volume(const std::string& name) {
+  GeneratorSpec s;
+  s.kind = parse_generator_kind(name);
+  s.type = default_type(s.kind);
+  if (s.kind == GeneratorKind::Blobs) s.dims = {256, 256, 256};
+  else if (s.kind == GeneratorKind::MarschnerLobb) s.dims = {128, 128, 128};
+  else if (s.kind == GeneratorKind::Em) s.dims = {900, 500, 930};
+  else s.dims = {256, 256, 256};
+  std::ostringstream n;
+  n << name << "_" << s.dims[0] << "x" << s.dims[1] << "x" << s.dims[2];
+  return {n.str(), s};
+}
+
+// Generated once into the data directory and reused by later runs.
+std::shared_ptr<Volume> load_or_make(const BenchVolume& bv, const fs::path& dir) {
+  fs::create_directories(dir);
+  const fs::path file = dir / (bv.name + ".raw");
+  if (!fs::exists(file)) {
+    std::printf("generating %s ...\n", file.c_str());
+    std::fflush(stdout);
+    generate_to_file(bv.spec, file);
+  }
+  return std::make_shared<Volume>(load_volume(file));
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+}  // namespace
+
+void add_bench_commands(CLI::App& app, Runner& run) {
+  auto* bench = app.add_subcommand("bench", "Benchmarks (commands, not tests)");
+  bench->require_subcommand(1);
+  auto a = std::make_shared<BenchArgs>();
+  auto* rc = bench->add_subcommand("raycast", "GL ray caster vs a bare sampling loop: blobs 256^3, ML 128^3, em 900x500x930");
+  rc->add_option("--volumes", a->volumes, "generator kinds (blobs, marschner-lobb, em, fire)")->delimiter(',');
+  rc->add_option("--sizes", a->sizes, "square image sizes")->delimiter(',');
+  rc->add_option("--paths", a->paths, "fragment, compute")->delimiter(',');
+  rc->add_option("--frames", a->frames, "timed frames per case (after one warm-up)");
+  rc->add_option("--data-dir", a->data_dir, "where generated volumes are cached");
+  rc->callback([a, &run] {
+    run = [a] {
+      auto ctx = gpu::EglContext::create();
+      std::printf("GL: %s\n", ctx->info().to_string().c_str());
+      gpu::ShaderCache shaders(gpu::default_shader_dir());
+      render::Raycaster caster(shaders);
+      std::printf("%-22s %5s %-5s %-30s %9s %8s %10s | %9s %10s | %6s\n", "volume", "size", "path", "variant",
+                  "median_ms", "spr", "Msamples/s", "bare_ms", "bare_MS/s", "ratio");
+      for (const auto& name : a->volumes) {
+        const BenchVolume bv = bench_volume(name);
+        auto vol = load_or_make(bv, a->data_dir);
+        render::GpuVolume gv(vol);
+        for (int size : a->sizes) {
+          nlohmann::json j = {{"volume", bv.name}, {"image", {{"width", size}, {"height", size}}}};
+          const double lo = vol->min_value, hi = vol->max_value;
+          j["tf"] = {{"points", {{lo, 0, 0, 0, 0}, {lo + 0.3 * (hi - lo), 0.2, 0.4, 1.0, 0.0},
+                                 {lo + 0.6 * (hi - lo), 1.0, 0.8, 0.4, 0.3}, {hi, 1, 1, 1, 0.6}}}};
+          ResolvedScene s = resolve_scene(parse_scene(j), *vol);
+          // A three-quarter view rather than the axis-aligned default.
+          const glm::dvec3 c = s.camera.center;
+          s.camera.eye = c + (s.camera.eye - c).z * glm::dvec3(0.55, 0.45, 0.7);
+          for (const auto& p : a->paths) {
+            const auto path = p == "compute" ? render::GpuPath::Compute : render::GpuPath::Fragment;
+            std::vector<double> full_ms, bare_ms;
+            render::RenderStats st, bst;
+            Image img;
+            for (int f = 0; f <= a->frames; ++f) {
+              img = caster.render(gv, s, path, &st);
+              caster.render_bare(gv, s, path, img, &bst);
+              if (f > 0) {  // frame 0 warms up (shader compile, first upload)
+                full_ms.push_back(st.render_ms);
+                bare_ms.push_back(bst.render_ms);
+              }
+            }
+            const double fm = median(full_ms), bm = median(bare_ms);
+            const double rate = st.samples_total / (fm / 1000.0) / 1e6, brate = bst.samples_total / (bm / 1000.0) / 1e6;
+            std::printf("%-22s %5d %-5s %-30s %9.1f %8.1f %10.1f | %9.1f %10.1f | %6.2f\n", bv.name.c_str(), size,
+                        p == "compute" ? "comp" : "frag", st.variant.c_str(), fm, st.samples_mean, rate, bm, brate,
+                        fm / bm);
+            std::fflush(stdout);
+          }
+        }
+      }
+      std::printf("spr: samples per ray (rays that hit the box); ratio: full frame ms / bare loop ms (same samples)\n");
+      return 0;
+    };
+  });
+}
+
+}  // namespace peakcast::app
