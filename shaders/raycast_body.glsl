@@ -1,4 +1,6 @@
 // The ray caster shared by the fragment and compute entry points (raycast.frag, raycast.comp).
+// Classification: post (TF table per sample), peaks (PEAKS: Knoll's peak finding between
+// samples, with PEAK_XOR / PEAKS_ONLY modes) or pre-integrated segments (PREINTEGRATION).
 // Samples lie on the lattice t_i = t_enter + i * step, i = 0..floor((t_exit - t_enter) / step),
 // computed from i (no accumulated t += dt drift). Space skipping visits only the lattice points
 // inside occupied macrocells, so it changes no sample that contributes.
@@ -9,26 +11,69 @@ layout(binding = 2) uniform usampler3D u_occupancy;  // 1 = some voxel of the ce
 
 struct RayResult {
   vec4 acc;
-  float samples;
+  float samples;  // filter evaluations (root-solving steps included); -1: missed the box
 };
 
 vec3 voxel_coords(vec3 p) { return (p + u_box_half.xyz) / u_spacing.xyz; }
 
-// One sample at lattice index i; returns true when the ray is opaque enough to stop.
-bool take_sample(Ray r, float t_enter, int i, inout RayResult res) {
-  float dt = u_box_half.w;
-  vec3 p = r.o + (t_enter + float(i) * dt) * r.d;
-  vec3 x = voxel_coords(p);
-  float s = sample_field(x);
-  vec4 c = tf_lookup(s);
-  res.samples += 1.0;
-  if (c.a > 0.0) {
-    vec3 rgb = c.rgb;
-#ifdef SHADING
-    rgb = shade(rgb, field_gradient(x), r.d);
+#if defined(PEAKS) || defined(PREINTEGRATION)
+#define SEGMENTS  // methods that look at the segment between consecutive samples
 #endif
-    composite(res.acc, rgb, correct_opacity(c.a, dt));
+
+#ifdef PEAKS
+#include "peak_find.glsl"
+#endif
+#ifdef PREINTEGRATION
+#include "preintegration.glsl"
+#endif
+
+// The previous sample, for segment methods: a segment exists only between consecutive lattice
+// indices.
+float g_prev_t, g_prev_f;
+int g_prev_i;
+
+// Visits lattice index i: peaks in the segment ending here, then the sample (post-classified,
+// or the pre-integrated segment). Returns true when the ray is opaque enough to stop.
+bool visit(Ray r, float t_enter, int i, inout RayResult res) {
+  float dt = u_box_half.w;
+  float t = t_enter + float(i) * dt;
+  vec3 x = voxel_coords(r.o + t * r.d);
+  float f = sample_field(x);
+  res.samples += 1.0;
+  bool segment = g_prev_i == i - 1;
+  bool peak_hit = false;
+#ifdef PEAKS
+  if (segment) peak_hit = find_peaks(r, g_prev_t, g_prev_f, t, f, res);
+#endif
+#if defined(PREINTEGRATION)
+  if (segment) {
+    vec4 c = preint_lookup(g_prev_f, f);
+    if (c.a > 0.0) {
+      vec3 rgb = c.rgb / c.a;
+#ifdef SHADING
+      rgb = shade(rgb, field_gradient(x), r.d);  // at the segment's end, as preintegration does
+#endif
+      composite(res.acc, rgb, c.a);
+    }
   }
+#elif !defined(PEAKS_ONLY)
+#ifdef PEAK_XOR
+  if (!peak_hit)
+#endif
+  {
+    vec4 c = tf_lookup(f);
+    if (c.a > 0.0) {
+      vec3 rgb = c.rgb;
+#ifdef SHADING
+      rgb = shade(rgb, field_gradient(x), r.d);
+#endif
+      composite(res.acc, rgb, correct_opacity(c.a, dt));
+    }
+  }
+#endif
+  g_prev_t = t;
+  g_prev_f = f;
+  g_prev_i = i;
   return res.acc.a >= u_dims.w;
 }
 
@@ -36,9 +81,10 @@ RayResult cast_ray(vec2 pixel) {
   RayResult res;
   res.acc = vec4(0.0);
   res.samples = 0.0;
+  g_prev_i = -2;
   Ray r = make_ray(pixel);
   vec2 span = intersect_box(r);
-  if (!(span.x <= span.y)) {  // missed (also false for NaN): -1 tells misses from skipped rays
+  if (!(span.x <= span.y)) {  // missed (also false for NaN)
     res.samples = -1.0;
     return res;
   }
@@ -46,9 +92,11 @@ RayResult cast_ray(vec2 pixel) {
   int last = int(min(floor((span.y - span.x) / dt), u_value_map.w - 1.0));
 #ifndef SPACE_SKIPPING
   for (int i = 0; i <= last; ++i)
-    if (take_sample(r, span.x, i, res)) break;
+    if (visit(r, span.x, i, res)) break;
 #else
-  // 3D-DDA over the macrocell grid (Amanatides & Woo) in voxel coordinates.
+  // 3D-DDA over the macrocell grid (Amanatides & Woo) in voxel coordinates. Each occupied cell
+  // visits the lattice indices inside it; segment methods also visit one index on each side, so
+  // the segments that leave or enter the cell are not lost.
   float edge = u_cells.w;
   vec3 x0 = voxel_coords(r.o + span.x * r.d);
   vec3 dv = r.d / u_spacing.xyz;
@@ -71,14 +119,19 @@ RayResult cast_ray(vec2 pixel) {
   for (int guard = 0; guard < 4 * (grid.x + grid.y + grid.z) + 4; ++guard) {
     float t_out = min(min(t_max.x, t_max.y), t_max.z);
     bool final_cell = t_out >= span.y || any(lessThan(cell, ivec3(0))) || any(greaterThanEqual(cell, grid));
-    // Lattice points with t in [t_in, t_out): i < ceil((t_out - t_enter) / dt); all of them in the last cell.
+    // Lattice points with t in [t_in, t_out); all remaining ones in the last cell.
+    int first = int(ceil((t_in - span.x) / dt));
     int end = final_cell ? last : min(last, int(ceil((t_out - span.x) / dt)) - 1);
     bool occupied = texelFetch(u_occupancy, clamp(cell, ivec3(0), grid - 1), 0).r != 0u;
     if (occupied) {
-      for (int i = next; i <= end; ++i)
-        if (take_sample(r, span.x, i, res)) return res;
+#ifdef SEGMENTS
+      first -= 1;
+      end = min(last, end + 1);
+#endif
+      for (int i = max(next, first); i <= end; ++i)
+        if (visit(r, span.x, i, res)) return res;
+      next = max(next, end + 1);
     }
-    next = max(next, end + 1);
     if (final_cell || next > last) break;
     // Step to the neighbour across the nearest face; ties step every tied axis at once.
     bvec3 hit = lessThanEqual(t_max, vec3(t_out));

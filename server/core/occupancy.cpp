@@ -6,7 +6,8 @@
 
 namespace peakcast {
 
-Occupancy classify_cells(const MacrocellGrid& grid, const TransferFunction& tf, double lo, double hi, int n) {
+Occupancy classify_cells(const MacrocellGrid& grid, const TransferFunction& tf, double lo, double hi,
+                         const std::vector<double>& peak_values, int n) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::vector<float> table = tf.bake(n, lo, hi);
   // Sparse table of maxima over power-of-two runs of opacity entries.
@@ -28,7 +29,9 @@ Occupancy classify_cells(const MacrocellGrid& grid, const TransferFunction& tf, 
   for (size_t c = 0; c < grid.size(); ++c) {
     const int a = std::clamp(int(std::floor((grid.min[c] - lo) * scale)) - 1, 0, n - 1);
     const int b = std::clamp(int(std::ceil((grid.max[c] - lo) * scale)) + 1, 0, n - 1);
-    out.occupied[c] = range_max(a, b) > 0.f ? 1 : 0;
+    bool visible = range_max(a, b) > 0.f;
+    for (double v : peak_values) visible = visible || (v >= grid.min[c] && v <= grid.max[c]);
+    out.occupied[c] = visible ? 1 : 0;
     out.empty_cells += out.occupied[c] ? 0 : 1;
   }
   out.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

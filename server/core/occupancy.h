@@ -19,7 +19,10 @@ struct Occupancy {
 
 // `lo`, `hi`: the TF table's domain (the volume's value range). The table is sampled with
 // linear filtering, so each cell's range is widened by one table entry on each side.
+// With peak finding, a cell whose range holds a peak value is occupied too (a Dirac-like peak is
+// narrower than a table entry, so the opacity table alone would call it empty).
 Occupancy classify_cells(const MacrocellGrid& grid, const TransferFunction& tf, double lo, double hi,
+                         const std::vector<double>& peak_values = {},
                          int table_size = TransferFunction::kTableSize);
 
 }  // namespace peakcast

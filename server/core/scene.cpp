@@ -106,9 +106,9 @@ TransferFunction parse_tf(const json& j, double& opacity_unit) {
 }
 
 RenderSettings parse_render(const json& j) {
-  only_keys(j, "render", {"classification", "peak_mode", "max_peaks", "sampling", "step", "s_k", "filter",
-                          "virtual_samples", "shading", "early_termination", "space_skipping", "adaptive",
-                          "ray_texture"});
+  only_keys(j, "render", {"classification", "peak_mode", "max_peaks", "peak_table_bins", "secant_iterations",
+                          "preint_table_size", "sampling", "step", "s_k", "filter", "virtual_samples", "shading",
+                          "early_termination", "space_skipping", "adaptive", "ray_texture"});
   RenderSettings r;
   if (j.contains("classification"))
     r.classification = choice<Classification>(j["classification"], "render.classification",
@@ -119,6 +119,12 @@ RenderSettings parse_render(const json& j) {
                                    {{"dvr+peaks", PeakMode::DvrPlusPeaks}, {"xor", PeakMode::Xor},
                                     {"peaks_only", PeakMode::PeaksOnly}, {"dvr_only", PeakMode::DvrOnly}});
   if (j.contains("max_peaks")) r.max_peaks = integer(j["max_peaks"], "render.max_peaks", 1, 4);
+  if (j.contains("peak_table_bins"))
+    r.peak_table_bins = integer(j["peak_table_bins"], "render.peak_table_bins", 64, 1024);
+  if (j.contains("secant_iterations"))
+    r.secant_iterations = integer(j["secant_iterations"], "render.secant_iterations", 0, 16);
+  if (j.contains("preint_table_size"))
+    r.preint_table_size = integer(j["preint_table_size"], "render.preint_table_size", 16, 1024);
   if (j.contains("sampling"))
     r.sampling = choice<Sampling>(j["sampling"], "render.sampling",
                                   {{"uniform", Sampling::Uniform}, {"differential", Sampling::Differential}});
@@ -219,7 +225,9 @@ json scene_to_json(const Scene& s) {
   j["background"] = {s.background.x, s.background.y, s.background.z};
   const RenderSettings& r = s.render;
   j["render"] = {{"classification", to_string(r.classification)}, {"peak_mode", to_string(r.peak_mode)},
-                 {"max_peaks", r.max_peaks}, {"sampling", to_string(r.sampling)}, {"s_k", r.s_k},
+                 {"max_peaks", r.max_peaks}, {"peak_table_bins", r.peak_table_bins},
+                 {"secant_iterations", r.secant_iterations}, {"preint_table_size", r.preint_table_size},
+                 {"sampling", to_string(r.sampling)}, {"s_k", r.s_k},
                  {"filter", to_string(r.filter)}, {"virtual_samples", r.virtual_samples}, {"shading", r.shading},
                  {"early_termination", r.early_termination}, {"space_skipping", r.space_skipping},
                  {"adaptive", r.adaptive}};

@@ -8,7 +8,8 @@ std::map<std::string, size_t> host_uniform_offsets() {
           {"u_box_half", offsetof(RayUniforms, box_half)}, {"u_spacing", offsetof(RayUniforms, spacing)},
           {"u_dims", offsetof(RayUniforms, dims)},       {"u_value_map", offsetof(RayUniforms, value_map)},
           {"u_background", offsetof(RayUniforms, background)}, {"u_cells", offsetof(RayUniforms, cells)},
-          {"u_image", offsetof(RayUniforms, image)}};
+          {"u_image", offsetof(RayUniforms, image)},
+          {"u_peaks", offsetof(RayUniforms, peaks)},           {"u_tables", offsetof(RayUniforms, tables)}};
 }
 
 std::map<std::string, size_t> gl_uniform_offsets(const gpu::Program& program) {

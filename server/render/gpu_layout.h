@@ -25,9 +25,11 @@ struct RayUniforms {
   glm::vec4 background;
   glm::vec4 cells;
   glm::ivec4 image;
+  glm::vec4 peaks;
+  glm::vec4 tables;
 };
 
-static_assert(sizeof(RayUniforms) == 11 * 16, "std140 block size");
+static_assert(sizeof(RayUniforms) == 13 * 16, "std140 block size");
 static_assert(offsetof(RayUniforms, value_map) == 7 * 16, "std140 offset");
 static_assert(offsetof(RayUniforms, image) == 10 * 16, "std140 offset");
 

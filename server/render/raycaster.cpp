@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/occupancy.h"
+#include "core/preintegration.h"
 #include "render/gpu_layout.h"
 
 namespace peakcast::render {
@@ -13,7 +14,8 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
-RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const MacrocellGrid& cells) {
+RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const MacrocellGrid& cells,
+                          const RayTables& t) {
   const Volume& v = gv.volume();
   const glm::dvec3 center = (s.box_min + s.box_max) * 0.5;
   const ViewSetup view = setup_view(s.camera, center, s.scene.width, s.scene.height);
@@ -29,6 +31,8 @@ RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const Mac
   u.background = glm::vec4(glm::vec3(s.scene.background), 1.f);
   u.cells = glm::vec4(float(cells.grid[0]), float(cells.grid[1]), float(cells.grid[2]), float(cells.cell));
   u.image = glm::ivec4(s.scene.width, s.scene.height, 0, 0);
+  u.peaks = glm::vec4(float(t.peak_bins), float(t.peak_layers), float(t.max_peaks), float(t.secant_iterations));
+  u.tables = glm::vec4(float(t.preint_size), float(t.tf_points), 0.f, 0.f);
   return u;
 }
 
@@ -80,9 +84,17 @@ Image Raycaster::render(const GpuVolume& gv, const ResolvedScene& s, GpuPath pat
   // Per-frame state that depends on the TF: table and macrocell occupancy.
   const std::vector<float> table = s.tf.bake(TransferFunction::kTableSize, gv.tf_lo(), gv.tf_hi());
   glTextureSubImage1D(tf_texture_.id(), 0, 0, TransferFunction::kTableSize, GL_RGBA, GL_FLOAT, table.data());
+  const auto t_tables = Clock::now();
+  const std::vector<Peak> peaks =
+      s.scene.render.classification == Classification::Peaks ? find_peaks(s.tf) : std::vector<Peak>{};
+  std::vector<double> peak_values;
+  for (const auto& p : peaks) peak_values.push_back(p.value);
   Occupancy occ;
-  if (s.scene.render.space_skipping) occ = classify_cells(cells, s.tf, gv.tf_lo(), gv.tf_hi());
-  const VariantKey key = choose_variant(s, occ.empty_cells, path);
+  if (s.scene.render.space_skipping) occ = classify_cells(cells, s.tf, gv.tf_lo(), gv.tf_hi(), peak_values);
+  const VariantKey key = choose_variant(s, occ.empty_cells, path, peaks.size());
+  upload_tables(gv, s, key.peaks ? peaks : std::vector<Peak>{});
+  if (!key.peaks && !key.preintegration) tables_ = RayTables{};
+  const double table_ms = ms_since(t_tables);
   if (key.space_skipping) {
     occupancy_texture_ = gpu::make_texture(GL_TEXTURE_3D);
     glTextureStorage3D(occupancy_texture_.id(), 1, GL_R8UI, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]),
@@ -96,8 +108,57 @@ Image Raycaster::render(const GpuVolume& gv, const ResolvedScene& s, GpuPath pat
     glBindTextureUnit(2, occupancy_texture_.id());
   }
   Image img = draw(gv, s, key, stats);
-  if (stats) stats->empty_cells = occ.empty_cells;
+  if (stats) {
+    stats->empty_cells = occ.empty_cells;
+    stats->peaks = peaks.size();
+    stats->table_ms = table_ms;
+  }
   return img;
+}
+
+void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const std::vector<Peak>& peaks) {
+  const RenderSettings& r = s.scene.render;
+  const double lo = gv.tf_lo(), hi = gv.tf_hi();
+  tables_ = RayTables{};
+  if (r.classification == Classification::Peaks) {
+    const PeakTable table = build_peak_table(peaks, lo, hi, r.peak_table_bins);
+    std::vector<float> texels(table.texels.size());
+    for (size_t k = 0; k < texels.size(); ++k)  // to TF coordinates; -1 = none
+      texels[k] = table.texels[k] == PeakTable::kNoPeak ? -1.f : float((table.texels[k] - lo) / (hi - lo));
+    peak_table_ = gpu::make_texture(GL_TEXTURE_2D_ARRAY);
+    glTextureStorage3D(peak_table_.id(), 1, GL_RGBA32F, table.bins, table.bins, table.layers);
+    glTextureSubImage3D(peak_table_.id(), 0, 0, 0, 0, table.bins, table.bins, table.layers, GL_RGBA, GL_FLOAT,
+                        texels.data());
+    glTextureParameteri(peak_table_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(peak_table_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glBindTextureUnit(4, peak_table_.id());
+    std::vector<glm::vec4> points;
+    for (const auto& p : s.tf.points) {
+      points.emplace_back(float((p.value - lo) / (hi - lo)), 0.f, 0.f, 0.f);
+      points.emplace_back(float(p.r), float(p.g), float(p.b), float(p.a));
+    }
+    tf_points_ = gpu::make_buffer();
+    glNamedBufferStorage(tf_points_.id(), GLsizeiptr(points.size() * sizeof(glm::vec4)), points.data(), 0);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, tf_points_.id());
+    tables_.peak_bins = table.bins;
+    tables_.peak_layers = table.layers;
+    tables_.max_peaks = r.max_peaks;
+    tables_.secant_iterations = r.secant_iterations;
+    tables_.tf_points = int(s.tf.points.size());
+    tables_.peak_count = peaks.size();
+  }
+  if (r.classification == Classification::Preint) {
+    const PreintegrationTable table = build_preintegration(s.tf, lo, hi, s.step, r.preint_table_size);
+    preint_table_ = gpu::make_texture(GL_TEXTURE_2D);
+    glTextureStorage2D(preint_table_.id(), 1, GL_RGBA32F, table.size, table.size);
+    glTextureSubImage2D(preint_table_.id(), 0, 0, 0, table.size, table.size, GL_RGBA, GL_FLOAT, table.rgba.data());
+    glTextureParameteri(preint_table_.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTextureParameteri(preint_table_.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTextureParameteri(preint_table_.id(), GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(preint_table_.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glBindTextureUnit(5, preint_table_.id());
+    tables_.preint_size = table.size;
+  }
 }
 
 Image Raycaster::render_bare(const GpuVolume& gv, const ResolvedScene& s, GpuPath path, const Image& full,
@@ -124,7 +185,7 @@ Image Raycaster::draw(const GpuVolume& gv, const ResolvedScene& s, const Variant
   const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
   const GpuPath path = key.path;
   const gpu::Program& prog = program(key);
-  const RayUniforms u = make_uniforms(gv, s, cells);
+  const RayUniforms u = make_uniforms(gv, s, cells, tables_);
   glNamedBufferSubData(ubo_.id(), 0, sizeof u, &u);
   glBindBufferBase(GL_UNIFORM_BUFFER, 0, ubo_.id());
   gv.bind(0);

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "core/image.h"
+#include "core/peaks.h"
 #include "core/scene.h"
 #include "gpu/gl_objects.h"
 #include "gpu/shader_cache.h"
@@ -12,6 +13,13 @@
 #include "render/variant.h"
 
 namespace peakcast::render {
+
+// Sizes of the per-TF tables bound for a frame.
+struct RayTables {
+  int peak_bins = 0, peak_layers = 0, max_peaks = 0, secant_iterations = 0;
+  int preint_size = 0, tf_points = 0;
+  size_t peak_count = 0;
+};
 
 struct RenderStats {
   double render_ms = 0.0;      // GPU work, draw to glFinish
@@ -21,6 +29,8 @@ struct RenderStats {
   double samples_total = 0.0;
   int64_t rays_hit = 0;
   int64_t empty_cells = 0;
+  size_t peaks = 0;
+  double table_ms = 0.0;  // peak table / preintegration table / occupancy rebuilt for this frame
   std::string variant;
   std::string to_string() const;
 };
@@ -38,12 +48,17 @@ class Raycaster {
 
  private:
   void ensure_targets(int w, int h);
+  // Builds and binds the peak table + TF points or the preintegration table the scene needs.
+  void upload_tables(const GpuVolume& volume, const ResolvedScene& scene, const std::vector<Peak>& peaks);
   Image draw(const GpuVolume& volume, const ResolvedScene& scene, const VariantKey& key, RenderStats* stats);
 
   gpu::ShaderCache& shaders_;
   gpu::Buffer ubo_;
   gpu::VertexArray vao_;
   gpu::Texture tf_texture_, occupancy_texture_, budget_texture_, color_, samples_;
+  gpu::Texture peak_table_, preint_table_;
+  gpu::Buffer tf_points_;
+  RayTables tables_;  // what the current frame's tables hold (for the uniforms and stats)
   gpu::Framebuffer fbo_;
   int target_w_ = 0, target_h_ = 0;
 };

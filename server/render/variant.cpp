@@ -10,12 +10,20 @@ std::vector<std::string> VariantKey::defines() const {
   if (space_skipping) d.push_back("SPACE_SKIPPING");
   if (orthographic) d.push_back("ORTHOGRAPHIC");
   if (bare_sampling) d.push_back("BARE_SAMPLING");
+  if (peaks) {
+    d.push_back("PEAKS");
+    if (peak_mode == PeakMode::Xor) d.push_back("PEAK_XOR");
+    if (peak_mode == PeakMode::PeaksOnly) d.push_back("PEAKS_ONLY");
+  }
+  if (preintegration) d.push_back("PREINTEGRATION");
   return d;
 }
 
 std::string VariantKey::name() const {
   std::string n = path == GpuPath::Compute ? "comp" : "frag";
   n += tricubic ? "+tricubic" : "+trilinear";
+  if (peaks) n += std::string("+peaks:") + to_string(peak_mode);
+  if (preintegration) n += "+preint";
   if (shading) n += "+shade";
   if (space_skipping) n += "+skip";
   if (orthographic) n += "+ortho";
@@ -23,13 +31,19 @@ std::string VariantKey::name() const {
   return n;
 }
 
-VariantKey choose_variant(const ResolvedScene& s, int64_t empty_cells, GpuPath path) {
+VariantKey choose_variant(const ResolvedScene& s, int64_t empty_cells, GpuPath path, size_t peak_count) {
   VariantKey k;
   k.path = path;
   k.tricubic = s.scene.render.filter == Filter::Tricubic;
   k.shading = s.scene.render.shading;
   k.space_skipping = s.scene.render.space_skipping && empty_cells > 0;
   k.orthographic = s.camera.orthographic;
+  const RenderSettings& r = s.scene.render;
+  // dvr_only, or a TF without peaks, leaves the peak-finding code out (plain postclassification).
+  k.peaks = r.classification == Classification::Peaks && r.peak_mode != PeakMode::DvrOnly &&
+            (peak_count > 0 || r.peak_mode == PeakMode::PeaksOnly);
+  k.peak_mode = r.peak_mode;
+  k.preintegration = r.classification == Classification::Preint;
   return k;
 }
 

@@ -18,11 +18,15 @@ struct VariantKey {
   bool space_skipping = false;  // only when the TF leaves some macrocell empty
   bool orthographic = false;
   bool bare_sampling = false;  // benchmark baseline only
+  bool peaks = false;          // peak finding between samples
+  PeakMode peak_mode = PeakMode::DvrPlusPeaks;
+  bool preintegration = false;
 
   std::vector<std::string> defines() const;
   std::string name() const;  // e.g. "frag+tricubic+skip"
 };
 
-VariantKey choose_variant(const ResolvedScene& scene, int64_t empty_cells, GpuPath path);
+// peak_count: peaks of the scene's TF (no peaks -> no peak-finding code).
+VariantKey choose_variant(const ResolvedScene& scene, int64_t empty_cells, GpuPath path, size_t peak_count = 0);
 
 }  // namespace peakcast::render

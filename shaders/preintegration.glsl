@@ -1,0 +1,9 @@
+// Pre-integrated classification: the segment's colour (opacity-weighted) and opacity from the
+// 2D table built by core/preintegration.cpp for the current step.
+layout(binding = 5) uniform sampler2D u_preint;
+
+vec4 preint_lookup(float s_front, float s_back) {
+  float n = u_tables.x;
+  vec2 uv = (0.5 + clamp(vec2(s_front, s_back), 0.0, 1.0) * (n - 1.0)) / n;
+  return texture(u_preint, uv);
+}
