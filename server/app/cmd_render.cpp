@@ -25,6 +25,7 @@ struct ReferenceArgs {
   std::string scene, out;
   double step = 0;
   bool converged = false;
+  std::string model;
 };
 
 struct CompareArgs {
@@ -70,7 +71,10 @@ void add_render_commands(CLI::App& app, Runner& run) {
   ref->add_option("scene", fa->scene, "scene JSON")->required()->check(CLI::ExistingFile);
   ref->add_option("-o,--out", fa->out, "output PNG")->required();
   auto* step = ref->add_option("--step", fa->step, "sampling step in world units (default: the scene's)");
-  ref->add_flag("--converged", fa->converged, "refine the step until the image changes < 1e-4")->excludes(step);
+  ref->add_flag("--converged", fa->converged, "the optical model itself: refine until the image changes < 1e-4")
+      ->excludes(step);
+  ref->add_option("--model", fa->model, "with --converged: dvr | peaks (default: peaks for classification peaks)")
+      ->check(CLI::IsMember({"dvr", "peaks"}));
   ref->callback([fa, &run] {
     run = [fa] {
       LoadedScene ls = load_scene_file(fa->scene);
@@ -78,9 +82,12 @@ void add_render_commands(CLI::App& app, Runner& run) {
       Image img;
       std::string how;
       if (fa->converged) {
-        auto c = reference::render_converged(*ls.volume, ls.scene);
+        const bool peaks = fa->model.empty() ? ls.scene.scene.render.classification == Classification::Peaks
+                                             : fa->model == "peaks";
+        auto c = reference::render_converged(*ls.volume, ls.scene,
+                                             peaks ? reference::OpticalModel::Peaks : reference::OpticalModel::Dvr);
         img = std::move(c.image);
-        how = "converged=" + std::string(c.converged ? "yes" : "no") + " step " + std::to_string(c.step) +
+        how = std::string(peaks ? "peak" : "DVR") + " model, converged=" + std::string(c.converged ? "yes" : "no") + " step " + std::to_string(c.step) +
               " last change " + std::to_string(c.last_change);
       } else {
         reference::ReferenceOptions opt;

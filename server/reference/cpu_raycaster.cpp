@@ -2,85 +2,227 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 #include "core/parallel.h"
+#include "core/peaks.h"
+#include "core/preintegration.h"
 #include "reference/field.h"
+#include "reference/ray_events.h"
 #include "reference/shading.h"
 
 namespace peakcast::reference {
+namespace {
 
-Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceOptions& opt) {
-  const int w = s.scene.width, h = s.scene.height;
-  const glm::dvec3 center = (s.box_min + s.box_max) * 0.5, half = (s.box_max - s.box_min) * 0.5;
-  const ViewSetup view = setup_view(s.camera, center, w, h);
-  const double dt = opt.step > 0 ? opt.step : s.step;
-  const double unit = s.tf.opacity_unit;
-  const double stop = opt.early_termination ? s.scene.render.early_termination : 2.0;
-  const Filter filter = s.scene.render.filter;
-  const bool shading = s.scene.render.shading;
-  const double lo = v.min_value, hi = v.max_value > v.min_value ? v.max_value : v.min_value + 1.0;
-  const double min_spacing = std::min({v.spacing.x, v.spacing.y, v.spacing.z});
+// What every pixel of a frame shares.
+struct Frame {
+  const Volume& v;
+  const ResolvedScene& s;
+  glm::dvec3 half;
+  ViewSetup view;
+  double lo, hi, min_spacing;
+  Filter filter;
+  bool shading;
+
+  Frame(const Volume& vol, const ResolvedScene& sc)
+      : v(vol), s(sc), filter(sc.scene.render.filter), shading(sc.scene.render.shading) {
+    const glm::dvec3 center = (s.box_min + s.box_max) * 0.5;
+    half = (s.box_max - s.box_min) * 0.5;
+    view = setup_view(s.camera, center, s.scene.width, s.scene.height);
+    lo = v.min_value;
+    hi = v.max_value > v.min_value ? v.max_value : v.min_value + 1.0;
+    min_spacing = std::min({v.spacing.x, v.spacing.y, v.spacing.z});
+  }
+  glm::dvec3 voxel(const Ray& r, double t) const { return (r.o + t * r.d + half) / v.spacing; }
+  double field(const Ray& r, double t) const { return sample(v, voxel(r, t), filter); }
+  glm::dvec3 lit(const glm::dvec3& rgb, const Ray& r, double t) const {
+    return shading ? shade(rgb, gradient(v, voxel(r, t), filter) / (hi - lo), r.d, min_spacing) : rgb;
+  }
+};
+
+struct Accum {
+  glm::dvec3 rgb{0.0};
+  double alpha = 0.0;
+  void add(const glm::dvec3& c, double a) {
+    const double w = (1.0 - alpha) * a;
+    rgb += w * c;
+    alpha += w;
+  }
+};
+
+// Twin of shaders/peak_find.glsl solve_root.
+double solve_root(const Frame& fr, const Ray& r, double t0, double f0, double t1, double f1, double v, int iters,
+                  double& evaluations) {
+  double ta = t0, tb = t1, ga = f0 - v, gb = f1 - v;
+  for (int k = 0; k < iters; ++k) {
+    if (gb == ga) break;
+    const double t = std::clamp(ta - ga * (tb - ta) / (gb - ga), std::min(ta, tb), std::max(ta, tb));
+    const double g = fr.field(r, t) - v;
+    evaluations += 1;
+    if ((g >= 0) == (ga >= 0)) {
+      ta = t;
+      ga = g;
+    } else {
+      tb = t;
+      gb = g;
+    }
+  }
+  return gb == ga ? 0.5 * (ta + tb) : std::clamp(ta - ga * (tb - ta) / (gb - ga), std::min(ta, tb), std::max(ta, tb));
+}
+
+template <typename PixelFn>
+Image for_each_pixel(const Frame& fr, PixelFn fn) {
+  const int w = fr.s.scene.width, h = fr.s.scene.height;
   Image img(w, h);
   parallel_for(size_t(h), [&](size_t row) {
     const int y = int(row);
     for (int x = 0; x < w; ++x) {
-      const Ray r = make_ray(view, x, y);
-      double t0, t1;
-      glm::dvec3 rgb(0.0);
-      double alpha = 0.0, samples = -1.0;  // -1: the ray misses the box
-      if (intersect_box(r, half, t0, t1)) {
+      const Ray r = make_ray(fr.view, x, y);
+      double t0, t1, samples = -1.0;  // -1: the ray misses the box
+      Accum acc;
+      if (intersect_box(r, fr.half, t0, t1)) {
         samples = 0.0;
-        // Lattice: t0 + i*dt up to t1 (the GPU's). Midpoint: the segment split into n equal
-        // pieces of at most dt, sampled at their centres (second order, covers [t0, t1] exactly).
-        const int64_t pieces = std::max<int64_t>(1, int64_t(std::ceil((t1 - t0) / dt)));
-        const double h = opt.midpoint ? (t1 - t0) / double(pieces) : dt;
-        const int64_t last = opt.midpoint ? pieces - 1 : int64_t(std::floor((t1 - t0) / dt));
-        for (int64_t i = 0; i <= last; ++i) {
-          const double t = t0 + (double(i) + (opt.midpoint ? 0.5 : 0.0)) * h;
-          const glm::dvec3 p = r.o + t * r.d;
-          const glm::dvec3 xv = (p + half) / v.spacing;
-          const glm::dvec4 c = s.tf.eval(sample(v, xv, filter));
-          samples += 1;
-          if (c.a > 0) {
-            glm::dvec3 col(c);
-            if (shading) col = shade(col, gradient(v, xv, filter) / (hi - lo), r.d, min_spacing);
-            const double a = correct_opacity(c.a, h, unit);
-            const double wgt = (1.0 - alpha) * a;
-            rgb += wgt * col;
-            alpha += wgt;
-          }
-          if (alpha >= stop) break;
-        }
+        fn(r, t0, t1, acc, samples);
       }
       float* px = img.pixel(x, y);
-      const glm::dvec3 out = rgb + (1.0 - alpha) * s.scene.background;
-      px[0] = float(out.x);
-      px[1] = float(out.y);
-      px[2] = float(out.z);
-      px[3] = float(alpha);
+      const glm::dvec3 out = acc.rgb + (1.0 - acc.alpha) * fr.s.scene.background;
+      px[0] = float(out.x), px[1] = float(out.y), px[2] = float(out.z), px[3] = float(acc.alpha);
       img.samples[size_t(y) * w + x] = float(samples);
     }
   });
   return img;
 }
 
-ConvergedImage render_converged(const Volume& v, const ResolvedScene& s, double tolerance, double min_step_voxels) {
+}  // namespace
+
+Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceOptions& opt) {
+  const Frame fr(v, s);
+  const RenderSettings& rs = s.scene.render;
+  const double dt = opt.step > 0 ? opt.step : s.step;
+  const double stop = opt.early_termination ? rs.early_termination : 2.0;
+  const bool peaks_on = rs.classification == Classification::Peaks && rs.peak_mode != PeakMode::DvrOnly;
+  const bool preint = rs.classification == Classification::Preint;
+  const bool dvr_on = !(peaks_on && rs.peak_mode == PeakMode::PeaksOnly);
+  const PeakTable table = build_peak_table(peaks_on ? find_peaks(s.tf) : std::vector<Peak>{}, fr.lo, fr.hi,
+                                           rs.peak_table_bins);
+  const PreintegrationTable pre =
+      preint ? build_preintegration(s.tf, fr.lo, fr.hi, dt, rs.preint_table_size) : PreintegrationTable{};
+  return for_each_pixel(fr, [&](const Ray& r, double t0, double t1, Accum& acc, double& samples) {
+    const int64_t last = int64_t(std::floor((t1 - t0) / dt));
+    double t_prev = 0, f_prev = 0;
+    for (int64_t i = 0; i <= last; ++i) {
+      const double t = t0 + double(i) * dt;
+      const double f = fr.field(r, t);
+      samples += 1;
+      bool peak_hit = false;
+      if (peaks_on && i > 0) {
+        for (double pv : peaks_crossed(table, f_prev, f, rs.max_peaks)) {
+          const double tr = solve_root(fr, r, t_prev, f_prev, t, f, pv, rs.secant_iterations, samples);
+          const glm::dvec4 c = s.tf.eval(pv);
+          acc.add(fr.lit(glm::dvec3(c), r, tr), c.a);
+          peak_hit = true;
+          if (acc.alpha >= stop) break;
+        }
+      }
+      if (preint) {
+        if (i > 0) {
+          const glm::dvec4 c = lookup_preintegration(pre, f_prev, f);
+          if (c.a > 0) acc.add(fr.lit(glm::dvec3(c) / c.a, r, t), c.a);
+        }
+      } else if (dvr_on && !(peak_hit && rs.peak_mode == PeakMode::Xor)) {
+        const glm::dvec4 c = s.tf.eval(f);
+        if (c.a > 0) acc.add(fr.lit(glm::dvec3(c), r, t), correct_opacity(c.a, dt, s.tf.opacity_unit));
+      }
+      t_prev = t;
+      f_prev = f;
+      if (acc.alpha >= stop) break;
+    }
+  });
+}
+
+ConvergedImage render_converged(const Volume& v, const ResolvedScene& s, OpticalModel model, double tolerance,
+                                double min_step_voxels) {
+  const Frame fr(v, s);
+  std::vector<double> breakpoints, peak_values;
+  for (const auto& p : s.tf.points) breakpoints.push_back(p.value);
+  if (model == OpticalModel::Peaks)
+    for (const auto& p : find_peaks(s.tf)) peak_values.push_back(p.value);
+  // The ray splits do not depend on the step: find them once per pixel.
+  const int w = s.scene.width, h = s.scene.height;
+  std::vector<RaySplit> splits(size_t(w) * h);
+  std::vector<double> enter(splits.size(), 0.0);
+  std::vector<char> hit(splits.size(), 0);
+  parallel_for(size_t(h), [&](size_t row) {
+    for (int x = 0; x < w; ++x) {
+      const Ray r = make_ray(fr.view, x, int(row));
+      double t0, t1;
+      const size_t k = row * size_t(w) + size_t(x);
+      if (intersect_box(r, fr.half, t0, t1)) {
+        hit[k] = 1;
+        splits[k] = split_ray(v, fr.filter, r, fr.half, t0, t1, breakpoints, peak_values);
+      }
+    }
+  });
+  auto render_at = [&](double step) {
+    // Misses keep the background (for_each_pixel with nothing to integrate), hits are filled below.
+    Image img = for_each_pixel(fr, [](const Ray&, double, double, Accum&, double&) {});
+    parallel_for(size_t(h), [&](size_t row) {
+      for (int x = 0; x < w; ++x) {
+        const size_t k = row * size_t(w) + size_t(x);
+        if (!hit[k]) continue;
+        const Ray r = make_ray(fr.view, x, int(row));
+        const RaySplit& sp = splits[k];
+        Accum acc;
+        double samples = 0;
+        size_t next_peak = 0;
+        for (size_t c = 0; c + 1 < sp.cuts.size(); ++c) {
+          const double a = sp.cuts[c], b = sp.cuts[c + 1];
+          while (next_peak < sp.peaks.size() && sp.peaks[next_peak].t <= a) {  // surfaces at this cut
+            const double pv = sp.peaks[next_peak].value;
+            const glm::dvec4 col = s.tf.eval(pv);
+            acc.add(fr.lit(glm::dvec3(col), r, sp.peaks[next_peak].t), col.a);
+            ++next_peak;
+          }
+          if (b <= a) continue;
+          // Midpoint steps of at most `step`, and small enough that opacity changes by at most
+          // `da` per step: inside a Dirac-like tent the field lingers where the TF is steep.
+          const double da = 0.02 * step / s.step;
+          const double a0 = s.tf.eval(fr.field(r, a)).a, a1 = s.tf.eval(fr.field(r, b)).a;
+          const int pieces = std::min(1 << 16, std::max({1, int(std::ceil((b - a) / step)), int(std::ceil(std::abs(a1 - a0) / da))}));
+          const double hstep = (b - a) / pieces;
+          for (int q = 0; q < pieces; ++q) {
+            const double t = a + (q + 0.5) * hstep;
+            const glm::dvec4 col = s.tf.eval(fr.field(r, t));
+            samples += 1;
+            if (col.a > 0) acc.add(fr.lit(glm::dvec3(col), r, t), correct_opacity(col.a, hstep, s.tf.opacity_unit));
+          }
+        }
+        while (next_peak < sp.peaks.size()) {
+          const glm::dvec4 col = s.tf.eval(sp.peaks[next_peak].value);
+          acc.add(fr.lit(glm::dvec3(col), r, sp.peaks[next_peak].t), col.a);
+          ++next_peak;
+        }
+        float* px = img.pixel(x, int(row));
+        const glm::dvec3 out = acc.rgb + (1.0 - acc.alpha) * s.scene.background;
+        px[0] = float(out.x), px[1] = float(out.y), px[2] = float(out.z), px[3] = float(acc.alpha);
+        img.samples[k] = float(samples);
+      }
+    });
+    return img;
+  };
   ConvergedImage out;
-  const double min_spacing = std::min({v.spacing.x, v.spacing.y, v.spacing.z});
-  ReferenceOptions opt;
-  opt.early_termination = false;
-  opt.midpoint = true;
-  opt.step = s.step;
-  out.image = render_reference(v, s, opt);
-  while (opt.step > min_step_voxels * min_spacing) {
-    opt.step *= 0.5;
-    Image finer = render_reference(v, s, opt);
+  out.step = s.step;
+  out.image = render_at(out.step);
+  while (out.step > min_step_voxels * fr.min_spacing) {
+    Image finer = render_at(out.step * 0.5);
     double change = 0;
     for (size_t i = 0; i < finer.rgba.size(); ++i)
       if (i % 4 != 3) change = std::max(change, double(std::abs(finer.rgba[i] - out.image.rgba[i])));
     out.image = std::move(finer);
-    out.step = opt.step;
+    out.step *= 0.5;
     out.last_change = change;
+    if (std::getenv("PEAKCAST_DEBUG_CONVERGENCE")) std::fprintf(stderr, "step %g change %g\n", out.step, change);
     out.refinements++;
     if (change < tolerance) {
       out.converged = true;

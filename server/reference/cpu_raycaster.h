@@ -1,8 +1,13 @@
 // The CPU reference renderer (DESIGN §4): the same conventions as the GL ray caster, in double
 // precision, multithreaded over rows.
-//  (a) `render_reference` at a given step: the same algorithm as the GPU, to check it;
-//  (b) `render_converged`: the emission-absorption integral of the DVR model, by refining the
-//      step (midpoint rule, early termination off) until the image changes < tolerance.
+//  (a) `render_reference` at a given step: the same algorithm as the GPU (post-classification,
+//      peak finding with the same table and regula falsi, or the same preintegration table), to
+//      check the GL path;
+//  (b) `render_converged`: the optical model itself. The ray is cut at voxel-cell faces and at
+//      the exact crossings of every TF breakpoint (ray_events.h), so each piece is smooth; pieces
+//      are integrated by the midpoint rule, refined until the image changes < tolerance. The
+//      peak model adds, at every exact crossing of a peak value, a surface with the peak's colour
+//      and unscaled opacity, composited in ray order.
 #pragma once
 
 #include "core/image.h"
@@ -14,20 +19,21 @@ namespace peakcast::reference {
 struct ReferenceOptions {
   double step = 0.0;  // 0: the scene's step
   bool early_termination = true;
-  bool midpoint = false;  // samples at t_enter + (i + 1/2) step, for the converged integral
 };
 
 Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceOptions& options = {});
 
+enum class OpticalModel { Dvr, Peaks };
+
 struct ConvergedImage {
   Image image;
-  double step = 0.0;
+  double step = 0.0;         // finest midpoint step used
   double last_change = 0.0;  // max abs RGB change between the last two refinements
   int refinements = 0;
   bool converged = false;
 };
 
-ConvergedImage render_converged(const Volume& v, const ResolvedScene& s, double tolerance = 1e-4,
-                                double min_step_voxels = 1.0 / 64.0);
+ConvergedImage render_converged(const Volume& v, const ResolvedScene& s, OpticalModel model = OpticalModel::Dvr,
+                                double tolerance = 1e-4, double min_step_voxels = 1.0 / 64.0);
 
 }  // namespace peakcast::reference

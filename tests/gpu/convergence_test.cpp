@@ -18,7 +18,7 @@ TEST(Convergence, GpuErrorFallsAsTheStepHalves) {
       {"tf", {{"points", {{0.0, 0.1, 0.2, 0.8, 0.0}, {0.5, 0.9, 0.6, 0.3, 0.25}, {1.0, 1.0, 1.0, 1.0, 0.0}}}}},
       {"render", {{"early_termination", 1.0}}}};
   ResolvedScene s = test::make_scene(*v, over);
-  auto conv = reference::render_converged(*v, s, 1e-4);
+  auto conv = reference::render_converged(*v, s, reference::OpticalModel::Dvr, 1e-4);
   std::printf("converged reference: step %.5f after %d refinements, last change %.2e\n", conv.step, conv.refinements,
               conv.last_change);
   ASSERT_TRUE(conv.converged);

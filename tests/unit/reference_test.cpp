@@ -46,7 +46,7 @@ TEST(Reference, LatticeSamplesIncludeEntryAndExit) {
 
 TEST(Reference, ConvergedEqualsTheContinuousIntegral) {
   Volume v = ramp();
-  auto c = reference::render_converged(v, constant_tf_scene(v, 1.0), 1e-6);
+  auto c = reference::render_converged(v, constant_tf_scene(v, 1.0), reference::OpticalModel::Dvr, 1e-6);
   EXPECT_NEAR(c.image.pixel(4, 4)[3], 1.0 - std::pow(0.95, 32.0), 1e-6);
 }
 
