@@ -7,11 +7,17 @@
 #include <memory>
 #include <sstream>
 
+#include <glm/geometric.hpp>
+
 #include "app/commands.h"
 #include "core/generators.h"
 #include "core/volume_io.h"
 #include "gpu/egl_context.h"
 #include "gpu/shader_cache.h"
+#include "core/peaks.h"
+#include "core/preintegration.h"
+#include "reference/cpu_raycaster.h"
+#include "reference/metrics.h"
 #include "render/raycaster.h"
 
 namespace fs = std::filesystem;
@@ -25,6 +31,12 @@ struct BenchArgs {
   std::vector<std::string> paths{"fragment", "compute"};
   int frames = 5;
   std::string data_dir = "bench-data";
+};
+
+struct PeaksArgs {
+  std::string volume;
+  int size = 512;
+  int frames = 3;
 };
 
 struct BenchVolume {
@@ -118,6 +130,73 @@ void add_bench_commands(CLI::App& app, Runner& run) {
         }
       }
       std::printf("spr: samples per ray (rays that hit the box); ratio: full frame ms / bare loop ms (same samples)\n");
+      return 0;
+    };
+  });
+
+  auto pa = std::make_shared<PeaksArgs>();
+  auto* pk = bench->add_subcommand("peaks", "Knoll Table 1 / Fig. 3: peak finding vs postclassification vs preintegration");
+  pk->add_option("--volume", pa->volume, "volume file (default: the heptane sample)");
+  pk->add_option("--size", pa->size, "square image size");
+  pk->add_option("--frames", pa->frames, "timed frames per method");
+  pk->callback([pa, &run] {
+    run = [pa] {
+      const fs::path file = pa->volume.empty() ? fs::path(PEAKCAST_SOURCE_DIR) / "tests/data/heptane_151.nrrd"
+                                               : fs::path(pa->volume);
+      auto vol = std::make_shared<Volume>(load_volume(file));
+      auto ctx = gpu::EglContext::create();
+      std::printf("GL: %s\nvolume: %s\n", ctx->info().to_string().c_str(), vol->to_string().c_str());
+      gpu::ShaderCache shaders(gpu::default_shader_dir());
+      render::Raycaster caster(shaders);
+      render::GpuVolume gv(vol);
+      // Fig. 3: a near-Dirac red peak (width 1e-4 of the range) and a smooth blue feature.
+      const double lo = vol->min_value, span = vol->max_value - vol->min_value;
+      auto x = [&](double r) { return lo + r * span; };
+      nlohmann::json tf = {{"points",
+                            {{x(0.0), 0.1, 0.3, 1.0, 0.0}, {x(0.15), 0.2, 0.5, 1.0, 0.0}, {x(0.35), 0.2, 0.5, 1.0, 0.04},
+                             {x(0.55), 0.2, 0.5, 1.0, 0.0}, {x(0.78) - 1e-4 * span, 1.0, 0.1, 0.0, 0.0},
+                             {x(0.78), 1.0, 0.1, 0.0, 0.9}, {x(0.78) + 1e-4 * span, 1.0, 0.1, 0.0, 0.0},
+                             {x(1.0), 1.0, 1.0, 1.0, 0.0}}}};
+      const glm::dvec3 c = vol->origin + vol->extent() * 0.5;
+      const double dist = glm::length(vol->extent()) * 0.5 / std::sin(15.0 * M_PI / 180.0);
+      const glm::dvec3 eye = c + dist * glm::normalize(glm::dvec3(0.0, -0.72, 1.0));
+      nlohmann::json j = {{"volume", file.string()},
+                          {"image", {{"width", pa->size}, {"height", pa->size}}},
+                          {"tf", tf},
+                          {"camera", {{"eye", {eye.x, eye.y, eye.z}}, {"center", {c.x, c.y, c.z}}, {"up", {0, 0, 1}}}},
+                          {"render", {{"shading", true}, {"step", 1.0}}}};
+      std::printf("references (CPU, converged) ...\n");
+      std::fflush(stdout);
+      const ResolvedScene base = resolve_scene(parse_scene(j), *vol);
+      const auto ref_peaks = reference::render_converged(*vol, base, reference::OpticalModel::Peaks, 1e-4, 1.0 / 16);
+      const auto ref_dvr = reference::render_converged(*vol, base, reference::OpticalModel::Dvr, 1e-4, 1.0 / 16);
+      std::printf("%-8s %9s %8s %14s %12s %12s\n", "method", "median_ms", "spr", "variant", "PSNR_peak", "PSNR_dvr");
+      for (const char* method : {"peaks", "post", "preint"}) {
+        j["render"]["classification"] = method;
+        const ResolvedScene s = resolve_scene(parse_scene(j), *vol);
+        std::vector<double> ms;
+        render::RenderStats st;
+        Image img;
+        for (int f = 0; f <= pa->frames; ++f) {
+          img = caster.render(gv, s, render::GpuPath::Fragment, &st);
+          if (f > 0) ms.push_back(st.render_ms);
+        }
+        std::printf("%-8s %9.1f %8.1f %14s %12.1f %12.1f\n", method, median(ms), st.samples_mean, st.variant.c_str(),
+                    reference::compare(img, ref_peaks.image).psnr, reference::compare(img, ref_dvr.image).psnr);
+      }
+      std::vector<Peak> peaks = find_peaks(resolve_scene(parse_scene(j), *vol).tf);
+      for (int bins : {128, 256, 1024}) {
+        std::vector<double> ms;
+        for (int k = 0; k < 5; ++k) ms.push_back(build_peak_table(peaks, lo, lo + span, bins).build_ms);
+        std::printf("peak table %4d bins: %.2f ms (median of 5)\n", bins, median(ms));
+      }
+      for (int size : {256, 512}) {
+        std::vector<double> ms;
+        for (int k = 0; k < 3; ++k) ms.push_back(build_preintegration(base.tf, lo, lo + span, base.step, size).build_ms);
+        std::printf("preintegration table %d^2: %.1f ms (median of 3)\n", size, median(ms));
+      }
+      std::printf("references: peak model step %.4f (change %.1e), DVR step %.4f (change %.1e)\n", ref_peaks.step,
+                  ref_peaks.last_change, ref_dvr.step, ref_dvr.last_change);
       return 0;
     };
   });
