@@ -1,5 +1,6 @@
 #include "encode/png.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
@@ -28,6 +29,19 @@ void write_png(const Image& img, const std::filesystem::path& path) {
   const auto bytes = to_rgb8(img);
   if (!out->write_image(TypeDesc::UINT8, bytes.data())) throw std::runtime_error(path.string() + ": " + out->geterror());
   out->close();
+}
+
+std::vector<unsigned char> encode_png(const unsigned char* rgb, int width, int height) {
+  std::vector<unsigned char> out;
+  Filesystem::IOVecOutput vec(out);
+  auto writer = ImageOutput::create("png");
+  if (!writer) throw std::runtime_error("no PNG writer");
+  ImageSpec spec(width, height, 3, TypeDesc::UINT8);
+  writer->set_ioproxy(&vec);
+  if (!writer->open("memory.png", spec) || !writer->write_image(TypeDesc::UINT8, rgb))
+    throw std::runtime_error("PNG encode failed: " + writer->geterror());
+  writer->close();
+  return out;
 }
 
 Image read_png(const std::filesystem::path& path) {

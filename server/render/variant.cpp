@@ -31,6 +31,27 @@ std::string VariantKey::name() const {
   return n;
 }
 
+nlohmann::json capabilities() {
+  return {{"classification", {"post", "preint", "peaks"}},
+          {"peak_mode", {"dvr+peaks", "xor", "peaks_only", "dvr_only"}},
+          {"max_peaks", {1, 2, 3, 4}},
+          {"sampling", {"uniform"}},
+          {"filter", {"trilinear", "tricubic"}},
+          {"virtual_samples", {0}},
+          {"shading", true},
+          {"space_skipping", true},
+          {"adaptive", false},
+          {"ray_texture", false},
+          {"still_formats", {"jpeg", "png"}}};
+}
+
+void require_supported(const RenderSettings& r) {
+  if (r.sampling != Sampling::Uniform) throw SceneError("render.sampling: 'differential' is not implemented yet");
+  if (r.virtual_samples != 0) throw SceneError("render.virtual_samples: virtual samples are not implemented yet");
+  if (r.adaptive) throw SceneError("render.adaptive: adaptive sampling is not implemented yet");
+  if (!r.ray_texture.is_null()) throw SceneError("render.ray_texture: ray textures are not implemented yet");
+}
+
 VariantKey choose_variant(const ResolvedScene& s, int64_t empty_cells, GpuPath path, size_t peak_count) {
   VariantKey k;
   k.path = path;

@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "core/scene.h"
 
 namespace peakcast::render {
@@ -25,6 +27,12 @@ struct VariantKey {
   std::vector<std::string> defines() const;
   std::string name() const;  // e.g. "frag+tricubic+skip"
 };
+
+// What this build renders; the server's welcome lists it so clients build their controls from it.
+nlohmann::json capabilities();
+// Throws SceneError naming the key for settings the schema allows but this renderer does not
+// implement yet (differential sampling, virtual samples, adaptive sampling, ray textures).
+void require_supported(const RenderSettings& r);
 
 // peak_count: peaks of the scene's TF (no peaks -> no peak-finding code).
 VariantKey choose_variant(const ResolvedScene& scene, int64_t empty_cells, GpuPath path, size_t peak_count = 0);

@@ -1,0 +1,59 @@
+// `serve`: the render server. Options come from flags, then PEAKCAST_* environment variables,
+// then an optional config file (CLI11's TOML/INI: `--config FILE`).
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+
+#include "app/commands.h"
+#include "gpu/shader_cache.h"
+#include "net/server.h"
+
+namespace peakcast::app {
+
+void add_serve_command(CLI::App& app, Runner& run) {
+  auto cfg = std::make_shared<net::ServerConfig>();
+  auto web = std::make_shared<std::string>(PEAKCAST_WEB_DIR_DEFAULT);
+  auto data = std::make_shared<std::vector<std::string>>();
+  auto vols = std::make_shared<std::vector<std::string>>();
+  auto idle = std::make_shared<int>(int(cfg->idle_timeout.count()));
+  auto budget_mib = std::make_shared<int64_t>(cfg->gpu_budget_bytes >> 20);
+  auto* s = app.add_subcommand("serve", "Run the render server (HTTP + WebSocket on one port)");
+  s->set_config("--config", "", "read options from a TOML/INI file");
+  s->add_option("--bind", cfg->bind, "address to listen on (default loopback only)")->envname("PEAKCAST_BIND");
+  s->add_option("--port", cfg->port, "TCP port (0: any free port)")->envname("PEAKCAST_PORT");
+  s->add_option("--data", *data, "directory volumes may be opened from (repeatable)")->envname("PEAKCAST_DATA");
+  s->add_option("--volume", *vols, "volume to preload (repeatable; the first is the default view)")
+      ->envname("PEAKCAST_VOLUME");
+  s->add_option("--token", cfg->token, "require this bearer token (HTTP header, ?token= or hello.token)")
+      ->envname("PEAKCAST_TOKEN");
+  s->add_option("--allow-origin", cfg->allow_origins, "WebSocket Origin to accept besides the server's own (repeatable)")
+      ->envname("PEAKCAST_ALLOW_ORIGIN");
+  s->add_option("--max-sessions", cfg->max_sessions, "concurrent WebSocket sessions")->check(CLI::Range(1, 4096));
+  s->add_option("--idle-timeout", *idle, "seconds without a client message before closing")->check(CLI::Range(1, 86400));
+  s->add_option("--max-fps", cfg->max_fps, "frames per second per session")->check(CLI::Range(1.0, 240.0));
+  s->add_option("--gpu-budget-mib", *budget_mib, "MiB of volume textures on the GPU")->check(CLI::Range(int64_t(1), int64_t(1) << 24));
+  s->add_option("--io-threads", cfg->io_threads, "network threads")->check(CLI::Range(1, 64));
+  s->add_option("--encode-threads", cfg->encode_threads, "JPEG encode threads")->check(CLI::Range(1, 64));
+  s->add_option("--web-dir", *web, "the browser client's files");
+  s->callback([=, &run] {
+    run = [=] {
+      net::ServerConfig c = *cfg;
+      for (auto& d : *data) c.data_dirs.emplace_back(d);
+      for (auto& v : *vols) c.volumes.emplace_back(v);
+      c.idle_timeout = std::chrono::seconds(*idle);
+      c.gpu_budget_bytes = *budget_mib << 20;
+      c.web_dir = *web;
+      c.shader_dir = gpu::default_shader_dir();
+      net::Server server(c);
+      server.start();
+      std::printf("peakcast: serving on http://%s:%u (GL: %s)\n", c.bind.c_str(), unsigned(server.port()),
+                  server.app().render.gl_renderer().c_str());
+      std::fflush(stdout);
+      server.run_until_signal();
+      std::printf("peakcast: stopped\n");
+      return 0;
+    };
+  });
+}
+
+}  // namespace peakcast::app

@@ -1,0 +1,34 @@
+#include "net/app_context.h"
+
+namespace peakcast::net {
+
+AppContext::AppContext(ServerConfig c)
+    : config(std::move(c)),
+      volumes(config.data_dirs, config.gpu_budget_bytes),
+      render(volumes, metrics,
+             RenderServiceOptions{config.shader_dir, config.encode_threads, config.max_fps, limits::kStillDelay}) {}
+
+std::string path_of(const std::string& target) { return target.substr(0, target.find('?')); }
+
+std::string query_param(const std::string& target, const std::string& key) {
+  const auto q = target.find('?');
+  if (q == std::string::npos) return "";
+  size_t i = q + 1;
+  while (i < target.size()) {
+    size_t amp = target.find('&', i);
+    if (amp == std::string::npos) amp = target.size();
+    const std::string pair = target.substr(i, amp - i);
+    const auto eq = pair.find('=');
+    if (pair.substr(0, eq) == key) return eq == std::string::npos ? "" : pair.substr(eq + 1);
+    i = amp + 1;
+  }
+  return "";
+}
+
+std::string token_from(const std::string& authorization, const std::string& target) {
+  const std::string prefix = "Bearer ";
+  if (authorization.rfind(prefix, 0) == 0) return authorization.substr(prefix.size());
+  return query_param(target, "token");
+}
+
+}  // namespace peakcast::net

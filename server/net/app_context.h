@@ -1,0 +1,49 @@
+// What every connection shares: configuration, volumes, the render service, metrics.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/metrics.h"
+#include "session/limits.h"
+#include "session/render_service.h"
+#include "session/volume_store.h"
+
+namespace peakcast::net {
+
+struct ServerConfig {
+  std::string bind = "127.0.0.1";
+  uint16_t port = 8080;
+  std::vector<std::filesystem::path> data_dirs;
+  std::vector<std::filesystem::path> volumes;  // preloaded; the first is the default
+  std::string token;                           // empty: no authentication
+  std::vector<std::string> allow_origins;      // besides the server's own origin
+  int max_sessions = limits::kDefaultMaxSessions;
+  std::chrono::seconds idle_timeout = limits::kDefaultIdleTimeout;
+  double max_fps = limits::kDefaultMaxFps;
+  int64_t gpu_budget_bytes = limits::kDefaultGpuBudgetBytes;
+  int io_threads = 2;
+  int encode_threads = 2;
+  std::filesystem::path web_dir, shader_dir;
+};
+
+struct AppContext {
+  ServerConfig config;
+  Metrics metrics;
+  VolumeStore volumes;
+  RenderService render;
+  std::atomic<int> ws_sessions{0};
+  std::atomic<uint64_t> next_session{1};
+
+  explicit AppContext(ServerConfig c);
+};
+
+// Bearer token from "Authorization: Bearer X" or the query "?token=X"; empty when absent.
+std::string token_from(const std::string& authorization, const std::string& target);
+std::string path_of(const std::string& target);  // target without the query
+std::string query_param(const std::string& target, const std::string& key);
+
+}  // namespace peakcast::net

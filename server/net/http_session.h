@@ -1,0 +1,32 @@
+// One HTTP connection: REST, static files, and the upgrade to a WebSocket at /ws (with the
+// Origin allow-list, the bearer token and the session cap checked first).
+#pragma once
+
+#include <memory>
+#include <optional>
+
+#include "net/app_context.h"
+#include "net/beast.h"
+#include "net/rest_routes.h"
+
+namespace peakcast::net {
+
+class HttpSession : public std::enable_shared_from_this<HttpSession> {
+ public:
+  HttpSession(tcp::socket&& socket, AppContext& app);
+  void run();
+
+ private:
+  void read();
+  void on_read(beast::error_code ec);
+  void upgrade(Request req);
+  void write(Response res);
+  bool origin_allowed(const Request& req) const;
+
+  beast::tcp_stream stream_;
+  beast::flat_buffer buffer_;
+  AppContext& app_;
+  std::optional<http::request_parser<http::string_body>> parser_;
+};
+
+}  // namespace peakcast::net

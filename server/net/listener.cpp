@@ -1,0 +1,39 @@
+#include "net/listener.h"
+
+#include <cstdio>
+
+#include "net/http_session.h"
+
+namespace peakcast::net {
+
+void fail(beast::error_code ec, const char* what) {
+  if (ec == asio::error::operation_aborted || ec == websocket::error::closed || ec == http::error::end_of_stream ||
+      ec == asio::error::eof || ec == beast::error::timeout || ec == asio::error::connection_reset ||
+      ec == asio::error::broken_pipe)
+    return;
+  std::fprintf(stderr, "peakcast: %s: %s\n", what, ec.message().c_str());
+}
+
+Listener::Listener(asio::io_context& ioc, tcp::endpoint endpoint, AppContext& app)
+    : ioc_(ioc), acceptor_(asio::make_strand(ioc)), app_(app) {
+  acceptor_.open(endpoint.protocol());
+  acceptor_.set_option(asio::socket_base::reuse_address(true));
+  acceptor_.bind(endpoint);  // throws system_error, e.g. address in use
+  acceptor_.listen(asio::socket_base::max_listen_connections);
+}
+
+void Listener::run() { accept(); }
+
+void Listener::accept() {
+  acceptor_.async_accept(asio::make_strand(ioc_), [self = shared_from_this()](beast::error_code ec, tcp::socket s) {
+    if (ec) {
+      fail(ec, "accept");
+      if (ec == asio::error::operation_aborted) return;
+    } else {
+      std::make_shared<HttpSession>(std::move(s), self->app_)->run();
+    }
+    self->accept();
+  });
+}
+
+}  // namespace peakcast::net

@@ -1,0 +1,186 @@
+#include "net/rest_routes.h"
+
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "render/variant.h"
+
+namespace fs = std::filesystem;
+
+namespace peakcast::net {
+namespace {
+
+void count(AppContext& app, const char* route, http::status status) {
+  app.metrics.add("peakcast_http_requests_total",
+                  std::string("route=\"") + route + "\",code=\"" + std::to_string(int(status)) + "\"", 1);
+}
+
+const char* mime_type(const std::string& path) {
+  auto ends = [&](const char* ext) { return path.size() >= std::strlen(ext) && path.ends_with(ext); };
+  if (ends(".html")) return "text/html; charset=utf-8";
+  if (ends(".js") || ends(".mjs")) return "text/javascript; charset=utf-8";
+  if (ends(".css")) return "text/css; charset=utf-8";
+  if (ends(".json")) return "application/json";
+  if (ends(".svg")) return "image/svg+xml";
+  if (ends(".png")) return "image/png";
+  if (ends(".ico")) return "image/x-icon";
+  return "application/octet-stream";
+}
+
+Response static_file(const Request& req, const fs::path& root, std::string path) {
+  if (path == "/" || path.empty()) path = "/index.html";
+  if (path.find("..") != std::string::npos || path.find('\0') != std::string::npos)
+    return error_response(req, http::status::bad_request, "bad_path", "illegal path");
+  const fs::path file = root / path.substr(1);
+  std::ifstream in(file, std::ios::binary);
+  if (!in || fs::is_directory(file)) return error_response(req, http::status::not_found, "not_found", path + " not found");
+  std::stringstream body;
+  body << in.rdbuf();
+  Response res{http::status::ok, req.version()};
+  res.set(http::field::content_type, mime_type(path));
+  res.set(http::field::cache_control, "no-cache");
+  res.body() = body.str();
+  res.keep_alive(req.keep_alive());
+  res.prepare_payload();
+  return res;
+}
+
+void render_still(AppContext& app, const Request& req, std::function<void(Response)> send) {
+  Scene scene;
+  try {
+    scene = parse_scene_text(req.body());
+    render::require_supported(scene.render);
+  } catch (const SceneError& e) {
+    count(app, "render", http::status::bad_request);
+    return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
+  }
+  std::shared_ptr<VolumeEntry> vol;
+  try {
+    vol = app.volumes.get(scene.volume);
+  } catch (const VolumeError& e) {
+    count(app, "render", http::status::not_found);
+    return send(error_response(req, http::status::not_found, "volume_error", e.what()));
+  }
+  StillJob job;
+  try {
+    job.scene = resolve_scene(scene, *vol->volume);
+  } catch (const SceneError& e) {
+    count(app, "render", http::status::bad_request);
+    return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
+  }
+  const std::string format = query_param(std::string(req.target()), "format");
+  const std::string accept(req[http::field::accept]);
+  job.png = !(format == "jpeg" || format == "jpg" || (format.empty() && accept.find("image/jpeg") != std::string::npos &&
+                                                       accept.find("image/png") == std::string::npos));
+  if (!format.empty() && format != "png" && format != "jpeg" && format != "jpg") {
+    count(app, "render", http::status::bad_request);
+    return send(error_response(req, http::status::bad_request, "bad_request", "format must be png or jpeg"));
+  }
+  const std::string q = query_param(std::string(req.target()), "quality");
+  if (!q.empty()) {
+    try {
+      job.quality = std::stoi(q);
+    } catch (...) {
+      job.quality = -1;
+    }
+    if (job.quality < 10 || job.quality > 100) {
+      count(app, "render", http::status::bad_request);
+      return send(error_response(req, http::status::bad_request, "bad_request", "quality must be 10..100"));
+    }
+  }
+  job.volume = vol;
+  const unsigned version = req.version();
+  const bool keep_alive = req.keep_alive();
+  job.done = [&app, send, version, keep_alive](StillResult r) {
+    if (!r.error.empty()) {
+      count(app, "render", http::status::internal_server_error);
+      Request fake;
+      fake.version(version);
+      return send(error_response(fake, http::status::internal_server_error, "render_failed", r.error));
+    }
+    Response res{http::status::ok, version};
+    res.set(http::field::content_type, r.content_type);
+    res.set("X-Render-Ms", std::to_string(r.render_ms));
+    res.set("X-Encode-Ms", std::to_string(r.encode_ms));
+    res.set("X-Samples-Per-Ray", std::to_string(r.samples_per_ray));
+    res.set("X-Variant", r.variant);
+    res.body().assign(r.bytes.begin(), r.bytes.end());
+    res.keep_alive(keep_alive);
+    res.prepare_payload();
+    count(app, "render", http::status::ok);
+    send(std::move(res));
+  };
+  app.render.submit_still(std::move(job));
+}
+
+}  // namespace
+
+Response json_response(const Request& req, http::status status, const std::string& body) {
+  Response res{status, req.version()};
+  res.set(http::field::content_type, "application/json");
+  res.set(http::field::cache_control, "no-store");
+  res.body() = body;
+  res.keep_alive(req.keep_alive());
+  res.prepare_payload();
+  return res;
+}
+
+Response error_response(const Request& req, http::status status, const std::string& code, const std::string& message) {
+  return json_response(req, status, nlohmann::json{{"error", code}, {"message", message}}.dump());
+}
+
+void handle_request(AppContext& app, Request req, std::function<void(Response)> send) {
+  const std::string path = path_of(std::string(req.target()));
+  const bool api = path.rfind("/api/", 0) == 0 || path == "/metrics";
+  if (api && path != "/api/health" && !app.config.token.empty() &&
+      token_from(std::string(req[http::field::authorization]), std::string(req.target())) != app.config.token) {
+    count(app, "auth", http::status::unauthorized);
+    auto res = error_response(req, http::status::unauthorized, "unauthorized", "missing or wrong bearer token");
+    res.set(http::field::www_authenticate, "Bearer");
+    return send(std::move(res));
+  }
+  if (path == "/api/render") {
+    if (req.method() != http::verb::post)
+      return send(error_response(req, http::status::method_not_allowed, "bad_request", "POST a scene"));
+    return render_still(app, req, std::move(send));
+  }
+  if (req.method() != http::verb::get && req.method() != http::verb::head)
+    return send(error_response(req, http::status::method_not_allowed, "bad_request", "GET only"));
+  if (path == "/api/health") {
+    count(app, "health", http::status::ok);
+    return send(json_response(req, http::status::ok,
+                              nlohmann::json{{"status", "ok"},
+                                             {"gl_renderer", app.render.gl_renderer()},
+                                             {"sessions", app.ws_sessions.load()},
+                                             {"volumes", app.volumes.list().size()}}
+                                  .dump()));
+  }
+  if (path == "/api/volumes") {
+    nlohmann::json list = nlohmann::json::array();
+    for (const auto& v : app.volumes.list()) list.push_back(v->info(false));
+    count(app, "volumes", http::status::ok);
+    return send(json_response(req, http::status::ok,
+                              nlohmann::json{{"volumes", list}, {"default", app.volumes.default_id()}}.dump()));
+  }
+  if (path.rfind("/api/volumes/", 0) == 0) {
+    const std::string id = path.substr(std::strlen("/api/volumes/"));
+    auto v = app.volumes.find(id);
+    count(app, "volume", v ? http::status::ok : http::status::not_found);
+    if (!v) return send(error_response(req, http::status::not_found, "not_found", "no loaded volume '" + id + "'"));
+    return send(json_response(req, http::status::ok, v->info(true).dump()));
+  }
+  if (path == "/metrics") {
+    app.metrics.set("peakcast_sessions", "", app.ws_sessions.load());
+    Response res{http::status::ok, req.version()};
+    res.set(http::field::content_type, "text/plain; version=0.0.4");
+    res.body() = app.metrics.prometheus_text();
+    res.keep_alive(req.keep_alive());
+    res.prepare_payload();
+    return send(std::move(res));
+  }
+  if (api) return send(error_response(req, http::status::not_found, "not_found", path + " is not an API route"));
+  send(static_file(req, app.config.web_dir, path));
+}
+
+}  // namespace peakcast::net

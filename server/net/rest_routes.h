@@ -1,0 +1,22 @@
+// REST (DESIGN §5): /api/health, /api/volumes, /api/volumes/{id}, POST /api/render, /metrics,
+// and client-web/ as static files. Responses are produced through `send`, possibly later (render).
+#pragma once
+
+#include <boost/beast/http.hpp>
+#include <functional>
+
+#include "net/app_context.h"
+
+namespace peakcast::net {
+
+namespace http = boost::beast::http;
+using Request = http::request<http::string_body>;
+using Response = http::response<http::string_body>;
+
+Response json_response(const Request& req, http::status status, const std::string& body);
+Response error_response(const Request& req, http::status status, const std::string& code, const std::string& message);
+
+// Calls `send` exactly once, on any thread (the caller re-posts onto its strand).
+void handle_request(AppContext& app, Request req, std::function<void(Response)> send);
+
+}  // namespace peakcast::net

@@ -1,0 +1,223 @@
+#include "net/ws_session.h"
+
+#include "render/variant.h"
+#include "session/protocol.h"
+
+namespace peakcast::net {
+
+WsSession::WsSession(tcp::socket&& socket, AppContext& app, bool authorized)
+    : ws_(std::move(socket)), app_(app), authorized_(authorized), idle_(ws_.get_executor()) {}
+
+WsSession::~WsSession() {
+  if (session_) app_.render.remove_session(session_->id());
+  if (counted_) app_.ws_sessions--;
+}
+
+void WsSession::run(Request upgrade) {
+  counted_ = true;
+  app_.ws_sessions++;
+  ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
+  ws_.read_message_max(limits::kMaxWsMessageBytes);
+  ws_.set_option(websocket::stream_base::decorator(
+      [](websocket::response_type& res) { res.set(http::field::server, "peakcast"); }));
+  auto req = std::make_shared<Request>(std::move(upgrade));
+  ws_.async_accept(*req, [self = shared_from_this(), req](beast::error_code ec) {
+    if (ec) return fail(ec, "ws accept");
+    self->arm_idle_timer();
+    self->read();
+  });
+}
+
+void WsSession::arm_idle_timer() {
+  idle_.expires_after(app_.config.idle_timeout);
+  idle_.async_wait([weak = weak_from_this()](beast::error_code ec) {
+    if (ec) return;  // re-armed or closed
+    if (auto self = weak.lock()) self->close(websocket::close_code::going_away, "idle timeout");
+  });
+}
+
+void WsSession::read() {
+  ws_.async_read(buffer_, [self = shared_from_this()](beast::error_code ec, std::size_t) {
+    if (ec == websocket::error::message_too_big) {
+      self->send_error("too_large", "message exceeds " + std::to_string(limits::kMaxWsMessageBytes) + " bytes");
+      self->close(websocket::close_code::too_big, "message too big");
+      return;
+    }
+    if (ec) {
+      self->idle_.cancel();
+      return fail(ec, "ws read");
+    }
+    self->on_message();
+  });
+}
+
+void WsSession::on_message() {
+  arm_idle_timer();
+  if (!ws_.got_text()) {
+    buffer_.consume(buffer_.size());
+    send_error("bad_message", "binary messages are not accepted; send JSON text");
+  } else {
+    const std::string text = beast::buffers_to_string(buffer_.data());
+    buffer_.consume(buffer_.size());
+    try {
+      handle(text);
+    } catch (const protocol::ProtocolError& e) {
+      send_error(e.code, e.what());
+    } catch (const VolumeError& e) {
+      send_error("volume_error", e.what());
+    } catch (const std::exception& e) {  // nothing escapes the handler
+      send_error("internal", e.what());
+    }
+  }
+  if (!closing_) read();
+}
+
+void WsSession::handle(const std::string& text) {
+  using namespace protocol;
+  ClientMessage msg = parse_client_message(text);
+  if (auto* ping = std::get_if<PingMsg>(&msg)) {
+    return deliver_text(nlohmann::json{{"type", "pong"}, {"id", ping->id}}.dump());
+  }
+  if (auto* hello = std::get_if<Hello>(&msg)) {
+    if (session_) throw ProtocolError("bad_message", "hello: the session has already started");
+    if (!authorized_) {
+      if (hello->token != app_.config.token) {
+        send_error("unauthorized", "missing or wrong token");
+        return close(websocket::close_code::policy_error, "unauthorized");
+      }
+      authorized_ = true;
+    }
+    const std::string vid = hello->volume.empty() ? app_.volumes.default_id() : hello->volume;
+    if (vid.empty()) throw ProtocolError("volume_error", "no volume given and the server has none loaded");
+    auto volume = app_.volumes.get(vid);
+    auto session = std::make_shared<Session>("s" + std::to_string(app_.next_session++), weak_from_this());
+    session->start(volume, hello->viewport, hello->state);
+    session_ = session;
+    nlohmann::json vols = nlohmann::json::array();
+    for (const auto& v : app_.volumes.list()) vols.push_back(v->info(false));
+    nlohmann::json welcome = {
+        {"type", "welcome"},
+        {"session", session_->id()},
+        {"volume", volume->info(true)},
+        {"volumes", vols},
+        {"state", session_->state_json()},
+        {"capabilities", render::capabilities()},
+        {"gl_renderer", app_.render.gl_renderer()},
+        {"limits",
+         {{"max_message_bytes", limits::kMaxWsMessageBytes},
+          {"max_viewport_side", limits::kMaxViewportSide},
+          {"max_viewport_pixels", limits::kMaxViewportPixels},
+          {"max_frames_in_flight", limits::kMaxFramesInFlight},
+          {"max_tf_points", kMaxTfPoints},
+          {"idle_timeout_s", app_.config.idle_timeout.count()},
+          {"still_delay_ms", limits::kStillDelay.count()},
+          {"max_fps", app_.config.max_fps}}}};
+    deliver_text(welcome.dump());
+    app_.render.add_session(session_);
+    return;
+  }
+  if (!session_) throw ProtocolError("no_session", "send hello first");
+  std::visit(
+      [&](auto& m) {
+        using T = std::decay_t<decltype(m)>;
+        if constexpr (std::is_same_v<T, CameraMsg>) session_->set_camera(m.camera);
+        if constexpr (std::is_same_v<T, TfMsg>) session_->set_tf(m.tf, m.opacity_unit, m.version);
+        if constexpr (std::is_same_v<T, RenderMsg>) session_->merge_render(m.render);
+        if constexpr (std::is_same_v<T, QualityMsg>) session_->set_quality(m);
+        if constexpr (std::is_same_v<T, ViewportMsg>) session_->set_viewport(m.viewport);
+        if constexpr (std::is_same_v<T, AckMsg>) session_->ack(m.frame);
+        if constexpr (std::is_same_v<T, VolumeMsg>) {
+          auto entry = app_.volumes.get(m.volume);
+          session_->set_volume(entry);
+          deliver_text(
+              nlohmann::json{{"type", "volume"}, {"volume", entry->info(true)}, {"state", session_->state_json()}}.dump());
+        }
+      },
+      msg);
+  app_.render.notify();
+}
+
+void WsSession::send_error(const std::string& code, const std::string& message) {
+  app_.metrics.add("peakcast_ws_errors_total", "code=\"" + code + "\"", 1);
+  deliver_text(protocol::error_message(code, message));
+}
+
+void WsSession::deliver_frame(std::vector<uint8_t> bytes, uint32_t frame_id, bool final) {
+  Outgoing o;
+  o.binary = true;
+  o.frame = std::make_shared<const std::vector<uint8_t>>(std::move(bytes));
+  o.frame_id = frame_id;
+  o.final = final;
+  asio::post(ws_.get_executor(), [self = shared_from_this(), o = std::move(o)]() mutable { self->enqueue(std::move(o)); });
+}
+
+void WsSession::deliver_text(std::string text) {
+  Outgoing o;
+  o.text = std::make_shared<const std::string>(std::move(text));
+  asio::post(ws_.get_executor(), [self = shared_from_this(), o = std::move(o)]() mutable { self->enqueue(std::move(o)); });
+}
+
+void WsSession::enqueue(Outgoing out) {
+  if (closing_) {
+    if (out.binary && session_) session_->frame_dropped(out.frame_id);
+    return;
+  }
+  if (out.binary) {
+    // The newest frame replaces a frame still waiting (not the one being written).
+    for (size_t k = writing_ ? 1 : 0; k < queue_.size(); ++k)
+      if (queue_[k].binary) {
+        if (session_) session_->frame_dropped(queue_[k].frame_id);
+        app_.metrics.add("peakcast_frames_dropped_total", "", 1);
+        queue_.erase(queue_.begin() + long(k));
+        break;
+      }
+  } else if (queue_.size() >= limits::kMaxQueuedTextMessages) {
+    return close(websocket::close_code::policy_error, "client too slow");
+  }
+  queue_.push_back(std::move(out));
+  if (!writing_) write_next();
+}
+
+void WsSession::write_next() {
+  if (queue_.empty() || closing_) return;
+  writing_ = true;
+  Outgoing& o = queue_.front();
+  ws_.binary(o.binary);
+  auto done = [self = shared_from_this()](beast::error_code ec, std::size_t bytes) {
+    self->writing_ = false;
+    if (ec) {
+      self->queue_.clear();
+      return fail(ec, "ws write");
+    }
+    Outgoing sent = std::move(self->queue_.front());
+    self->queue_.pop_front();
+    if (sent.binary) {
+      const char* kind = sent.final ? "kind=\"final\"" : "kind=\"interactive\"";
+      self->app_.metrics.add("peakcast_frames_sent_total", kind, 1);
+      self->app_.metrics.add("peakcast_bytes_sent_total", "", double(bytes));
+      const auto h = protocol::decode_frame_header(sent.frame->data(), sent.frame->size());
+      const double now_us = double(std::chrono::duration_cast<std::chrono::microseconds>(
+                                       Clock::now().time_since_epoch()).count());
+      self->app_.metrics.observe("peakcast_input_to_sent_ms", kind, (now_us - double(h.t_input_us)) / 1000.0);
+    }
+    self->write_next();
+  };
+  if (o.binary)
+    ws_.async_write(asio::buffer(*o.frame), std::move(done));
+  else
+    ws_.async_write(asio::buffer(*o.text), std::move(done));
+}
+
+void WsSession::close(websocket::close_code code, const std::string& reason) {
+  if (closing_) return;
+  closing_ = true;
+  idle_.cancel();
+  if (session_) {
+    app_.render.remove_session(session_->id());
+  }
+  ws_.async_close(websocket::close_reason(code, reason), [self = shared_from_this()](beast::error_code ec) {
+    if (ec) fail(ec, "ws close");
+  });
+}
+
+}  // namespace peakcast::net

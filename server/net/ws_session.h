@@ -1,0 +1,55 @@
+// One WebSocket viewer: reads JSON messages (parse and validate only, then store the newest
+// state in its Session), writes frames and text with one write in flight. A frame waiting to be
+// written is replaced by a newer one (the older is dropped and released from flow control).
+#pragma once
+
+#include <deque>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "net/app_context.h"
+#include "net/beast.h"
+#include "net/rest_routes.h"
+#include "session/session.h"
+
+namespace peakcast::net {
+
+class WsSession : public FrameSink, public std::enable_shared_from_this<WsSession> {
+ public:
+  WsSession(tcp::socket&& socket, AppContext& app, bool authorized);
+  ~WsSession() override;
+  void run(Request upgrade);
+
+  // FrameSink: called from encode threads.
+  void deliver_frame(std::vector<uint8_t> bytes, uint32_t frame_id, bool final) override;
+  void deliver_text(std::string text) override;
+
+ private:
+  struct Outgoing {
+    bool binary = false;
+    std::shared_ptr<const std::string> text;
+    std::shared_ptr<const std::vector<uint8_t>> frame;
+    uint32_t frame_id = 0;
+    bool final = false;
+  };
+  void read();
+  void on_message();
+  void handle(const std::string& text);
+  void send_error(const std::string& code, const std::string& message);
+  void enqueue(Outgoing out);
+  void write_next();
+  void arm_idle_timer();
+  void close(websocket::close_code code, const std::string& reason);
+
+  websocket::stream<beast::tcp_stream> ws_;
+  beast::flat_buffer buffer_;
+  AppContext& app_;
+  bool authorized_;
+  bool counted_ = false, closing_ = false, writing_ = false;
+  std::shared_ptr<Session> session_;
+  std::deque<Outgoing> queue_;
+  asio::steady_timer idle_;
+};
+
+}  // namespace peakcast::net

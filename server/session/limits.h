@@ -1,0 +1,27 @@
+// Every limit at the edge of the server, with its unit (DESIGN §6). The serve command can
+// override the ones marked (cfg).
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+
+namespace peakcast::limits {
+
+constexpr size_t kMaxWsMessageBytes = 256 * 1024;        // one WebSocket text message (a 1024-point TF fits)
+constexpr size_t kMaxHttpBodyBytes = 1024 * 1024;        // one REST request body
+constexpr size_t kMaxHttpHeaderBytes = 16 * 1024;        // request line + headers
+constexpr int kMaxViewportSide = 8192;                   // pixels, after the device pixel ratio
+constexpr int64_t kMaxViewportPixels = 4096ll * 4096;    // pixels per streamed frame
+constexpr double kMinDpr = 0.25, kMaxDpr = 4.0;          // device pixel ratio
+constexpr int kMaxFramesInFlight = 2;                    // un-acknowledged frames per client
+constexpr size_t kMaxQueuedTextMessages = 64;            // per client; beyond, the client is too slow: closed
+constexpr int kDefaultMaxSessions = 16;                  // (cfg) concurrent WebSocket sessions
+constexpr std::chrono::seconds kDefaultIdleTimeout{600}; // (cfg) no message from the client for this long
+constexpr std::chrono::seconds kHandshakeTimeout{10};    // HTTP request / WebSocket handshake
+constexpr std::chrono::milliseconds kStillDelay{150};    // input quiet this long -> one final frame
+constexpr double kDefaultMaxFps = 60.0;                  // (cfg) frames per second per session
+constexpr int64_t kDefaultGpuBudgetBytes = int64_t(4) << 30;  // (cfg) volume bytes resident on the GPU
+constexpr int kMaxPingIdLength = 64;                     // characters
+
+}  // namespace peakcast::limits

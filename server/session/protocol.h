@@ -1,0 +1,100 @@
+// The WebSocket protocol (DESIGN §5, proto/): client messages parsed and validated into typed
+// structs, server messages built, and the binary frame header. No sockets here: the whole
+// protocol is testable in memory.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/scene.h"
+
+namespace peakcast::protocol {
+
+// A refusal: `code` is one of the error codes in proto/messages.md.
+class ProtocolError : public std::runtime_error {
+ public:
+  ProtocolError(std::string code, const std::string& message) : std::runtime_error(message), code(std::move(code)) {}
+  std::string code;
+};
+
+struct Viewport {
+  int width = 0, height = 0;  // CSS pixels
+  double dpr = 1.0;
+  int pixel_width() const;    // width * dpr, rounded, at least 1
+  int pixel_height() const;
+};
+
+// Partial scene state carried by hello and by camera/tf/render messages.
+struct StatePatch {
+  std::optional<Camera> camera;
+  std::optional<TransferFunction> tf;
+  double opacity_unit = 0.0;
+  std::optional<nlohmann::json> render;  // validated render settings object, merged over the current ones
+  std::optional<glm::dvec3> background;
+};
+
+struct Hello {
+  std::string token, volume;
+  Viewport viewport;
+  StatePatch state;
+};
+struct CameraMsg {
+  Camera camera;
+};
+struct TfMsg {
+  TransferFunction tf;
+  double opacity_unit = 0.0;
+  uint32_t version = 0;
+};
+struct RenderMsg {
+  nlohmann::json render;
+};
+struct QualityMsg {
+  std::optional<double> interactive_scale;  // 0.1..1
+  std::optional<int> interactive_quality, final_quality;  // 10..100
+  std::optional<std::string> final_format;  // jpeg | png
+};
+struct ViewportMsg {
+  Viewport viewport;
+};
+struct VolumeMsg {
+  std::string volume;
+};
+struct AckMsg {
+  uint32_t frame = 0;
+};
+struct PingMsg {
+  std::string id;
+};
+
+using ClientMessage = std::variant<Hello, CameraMsg, TfMsg, RenderMsg, QualityMsg, ViewportMsg, VolumeMsg, AckMsg, PingMsg>;
+
+// Throws ProtocolError (bad_json, too_large, bad_message, unknown_type).
+ClientMessage parse_client_message(const std::string& text);
+
+std::string error_message(const std::string& code, const std::string& message);
+
+// Binary frame: this header, then the image bytes (JPEG, or PNG for a final frame when asked).
+struct FrameHeader {
+  static constexpr uint32_t kMagic = 0x31464350;  // "PCF1" little-endian
+  static constexpr uint16_t kVersion = 1;
+  static constexpr uint16_t kSize = 64;
+  enum Flags : uint32_t { kFinal = 1, kInteractive = 2, kPng = 4 };
+  uint32_t frame_id = 0;
+  uint32_t flags = 0;
+  uint32_t camera_version = 0, tf_version = 0, render_version = 0;
+  uint32_t width = 0, height = 0, quality = 0;
+  uint64_t t_input_us = 0, t_render_done_us = 0, t_encode_done_us = 0;  // server steady clock
+};
+
+std::vector<uint8_t> encode_frame(const FrameHeader& h, const std::vector<uint8_t>& image);
+// Throws ProtocolError("bad_frame") when the bytes are not a frame.
+FrameHeader decode_frame_header(const uint8_t* data, size_t size);
+
+}  // namespace peakcast::protocol

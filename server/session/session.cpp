@@ -1,0 +1,174 @@
+#include "session/session.h"
+
+#include <algorithm>
+
+#include "session/limits.h"
+
+namespace peakcast {
+
+Session::Session(std::string id, std::weak_ptr<FrameSink> sink) : id_(std::move(id)), sink_(std::move(sink)) {}
+
+void Session::touch() {
+  dirty_ = true;
+  final_pending_ = true;
+  last_input_ = Clock::now();
+}
+
+ResolvedScene Session::resolve() const {
+  Scene s = scene_;
+  s.render = parse_scene({{"volume", "x"}, {"render", render_json_}}).render;
+  s.width = viewport_.pixel_width();
+  s.height = viewport_.pixel_height();
+  return resolve_scene(s, *volume_->volume);
+}
+
+void Session::start(std::shared_ptr<VolumeEntry> volume, const protocol::Viewport& vp,
+                    const protocol::StatePatch& state) {
+  std::lock_guard lock(m_);
+  volume_ = std::move(volume);
+  viewport_ = vp;
+  scene_ = Scene{};
+  scene_.volume = volume_->id;
+  if (state.render) render_json_ = *state.render;
+  if (state.background) scene_.background = *state.background;
+  // Defaults resolved now, so the client knows the camera and TF it starts from.
+  ResolvedScene r = resolve_scene(scene_, *volume_->volume);
+  scene_.camera = state.camera ? *state.camera : r.camera;
+  scene_.tf = state.tf ? *state.tf : r.tf;
+  scene_.opacity_unit = state.tf ? state.opacity_unit : 0.0;
+  try {
+    resolve();
+  } catch (const SceneError& e) {
+    throw protocol::ProtocolError("bad_message", e.what());
+  }
+  camera_version_ = tf_version_ = render_version_ = 1;
+  touch();
+}
+
+void Session::set_volume(std::shared_ptr<VolumeEntry> volume) {
+  std::lock_guard lock(m_);
+  volume_ = std::move(volume);
+  scene_.volume = volume_->id;
+  Scene defaults;
+  defaults.volume = volume_->id;
+  ResolvedScene r = resolve_scene(defaults, *volume_->volume);
+  scene_.camera = r.camera;
+  scene_.tf = r.tf;
+  scene_.opacity_unit = 0.0;
+  camera_version_++;
+  tf_version_++;
+  touch();
+}
+
+void Session::set_camera(const Camera& c) {
+  std::lock_guard lock(m_);
+  scene_.camera = c;
+  camera_version_++;
+  touch();
+}
+
+void Session::set_tf(const TransferFunction& tf, double opacity_unit, uint32_t version) {
+  std::lock_guard lock(m_);
+  scene_.tf = tf;
+  scene_.opacity_unit = opacity_unit;
+  tf_version_ = version ? version : tf_version_ + 1;
+  touch();
+}
+
+void Session::merge_render(const nlohmann::json& patch) {
+  std::lock_guard lock(m_);
+  nlohmann::json merged = render_json_;
+  merged.merge_patch(patch);
+  const nlohmann::json before = render_json_;
+  render_json_ = merged;
+  try {
+    if (volume_) resolve();  // e.g. a step below the volume's floor
+  } catch (const SceneError& e) {
+    render_json_ = before;
+    throw protocol::ProtocolError("bad_message", e.what());
+  }
+  render_version_++;
+  touch();
+}
+
+void Session::set_quality(const protocol::QualityMsg& q) {
+  std::lock_guard lock(m_);
+  if (q.interactive_scale) quality_.interactive_scale = *q.interactive_scale;
+  if (q.interactive_quality) quality_.interactive_quality = *q.interactive_quality;
+  if (q.final_quality) quality_.final_quality = *q.final_quality;
+  if (q.final_format) quality_.final_png = *q.final_format == "png";
+  final_pending_ = true;  // re-send the still at the new quality
+}
+
+void Session::set_viewport(const protocol::Viewport& vp) {
+  std::lock_guard lock(m_);
+  viewport_ = vp;
+  touch();
+}
+
+void Session::ack(uint32_t frame_id) {
+  std::lock_guard lock(m_);
+  outstanding_.erase(frame_id);
+}
+
+void Session::frame_dropped(uint32_t frame_id) { ack(frame_id); }
+
+uint32_t Session::in_flight() const {
+  std::lock_guard lock(m_);
+  return uint32_t(outstanding_.size());
+}
+
+nlohmann::json Session::state_json() const {
+  std::lock_guard lock(m_);
+  nlohmann::json s = scene_to_json(scene_);
+  s["render"] = render_json_;
+  s["image"] = {{"width", viewport_.pixel_width()}, {"height", viewport_.pixel_height()}};
+  return s;
+}
+
+std::optional<FrameJob> Session::take_job(Clock::time_point now, std::chrono::milliseconds still_delay,
+                                          std::chrono::duration<double> min_interval, Clock::time_point& wake) {
+  std::lock_guard lock(m_);
+  wake = Clock::time_point::max();
+  if (!volume_ || !(dirty_ || final_pending_)) return std::nullopt;
+  if (int(outstanding_.size()) >= limits::kMaxFramesInFlight) return std::nullopt;  // an ack wakes us
+  const bool quiet = now - last_input_ >= still_delay;
+  const auto next_allowed = last_frame_ + std::chrono::duration_cast<Clock::duration>(min_interval);
+  if (!quiet) {
+    if (!dirty_) {  // interactive frame already shows the newest state: wait for the still
+      wake = last_input_ + still_delay;
+      return std::nullopt;
+    }
+    if (now < next_allowed) {
+      wake = std::min(next_allowed, last_input_ + still_delay);
+      return std::nullopt;
+    }
+  }
+  FrameJob job;
+  job.final = quiet;
+  job.volume = volume_;
+  job.quality = quality_;
+  try {
+    job.scene = resolve();
+  } catch (const std::exception&) {
+    dirty_ = final_pending_ = false;  // validated on input; nothing renderable
+    return std::nullopt;
+  }
+  if (!job.final) {  // reduced resolution and a coarser step while the input moves
+    job.scene.scene.width = std::max(1, int(job.scene.scene.width * quality_.interactive_scale));
+    job.scene.scene.height = std::max(1, int(job.scene.scene.height * quality_.interactive_scale));
+    job.scene.step *= 2.0;
+  }
+  job.frame_id = next_frame_id_++;
+  job.camera_version = camera_version_;
+  job.tf_version = tf_version_;
+  job.render_version = render_version_;
+  job.input_time = last_input_;
+  outstanding_.insert(job.frame_id);
+  last_frame_ = now;
+  dirty_ = false;
+  if (job.final) final_pending_ = false;
+  return job;
+}
+
+}  // namespace peakcast

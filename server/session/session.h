@@ -1,0 +1,94 @@
+// One viewer's state (DESIGN §2): written by its connection (newest wins), read by the render
+// thread as snapshots. Flow control: at most limits::kMaxFramesInFlight un-acknowledged frames;
+// a client that stops acking gets no more frames and costs no more memory.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/scene.h"
+#include "session/protocol.h"
+#include "session/volume_store.h"
+
+namespace peakcast {
+
+using Clock = std::chrono::steady_clock;
+
+// Where a session's output goes: its connection. Called from encode threads; implementations
+// post onto their own strand.
+class FrameSink {
+ public:
+  virtual ~FrameSink() = default;
+  virtual void deliver_frame(std::vector<uint8_t> bytes, uint32_t frame_id, bool final) = 0;
+  virtual void deliver_text(std::string text) = 0;
+};
+
+struct Quality {
+  double interactive_scale = 0.5;  // resolution ratio while input arrives
+  int interactive_quality = 70;    // JPEG, 4:2:0
+  int final_quality = 95;          // JPEG, 4:4:4
+  bool final_png = false;
+};
+
+// Everything the render thread needs for one frame.
+struct FrameJob {
+  std::shared_ptr<VolumeEntry> volume;
+  ResolvedScene scene;  // at the frame's resolution and step
+  bool final = false;
+  uint32_t frame_id = 0;
+  uint32_t camera_version = 0, tf_version = 0, render_version = 0;
+  Quality quality;
+  Clock::time_point input_time;
+};
+
+class Session {
+ public:
+  Session(std::string id, std::weak_ptr<FrameSink> sink);
+  const std::string& id() const { return id_; }
+  std::shared_ptr<FrameSink> sink() const { return sink_.lock(); }
+
+  // Connection side. Each throws protocol::ProtocolError for a state the volume refuses.
+  void start(std::shared_ptr<VolumeEntry> volume, const protocol::Viewport& vp, const protocol::StatePatch& state);
+  void set_volume(std::shared_ptr<VolumeEntry> volume);  // resets camera and TF to the volume's defaults
+  void set_camera(const Camera& c);
+  void set_tf(const TransferFunction& tf, double opacity_unit, uint32_t version);
+  void merge_render(const nlohmann::json& patch);
+  void set_quality(const protocol::QualityMsg& q);
+  void set_viewport(const protocol::Viewport& vp);
+  void ack(uint32_t frame_id);
+  void frame_dropped(uint32_t frame_id);  // the connection replaced it before sending
+  nlohmann::json state_json() const;      // volume, camera, tf, render, viewport: what the client restores
+
+  // Render-thread side. When there is nothing to do now, `wake` says when to ask again
+  // (Clock::time_point::max() when only new input can create work).
+  std::optional<FrameJob> take_job(Clock::time_point now, std::chrono::milliseconds still_delay,
+                                   std::chrono::duration<double> min_interval, Clock::time_point& wake);
+  uint32_t in_flight() const;
+
+ private:
+  void touch();  // a state change arrived (lock held)
+  ResolvedScene resolve() const;  // lock held
+  std::string id_;
+  std::weak_ptr<FrameSink> sink_;
+  mutable std::mutex m_;
+  std::shared_ptr<VolumeEntry> volume_;
+  Scene scene_;
+  nlohmann::json render_json_ = nlohmann::json::object();
+  protocol::Viewport viewport_;
+  Quality quality_;
+  uint32_t camera_version_ = 0, tf_version_ = 0, render_version_ = 0;
+  bool dirty_ = false, final_pending_ = false;
+  Clock::time_point last_input_{}, last_frame_{};
+  uint32_t next_frame_id_ = 1;
+  std::set<uint32_t> outstanding_;
+};
+
+}  // namespace peakcast
