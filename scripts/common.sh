@@ -12,7 +12,7 @@ PEAKCAST_PACKAGES=(
   libepoxy-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev
   libopenimageio-dev libturbojpeg0-dev libboost1.74-dev
   nlohmann-json3-dev libglm-dev libcli11-dev libspdlog-dev zlib1g-dev
-  python3 python3-jsonschema python3-websockets
+  python3 python3-jsonschema python3-websockets python3-pil
 )
 # Only the test command needs these (browser tests: Debian's chromium + playwright-core).
 PEAKCAST_TEST_PACKAGES=(chromium nodejs npm)

@@ -17,7 +17,7 @@ void WsSession::run(Request upgrade) {
   counted_ = true;
   app_.ws_sessions++;
   ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
-  ws_.read_message_max(limits::kMaxWsMessageBytes);
+  ws_.read_message_max(limits::kMaxWsReadBytes);
   ws_.set_option(websocket::stream_base::decorator(
       [](websocket::response_type& res) { res.set(http::field::server, "peakcast"); }));
   auto req = std::make_shared<Request>(std::move(upgrade));
@@ -38,9 +38,8 @@ void WsSession::arm_idle_timer() {
 
 void WsSession::read() {
   ws_.async_read(buffer_, [self = shared_from_this()](beast::error_code ec, std::size_t) {
-    if (ec == websocket::error::message_too_big) {
-      self->send_error("too_large", "message exceeds " + std::to_string(limits::kMaxWsMessageBytes) + " bytes");
-      self->close(websocket::close_code::too_big, "message too big");
+    if (ec == websocket::error::message_too_big) {  // Beast has already closed with 1009
+      self->idle_.cancel();
       return;
     }
     if (ec) {

