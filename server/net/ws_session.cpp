@@ -75,7 +75,7 @@ void WsSession::handle(const std::string& text) {
   using namespace protocol;
   ClientMessage msg = parse_client_message(text);
   if (auto* ping = std::get_if<PingMsg>(&msg)) {
-    return deliver_text(nlohmann::json{{"type", "pong"}, {"id", ping->id}}.dump());
+    return queue_text(nlohmann::json{{"type", "pong"}, {"id", ping->id}}.dump());
   }
   if (auto* hello = std::get_if<Hello>(&msg)) {
     if (session_) throw ProtocolError("bad_message", "hello: the session has already started");
@@ -111,7 +111,7 @@ void WsSession::handle(const std::string& text) {
           {"idle_timeout_s", app_.config.idle_timeout.count()},
           {"still_delay_ms", limits::kStillDelay.count()},
           {"max_fps", app_.config.max_fps}}}};
-    deliver_text(welcome.dump());
+    queue_text(welcome.dump());
     app_.render.add_session(session_);
     return;
   }
@@ -128,7 +128,7 @@ void WsSession::handle(const std::string& text) {
         if constexpr (std::is_same_v<T, VolumeMsg>) {
           auto entry = app_.volumes.get(m.volume);
           session_->set_volume(entry);
-          deliver_text(
+          queue_text(
               nlohmann::json{{"type", "volume"}, {"volume", entry->info(true)}, {"state", session_->state_json()}}.dump());
         }
       },
@@ -138,7 +138,13 @@ void WsSession::handle(const std::string& text) {
 
 void WsSession::send_error(const std::string& code, const std::string& message) {
   app_.metrics.add("peakcast_ws_errors_total", "code=\"" + code + "\"", 1);
-  deliver_text(protocol::error_message(code, message));
+  queue_text(protocol::error_message(code, message));
+}
+
+void WsSession::queue_text(std::string text) {
+  Outgoing o;
+  o.text = std::make_shared<const std::string>(std::move(text));
+  enqueue(std::move(o));
 }
 
 void WsSession::deliver_frame(std::vector<uint8_t> bytes, uint32_t frame_id, bool final) {
@@ -178,7 +184,15 @@ void WsSession::enqueue(Outgoing out) {
 }
 
 void WsSession::write_next() {
-  if (queue_.empty() || closing_) return;
+  if (queue_.empty()) {
+    if (closing_ && !close_sent_) {  // everything queued before the close has gone out
+      close_sent_ = true;
+      ws_.async_close(websocket::close_reason(close_code_, close_reason_), [self = shared_from_this()](beast::error_code ec) {
+        if (ec) fail(ec, "ws close");
+      });
+    }
+    return;
+  }
   writing_ = true;
   Outgoing& o = queue_.front();
   ws_.binary(o.binary);
@@ -210,13 +224,20 @@ void WsSession::write_next() {
 void WsSession::close(websocket::close_code code, const std::string& reason) {
   if (closing_) return;
   closing_ = true;
+  close_code_ = code;
+  close_reason_ = reason;
   idle_.cancel();
-  if (session_) {
-    app_.render.remove_session(session_->id());
+  if (session_) app_.render.remove_session(session_->id());
+  // Frames still queued are dropped; text (the error that explains the close) is sent first.
+  for (auto it = queue_.begin() + (writing_ ? 1 : 0); it != queue_.end();) {
+    if (it->binary) {
+      if (session_) session_->frame_dropped(it->frame_id);
+      it = queue_.erase(it);
+    } else {
+      ++it;
+    }
   }
-  ws_.async_close(websocket::close_reason(code, reason), [self = shared_from_this()](beast::error_code ec) {
-    if (ec) fail(ec, "ws close");
-  });
+  if (!writing_) write_next();
 }
 
 }  // namespace peakcast::net

@@ -37,6 +37,7 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   void on_message();
   void handle(const std::string& text);
   void send_error(const std::string& code, const std::string& message);
+  void queue_text(std::string text);  // on the strand: in order with what this handler does next
   void enqueue(Outgoing out);
   void write_next();
   void arm_idle_timer();
@@ -46,7 +47,9 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   beast::flat_buffer buffer_;
   AppContext& app_;
   bool authorized_;
-  bool counted_ = false, closing_ = false, writing_ = false;
+  bool counted_ = false, closing_ = false, writing_ = false, close_sent_ = false;
+  websocket::close_code close_code_ = websocket::close_code::normal;
+  std::string close_reason_;
   std::shared_ptr<Session> session_;
   std::deque<Outgoing> queue_;
   asio::steady_timer idle_;

@@ -1,0 +1,122 @@
+// The protocol and the session's flow control without sockets (STYLE 4).
+#include <gtest/gtest.h>
+
+#include <thread>
+
+#include "core/generators.h"
+#include "session/protocol.h"
+#include "session/session.h"
+
+using namespace peakcast;
+using namespace peakcast::protocol;
+
+namespace {
+
+TEST(Protocol, ParsesEachMessageType) {
+  auto h = std::get<Hello>(parse_client_message(
+      R"({"type":"hello","token":"t","viewport":{"width":100,"height":50,"dpr":2},"state":{"camera":{"eye":[0,0,5],"center":[0,0,0]}}})"));
+  EXPECT_EQ(h.viewport.pixel_width(), 200);
+  EXPECT_EQ(h.token, "t");
+  ASSERT_TRUE(h.state.camera);
+  EXPECT_TRUE(std::holds_alternative<CameraMsg>(parse_client_message(R"({"type":"camera","camera":{"eye":[0,0,5],"center":[0,0,0]}})")));
+  auto tf = std::get<TfMsg>(parse_client_message(R"({"type":"tf","version":7,"tf":{"points":[[0,0,0,0,0],[1,1,1,1,1]]}})"));
+  EXPECT_EQ(tf.version, 7u);
+  EXPECT_EQ(std::get<AckMsg>(parse_client_message(R"({"type":"ack","frame":3})")).frame, 3u);
+  EXPECT_TRUE(std::holds_alternative<PingMsg>(parse_client_message(R"({"type":"ping"})")));
+}
+
+TEST(Protocol, RefusalsCarryACode) {
+  auto code = [](const std::string& text) {
+    try {
+      parse_client_message(text);
+    } catch (const ProtocolError& e) {
+      return e.code;
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(code("{"), "bad_json");
+  EXPECT_EQ(code(R"({"type":"dance"})"), "unknown_type");
+  EXPECT_EQ(code(R"({"type":"camera","camera":{"eye":[0,0,0],"center":[0,0,0]}})"), "bad_message");
+  EXPECT_EQ(code(R"({"type":"viewport","width":9000,"height":10})"), "bad_message");
+  EXPECT_EQ(code(std::string(300 * 1024, ' ')), "too_large");
+}
+
+TEST(Protocol, FrameHeaderRoundTrips) {
+  FrameHeader h;
+  h.frame_id = 42;
+  h.flags = FrameHeader::kFinal | FrameHeader::kPng;
+  h.camera_version = 3;
+  h.width = 640;
+  h.height = 480;
+  h.t_input_us = 1234567890123ull;
+  auto bytes = encode_frame(h, {1, 2, 3});
+  ASSERT_EQ(bytes.size(), 67u);
+  EXPECT_EQ(bytes[0], 'P');
+  FrameHeader back = decode_frame_header(bytes.data(), bytes.size());
+  EXPECT_EQ(back.frame_id, 42u);
+  EXPECT_EQ(back.flags, h.flags);
+  EXPECT_EQ(back.t_input_us, h.t_input_us);
+  EXPECT_THROW(decode_frame_header(bytes.data(), 10), ProtocolError);
+}
+
+std::shared_ptr<VolumeEntry> entry() {
+  GeneratorSpec g;
+  g.dims = {8, 8, 8};
+  auto e = std::make_shared<VolumeEntry>();
+  e->id.assign(1, 'v');  // (a plain "v" trips GCC 12's false -Wrestrict)
+  e->volume = std::make_shared<Volume>(generate_volume(g));
+  return e;
+}
+
+TEST(SessionFlow, AtMostTwoFramesInFlightNewestStateWins) {
+  Session s("s1", {});
+  Viewport vp{100, 80, 1.0};
+  s.start(entry(), vp, {});
+  const auto still = std::chrono::milliseconds(150);
+  const auto rate = std::chrono::duration<double>(0.0);
+  Clock::time_point wake;
+  auto t = Clock::now();
+  auto a = s.take_job(t, still, rate, wake);
+  ASSERT_TRUE(a);
+  EXPECT_FALSE(a->final);
+  EXPECT_EQ(a->scene.scene.width, 50);  // interactive: half resolution
+  Camera c = a->scene.camera;
+  for (int i = 0; i < 50; ++i) {  // fast input coalesces
+    c.eye.x += 1;
+    s.set_camera(c);
+  }
+  auto b = s.take_job(Clock::now(), still, rate, wake);
+  ASSERT_TRUE(b);
+  EXPECT_EQ(b->camera_version, 51u);
+  c.eye.x += 1;
+  s.set_camera(c);
+  EXPECT_FALSE(s.take_job(Clock::now(), still, rate, wake)) << "two un-acked frames: no third";
+  EXPECT_EQ(wake, Clock::time_point::max());
+  s.ack(a->frame_id);
+  auto d = s.take_job(Clock::now() + std::chrono::seconds(1), still, rate, wake);
+  ASSERT_TRUE(d);
+  EXPECT_TRUE(d->final) << "input quiet for longer than the still delay";
+  EXPECT_EQ(d->scene.scene.width, 100);
+  EXPECT_EQ(d->camera_version, 52u);
+  s.ack(b->frame_id);
+  s.ack(d->frame_id);
+  EXPECT_FALSE(s.take_job(Clock::now() + std::chrono::seconds(2), still, rate, wake)) << "nothing new after the final";
+}
+
+TEST(SessionFlow, FinalFollowsInteractiveAfterTheStillDelay) {
+  Session s("s2", {});
+  s.start(entry(), Viewport{64, 64, 1.0}, {});
+  Clock::time_point wake;
+  const auto t0 = Clock::now();
+  auto a = s.take_job(t0, std::chrono::milliseconds(150), std::chrono::duration<double>(0), wake);
+  ASSERT_TRUE(a && !a->final);
+  s.ack(a->frame_id);
+  EXPECT_FALSE(s.take_job(t0 + std::chrono::milliseconds(10), std::chrono::milliseconds(150),
+                          std::chrono::duration<double>(0), wake));
+  EXPECT_NE(wake, Clock::time_point::max()) << "the render thread must wake for the still";
+  auto b = s.take_job(wake, std::chrono::milliseconds(150), std::chrono::duration<double>(0), wake);
+  ASSERT_TRUE(b);
+  EXPECT_TRUE(b->final);
+}
+
+}  // namespace

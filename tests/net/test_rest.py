@@ -1,0 +1,116 @@
+#!/usr/bin/env python3
+"""REST and shared resources (issue 5): routes, REST render == CLI render, 16 sessions on one GPU copy,
+/metrics as Prometheus text."""
+import asyncio, io, json, pathlib, re, subprocess, sys, tempfile
+
+sys.path.insert(0, str(pathlib.Path(__file__).parent))
+from harness import *  # noqa: F401,F403
+
+SERVER = None
+SCENE = {"volume": "heptane_151", "image": {"width": 200, "height": 160},
+         "camera": {"eye": [75, -160, 230], "center": [75, 75, 75], "up": [0, 0, 1], "fov_y": 30},
+         "tf": {"points": [[0, 0, 0, 0, 0], [90, 0.2, 0.5, 1.0, 0.04], [140, 0.2, 0.5, 1, 0], [199, 1, 0.1, 0, 0],
+                           [200, 1, 0.1, 0, 0.9], [201, 1, 0.1, 0, 0], [255, 1, 1, 1, 0]]},
+         "render": {"classification": "peaks", "shading": True, "filter": "tricubic"}}
+
+
+def test_health_and_volumes():
+    status, _, body = http(SERVER, "/api/health")
+    h = json.loads(body)
+    assert status == 200 and h["status"] == "ok" and "llvmpipe" in h["gl_renderer"] or h["gl_renderer"]
+    status, _, body = http(SERVER, "/api/volumes")
+    v = json.loads(body)
+    assert v["default"] == "heptane_151" and v["volumes"][0]["dims"] == [151, 151, 151]
+    status, _, body = http(SERVER, "/api/volumes/heptane_151")
+    info = json.loads(body)
+    assert len(info["histogram"]) == 1024 and sum(info["histogram"]) == 151 ** 3
+    assert http(SERVER, "/api/volumes/nope")[0] == 404
+
+
+def test_rest_render_equals_cli_render():
+    status, headers, png = http(SERVER, "/api/render", "POST", json.dumps(SCENE).encode())
+    assert status == 200 and headers["Content-Type"] == "image/png", (status, png[:200])
+    assert float(headers["X-Render-Ms"]) > 0 and "peaks" in headers["X-Variant"]
+    with tempfile.TemporaryDirectory() as tmp:
+        scene = dict(SCENE, volume=str(DATA / "heptane_151.nrrd"))
+        pathlib.Path(tmp, "s.json").write_text(json.dumps(scene))
+        subprocess.run([PEAKCAST, "render", f"{tmp}/s.json", "-o", f"{tmp}/cli.png"], check=True, capture_output=True)
+        value = psnr(decode_image(png), Image.open(f"{tmp}/cli.png"))
+    print(f"  REST vs CLI: PSNR {value:.1f} dB")
+    assert value == 200.0, "REST and CLI render the same scene with the same code: identical pixels"
+
+
+def test_rest_jpeg_and_refusals():
+    status, headers, jpg = http(SERVER, "/api/render?format=jpeg&quality=80", "POST", json.dumps(SCENE).encode())
+    assert status == 200 and headers["Content-Type"] == "image/jpeg"
+    assert decode_image(jpg).size == (200, 160)
+    status, headers, jpg = http(SERVER, "/api/render", "POST", json.dumps(SCENE).encode(), {"Accept": "image/jpeg"})
+    assert headers["Content-Type"] == "image/jpeg"
+    for q in ("format=gif", "quality=0", "quality=abc"):
+        assert http(SERVER, "/api/render?" + q, "POST", json.dumps(SCENE).encode())[0] == 400, q
+    bad = dict(SCENE, render={"sampling": "differential"})
+    status, _, body = http(SERVER, "/api/render", "POST", json.dumps(bad).encode())
+    assert status == 400 and b"not implemented" in body
+
+
+def test_sixteen_sessions_share_one_gpu_copy():
+    async def run():
+        clients = [await Client.connect(SERVER) for _ in range(16)]
+        for c in clients:
+            await c.hello(96, 72)
+        for c in clients:
+            f = await c.next_frame(final=True)
+            assert decode_image(f["image"]).size == (96, 72)
+        status, _, text = http(SERVER, "/metrics")
+        metrics = parse_prometheus(text.decode())
+        assert metrics[("peakcast_sessions", "")] == 16, metrics.get(("peakcast_sessions", ""))
+        assert metrics[("peakcast_gpu_volumes", "")] == 1
+        assert metrics[("peakcast_gpu_volume_bytes", "")] == 151 ** 3
+        for c in clients:
+            await c.close()
+    asyncio.run(run())
+
+
+LINE = re.compile(r'^([a-zA-Z_:][a-zA-Z0-9_:]*)(\{([a-zA-Z_][a-zA-Z0-9_]*="[^"]*"(,[a-zA-Z_][a-zA-Z0-9_]*="[^"]*")*)?\})? (-?[0-9.e+-]+|\+Inf|NaN)$')
+
+
+def parse_prometheus(text):
+    """Strict enough: every line is a comment (HELP/TYPE) or `name{labels} value`."""
+    out, types = {}, {}
+    for line in text.splitlines():
+        if line.startswith("# HELP "):
+            continue
+        if line.startswith("# TYPE "):
+            _, _, name, kind = line.split(" ", 3)
+            assert kind in ("counter", "gauge", "histogram"), line
+            types[name] = kind
+            continue
+        m = LINE.match(line)
+        assert m, f"not Prometheus text: {line!r}"
+        name = m.group(1)
+        base = re.sub(r"_(bucket|sum|count)$", "", name)
+        assert name in types or base in types, f"no TYPE for {name}"
+        out[(name, m.group(3) or "")] = float(m.group(5))
+    return out
+
+
+def test_metrics_parse_as_prometheus_text():
+    status, headers, text = http(SERVER, "/metrics")
+    assert status == 200 and headers["Content-Type"].startswith("text/plain")
+    m = parse_prometheus(text.decode())
+    assert m[("peakcast_frames_sent_total", 'kind="final"')] >= 16
+    assert any(k[0] == "peakcast_input_to_sent_ms_bucket" for k in m)
+    assert any(k[0] == "peakcast_render_ms_count" for k in m)
+
+
+def test_static_client_is_served():
+    status, headers, body = http(SERVER, "/")
+    assert status == 200 and headers["Content-Type"].startswith("text/html")
+
+
+if __name__ == "__main__":
+    with Server("--max-sessions", "20") as s:
+        SERVER = s
+        run_tests([test_health_and_volumes, test_rest_render_equals_cli_render, test_rest_jpeg_and_refusals,
+                   test_sixteen_sessions_share_one_gpu_copy, test_metrics_parse_as_prometheus_text,
+                   test_static_client_is_served])
