@@ -13,6 +13,7 @@ void add_volume_commands(CLI::App& app, Runner& run);  // make-volume, info
 void add_render_commands(CLI::App& app, Runner& run);  // render, reference, compare
 void add_bench_commands(CLI::App& app, Runner& run);   // bench raycast, bench peaks
 void add_serve_command(CLI::App& app, Runner& run);    // serve
+void add_bench_serve_command(CLI::App& bench, Runner& run);  // bench serve
 
 // Exit codes: 0 ok, 1 failure of the job, 2 bad input (file, scene, arguments).
 constexpr int kExitBadInput = 2;
