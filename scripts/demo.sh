@@ -1,11 +1,10 @@
 #!/usr/bin/env bash
-# The README's first command: install what is missing, build Release, run the demo.
-# Renders the heptane sample (a real volume) with a near-Dirac red peak and a smooth blue
-# feature, and prints where the PNG is.
+# The README's first command: install what is missing, build Release, and start the server on
+# http://127.0.0.1:8080 with the heptane sample (a real simulation volume) loaded. Open that
+# address in a browser. Ctrl-C stops it. PEAKCAST_PORT / PEAKCAST_BIND change where it listens.
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 install_packages "${PEAKCAST_PACKAGES[@]}"
 build_peakcast Release
-out=${PEAKCAST_DEMO_OUT:-$PEAKCAST_ROOT/out}
-mkdir -p "$out"
-"$BUILD_DIR/server/peakcast" render "$PEAKCAST_ROOT/scripts/demo/heptane.json" -o "$out/demo.png" --stats "$out/demo_stats.json"
-echo "peakcast: demo image at $out/demo.png (stats: $out/demo_stats.json)"
+data="$PEAKCAST_ROOT/tests/data"
+exec "$BUILD_DIR/server/peakcast" serve --port "${PEAKCAST_PORT:-8080}" --bind "${PEAKCAST_BIND:-127.0.0.1}" \
+  --data "$data" --volume "$data/heptane_151.nrrd" "$@"

@@ -153,6 +153,7 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
                               nlohmann::json{{"status", "ok"},
                                              {"gl_renderer", app.render.gl_renderer()},
                                              {"sessions", app.ws_sessions.load()},
+                                             {"max_sessions", app.config.max_sessions},
                                              {"volumes", app.volumes.list().size()}}
                                   .dump()));
   }

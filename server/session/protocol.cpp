@@ -131,7 +131,11 @@ ClientMessage parse_client_message(const std::string& text) {
   if (type == "render") {
     only_keys(j, "render", {"render"});
     if (!j.contains("render")) bad("render.render: required");
-    validate_parts({{"render", j["render"]}});
+    if (!j["render"].is_object()) bad("render.render: must be an object");
+    json present = j["render"];  // null removes a setting (JSON merge patch): validate the rest
+    for (auto it = j["render"].begin(); it != j["render"].end(); ++it)
+      if (it.value().is_null()) present.erase(it.key());
+    validate_parts({{"render", present}});
     return RenderMsg{j["render"]};
   }
   if (type == "quality") {

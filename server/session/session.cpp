@@ -122,8 +122,9 @@ uint32_t Session::in_flight() const {
 
 nlohmann::json Session::state_json() const {
   std::lock_guard lock(m_);
-  nlohmann::json s = scene_to_json(scene_);
-  s["render"] = render_json_;
+  Scene full = scene_;  // every render setting, defaults included: what the client shows and restores
+  full.render = parse_scene({{"volume", "x"}, {"render", render_json_}}).render;
+  nlohmann::json s = scene_to_json(full);
   s["image"] = {{"width", viewport_.pixel_width()}, {"height", viewport_.pixel_height()}};
   return s;
 }

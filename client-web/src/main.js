@@ -1,0 +1,174 @@
+// peakcast browser client: wires the stream, the viewport, the camera, the TF editor, the render
+// controls, the stats overlay, the volume picker, screenshots and the shareable URL.
+import { CameraController } from './camera.js';
+import { RenderControls } from './controls.js';
+import { Disposer } from './disposer.js';
+import { readState, stateUrl, writeState } from './state-url.js';
+import { StatsOverlay } from './stats.js';
+import { Stream } from './stream.js';
+import { TfEditor } from './tf-editor.js';
+import { VolumePicker } from './volume-picker.js';
+
+const $ = (id) => document.getElementById(id);
+const disposer = new Disposer();
+const canvas = $('frame');
+const ctx2d = canvas.getContext('2d');
+const params = new URLSearchParams(location.search);
+let token = params.get('token') || sessionStorage.getItem('peakcast-token') || '';
+
+// What the client knows of its session; sent again in hello after a reconnect.
+const app = { volume: null, camera: null, tf: null, render: {}, cameraVersion: 1, welcomed: false };
+const restored = readState();
+if (restored) Object.assign(app, { volume: restored.volume, camera: restored.camera, tf: restored.tf, render: restored.render || {} });
+
+const stats = new StatsOverlay($('stats'));
+const camera = new CameraController(canvas, disposer);
+const tfEditor = new TfEditor({ canvas: $('tf-canvas'), color: $('tf-color'), remove: $('tf-delete'), undo: $('tf-undo'),
+  redo: $('tf-redo'), preset: $('tf-preset'), iso: $('tf-iso') }, disposer);
+const controls = new RenderControls($('controls'), disposer);
+const picker = new VolumePicker({ select: $('volume-select'), path: $('volume-path'), open: $('volume-open'),
+  progress: $('volume-progress'), info: $('volume-info') }, disposer);
+
+function viewport() {
+  const r = canvas.getBoundingClientRect();
+  return { width: Math.max(1, Math.round(r.width)), height: Math.max(1, Math.round(r.height)), dpr: Math.min(window.devicePixelRatio || 1, 4) };
+}
+
+function helloFor() {
+  const hello = { type: 'hello', viewport: viewport() };
+  if (token) hello.token = token;
+  if (app.volume) hello.volume = app.volume;
+  const state = {};
+  if (app.camera) state.camera = app.camera;
+  if (app.tf) state.tf = { points: app.tf };
+  if (Object.keys(app.render).length) state.render = app.render;
+  if (Object.keys(state).length) hello.state = state;
+  return hello;
+}
+
+const stream = new Stream({ url: `${location.protocol === 'https:' ? 'wss' : 'ws'}://${location.host}/ws`, helloFor });
+disposer.add(() => stream.dispose());
+
+function share() { return { volume: app.volume, camera: app.camera, tf: app.tf, render: app.render }; }
+
+function applyState(state, volumeInfo, volumes) {
+  app.volume = volumeInfo.id;
+  app.camera = state.camera;
+  app.tf = state.tf.points;
+  app.render = state.render || {};
+  camera.set(state.camera, { home: !app.welcomed || !restored, silent: true });
+  tfEditor.setVolume(volumeInfo);
+  tfEditor.set(state.tf.points);
+  if (volumes) picker.show(volumes, volumeInfo);
+  writeState(share());
+}
+
+disposer.listen(stream, 'welcome', (e) => {
+  const w = e.detail;
+  app.cameraVersion = 1;
+  applyState(w.state, w.volume, w.volumes);
+  app.volumes = w.volumes;
+  controls.build(w.capabilities, w.state.render);
+  app.welcomed = true;
+  document.title = `peakcast — ${w.volume.id}`;
+});
+disposer.listen(stream, 'volume', (e) => {
+  applyState(e.detail.state, e.detail.volume, app.volumes.some((v) => v.id === e.detail.volume.id) ? app.volumes : [...app.volumes, e.detail.volume]);
+  camera.set(e.detail.state.camera, { home: true, silent: true });
+});
+disposer.listen(stream, 'stats', (e) => { stats.stats(e.detail); $('variant').textContent = e.detail.variant; });
+disposer.listen(stream, 'error', (e) => {
+  console.warn('peakcast:', e.detail.code, e.detail.message);
+  if (e.detail.code === 'volume_error') picker.failed(e.detail.message);
+});
+
+disposer.listen(stream, 'frame', (e) => {
+  const { frame, bitmap } = e.detail;
+  const vp = viewport();
+  canvas.width = Math.round(vp.width * vp.dpr);
+  canvas.height = Math.round(vp.height * vp.dpr);
+  ctx2d.imageSmoothingEnabled = true;
+  ctx2d.drawImage(bitmap, 0, 0, canvas.width, canvas.height);  // interactive frames are upscaled
+  bitmap.close();
+  canvas.dataset.frames = String((+canvas.dataset.frames || 0) + 1);
+  canvas.dataset.final = String(frame.final);
+  canvas.dataset.cameraVersion = String(frame.cameraVersion);
+  stats.frameShown(frame);
+});
+
+const statusEl = $('status'), tokenForm = $('token-form');
+disposer.listen(stream, 'status', async (e) => {
+  const s = e.detail;
+  statusEl.hidden = s.state === 'live';
+  statusEl.className = 'banner' + (s.state === 'connecting' ? ' info' : '');
+  document.body.dataset.status = s.state;
+  if (s.state === 'connecting') statusEl.textContent = 'connecting…';
+  if (s.state === 'disconnected') {
+    let reason = s.reason;
+    try {  // a refused upgrade (session cap) shows no reason to a WebSocket: ask the server
+      const h = await (await fetch('/api/health')).json();
+      if (h.max_sessions && h.sessions >= h.max_sessions) reason = `server full (${h.sessions} sessions)`;
+    } catch { /* server down */ }
+    statusEl.textContent = `disconnected: ${reason} — reconnecting in ${(s.retryMs / 1000).toFixed(1)} s`;
+  }
+  if (s.state === 'refused') {
+    statusEl.textContent = 'refused: a valid access token is required';
+    tokenForm.hidden = false;
+    statusEl.style.top = '30%';
+  }
+});
+disposer.listen(tokenForm, 'submit', (e) => {
+  e.preventDefault();
+  token = $('token-input').value;
+  sessionStorage.setItem('peakcast-token', token);
+  tokenForm.hidden = true;
+  stream.refused = null;
+  stream.connect();
+});
+
+disposer.listen(camera, 'change', (e) => {
+  app.camera = e.detail;
+  app.cameraVersion++;
+  stats.inputSent(app.cameraVersion);
+  stream.send({ type: 'camera', camera: e.detail });
+  writeState(share());
+});
+disposer.listen(tfEditor, 'change', (e) => {
+  app.tf = e.detail.points;
+  stream.send({ type: 'tf', tf: { points: e.detail.points }, version: e.detail.version });
+  writeState(share());
+});
+disposer.listen(controls, 'change', (e) => {
+  for (const [k, v] of Object.entries(e.detail)) if (v === null) delete app.render[k]; else app.render[k] = v;
+  stream.send({ type: 'render', render: e.detail });
+  writeState(share());
+});
+disposer.listen(picker, 'pick', (e) => stream.send({ type: 'volume', volume: e.detail }));
+for (const b of document.querySelectorAll('#view-buttons button')) disposer.listen(b, 'click', () => camera.view(b.dataset.view));
+
+let resizeTimer = 0;
+disposer.listen(window, 'resize', () => {
+  clearTimeout(resizeTimer);
+  resizeTimer = setTimeout(() => stream.send({ type: 'viewport', ...viewport() }), 150);
+});
+
+disposer.listen($('shot'), 'click', async () => {
+  const width = +$('shot-w').value, height = +$('shot-h').value;
+  const scene = { volume: app.volume, camera: app.camera, tf: { points: app.tf }, render: app.render, image: { width, height } };
+  const headers = { 'Content-Type': 'application/json' };
+  if (token) headers.Authorization = `Bearer ${token}`;
+  const res = await fetch('/api/render?format=png', { method: 'POST', headers, body: JSON.stringify(scene) });
+  if (!res.ok) return alert(`screenshot failed: ${(await res.json()).message}`);
+  const url = URL.createObjectURL(await res.blob());
+  const a = Object.assign(document.createElement('a'), { href: url, download: `peakcast-${app.volume}-${width}x${height}.png` });
+  a.click();
+  setTimeout(() => URL.revokeObjectURL(url), 1000);
+});
+disposer.listen($('share'), 'click', async () => {
+  const url = stateUrl(share());
+  try { await navigator.clipboard.writeText(url); $('share-done').textContent = 'copied'; } catch { $('share-done').textContent = url; }
+});
+
+disposer.listen(window, 'pagehide', () => disposer.dispose());
+window.peakcast = { app, stats, stream, camera, tfEditor };  // for tests and the console
+stream.connect();

@@ -1,0 +1,92 @@
+// The WebSocket stream (proto/messages.md): hello, newest-frame-only decoding with
+// createImageBitmap, an ack per frame, reconnection that resumes the session state, and a status
+// for the page (connecting, live, disconnected, refused).
+import { parseFrame } from './protocol.js';
+
+export class Stream extends EventTarget {
+  #ws = null;
+  #pending = null;      // newest undecoded frame
+  #decoding = false;
+  #closed = false;
+  #retryMs = 500;
+  #timer = 0;
+
+  constructor({ url, helloFor }) {
+    super();
+    this.url = url;
+    this.helloFor = helloFor;  // () => hello message (with the state to resume)
+  }
+
+  connect() {
+    this.#closed = false;
+    this.#emit('status', { state: 'connecting' });
+    const ws = new WebSocket(this.url);
+    ws.binaryType = 'arraybuffer';
+    this.#ws = ws;
+    ws.onopen = () => { this.#retryMs = 500; ws.send(JSON.stringify(this.helloFor())); };
+    ws.onmessage = (ev) => (typeof ev.data === 'string' ? this.#onText(ev.data) : this.#onFrame(ev.data));
+    ws.onclose = (ev) => this.#onClose(ev);
+  }
+
+  send(message) {
+    if (this.#ws && this.#ws.readyState === WebSocket.OPEN) this.#ws.send(JSON.stringify(message));
+  }
+
+  get live() { return this.#ws?.readyState === WebSocket.OPEN; }
+
+  dispose() {
+    this.#closed = true;
+    clearTimeout(this.#timer);
+    if (this.#ws) { this.#ws.onclose = null; this.#ws.close(); }
+    this.#pending = null;
+  }
+
+  #emit(type, detail) { this.dispatchEvent(new CustomEvent(type, { detail })); }
+
+  #onText(text) {
+    const msg = JSON.parse(text);
+    if (msg.type === 'welcome') this.#emit('status', { state: 'live' });
+    if (msg.type === 'error' && msg.code === 'unauthorized') this.refused = 'unauthorized';
+    this.#emit(msg.type, msg);
+  }
+
+  #onFrame(buffer) {
+    const frame = parseFrame(buffer);
+    frame.receivedAt = performance.now();
+    if (this.#pending) this.send({ type: 'ack', frame: this.#pending.id });  // superseded, never shown
+    this.#pending = frame;
+    if (!this.#decoding) this.#decodeNewest();
+  }
+
+  async #decodeNewest() {
+    this.#decoding = true;
+    while (this.#pending) {
+      const frame = this.#pending;
+      this.#pending = null;
+      try {
+        const blob = new Blob([frame.image], { type: frame.png ? 'image/png' : 'image/jpeg' });
+        const bitmap = await createImageBitmap(blob);
+        frame.decodedAt = performance.now();
+        this.#emit('frame', { frame, bitmap });  // the listener owns and closes the bitmap
+      } catch (e) {
+        this.#emit('error', { code: 'decode', message: String(e) });
+      } finally {
+        this.send({ type: 'ack', frame: frame.id });
+      }
+    }
+    this.#decoding = false;
+  }
+
+  #onClose(ev) {
+    this.#ws = null;
+    if (this.#closed) return;
+    if (this.refused) {
+      this.#emit('status', { state: 'refused', reason: this.refused });
+      return;
+    }
+    const reason = ev.code === 1013 || ev.code === 1006 ? 'server unreachable' : (ev.reason || `closed (${ev.code})`);
+    this.#emit('status', { state: 'disconnected', reason, retryMs: this.#retryMs });
+    this.#timer = setTimeout(() => this.connect(), this.#retryMs);
+    this.#retryMs = Math.min(this.#retryMs * 2, 5000);
+  }
+}
