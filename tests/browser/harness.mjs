@@ -1,0 +1,97 @@
+// Browser-test helpers: a real `peakcast serve` on loopback and Debian's chromium through
+// playwright-core (executablePath /usr/bin/chromium; no browser is ever downloaded).
+import { spawn } from 'node:child_process';
+import { mkdirSync } from 'node:fs';
+import path from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { chromium } from 'playwright-core';
+
+const here = path.dirname(fileURLToPath(import.meta.url));
+export const ROOT = path.resolve(here, '../..');
+export const PEAKCAST = process.env.PEAKCAST_BIN || path.join(ROOT, 'build/server/peakcast');
+export const ARTIFACTS = process.env.PEAKCAST_ARTIFACTS || path.join(ROOT, 'build/test-artifacts/browser');
+mkdirSync(ARTIFACTS, { recursive: true });
+
+export function startServer(args = [], port = 0) {
+  const data = path.join(ROOT, 'tests/data');
+  const proc = spawn(PEAKCAST, ['serve', '--port', String(port), '--data', data, '--volume', path.join(data, 'heptane_151.nrrd'), ...args],
+    { stdio: ['ignore', 'pipe', 'pipe'] });
+  return new Promise((resolve, reject) => {
+    let out = '';
+    const timer = setTimeout(() => reject(new Error('server did not start: ' + out)), 60000);
+    proc.stdout.on('data', (d) => {
+      out += d;
+      const m = out.match(/serving on http:\/\/([\d.]+):(\d+)/);
+      if (m) {
+        clearTimeout(timer);
+        resolve({ proc, url: `http://${m[1]}:${m[2]}`, port: +m[2], stop: () => stop(proc) });
+      }
+    });
+    proc.stderr.on('data', (d) => { out += d; });
+    proc.on('exit', (code) => reject(new Error(`server exited ${code}: ${out}`)));
+  });
+}
+
+function stop(proc) {
+  return new Promise((resolve) => {
+    if (proc.exitCode !== null) return resolve();
+    proc.on('exit', resolve);
+    proc.kill('SIGTERM');
+  });
+}
+
+export async function launch() {
+  return chromium.launch({
+    executablePath: '/usr/bin/chromium',
+    args: ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
+      '--disable-component-update', '--disable-sync'],
+  });
+}
+
+export async function openClient(browser, url, { width = 1200, height = 700 } = {}) {
+  const page = await browser.newPage({ viewport: { width, height } });
+  page.errors = [];
+  page.on('pageerror', (e) => page.errors.push(e.message));
+  await page.goto(url);
+  return page;
+}
+
+// Waits for a final frame showing at least `cameraVersion`, after `afterFrames` frames.
+export async function waitFinal(page, { afterFrames = 0, cameraVersion = 0, timeout = 30000 } = {}) {
+  await page.waitForFunction(([n, v]) => {
+    const c = document.querySelector('#frame');
+    return c.dataset.final === 'true' && +(c.dataset.frames || 0) > n && +(c.dataset.cameraVersion || 0) >= v;
+  }, [afterFrames, cameraVersion], { timeout });
+}
+
+export const frameCount = (page) => page.evaluate(() => +(document.querySelector('#frame').dataset.frames || 0));
+
+// Mean and spread of the canvas pixels, and a small grey thumbnail to compare images.
+export function canvasSummary(page) {
+  return page.evaluate(() => {
+    const c = document.querySelector('#frame');
+    const t = document.createElement('canvas');
+    t.width = 64; t.height = 40;
+    const g = t.getContext('2d');
+    g.drawImage(c, 0, 0, 64, 40);
+    const d = g.getImageData(0, 0, 64, 40).data;
+    const grey = [];
+    let sum = 0, lit = 0;
+    for (let i = 0; i < d.length; i += 4) {
+      const v = (d[i] + d[i + 1] + d[i + 2]) / 3;
+      grey.push(v); sum += v; if (v > 20) lit++;
+      grey.red = (grey.red || 0) + d[i];
+    }
+    return { mean: sum / grey.length, lit: lit / grey.length, grey, red: grey.red / grey.length };
+  });
+}
+
+export function difference(a, b) {
+  let s = 0;
+  for (let i = 0; i < a.grey.length; i++) s += Math.abs(a.grey[i] - b.grey[i]);
+  return s / a.grey.length;
+}
+
+export async function screenshot(page, name) {
+  await page.screenshot({ path: path.join(ARTIFACTS, name + '.png') });
+}
