@@ -15,7 +15,7 @@ PEAKCAST_PACKAGES=(
   python3 python3-jsonschema python3-websockets python3-pil
 )
 # Only the test command needs these (browser tests: Debian's chromium + playwright-core).
-PEAKCAST_TEST_PACKAGES=(chromium nodejs npm)
+PEAKCAST_TEST_PACKAGES=(chromium nodejs)
 
 install_packages() {
   local missing=()
@@ -40,8 +40,8 @@ install_packages() {
 
 # Node tools for the browser tests: Debian's node may be missing; npm packages from the registry.
 install_node_modules() {
-  command -v node >/dev/null || return 0
-  [[ -f $PEAKCAST_ROOT/tests/browser/package.json ]] || return 0
+  # Debian's nodejs ships npm separately; some images' nodejs brings its own (and conflicts with it).
+  command -v npm >/dev/null || install_packages npm
   if [[ ! -d $PEAKCAST_ROOT/tests/browser/node_modules/playwright-core ]]; then
     (cd "$PEAKCAST_ROOT/tests/browser" && npm install --no-audit --no-fund --silent)
   fi

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <boost/asio/thread_pool.hpp>
+
 #include "core/metrics.h"
 #include "session/limits.h"
 #include "session/render_service.h"
@@ -37,6 +39,9 @@ struct AppContext {
   RenderService render;
   std::atomic<int> ws_sessions{0};
   std::atomic<uint64_t> next_session{1};
+  // Volume loads run here, never on an io thread (an 800 MB stack takes seconds). Declared last:
+  // joined first on destruction, while the volumes it fills still exist.
+  boost::asio::thread_pool loader{1};
 
   explicit AppContext(ServerConfig c);
 };

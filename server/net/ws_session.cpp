@@ -58,17 +58,42 @@ void WsSession::on_message() {
   } else {
     const std::string text = beast::buffers_to_string(buffer_.data());
     buffer_.consume(buffer_.size());
-    try {
-      handle(text);
-    } catch (const protocol::ProtocolError& e) {
-      send_error(e.code, e.what());
-    } catch (const VolumeError& e) {
-      send_error("volume_error", e.what());
-    } catch (const std::exception& e) {  // nothing escapes the handler
-      send_error("internal", e.what());
-    }
+    guarded([&] { handle(text); });
   }
   if (!closing_) read();
+}
+
+void WsSession::guarded(const std::function<void()>& fn) {
+  try {
+    fn();
+  } catch (const protocol::ProtocolError& e) {
+    send_error(e.code, e.what());
+  } catch (const VolumeError& e) {
+    send_error("volume_error", e.what());
+  } catch (const std::exception& e) {  // nothing escapes the handler
+    send_error("internal", e.what());
+  }
+}
+
+void WsSession::with_volume(const std::string& id, std::function<void(std::shared_ptr<VolumeEntry>)> then) {
+  if (auto e = app_.volumes.find(id)) return then(e);
+  asio::post(app_.loader, [self = shared_from_this(), id, then = std::move(then)] {
+    std::shared_ptr<VolumeEntry> entry;
+    std::string error;
+    try {
+      entry = self->app_.volumes.get(id);
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    asio::post(self->ws_.get_executor(), [self, entry, error, then] {
+      if (self->closing_) return;
+      if (!error.empty()) {
+        self->starting_ = false;
+        return self->send_error("volume_error", error);
+      }
+      self->guarded([&] { then(entry); });
+    });
+  });
 }
 
 void WsSession::handle(const std::string& text) {
@@ -88,31 +113,12 @@ void WsSession::handle(const std::string& text) {
     }
     const std::string vid = hello->volume.empty() ? app_.volumes.default_id() : hello->volume;
     if (vid.empty()) throw ProtocolError("volume_error", "no volume given and the server has none loaded");
-    auto volume = app_.volumes.get(vid);
-    auto session = std::make_shared<Session>("s" + std::to_string(app_.next_session++), weak_from_this());
-    session->start(volume, hello->viewport, hello->state);
-    session_ = session;
-    nlohmann::json vols = nlohmann::json::array();
-    for (const auto& v : app_.volumes.list()) vols.push_back(v->info(false));
-    nlohmann::json welcome = {
-        {"type", "welcome"},
-        {"session", session_->id()},
-        {"volume", volume->info(true)},
-        {"volumes", vols},
-        {"state", session_->state_json()},
-        {"capabilities", render::capabilities()},
-        {"gl_renderer", app_.render.gl_renderer()},
-        {"limits",
-         {{"max_message_bytes", limits::kMaxWsMessageBytes},
-          {"max_viewport_side", limits::kMaxViewportSide},
-          {"max_viewport_pixels", limits::kMaxViewportPixels},
-          {"max_frames_in_flight", limits::kMaxFramesInFlight},
-          {"max_tf_points", kMaxTfPoints},
-          {"idle_timeout_s", app_.config.idle_timeout.count()},
-          {"still_delay_ms", limits::kStillDelay.count()},
-          {"max_fps", app_.config.max_fps}}}};
-    queue_text(welcome.dump());
-    app_.render.add_session(session_);
+    if (starting_) throw ProtocolError("bad_message", "hello: already starting");
+    starting_ = true;
+    with_volume(vid, [this, hello = *hello](std::shared_ptr<VolumeEntry> volume) {
+      starting_ = false;
+      start_session(hello, std::move(volume));
+    });
     return;
   }
   if (!session_) throw ProtocolError("no_session", "send hello first");
@@ -126,14 +132,43 @@ void WsSession::handle(const std::string& text) {
         if constexpr (std::is_same_v<T, ViewportMsg>) session_->set_viewport(m.viewport);
         if constexpr (std::is_same_v<T, AckMsg>) session_->ack(m.frame);
         if constexpr (std::is_same_v<T, VolumeMsg>) {
-          auto entry = app_.volumes.get(m.volume);
-          session_->set_volume(entry);
-          queue_text(
-              nlohmann::json{{"type", "volume"}, {"volume", entry->info(true)}, {"state", session_->state_json()}}.dump());
+          with_volume(m.volume, [this](std::shared_ptr<VolumeEntry> entry) {
+            session_->set_volume(entry);
+            queue_text(
+                nlohmann::json{{"type", "volume"}, {"volume", entry->info(true)}, {"state", session_->state_json()}}.dump());
+            app_.render.notify();
+          });
         }
       },
       msg);
   app_.render.notify();
+}
+
+void WsSession::start_session(const protocol::Hello& hello, std::shared_ptr<VolumeEntry> volume) {
+  auto session = std::make_shared<Session>("s" + std::to_string(app_.next_session++), weak_from_this());
+  session->start(volume, hello.viewport, hello.state);
+  session_ = session;
+  nlohmann::json vols = nlohmann::json::array();
+  for (const auto& v : app_.volumes.list()) vols.push_back(v->info(false));
+  nlohmann::json welcome = {
+      {"type", "welcome"},
+      {"session", session_->id()},
+      {"volume", volume->info(true)},
+      {"volumes", vols},
+      {"state", session_->state_json()},
+      {"capabilities", render::capabilities()},
+      {"gl_renderer", app_.render.gl_renderer()},
+      {"limits",
+       {{"max_message_bytes", limits::kMaxWsMessageBytes},
+        {"max_viewport_side", limits::kMaxViewportSide},
+        {"max_viewport_pixels", limits::kMaxViewportPixels},
+        {"max_frames_in_flight", limits::kMaxFramesInFlight},
+        {"max_tf_points", kMaxTfPoints},
+        {"idle_timeout_s", app_.config.idle_timeout.count()},
+        {"still_delay_ms", limits::kStillDelay.count()},
+        {"max_fps", app_.config.max_fps}}}};
+  queue_text(welcome.dump());
+  app_.render.add_session(session_);
 }
 
 void WsSession::send_error(const std::string& code, const std::string& message) {

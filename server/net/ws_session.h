@@ -11,6 +11,7 @@
 #include "net/app_context.h"
 #include "net/beast.h"
 #include "net/rest_routes.h"
+#include "session/protocol.h"
 #include "session/session.h"
 
 namespace peakcast::net {
@@ -35,6 +36,11 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   };
   void read();
   void on_message();
+  // Runs fn on the strand, turning every exception into an error reply (nothing escapes a handler).
+  void guarded(const std::function<void()>& fn);
+  // Calls then(entry) on the strand once the volume is loaded (on the loader pool when needed).
+  void with_volume(const std::string& id, std::function<void(std::shared_ptr<VolumeEntry>)> then);
+  void start_session(const protocol::Hello& hello, std::shared_ptr<VolumeEntry> volume);
   void handle(const std::string& text);
   void send_error(const std::string& code, const std::string& message);
   void queue_text(std::string text);  // on the strand: in order with what this handler does next
@@ -51,6 +57,7 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   websocket::close_code close_code_ = websocket::close_code::normal;
   std::string close_reason_;
   std::shared_ptr<Session> session_;
+  bool starting_ = false;  // hello accepted, volume loading
   std::deque<Outgoing> queue_;
   asio::steady_timer idle_;
 };
