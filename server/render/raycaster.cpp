@@ -93,7 +93,6 @@ Image Raycaster::render(const GpuVolume& gv, const ResolvedScene& s, GpuPath pat
   if (s.scene.render.space_skipping) occ = classify_cells(cells, s.tf, gv.tf_lo(), gv.tf_hi(), peak_values);
   const VariantKey key = choose_variant(s, occ.empty_cells, path, peaks.size());
   upload_tables(gv, s, key.peaks ? peaks : std::vector<Peak>{});
-  if (!key.peaks && !key.preintegration) tables_ = RayTables{};
   const double table_ms = ms_since(t_tables);
   if (key.space_skipping) {
     occupancy_texture_ = gpu::make_texture(GL_TEXTURE_3D);
@@ -119,6 +118,21 @@ Image Raycaster::render(const GpuVolume& gv, const ResolvedScene& s, GpuPath pat
 void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const std::vector<Peak>& peaks) {
   const RenderSettings& r = s.scene.render;
   const double lo = gv.tf_lo(), hi = gv.tf_hi();
+  // The tables depend on the TF, the value range, the method's sizes and (preintegration) the
+  // step: a frame that changes none of them (a camera move) reuses what is bound.
+  std::ostringstream key;
+  key.precision(17);
+  key << to_string(r.classification) << ' ' << lo << ' ' << hi << ' ' << r.peak_table_bins << ' ' << r.max_peaks << ' '
+      << r.secant_iterations << ' ' << r.preint_table_size << ' ' << s.tf.opacity_unit << ' ' << peaks.size() << ' '
+      << (r.classification == Classification::Preint ? s.step : 0.0);
+  for (const auto& p : s.tf.points) key << ' ' << p.value << ' ' << p.r << ' ' << p.g << ' ' << p.b << ' ' << p.a;
+  if (key.str() == tables_key_) {
+    if (peak_table_) glBindTextureUnit(4, peak_table_.id());
+    if (tf_points_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, tf_points_.id());
+    if (preint_table_) glBindTextureUnit(5, preint_table_.id());
+    return;
+  }
+  tables_key_ = key.str();
   tables_ = RayTables{};
   if (r.classification == Classification::Peaks) {
     const PeakTable table = build_peak_table(peaks, lo, hi, r.peak_table_bins);

@@ -59,6 +59,7 @@ class Raycaster {
   gpu::Texture peak_table_, preint_table_;
   gpu::Buffer tf_points_;
   RayTables tables_;  // what the current frame's tables hold (for the uniforms and stats)
+  std::string tables_key_;  // the inputs tables_ was built from
   gpu::Framebuffer fbo_;
   int target_w_ = 0, target_h_ = 0;
 };
