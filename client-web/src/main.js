@@ -53,6 +53,7 @@ function share() { return { volume: app.volume, camera: app.camera, tf: app.tf, 
 
 function applyState(state, volumeInfo, volumes) {
   app.volume = volumeInfo.id;
+  app.cameraVersion = state.versions?.camera ?? app.cameraVersion;
   app.camera = state.camera;
   app.tf = state.tf.points;
   app.render = state.render || {};
@@ -65,7 +66,6 @@ function applyState(state, volumeInfo, volumes) {
 
 disposer.listen(stream, 'welcome', (e) => {
   const w = e.detail;
-  app.cameraVersion = 1;
   applyState(w.state, w.volume, w.volumes);
   app.volumes = w.volumes;
   controls.build(w.capabilities, w.state.render);

@@ -126,6 +126,8 @@ nlohmann::json Session::state_json() const {
   full.render = parse_scene({{"volume", "x"}, {"render", render_json_}}).render;
   nlohmann::json s = scene_to_json(full);
   s["image"] = {{"width", viewport_.pixel_width()}, {"height", viewport_.pixel_height()}};
+  // The versions frames will echo: a client counts on from these to match frames to its input.
+  s["versions"] = {{"camera", camera_version_}, {"tf", tf_version_}, {"render", render_version_}};
   return s;
 }
 
