@@ -1,6 +1,7 @@
 #include "gpu/shader_cache.h"
 
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <regex>
 #include <sstream>
@@ -32,6 +33,20 @@ void expand_into(const fs::path& dir, const std::string& file, ExpandedSource& o
     }
   }
   stack.pop_back();
+}
+
+// Empty when `status` reports success, else the object's info log (shaders and programs alike).
+template <typename GetIv, typename GetLog>
+std::string failure_log(GLuint id, GLenum status, GetIv get_iv, GetLog get_log) {
+  GLint ok = 0;
+  get_iv(id, status, &ok);
+  if (ok) return "";
+  GLint len = 0;
+  get_iv(id, GL_INFO_LOG_LENGTH, &len);
+  std::string log(size_t(std::max(len, 1)), '\0');
+  get_log(id, len, nullptr, log.data());
+  log.resize(std::strlen(log.c_str()));
+  return log.empty() ? "(no log)" : log;
 }
 
 GLenum stage_of(const std::string& file) {
@@ -79,28 +94,14 @@ const Program& ShaderCache::get(const std::string& key, const std::vector<std::s
     const char* text = src.text.c_str();
     glShaderSource(s.id(), 1, &text, nullptr);
     glCompileShader(s.id());
-    GLint ok = 0;
-    glGetShaderiv(s.id(), GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-      GLint len = 0;
-      glGetShaderiv(s.id(), GL_INFO_LOG_LENGTH, &len);
-      std::string log(size_t(std::max(len, 1)), '\0');
-      glGetShaderInfoLog(s.id(), len, nullptr, log.data());
-      throw ShaderError("compiling " + file + " [" + key + "]:\n" + translate_log(log.c_str(), src.files));
-    }
+    if (std::string log = failure_log(s.id(), GL_COMPILE_STATUS, glGetShaderiv, glGetShaderInfoLog); !log.empty())
+      throw ShaderError("compiling " + file + " [" + key + "]:\n" + translate_log(log, src.files));
     glAttachShader(program.id(), s.id());
     shaders.push_back(std::move(s));
   }
   glLinkProgram(program.id());
-  GLint ok = 0;
-  glGetProgramiv(program.id(), GL_LINK_STATUS, &ok);
-  if (!ok) {
-    GLint len = 0;
-    glGetProgramiv(program.id(), GL_INFO_LOG_LENGTH, &len);
-    std::string log(size_t(std::max(len, 1)), '\0');
-    glGetProgramInfoLog(program.id(), len, nullptr, log.data());
-    throw ShaderError("linking [" + key + "]: " + std::string(log.c_str()));
-  }
+  if (std::string log = failure_log(program.id(), GL_LINK_STATUS, glGetProgramiv, glGetProgramInfoLog); !log.empty())
+    throw ShaderError("linking [" + key + "]: " + log);
   return programs_.emplace(key, std::move(program)).first->second;
 }
 
