@@ -8,9 +8,14 @@ namespace peakcast::net {
 WsSession::WsSession(tcp::socket&& socket, AppContext& app, bool authorized)
     : ws_(std::move(socket)), app_(app), authorized_(authorized), idle_(ws_.get_executor()) {}
 
-WsSession::~WsSession() {
+WsSession::~WsSession() { release(); }
+
+// The connection is over: free its session slot now, not when the last frame in flight lets go
+// of this object.
+void WsSession::release() {
   if (session_) app_.render.remove_session(session_->id());
   if (counted_) app_.ws_sessions--;
+  counted_ = false;
 }
 
 void WsSession::run(Request upgrade) {
@@ -40,10 +45,12 @@ void WsSession::read() {
   ws_.async_read(buffer_, [self = shared_from_this()](beast::error_code ec, std::size_t) {
     if (ec == websocket::error::message_too_big) {  // Beast has already closed with 1009
       self->idle_.cancel();
+      self->release();
       return;
     }
     if (ec) {
       self->idle_.cancel();
+      self->release();
       return fail(ec, "ws read");
     }
     self->on_message();

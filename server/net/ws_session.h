@@ -48,6 +48,7 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   void write_next();
   void arm_idle_timer();
   void close(websocket::close_code code, const std::string& reason);
+  void release();
 
   websocket::stream<beast::tcp_stream> ws_;
   beast::flat_buffer buffer_;
