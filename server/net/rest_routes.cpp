@@ -4,9 +4,12 @@
 #include <fstream>
 #include <sstream>
 
+#include <boost/asio/post.hpp>
+
 #include "render/variant.h"
 
 namespace fs = std::filesystem;
+namespace asio = boost::asio;
 
 namespace peakcast::net {
 namespace {
@@ -46,22 +49,9 @@ Response static_file(const Request& req, const fs::path& root, std::string path)
   return res;
 }
 
-void render_still(AppContext& app, const Request& req, std::function<void(Response)> send) {
-  Scene scene;
-  try {
-    scene = parse_scene_text(req.body());
-    render::require_supported(scene.render);
-  } catch (const SceneError& e) {
-    count(app, "render", http::status::bad_request);
-    return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
-  }
-  std::shared_ptr<VolumeEntry> vol;
-  try {
-    vol = app.volumes.get(scene.volume);
-  } catch (const VolumeError& e) {
-    count(app, "render", http::status::not_found);
-    return send(error_response(req, http::status::not_found, "volume_error", e.what()));
-  }
+// The scene is valid and its volume loaded: resolve, queue on the render thread, answer later.
+void submit_still(AppContext& app, const Request& req, const Scene& scene, std::shared_ptr<VolumeEntry> vol,
+                  std::function<void(Response)> send) {
   StillJob job;
   try {
     job.scene = resolve_scene(scene, *vol->volume);
@@ -71,12 +61,12 @@ void render_still(AppContext& app, const Request& req, std::function<void(Respon
   }
   const std::string format = query_param(std::string(req.target()), "format");
   const std::string accept(req[http::field::accept]);
-  job.png = !(format == "jpeg" || format == "jpg" || (format.empty() && accept.find("image/jpeg") != std::string::npos &&
-                                                       accept.find("image/png") == std::string::npos));
   if (!format.empty() && format != "png" && format != "jpeg" && format != "jpg") {
     count(app, "render", http::status::bad_request);
     return send(error_response(req, http::status::bad_request, "bad_request", "format must be png or jpeg"));
   }
+  job.png = !(format == "jpeg" || format == "jpg" ||
+              (format.empty() && accept.find("image/jpeg") != std::string::npos && accept.find("image/png") == std::string::npos));
   const std::string q = query_param(std::string(req.target()), "quality");
   if (!q.empty()) {
     try {
@@ -89,7 +79,7 @@ void render_still(AppContext& app, const Request& req, std::function<void(Respon
       return send(error_response(req, http::status::bad_request, "bad_request", "quality must be 10..100"));
     }
   }
-  job.volume = vol;
+  job.volume = std::move(vol);
   const unsigned version = req.version();
   const bool keep_alive = req.keep_alive();
   job.done = [&app, send, version, keep_alive](StillResult r) {
@@ -112,6 +102,29 @@ void render_still(AppContext& app, const Request& req, std::function<void(Respon
     send(std::move(res));
   };
   app.render.submit_still(std::move(job));
+}
+
+void render_still(AppContext& app, const Request& req, std::function<void(Response)> send) {
+  Scene scene;
+  try {
+    scene = parse_scene_text(req.body());
+    render::require_supported(scene.render);
+  } catch (const SceneError& e) {
+    count(app, "render", http::status::bad_request);
+    return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
+  }
+  if (auto vol = app.volumes.find(scene.volume)) return submit_still(app, req, scene, std::move(vol), std::move(send));
+  // Not loaded yet: load on the loader pool, never on this io thread.
+  asio::post(app.loader, [&app, req, scene, send = std::move(send)] {
+    std::shared_ptr<VolumeEntry> vol;
+    try {
+      vol = app.volumes.get(scene.volume);
+    } catch (const VolumeError& e) {
+      count(app, "render", http::status::not_found);
+      return send(error_response(req, http::status::not_found, "volume_error", e.what()));
+    }
+    submit_still(app, req, scene, std::move(vol), send);
+  });
 }
 
 }  // namespace
