@@ -13,7 +13,8 @@ using json = nlohmann::json;
 
 void only_keys(const json& j, const std::string& where, std::initializer_list<const char*> allowed) {
   if (!j.is_object()) fail(where.empty() ? "scene" : where, "must be an object");
-  for (auto& [k, _] : j.items()) {
+  for (auto& item : j.items()) {
+    const std::string& k = item.key();
     bool ok = std::any_of(allowed.begin(), allowed.end(), [&](const char* a) { return k == a; });
     if (!ok) {
       std::string list;
