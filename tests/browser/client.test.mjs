@@ -136,3 +136,19 @@ test('a wrong token shows the refusal', async () => {
     await guarded.stop();
   }
 });
+
+test('a full server shows why the client cannot connect', async () => {
+  const full = await startServer(['--max-sessions', '1']);
+  try {
+    const first = await openClient(browser, full.url);
+    await waitFinal(first);
+    const second = await openClient(browser, full.url);
+    await second.waitForFunction(() => /server full/.test(document.querySelector('#status').textContent), null, { timeout: 20000 });
+    await screenshot(second, 'server_full');
+    await first.close();  // the slot frees: the waiting client gets in on its next retry
+    await waitFinal(second, { timeout: 40000 });
+    await second.close();
+  } finally {
+    await full.stop();
+  }
+});
