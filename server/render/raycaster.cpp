@@ -14,6 +14,15 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
+// Everything a per-TF table depends on: the points, the opacity unit and the value range.
+std::string tf_signature(const TransferFunction& tf, double lo, double hi) {
+  std::ostringstream s;
+  s.precision(17);
+  s << lo << ' ' << hi << ' ' << tf.opacity_unit;
+  for (const auto& p : tf.points) s << ' ' << p.value << ' ' << p.r << ' ' << p.g << ' ' << p.b << ' ' << p.a;
+  return s.str();
+}
+
 RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const MacrocellGrid& cells,
                           const RayTables& t) {
   const Volume& v = gv.volume();
@@ -89,12 +98,27 @@ Image Raycaster::render(const GpuVolume& gv, const ResolvedScene& s, GpuPath pat
       s.scene.render.classification == Classification::Peaks ? find_peaks(s.tf) : std::vector<Peak>{};
   std::vector<double> peak_values;
   for (const auto& p : peaks) peak_values.push_back(p.value);
-  Occupancy occ;
-  if (s.scene.render.space_skipping) occ = classify_cells(cells, s.tf, gv.tf_lo(), gv.tf_hi(), peak_values);
+  // Occupancy depends on the grid, the TF over the value range and the peaks: a camera move
+  // reuses it (and its texture).
+  const std::string occ_key = s.scene.render.space_skipping
+                                  ? tf_signature(s.tf, gv.tf_lo(), gv.tf_hi()) + " cells " +
+                                        std::to_string(reinterpret_cast<uintptr_t>(&cells)) + " " +
+                                        cells.to_string() + " " + std::to_string(cells.min.size()) + " peaks " +
+                                        std::to_string(peaks.size())
+                                  : std::string();
+  const bool occ_fresh = occ_key != occupancy_key_;
+  if (occ_fresh) {
+    occupancy_ = s.scene.render.space_skipping ? classify_cells(cells, s.tf, gv.tf_lo(), gv.tf_hi(), peak_values)
+                                               : Occupancy{};
+    occupancy_key_ = occ_key;
+  }
+  const Occupancy& occ = occupancy_;
   const VariantKey key = choose_variant(s, occ.empty_cells, path, peaks.size());
   upload_tables(gv, s, key.peaks ? peaks : std::vector<Peak>{});
   const double table_ms = ms_since(t_tables);
-  if (key.space_skipping) {
+  if (key.space_skipping && !occ_fresh && occupancy_texture_) {
+    glBindTextureUnit(2, occupancy_texture_.id());
+  } else if (key.space_skipping) {
     occupancy_texture_ = gpu::make_texture(GL_TEXTURE_3D);
     glTextureStorage3D(occupancy_texture_.id(), 1, GL_R8UI, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]),
                        GLsizei(cells.grid[2]));
@@ -122,10 +146,9 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
   // step: a frame that changes none of them (a camera move) reuses what is bound.
   std::ostringstream key;
   key.precision(17);
-  key << to_string(r.classification) << ' ' << lo << ' ' << hi << ' ' << r.peak_table_bins << ' ' << r.max_peaks << ' '
-      << r.secant_iterations << ' ' << r.preint_table_size << ' ' << s.tf.opacity_unit << ' ' << peaks.size() << ' '
+  key << tf_signature(s.tf, lo, hi) << ' ' << to_string(r.classification) << ' ' << r.peak_table_bins << ' '
+      << r.max_peaks << ' ' << r.secant_iterations << ' ' << r.preint_table_size << ' ' << peaks.size() << ' '
       << (r.classification == Classification::Preint ? s.step : 0.0);
-  for (const auto& p : s.tf.points) key << ' ' << p.value << ' ' << p.r << ' ' << p.g << ' ' << p.b << ' ' << p.a;
   if (key.str() == tables_key_) {
     if (peak_table_) glBindTextureUnit(4, peak_table_.id());
     if (tf_points_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, tf_points_.id());

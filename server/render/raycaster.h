@@ -5,6 +5,7 @@
 #include <string>
 
 #include "core/image.h"
+#include "core/occupancy.h"
 #include "core/peaks.h"
 #include "core/scene.h"
 #include "gpu/gl_objects.h"
@@ -60,6 +61,8 @@ class Raycaster {
   gpu::Buffer tf_points_;
   RayTables tables_;  // what the current frame's tables hold (for the uniforms and stats)
   std::string tables_key_;  // the inputs tables_ was built from
+  Occupancy occupancy_;      // macrocell classification for occupancy_key_
+  std::string occupancy_key_;
   gpu::Framebuffer fbo_;
   int target_w_ = 0, target_h_ = 0;
 };
