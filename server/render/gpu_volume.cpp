@@ -1,10 +1,13 @@
 #include "render/gpu_volume.h"
 
+#include <atomic>
 #include <stdexcept>
 
 namespace peakcast::render {
 
 GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume) : volume_(std::move(volume)) {
+  static std::atomic<uint64_t> next_serial{1};
+  serial_ = next_serial++;
   const Volume& v = *volume_;
   const auto& d = v.dims();
   GLenum internal = GL_R8, type = GL_UNSIGNED_BYTE;

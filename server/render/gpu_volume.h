@@ -27,6 +27,7 @@ class GpuVolume {
   double tf_lo() const { return lo_; }
   double tf_hi() const { return hi_; }
   void bind(unsigned unit) const;
+  uint64_t serial() const { return serial_; }  // unique per upload: caches key on it, not on addresses
 
  private:
   std::shared_ptr<const Volume> volume_;
@@ -34,6 +35,7 @@ class GpuVolume {
   MacrocellGrid cells_trilinear_, cells_tricubic_;
   float scale_ = 1.f, bias_ = 0.f;
   double lo_ = 0, hi_ = 1;
+  uint64_t serial_ = 0;
 };
 
 }  // namespace peakcast::render

@@ -102,8 +102,7 @@ Image Raycaster::render(const GpuVolume& gv, const ResolvedScene& s, GpuPath pat
   // reuses it (and its texture).
   const std::string occ_key = s.scene.render.space_skipping
                                   ? tf_signature(s.tf, gv.tf_lo(), gv.tf_hi()) + " cells " +
-                                        std::to_string(reinterpret_cast<uintptr_t>(&cells)) + " " +
-                                        cells.to_string() + " " + std::to_string(cells.min.size()) + " peaks " +
+                                        std::to_string(gv.serial()) + " " + cells.to_string() + " peaks " +
                                         std::to_string(peaks.size())
                                   : std::string();
   const bool occ_fresh = occ_key != occupancy_key_;
