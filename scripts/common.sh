@@ -15,7 +15,7 @@ PEAKCAST_PACKAGES=(
   python3 python3-jsonschema python3-websockets python3-pil
 )
 # Only the test command needs these (browser tests: Debian's chromium + playwright-core).
-PEAKCAST_TEST_PACKAGES=(chromium nodejs)
+PEAKCAST_TEST_PACKAGES=(chromium nodejs python3-vtk9 xvfb xauth)
 
 install_packages() {
   local missing=()

@@ -10,6 +10,7 @@
 #include "core/generators.h"
 #include "core/macrocells.h"
 #include "core/volume_io.h"
+#include "core/volume_writer.h"
 
 namespace peakcast::app {
 namespace {
@@ -63,6 +64,21 @@ void add_volume_commands(CLI::App& app, Runner& run) {
       std::printf("wrote %s: %s %lldx%lldx%lld %s seed %llu in %.2f s, peak RSS %.1f MiB\n", mv->out.c_str(),
                   to_string(s.kind), (long long)s.dims[0], (long long)s.dims[1], (long long)s.dims[2],
                   to_string(s.type), (unsigned long long)s.seed, secs, peak_rss_mib());
+      return 0;
+    };
+  });
+
+  auto ca = std::make_shared<std::pair<std::string, std::string>>();
+  auto gz = std::make_shared<bool>(false);
+  auto* conv = app.add_subcommand("convert", "Load a volume and write it again (.raw+.json, .nrrd, .nhdr, .mhd, .mha)");
+  conv->add_option("in", ca->first, "volume file or TIFF directory")->required();
+  conv->add_option("out", ca->second, "output file; the format follows the extension")->required();
+  conv->add_flag("--gzip", *gz, "gzip-compress the data (.raw, .nrrd, .nhdr)");
+  conv->callback([ca, gz, &run] {
+    run = [ca, gz] {
+      Volume v = load_volume(ca->first);
+      write_volume(ca->second, v, {*gz});
+      std::printf("wrote %s: %s\n", ca->second.c_str(), v.to_string().c_str());
       return 0;
     };
   });

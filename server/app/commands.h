@@ -9,7 +9,7 @@ namespace peakcast::app {
 // A command's body runs after parsing and returns the process exit code.
 using Runner = std::function<int()>;
 
-void add_volume_commands(CLI::App& app, Runner& run);  // make-volume, info
+void add_volume_commands(CLI::App& app, Runner& run);  // make-volume, convert, info
 void add_render_commands(CLI::App& app, Runner& run);  // render, reference, compare
 void add_bench_commands(CLI::App& app, Runner& run);   // bench raycast, bench peaks
 void add_serve_command(CLI::App& app, Runner& run);    // serve
