@@ -30,7 +30,8 @@ glm::dvec4 preintegrate_segment(const TransferFunction& tf, double sf, double sb
   return {c, alpha};
 }
 
-PreintegrationTable build_preintegration(const TransferFunction& tf, double lo, double hi, double step, int n) {
+PreintegrationTable build_preintegration(const TransferFunction& tf, double lo, double hi, double step, int n,
+                                         PreintegrationMethod method) {
   const auto t0 = std::chrono::steady_clock::now();
   PreintegrationTable t;
   t.size = n;
@@ -57,26 +58,59 @@ PreintegrationTable build_preintegration(const TransferFunction& tf, double lo, 
     const double a = correct_opacity(e.a, step, tf.opacity_unit);
     store(i, i, glm::dvec3(e) * a, a);
   }
-  // For |j - i| = d the segment crosses d * sub sub-bins, each of length step / (d * sub): their
-  // opacities depend on d only, so they are computed once per d; then every (i, j) at that
-  // distance composites its sub-bins front to back, in ray order.
+  if (method == PreintegrationMethod::Integral) {
+    // Prefix integrals over the field value, in units of one sub-bin.
+    std::vector<double> T(tau.size() + 1, 0.0);
+    std::vector<glm::dvec3> K(tau.size() + 1, glm::dvec3(0.0));
+    const double dsub = ds / sub;
+    for (size_t q = 0; q < tau.size(); ++q) {
+      T[q + 1] = T[q] + tau[q] * dsub;
+      K[q + 1] = K[q] + tau[q] * col[q] * dsub;
+    }
+    parallel_for(size_t(n), [&](size_t jj) {
+      const int j = int(jj);
+      for (int i = 0; i < n; ++i) {
+        if (i == j) continue;
+        const size_t qf = size_t(i) * sub, qb = size_t(j) * sub;
+        const double k = step / ((j - i) * ds);  // world length per unit of field value (signed)
+        const double a = 1.0 - std::exp(-std::abs(k * (T[qb] - T[qf])));
+        glm::dvec3 c = k * (K[qb] - K[qf]);
+        for (int ch = 0; ch < 3; ++ch) c[ch] = std::clamp(c[ch], 0.0, a);
+        store(i, j, c, a);
+      }
+    });
+    t.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return t;
+  }
+  // Exact: for |j - i| = d the segment crosses L = d * sub sub-bins of length step / L, so the
+  // sub-bin opacities depend on d only. Every window of L consecutive sub-bins is composited
+  // front to back with the sliding-window trick for an associative operator: cut the sub-bins
+  // into blocks of L, keep prefix and suffix composites per block, and a window is one suffix
+  // composited with one prefix. O(N * sub) per d, O(N^2 * sub) in all, each entry exact.
+  struct Acc {
+    glm::dvec3 c{0.0};
+    double a = 0.0;
+  };
+  auto over = [](const Acc& f, const Acc& b) { return Acc{f.c + (1.0 - f.a) * b.c, f.a + (1.0 - f.a) * b.a}; };
+  const int m = int(tau.size());
   parallel_for(size_t(n - 1), [&](size_t dd) {
-    const int d = int(dd) + 1, count = d * sub;
-    const double h = step / count;
-    std::vector<double> a(tau.size());
-    for (size_t q = 0; q < tau.size(); ++q) a[q] = 1.0 - std::exp(-tau[q] * h);
-    for (int i = 0; i + d < n; ++i) {
-      for (int dir : {1, -1}) {
-        const int front = dir > 0 ? i : i + d, back = dir > 0 ? i + d : i;
-        glm::dvec3 c(0.0);
-        double alpha = 0.0;
-        for (int m = 0; m < count; ++m) {
-          const size_t q = size_t(dir > 0 ? front * sub + m : front * sub - 1 - m);
-          const double w = (1.0 - alpha) * a[q];
-          c += w * col[q];
-          alpha += w;
-        }
-        store(front, back, c, alpha);
+    const int d = int(dd) + 1, L = d * sub;
+    const double h = step / L;
+    std::vector<Acc> e(static_cast<size_t>(m)), pre(static_cast<size_t>(m)), suf(static_cast<size_t>(m));
+    for (int dir : {1, -1}) {  // rising field (front bin i, back i + d), then falling
+      for (int q = 0; q < m; ++q) {  // element k is the k-th sub-bin in ray order
+        const size_t src = size_t(dir > 0 ? q : m - 1 - q);
+        const double a = 1.0 - std::exp(-tau[src] * h);
+        e[size_t(q)] = {a * col[src], a};
+      }
+      for (int q = 0; q < m; ++q) pre[size_t(q)] = q % L == 0 ? e[size_t(q)] : over(pre[size_t(q - 1)], e[size_t(q)]);
+      for (int q = m - 1; q >= 0; --q)
+        suf[size_t(q)] = (q % L == L - 1 || q == m - 1) ? e[size_t(q)] : over(e[size_t(q)], suf[size_t(q + 1)]);
+      for (int i = 0; i + d < n; ++i) {
+        const int qs = dir > 0 ? i * sub : m - (i + d) * sub;  // first element of the window
+        const int qe = qs + L - 1;
+        const Acc w = (qs / L == qe / L) ? suf[size_t(qs)] : over(suf[size_t(qs)], pre[size_t(qe)]);
+        if (dir > 0) store(i, i + d, w.c, w.a); else store(i + d, i, w.c, w.a);
       }
     }
   });

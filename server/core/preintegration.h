@@ -4,11 +4,18 @@
 //
 // Entry (i, j): s_f = lo + i/(n-1) (hi-lo), s_b = lo + j/(n-1) (hi-lo); rgb is the segment's
 // colour (already weighted by opacity, ready to composite as C += (1 - A) rgb), a its opacity.
-// Built in double: the segment is cut into 8 pieces per table bin it crosses and composited
-// front to back (self-attenuation included, unlike Engel's integral-function approximation);
-// piece opacities depend only on |j - i|, so they are computed once per distance. O(N^3 / 3)
-// compositing steps in all, measured in the note. Equal values (i == j) use the 1D TF at that
-// value, avoiding the 0/0 of the integral form for tiny delta-f.
+// Two builds, both in double:
+//  - Exact (default): the segment cut into 8 pieces per bin it crosses and composited front to
+//    back, self-attenuation included. Piece opacities depend only on |j - i|; for each distance
+//    every window is composited with a sliding-window aggregation (block prefix/suffix
+//    composites), so the whole table costs O(N^2 * 8).
+//  - Integral: Engel et al.'s O(N^2) integral functions. T(s) = ∫ tau and
+//    K(s) = ∫ tau * rgb are tabulated once (8 sub-samples per bin); then each entry is
+//    alpha = 1 - exp(-k (T(s_b) - T(s_f))), rgb = k (K(s_b) - K(s_f)) with k = step / (s_b - s_f).
+//    Opacity is exact; colour ignores the attenuation inside the segment (so it is clamped to
+//    alpha, which an opacity-weighted colour in [0, 1] cannot exceed).
+//    Kept for comparison: at step 2 and opacity 0.9 its colour is off by up to 0.42.
+// Equal values (i == j) use the 1D TF at that value, avoiding the 0/0 of the integral form.
 #pragma once
 
 #include <vector>
@@ -24,8 +31,13 @@ struct PreintegrationTable {
   double build_ms = 0.0;
 };
 
+enum class PreintegrationMethod { Integral, Exact };
+
 PreintegrationTable build_preintegration(const TransferFunction& tf, double lo, double hi, double step,
-                                         int size = 256);
+                                         int size = 256, PreintegrationMethod method = PreintegrationMethod::Exact);
+
+struct RenderSettings;
+PreintegrationMethod preint_method(const RenderSettings& r);
 
 // The segment integral computed directly (reference for tests), in double.
 glm::dvec4 preintegrate_segment(const TransferFunction& tf, double s_front, double s_back, double step,

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <set>
 
+#include "core/preintegration.h"
+
 namespace peakcast {
 namespace {
 
@@ -108,7 +110,7 @@ TransferFunction parse_tf(const json& j, double& opacity_unit) {
 
 RenderSettings parse_render(const json& j) {
   only_keys(j, "render", {"classification", "peak_mode", "max_peaks", "peak_table_bins", "secant_iterations",
-                          "preint_table_size", "sampling", "step", "s_k", "filter", "virtual_samples", "shading",
+                          "preint_table_size", "preint_method", "sampling", "step", "s_k", "filter", "virtual_samples", "shading",
                           "early_termination", "space_skipping", "adaptive", "ray_texture"});
   RenderSettings r;
   if (j.contains("classification"))
@@ -126,6 +128,9 @@ RenderSettings parse_render(const json& j) {
     r.secant_iterations = integer(j["secant_iterations"], "render.secant_iterations", 0, 16);
   if (j.contains("preint_table_size"))
     r.preint_table_size = integer(j["preint_table_size"], "render.preint_table_size", 16, 1024);
+  if (j.contains("preint_method"))
+    r.preint_method = choice<std::string>(j["preint_method"], "render.preint_method",
+                                          {{"integral", std::string("integral")}, {"exact", std::string("exact")}});
   if (j.contains("sampling"))
     r.sampling = choice<Sampling>(j["sampling"], "render.sampling",
                                   {{"uniform", Sampling::Uniform}, {"differential", Sampling::Differential}});
@@ -191,6 +196,10 @@ Scene parse_scene_text(const std::string& text) {
   return parse_scene(j);
 }
 
+PreintegrationMethod preint_method(const RenderSettings& r) {
+  return r.preint_method == "integral" ? PreintegrationMethod::Integral : PreintegrationMethod::Exact;
+}
+
 const char* to_string(Classification c) {
   return c == Classification::Post ? "post" : c == Classification::Preint ? "preint" : "peaks";
 }
@@ -228,6 +237,7 @@ json scene_to_json(const Scene& s) {
   j["render"] = {{"classification", to_string(r.classification)}, {"peak_mode", to_string(r.peak_mode)},
                  {"max_peaks", r.max_peaks}, {"peak_table_bins", r.peak_table_bins},
                  {"secant_iterations", r.secant_iterations}, {"preint_table_size", r.preint_table_size},
+                 {"preint_method", r.preint_method},
                  {"sampling", to_string(r.sampling)}, {"s_k", r.s_k},
                  {"filter", to_string(r.filter)}, {"virtual_samples", r.virtual_samples}, {"shading", r.shading},
                  {"early_termination", r.early_termination}, {"space_skipping", r.space_skipping},

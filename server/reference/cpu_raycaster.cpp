@@ -107,7 +107,7 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
   const PeakTable table = build_peak_table(peaks_on ? find_peaks(s.tf) : std::vector<Peak>{}, fr.lo, fr.hi,
                                            rs.peak_table_bins);
   const PreintegrationTable pre =
-      preint ? build_preintegration(s.tf, fr.lo, fr.hi, dt, rs.preint_table_size) : PreintegrationTable{};
+      preint ? build_preintegration(s.tf, fr.lo, fr.hi, dt, rs.preint_table_size, preint_method(rs)) : PreintegrationTable{};
   return for_each_pixel(fr, [&](const Ray& r, double t0, double t1, Accum& acc, double& samples) {
     const int64_t last = int64_t(std::floor((t1 - t0) / dt));
     double t_prev = 0, f_prev = 0;

@@ -146,7 +146,8 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
   std::ostringstream key;
   key.precision(17);
   key << tf_signature(s.tf, lo, hi) << ' ' << to_string(r.classification) << ' ' << r.peak_table_bins << ' '
-      << r.max_peaks << ' ' << r.secant_iterations << ' ' << r.preint_table_size << ' ' << peaks.size() << ' '
+      << r.max_peaks << ' ' << r.secant_iterations << ' ' << r.preint_table_size << ' ' << r.preint_method << ' '
+      << peaks.size() << ' '
       << (r.classification == Classification::Preint ? s.step : 0.0);
   if (key.str() == tables_key_) {
     if (peak_table_) glBindTextureUnit(4, peak_table_.id());
@@ -184,7 +185,8 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
     tables_.peak_count = peaks.size();
   }
   if (r.classification == Classification::Preint) {
-    const PreintegrationTable table = build_preintegration(s.tf, lo, hi, s.step, r.preint_table_size);
+    const PreintegrationTable table = build_preintegration(s.tf, lo, hi, s.step, r.preint_table_size,
+                                                           preint_method(r));
     preint_table_ = gpu::make_texture(GL_TEXTURE_2D);
     glTextureStorage2D(preint_table_.id(), 1, GL_RGBA32F, table.size, table.size);
     glTextureSubImage2D(preint_table_.id(), 0, 0, 0, table.size, table.size, GL_RGBA, GL_FLOAT, table.rgba.data());
