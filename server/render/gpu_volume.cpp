@@ -49,7 +49,12 @@ GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume) : volume_(std::move(v
   scale_ = float(texel_to_stored / (hi_ - lo_));
   bias_ = float((v.value_offset - lo_) / (hi_ - lo_));
   cells_trilinear_ = build_macrocells(v, 0, FilterSupport::Trilinear);
-  cells_tricubic_ = build_macrocells(v, 0, FilterSupport::Tricubic);
+}
+
+const MacrocellGrid& GpuVolume::macrocells(Filter filter) const {
+  if (filter != Filter::Tricubic) return cells_trilinear_;
+  if (!cells_tricubic_) cells_tricubic_ = build_macrocells(*volume_, 0, FilterSupport::Tricubic);
+  return *cells_tricubic_;
 }
 
 void GpuVolume::bind(unsigned unit) const { glBindTextureUnit(unit, texture_.id()); }

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 
 #include "core/macrocells.h"
 #include "core/scene.h"
@@ -17,9 +18,9 @@ class GpuVolume {
 
   const Volume& volume() const { return *volume_; }
   std::shared_ptr<const Volume> shared() const { return volume_; }
-  const MacrocellGrid& macrocells(Filter filter) const {
-    return filter == Filter::Tricubic ? cells_tricubic_ : cells_trilinear_;
-  }
+  // The tricubic grid (wider filter support) is built on first use: most views never ask.
+  // Render thread only, like every other member.
+  const MacrocellGrid& macrocells(Filter filter) const;
   size_t gpu_bytes() const { return volume_->byte_size(); }
   // TF coordinate of a texel value: a * texel + b (the TF table spans [min_value, max_value]).
   float value_scale() const { return scale_; }
@@ -32,7 +33,8 @@ class GpuVolume {
  private:
   std::shared_ptr<const Volume> volume_;
   gpu::Texture texture_;
-  MacrocellGrid cells_trilinear_, cells_tricubic_;
+  MacrocellGrid cells_trilinear_;
+  mutable std::optional<MacrocellGrid> cells_tricubic_;
   float scale_ = 1.f, bias_ = 0.f;
   double lo_ = 0, hi_ = 1;
   uint64_t serial_ = 0;

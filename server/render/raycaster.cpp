@@ -91,8 +91,12 @@ Image Raycaster::render(const GpuVolume& gv, const ResolvedScene& s, GpuPath pat
   const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
 
   // Per-frame state that depends on the TF: table and macrocell occupancy.
-  const std::vector<float> table = s.tf.bake(TransferFunction::kTableSize, gv.tf_lo(), gv.tf_hi());
-  glTextureSubImage1D(tf_texture_.id(), 0, 0, TransferFunction::kTableSize, GL_RGBA, GL_FLOAT, table.data());
+  const std::string tf_sig = tf_signature(s.tf, gv.tf_lo(), gv.tf_hi());
+  if (tf_sig != tf_table_key_) {
+    const std::vector<float> table = s.tf.bake(TransferFunction::kTableSize, gv.tf_lo(), gv.tf_hi());
+    glTextureSubImage1D(tf_texture_.id(), 0, 0, TransferFunction::kTableSize, GL_RGBA, GL_FLOAT, table.data());
+    tf_table_key_ = tf_sig;
+  }
   const auto t_tables = Clock::now();
   const std::vector<Peak> peaks =
       s.scene.render.classification == Classification::Peaks ? find_peaks(s.tf) : std::vector<Peak>{};
@@ -101,7 +105,7 @@ Image Raycaster::render(const GpuVolume& gv, const ResolvedScene& s, GpuPath pat
   // Occupancy depends on the grid, the TF over the value range and the peaks: a camera move
   // reuses it (and its texture).
   const std::string occ_key = s.scene.render.space_skipping
-                                  ? tf_signature(s.tf, gv.tf_lo(), gv.tf_hi()) + " cells " +
+                                  ? tf_sig + " cells " +
                                         std::to_string(gv.serial()) + " " + cells.to_string() + " peaks " +
                                         std::to_string(peaks.size())
                                   : std::string();

@@ -60,7 +60,8 @@ class Raycaster {
   gpu::Texture peak_table_, preint_table_;
   gpu::Buffer tf_points_;
   RayTables tables_;  // what the current frame's tables hold (for the uniforms and stats)
-  std::string tables_key_;  // the inputs tables_ was built from
+  std::string tf_table_key_;  // the TF (and value range) the 1D table holds
+  std::string tables_key_;    // the inputs tables_ was built from
   Occupancy occupancy_;      // macrocell classification for occupancy_key_
   std::string occupancy_key_;
   gpu::Framebuffer fbo_;

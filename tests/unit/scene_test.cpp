@@ -68,6 +68,10 @@ TEST(Scene, Refusals) {
   expect_refused(R"({"volume": "v", "render": {"filter": "nearest"}})", "render.filter");
   expect_refused(R"({"volume": "v", "render": {"max_peaks": 5}})", "render.max_peaks");
   expect_refused(R"({"volume": "v", "render": {"virtual_samples": 4}})", "render.virtual_samples");
+  expect_refused(R"({"volume": "v", "render": {"peak_table_bins": 32}})", "render.peak_table_bins");
+  expect_refused(R"({"volume": "v", "render": {"secant_iterations": 17}})", "render.secant_iterations");
+  expect_refused(R"({"volume": "v", "render": {"preint_table_size": 2048}})", "render.preint_table_size");
+  expect_refused(R"({"volume": "v", "render": {"preint_method": "magic"}})", "render.preint_method");
   expect_refused(R"({"volume": "v", "background": [0, 0]})", "background");
   expect_refused(R"([1, 2])", "scene");
 }
