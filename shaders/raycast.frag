@@ -1,5 +1,5 @@
-// Fragment entry point of the ray caster: one fragment per pixel of an RGBA32F target, plus
-// the sample count in a second R32F target.
+// Fragment entry point of the ray caster: one fragment per pixel of an RGBA32F (or RGBA8UI,
+// RGB8_OUTPUT) target, plus the sample count in a second R32F target.
 #include "uniforms.glsl"
 #include "ray_setup.glsl"
 #include "common_sampling.glsl"
@@ -7,14 +7,20 @@
 #include "compositing.glsl"
 #include "shading.glsl"
 #include "raycast_body.glsl"
+#include "output.glsl"
 
+#ifdef RGB8_OUTPUT
+layout(location = 0) out uvec4 out_color;
+#else
 layout(location = 0) out vec4 out_color;
+#endif
 layout(location = 1) out float out_samples;
 
 void main() {
-  // gl_FragCoord.y counts from the bottom; the ray generator counts rows from the top.
-  vec2 pixel = vec2(gl_FragCoord.x, float(u_image.y) - gl_FragCoord.y);
+  // Target row k holds image row u_image.w + k (row 0 at the top), so the read-back is already
+  // in image order; u_image.zw is the tile's first pixel (0, 0 for a full frame).
+  vec2 pixel = vec2(u_image.zw) + gl_FragCoord.xy;
   RayResult res = CAST_RAY(pixel, ivec2(gl_FragCoord.xy));
-  out_color = vec4(finish_pixel(res.acc), res.acc.a);
+  out_color = output_color(res.acc);
   out_samples = res.samples;
 }

@@ -12,7 +12,7 @@ layout(std140, binding = 0) uniform RayUniforms {
   vec4 u_value_map;  // x, y: texel value -> TF coordinate (a*v + b); z: TF size; w: max samples
   vec4 u_background; // rgb background
   vec4 u_cells;      // xyz: macrocell grid; w: cell edge in voxels
-  ivec4 u_image;     // x, y: image size in pixels
+  ivec4 u_image;     // x, y: full image size in pixels; z, w: first pixel of this draw (tile)
   vec4 u_peaks;      // x: peak-table bins; y: layers; z: max peaks per segment; w: secant iterations
   vec4 u_tables;     // x: preintegration table size; y: TF point count (exact TF at peaks)
 };

@@ -52,14 +52,14 @@ void add_render_commands(CLI::App& app, Runner& run) {
       const auto path = ra->path == "compute" ? render::GpuPath::Compute : render::GpuPath::Fragment;
       Image img = caster.render(gv, ls.scene, path, &st);
       encode::write_png(img, ra->out);
-      std::printf("wrote %s: %dx%d, %.1f ms, %.1f samples/ray, variant %s, %s\n", ra->out.c_str(), img.width,
-                  img.height, st.render_ms, st.samples_mean, st.variant.c_str(), ctx->info().renderer.c_str());
+      std::printf("wrote %s: %dx%d, %s, %s\n", ra->out.c_str(), img.width, img.height, st.to_string().c_str(),
+                  ctx->info().renderer.c_str());
       if (!ra->stats.empty()) {
-        nlohmann::json j = {{"render_ms", st.render_ms},       {"readback_ms", st.readback_ms},
-                            {"samples_per_ray_mean", st.samples_mean}, {"samples_per_ray_max", st.samples_max},
-                            {"rays", st.rays_hit},             {"empty_macrocells", st.empty_cells},
-                            {"variant", st.variant},           {"gl_renderer", ctx->info().renderer},
-                            {"gl_version", ctx->info().version}, {"egl_platform", ctx->info().platform}};
+        // The render keys are the stream's stats keys (RenderStats::to_json); the GL keys are the CLI's.
+        nlohmann::json j = st.to_json();
+        j["gl_renderer"] = ctx->info().renderer;
+        j["gl_version"] = ctx->info().version;
+        j["egl_platform"] = ctx->info().platform;
         std::ofstream(ra->stats) << j.dump(2) << "\n";
       }
       return 0;

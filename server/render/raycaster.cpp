@@ -24,7 +24,7 @@ std::string tf_signature(const TransferFunction& tf, double lo, double hi) {
 }
 
 RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const MacrocellGrid& cells,
-                          const RayTables& t) {
+                          const RayTables& t, const PixelRect& rect) {
   const Volume& v = gv.volume();
   const glm::dvec3 center = (s.box_min + s.box_max) * 0.5;
   const ViewSetup view = setup_view(s.camera, center, s.scene.width, s.scene.height);
@@ -39,20 +39,13 @@ RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const Mac
   u.value_map = glm::vec4(gv.value_scale(), gv.value_bias(), float(TransferFunction::kTableSize), float(kMaxSamplesPerRay));
   u.background = glm::vec4(glm::vec3(s.scene.background), 1.f);
   u.cells = glm::vec4(float(cells.grid[0]), float(cells.grid[1]), float(cells.grid[2]), float(cells.cell));
-  u.image = glm::ivec4(s.scene.width, s.scene.height, 0, 0);
+  u.image = glm::ivec4(s.scene.width, s.scene.height, rect.x, rect.y);
   u.peaks = glm::vec4(float(t.peak_bins), float(t.peak_layers), float(t.max_peaks), float(t.secant_iterations));
   u.tables = glm::vec4(float(t.preint_size), float(t.tf_points), 0.f, 0.f);
   return u;
 }
 
 }  // namespace
-
-std::string RenderStats::to_string() const {
-  std::ostringstream s;
-  s << "RenderStats{" << variant << ", " << render_ms << " ms, samples/ray mean " << samples_mean << " max "
-    << samples_max << ", rays " << rays_hit << ", empty cells " << empty_cells << "}";
-  return s.str();
-}
 
 Raycaster::Raycaster(gpu::ShaderCache& shaders) : shaders_(shaders) {
   ubo_ = gpu::make_buffer();
@@ -70,24 +63,49 @@ const gpu::Program& Raycaster::program(const VariantKey& key) {
   return shaders_.get(key.name(), {"fullscreen.vert", "raycast.frag"}, key.defines());
 }
 
-void Raycaster::ensure_targets(int w, int h) {
-  if (w == target_w_ && h == target_h_) return;
-  color_ = gpu::make_texture(GL_TEXTURE_2D);
-  glTextureStorage2D(color_.id(), 1, GL_RGBA32F, w, h);
-  samples_ = gpu::make_texture(GL_TEXTURE_2D);
-  glTextureStorage2D(samples_.id(), 1, GL_R32F, w, h);
-  fbo_ = gpu::make_framebuffer();
-  glNamedFramebufferTexture(fbo_.id(), GL_COLOR_ATTACHMENT0, color_.id(), 0);
-  glNamedFramebufferTexture(fbo_.id(), GL_COLOR_ATTACHMENT1, samples_.id(), 0);
-  const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
-  glNamedFramebufferDrawBuffers(fbo_.id(), 2, bufs);
-  if (glCheckNamedFramebufferStatus(fbo_.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-    throw std::runtime_error("render target incomplete");
-  target_w_ = w;
-  target_h_ = h;
+Raycaster::Targets& Raycaster::targets(int w, int h, RenderOutput output) {
+  auto it = std::find_if(targets_.begin(), targets_.end(),
+                         [&](const Targets& t) { return t.w == w && t.h == h && t.output == output; });
+  if (it == targets_.end()) {
+    Targets t;
+    t.w = w;
+    t.h = h;
+    t.output = output;
+    t.color = gpu::make_texture(GL_TEXTURE_2D);
+    glTextureStorage2D(t.color.id(), 1, output == RenderOutput::Rgb8 ? GL_RGBA8UI : GL_RGBA32F, w, h);
+    t.samples = gpu::make_texture(GL_TEXTURE_2D);
+    glTextureStorage2D(t.samples.id(), 1, GL_R32F, w, h);
+    t.fbo = gpu::make_framebuffer();
+    glNamedFramebufferTexture(t.fbo.id(), GL_COLOR_ATTACHMENT0, t.color.id(), 0);
+    glNamedFramebufferTexture(t.fbo.id(), GL_COLOR_ATTACHMENT1, t.samples.id(), 0);
+    if (glCheckNamedFramebufferStatus(t.fbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+      throw std::runtime_error("render target incomplete");
+    gpu::check_gl("render targets");
+    if (targets_.size() >= 3) targets_.pop_back();  // a stream size, a tile size, one spare
+    targets_.insert(targets_.begin(), std::move(t));
+    return targets_.front();
+  }
+  std::rotate(targets_.begin(), it, it + 1);
+  return targets_.front();
 }
 
 Image Raycaster::render(const GpuVolume& gv, const ResolvedScene& s, GpuPath path, RenderStats* stats) {
+  RenderRequest req;
+  req.path = path;
+  return std::move(render(gv, s, req, stats).image);
+}
+
+RenderResult Raycaster::render(const GpuVolume& gv, const ResolvedScene& s, const RenderRequest& req,
+                               RenderStats* stats) {
+  const PixelRect rect = req.tile.value_or(PixelRect{0, 0, s.scene.width, s.scene.height});
+  check_rect(rect, s.scene.width, s.scene.height);
+  if (stats) *stats = RenderStats{};
+  VariantKey key = prepare(gv, s, req.path, stats);
+  key.rgb8 = req.output == RenderOutput::Rgb8;
+  return draw(gv, s, key, rect, req.output == RenderOutput::Float || req.sample_stats, stats);
+}
+
+VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPath path, RenderStats* stats) {
   const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
 
   // Per-frame state that depends on the TF: table and macrocell occupancy.
@@ -133,13 +151,12 @@ Image Raycaster::render(const GpuVolume& gv, const ResolvedScene& s, GpuPath pat
                         GLsizei(cells.grid[2]), GL_RED_INTEGER, GL_UNSIGNED_BYTE, occ.occupied.data());
     glBindTextureUnit(2, occupancy_texture_.id());
   }
-  Image img = draw(gv, s, key, stats);
   if (stats) {
     stats->empty_cells = occ.empty_cells;
     stats->peaks = peaks.size();
     stats->table_ms = table_ms;
   }
-  return img;
+  return key;
 }
 
 void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const std::vector<Peak>& peaks) {
@@ -207,9 +224,8 @@ Image Raycaster::render_bare(const GpuVolume& gv, const ResolvedScene& s, GpuPat
                              RenderStats* stats) {
   const int w = s.scene.width, h = s.scene.height;
   if (full.width != w || full.height != h) throw std::invalid_argument("render_bare: image size differs");
-  std::vector<float> budget(size_t(w) * h);
-  for (int y = 0; y < h; ++y)  // GL rows count from the bottom
-    for (int x = 0; x < w; ++x) budget[size_t(h - 1 - y) * w + x] = std::max(0.f, full.samples[size_t(y) * w + x]);
+  std::vector<float> budget(full.samples.size());  // rows top-down, like the render targets
+  for (size_t p = 0; p < budget.size(); ++p) budget[p] = std::max(0.f, full.samples[p]);
   budget_texture_ = gpu::make_texture(GL_TEXTURE_2D);
   glTextureStorage2D(budget_texture_.id(), 1, GL_R32F, w, h);
   glTextureSubImage2D(budget_texture_.id(), 0, 0, 0, w, h, GL_RED, GL_FLOAT, budget.data());
@@ -219,31 +235,37 @@ Image Raycaster::render_bare(const GpuVolume& gv, const ResolvedScene& s, GpuPat
   VariantKey key = choose_variant(s, 0, path);
   key.shading = false;
   key.bare_sampling = true;
-  return draw(gv, s, key, stats);
+  if (stats) *stats = RenderStats{};
+  return std::move(draw(gv, s, key, PixelRect{0, 0, w, h}, true, stats).image);
 }
 
-Image Raycaster::draw(const GpuVolume& gv, const ResolvedScene& s, const VariantKey& key, RenderStats* stats) {
-  const int w = s.scene.width, h = s.scene.height;
+RenderResult Raycaster::draw(const GpuVolume& gv, const ResolvedScene& s, const VariantKey& key,
+                           const PixelRect& rect, bool read_samples, RenderStats* stats) {
+  const int w = rect.w, h = rect.h;
   const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
   const GpuPath path = key.path;
+  const RenderOutput output = key.rgb8 ? RenderOutput::Rgb8 : RenderOutput::Float;
   const gpu::Program& prog = program(key);
-  const RayUniforms u = make_uniforms(gv, s, cells, tables_);
+  const RayUniforms u = make_uniforms(gv, s, cells, tables_, rect);
   glNamedBufferSubData(ubo_.id(), 0, sizeof u, &u);
   glBindBufferBase(GL_UNIFORM_BUFFER, 0, ubo_.id());
   gv.bind(0);
   glBindTextureUnit(1, tf_texture_.id());
-  ensure_targets(w, h);
+  Targets& t = targets(w, h, output);
   glUseProgram(prog.id());
 
   glFinish();
   const auto t0 = Clock::now();
   if (path == GpuPath::Compute) {
-    glBindImageTexture(0, color_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-    glBindImageTexture(1, samples_.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+    glBindImageTexture(0, t.color.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, key.rgb8 ? GL_RGBA8UI : GL_RGBA32F);
+    glBindImageTexture(1, t.samples.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
     glDispatchCompute(GLuint((w + 7) / 8), GLuint((h + 7) / 8), 1);
     glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
   } else {
-    glBindFramebuffer(GL_FRAMEBUFFER, fbo_.id());
+    // Sample counts nobody reads are not written (draw buffer NONE drops them).
+    const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, read_samples ? GLenum(GL_COLOR_ATTACHMENT1) : GLenum(GL_NONE)};
+    glNamedFramebufferDrawBuffers(t.fbo.id(), 2, bufs);
+    glBindFramebuffer(GL_FRAMEBUFFER, t.fbo.id());
     glViewport(0, 0, w, h);
     glDisable(GL_BLEND);
     glDisable(GL_DEPTH_TEST);
@@ -254,30 +276,45 @@ Image Raycaster::draw(const GpuVolume& gv, const ResolvedScene& s, const Variant
   const double render_ms = ms_since(t0);
   gpu::check_gl("ray cast");
 
+  // The targets hold rows top-down: read straight into the result, no flip.
   const auto t1 = Clock::now();
-  Image img(w, h);
-  std::vector<float> color(size_t(w) * h * 4), samples(size_t(w) * h);
-  glPixelStorei(GL_PACK_ALIGNMENT, 4);
-  glGetTextureImage(color_.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(color.size() * 4), color.data());
-  glGetTextureImage(samples_.id(), 0, GL_RED, GL_FLOAT, GLsizei(samples.size() * 4), samples.data());
-  for (int y = 0; y < h; ++y) {  // GL rows count from the bottom
-    std::copy_n(&color[size_t(h - 1 - y) * w * 4], size_t(w) * 4, img.pixel(0, y));
-    std::copy_n(&samples[size_t(h - 1 - y) * w], size_t(w), &img.samples[size_t(y) * w]);
+  RenderResult res;
+  res.rect = rect;
+  std::vector<float> samples;
+  if (output == RenderOutput::Float) {
+    res.image = Image(w, h);
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    glGetTextureImage(t.color.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(res.image.rgba.size() * 4), res.image.rgba.data());
+    glGetTextureImage(t.samples.id(), 0, GL_RED, GL_FLOAT, GLsizei(res.image.samples.size() * 4),
+                      res.image.samples.data());
+  } else {
+    res.rgb8 = Rgb8Image(w, h);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);  // rows of 3 * w bytes, unpadded
+    glGetTextureImage(t.color.id(), 0, GL_RGB_INTEGER, GL_UNSIGNED_BYTE, GLsizei(res.rgb8.rgb.size()),
+                      res.rgb8.rgb.data());
+    if (read_samples) {
+      samples.resize(size_t(w) * h);
+      glPixelStorei(GL_PACK_ALIGNMENT, 4);
+      glGetTextureImage(t.samples.id(), 0, GL_RED, GL_FLOAT, GLsizei(samples.size() * 4), samples.data());
+    }
   }
+  gpu::check_gl("read-back");
   if (stats) {
-    *stats = RenderStats{};
     stats->render_ms = render_ms;
     stats->readback_ms = ms_since(t1);
     stats->variant = key.name();
-    for (float n : img.samples) {
-      if (n < 0) continue;  // missed the box
-      stats->samples_total += n;
-      stats->samples_max = std::max<double>(stats->samples_max, n);
-      stats->rays_hit++;
+    stats->has_samples = read_samples;
+    if (read_samples) {
+      for (float n : output == RenderOutput::Float ? res.image.samples : samples) {
+        if (n < 0) continue;  // missed the box
+        stats->samples_total += n;
+        stats->samples_max = std::max<double>(stats->samples_max, n);
+        stats->rays_hit++;
+      }
+      stats->samples_mean = stats->rays_hit ? stats->samples_total / double(stats->rays_hit) : 0.0;
     }
-    stats->samples_mean = stats->rays_hit ? stats->samples_total / double(stats->rays_hit) : 0.0;
   }
-  return img;
+  return res;
 }
 
 }  // namespace peakcast::render

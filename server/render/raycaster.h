@@ -1,8 +1,10 @@
 // The GL ray caster (DESIGN §3, §4a): one fullscreen draw (fragment path) or one dispatch
-// (compute path) per frame, into float targets read back as an Image (row 0 at the top).
+// (compute path) per frame or tile, into targets that hold rows top-down (no flip on read):
+// float (an Image) or 8-bit RGB quantised on the GPU (render/frame.h).
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "core/image.h"
 #include "core/occupancy.h"
@@ -10,7 +12,9 @@
 #include "core/scene.h"
 #include "gpu/gl_objects.h"
 #include "gpu/shader_cache.h"
+#include "render/frame.h"
 #include "render/gpu_volume.h"
+#include "render/render_stats.h"
 #include "render/variant.h"
 
 namespace peakcast::render {
@@ -22,24 +26,16 @@ struct RayTables {
   size_t peak_count = 0;
 };
 
-struct RenderStats {
-  double render_ms = 0.0;      // GPU work, draw to glFinish
-  double readback_ms = 0.0;
-  double samples_mean = 0.0;   // per ray that hits the box (skipped rays count with 0)
-  double samples_max = 0.0;
-  double samples_total = 0.0;
-  int64_t rays_hit = 0;
-  int64_t empty_cells = 0;
-  size_t peaks = 0;
-  double table_ms = 0.0;  // peak table / preintegration table / occupancy rebuilt for this frame
-  std::string variant;
-  std::string to_string() const;
-};
-
 class Raycaster {
  public:
   explicit Raycaster(gpu::ShaderCache& shaders);
+  // The whole image as floats (tests, CLI, reference comparisons).
   Image render(const GpuVolume& volume, const ResolvedScene& scene, GpuPath path, RenderStats* stats = nullptr);
+  // Float or 8-bit output, whole image or a tile (checked: std::invalid_argument naming the
+  // limit). Tables and occupancy are cached on the TF, so the tiles of one still rebuild
+  // nothing after the first.
+  RenderResult render(const GpuVolume& volume, const ResolvedScene& scene, const RenderRequest& request,
+                      RenderStats* stats = nullptr);
   // Benchmark baseline: the rays of `full` (an image this caster rendered of the same scene)
   // with its per-pixel sample counts, reconstruction only.
   Image render_bare(const GpuVolume& volume, const ResolvedScene& scene, GpuPath path, const Image& full,
@@ -48,15 +44,26 @@ class Raycaster {
   const gpu::Program& program(const VariantKey& key);
 
  private:
-  void ensure_targets(int w, int h);
+  // Render targets of one size and format. A few are kept: a still's tiles interleave with
+  // stream frames of another size, and reallocating every draw would cost more than the tile.
+  struct Targets {
+    int w = 0, h = 0;
+    RenderOutput output = RenderOutput::Float;
+    gpu::Texture color, samples;
+    gpu::Framebuffer fbo;
+  };
+  Targets& targets(int w, int h, RenderOutput output);
+  // Tables, occupancy and the variant for a scene (cached on the TF).
+  VariantKey prepare(const GpuVolume& volume, const ResolvedScene& scene, GpuPath path, RenderStats* stats);
   // Builds and binds the peak table + TF points or the preintegration table the scene needs.
   void upload_tables(const GpuVolume& volume, const ResolvedScene& scene, const std::vector<Peak>& peaks);
-  Image draw(const GpuVolume& volume, const ResolvedScene& scene, const VariantKey& key, RenderStats* stats);
+  RenderResult draw(const GpuVolume& volume, const ResolvedScene& scene, const VariantKey& key, const PixelRect& rect,
+                    bool read_samples, RenderStats* stats);
 
   gpu::ShaderCache& shaders_;
   gpu::Buffer ubo_;
   gpu::VertexArray vao_;
-  gpu::Texture tf_texture_, occupancy_texture_, budget_texture_, color_, samples_;
+  gpu::Texture tf_texture_, occupancy_texture_, budget_texture_;
   gpu::Texture peak_table_, preint_table_;
   gpu::Buffer tf_points_;
   RayTables tables_;  // what the current frame's tables hold (for the uniforms and stats)
@@ -64,8 +71,7 @@ class Raycaster {
   std::string tables_key_;    // the inputs tables_ was built from
   Occupancy occupancy_;      // macrocell classification for occupancy_key_
   std::string occupancy_key_;
-  gpu::Framebuffer fbo_;
-  int target_w_ = 0, target_h_ = 0;
+  std::vector<Targets> targets_;  // most recently used first
 };
 
 // Maximum samples per ray the shader will take (guards runaway loops).

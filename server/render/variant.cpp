@@ -16,6 +16,7 @@ std::vector<std::string> VariantKey::defines() const {
     if (peak_mode == PeakMode::PeaksOnly) d.push_back("PEAKS_ONLY");
   }
   if (preintegration) d.push_back("PREINTEGRATION");
+  if (rgb8) d.push_back("RGB8_OUTPUT");
   return d;
 }
 
@@ -28,6 +29,7 @@ std::string VariantKey::name() const {
   if (space_skipping) n += "+skip";
   if (orthographic) n += "+ortho";
   if (bare_sampling) n += "+bare";
+  if (rgb8) n += "+rgb8";
   return n;
 }
 

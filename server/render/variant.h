@@ -23,6 +23,7 @@ struct VariantKey {
   bool peaks = false;          // peak finding between samples
   PeakMode peak_mode = PeakMode::DvrPlusPeaks;
   bool preintegration = false;
+  bool rgb8 = false;  // output quantised to 8-bit RGB on the GPU (RenderOutput::Rgb8)
 
   std::vector<std::string> defines() const;
   std::string name() const;  // e.g. "frag+tricubic+skip"

@@ -1,0 +1,48 @@
+#include "render/render_stats.h"
+
+#include <algorithm>
+#include <sstream>
+
+namespace peakcast::render {
+
+nlohmann::json RenderStats::to_json() const {
+  nlohmann::json j = {{"render_ms", render_ms}, {"readback_ms", readback_ms}, {"table_ms", table_ms},
+                      {"variant", variant},     {"peaks", peaks},             {"empty_macrocells", empty_cells},
+                      {"tiles", tiles}};
+  if (has_samples) {
+    j["samples_per_ray"] = samples_mean;
+    j["samples_per_ray_max"] = samples_max;
+    j["rays_hit"] = rays_hit;
+  }
+  return j;
+}
+
+std::string RenderStats::to_string() const {
+  const nlohmann::json j = to_json();
+  std::ostringstream s;
+  s << "RenderStats{";
+  bool first = true;
+  for (const char* key : {"variant", "render_ms", "readback_ms", "table_ms", "samples_per_ray", "samples_per_ray_max",
+                          "rays_hit", "peaks", "empty_macrocells", "tiles"}) {
+    if (!j.contains(key)) continue;
+    s << (first ? "" : " ") << key << "=" << (j[key].is_string() ? j[key].get<std::string>() : j[key].dump());
+    first = false;
+  }
+  s << "}";
+  return s.str();
+}
+
+void RenderStats::merge(const RenderStats& t) {
+  render_ms += t.render_ms;
+  readback_ms += t.readback_ms;
+  table_ms += t.table_ms;
+  has_samples = has_samples && t.has_samples;
+  samples_total += t.samples_total;
+  samples_max = std::max(samples_max, t.samples_max);
+  rays_hit += t.rays_hit;
+  samples_mean = rays_hit ? samples_total / double(rays_hit) : 0.0;
+  tiles += t.tiles;
+  if (!has_samples) samples_total = samples_mean = samples_max = 0.0, rays_hit = 0;
+}
+
+}  // namespace peakcast::render

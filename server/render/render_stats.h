@@ -1,0 +1,42 @@
+// What one frame (or one tile, or a still assembled from tiles) cost: GPU time, read-back,
+// table builds, samples per ray. One JSON form for the CLI (`render --stats`) and the stream's
+// stats message (proto/server_messages.schema.json, $defs/stats).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace peakcast::render {
+
+struct RenderStats {
+  double render_ms = 0.0;    // GPU work, draw to glFinish
+  double readback_ms = 0.0;  // GPU -> host copy of the output (and the sample counts when read)
+  double table_ms = 0.0;     // peak table / preintegration table / occupancy rebuilt for this frame
+  // Sample counts are read back for RenderOutput::Float always, for Rgb8 only on request
+  // (RenderRequest::sample_stats); without them the samples_* fields and rays_hit are 0 and
+  // to_json leaves them out.
+  bool has_samples = false;
+  double samples_mean = 0.0;  // per ray that hits the box (skipped rays count with 0)
+  double samples_max = 0.0;
+  double samples_total = 0.0;
+  int64_t rays_hit = 0;
+  int64_t empty_cells = 0;
+  size_t peaks = 0;
+  int tiles = 1;  // draws that made the image (merge() counts them)
+  std::string variant;
+
+  // Keys: render_ms, readback_ms, table_ms, variant, peaks, empty_macrocells, tiles and, with
+  // sample counts, samples_per_ray, samples_per_ray_max, rays_hit. The stream adds its frame
+  // keys (type, frame, final, width, height, encode_ms, bytes) to this object.
+  nlohmann::json to_json() const;
+  // The same keys and values as to_json, as "key=value" pairs in a fixed order.
+  std::string to_string() const;
+  // Adds a later tile's stats to a tiled image's (start from the first tile's): times, samples
+  // and tiles add up, the max is the max; variant, peaks and empty cells are the scene's, the
+  // same for every tile. Samples stay only if every tile had them.
+  void merge(const RenderStats& tile);
+};
+
+}  // namespace peakcast::render
