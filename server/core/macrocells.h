@@ -6,6 +6,7 @@
 // the cubic B-spline reads floor(x)-1..floor(x)+2, so one more before and two after.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -34,5 +35,17 @@ int64_t cells_along(int64_t n, int cell);
 
 MacrocellGrid build_macrocells(const Volume& volume, int cell = 0,
                                FilterSupport support = FilterSupport::Trilinear);
+
+// The grids a volume's renders use (default cell size), built once per volume off the render
+// thread: the server builds them on the loader pool with the volume (VolumeEntry) and hands
+// them to GpuVolume, so a session switching volumes does not stall every other session.
+struct VolumeMacrocells {
+  std::shared_ptr<const MacrocellGrid> trilinear, tricubic;
+  double build_ms = 0.0;  // both grids, wall time
+};
+VolumeMacrocells build_volume_macrocells(const Volume& volume);
+// Throws std::invalid_argument unless `g` is a default-cell grid of `volume`'s dims with the
+// given support (a grid of another volume would skip visible cells).
+void check_macrocells(const MacrocellGrid& g, const Volume& volume, FilterSupport support);
 
 }  // namespace peakcast

@@ -1,11 +1,22 @@
 #include "render/gpu_volume.h"
 
 #include <atomic>
+#include <chrono>
 #include <stdexcept>
 
 namespace peakcast::render {
 
-GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume) : volume_(std::move(volume)) {
+namespace {
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells)
+    : volume_(std::move(volume)), cells_trilinear_(std::move(cells.trilinear)), cells_tricubic_(std::move(cells.tricubic)) {
+  if (cells_trilinear_) check_macrocells(*cells_trilinear_, *volume_, FilterSupport::Trilinear);
+  if (cells_tricubic_) check_macrocells(*cells_tricubic_, *volume_, FilterSupport::Tricubic);
+  const auto t0 = std::chrono::steady_clock::now();
   static std::atomic<uint64_t> next_serial{1};
   serial_ = next_serial++;
   const Volume& v = *volume_;
@@ -43,17 +54,26 @@ GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume) : volume_(std::move(v
   for (GLenum wrap : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R})
     glTextureParameteri(texture_.id(), wrap, GL_CLAMP_TO_EDGE);
   gpu::check_gl("volume upload");
+  upload_ms_ = ms_since(t0);
 
   lo_ = v.min_value;
   hi_ = v.max_value > v.min_value ? v.max_value : v.min_value + 1.0;
   scale_ = float(texel_to_stored / (hi_ - lo_));
   bias_ = float((v.value_offset - lo_) / (hi_ - lo_));
-  cells_trilinear_ = build_macrocells(v, 0, FilterSupport::Trilinear);
+  if (!cells_trilinear_) {
+    const auto t1 = std::chrono::steady_clock::now();
+    cells_trilinear_ = std::make_shared<const MacrocellGrid>(build_macrocells(v, 0, FilterSupport::Trilinear));
+    macrocell_ms_ += ms_since(t1);
+  }
 }
 
 const MacrocellGrid& GpuVolume::macrocells(Filter filter) const {
-  if (filter != Filter::Tricubic) return cells_trilinear_;
-  if (!cells_tricubic_) cells_tricubic_ = build_macrocells(*volume_, 0, FilterSupport::Tricubic);
+  if (filter != Filter::Tricubic) return *cells_trilinear_;
+  if (!cells_tricubic_) {  // most views never ask for the wider filter support
+    const auto t1 = std::chrono::steady_clock::now();
+    cells_tricubic_ = std::make_shared<const MacrocellGrid>(build_macrocells(*volume_, 0, FilterSupport::Tricubic));
+    macrocell_ms_ += ms_since(t1);
+  }
   return *cells_tricubic_;
 }
 

@@ -3,7 +3,6 @@
 #pragma once
 
 #include <memory>
-#include <optional>
 
 #include "core/macrocells.h"
 #include "core/scene.h"
@@ -14,13 +13,18 @@ namespace peakcast::render {
 
 class GpuVolume {
  public:
-  explicit GpuVolume(std::shared_ptr<const Volume> volume);
+  // `cells`: grids built off the render thread (VolumeEntry::macrocells; checked against the
+  // volume, std::invalid_argument otherwise). A missing grid is built here (trilinear) or at
+  // first use (tricubic), on the calling thread: fine for the CLI and tests, a stall for the
+  // server's render thread.
+  explicit GpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells = {});
 
   const Volume& volume() const { return *volume_; }
   std::shared_ptr<const Volume> shared() const { return volume_; }
-  // The tricubic grid (wider filter support) is built on first use: most views never ask.
   // Render thread only, like every other member.
   const MacrocellGrid& macrocells(Filter filter) const;
+  double upload_ms() const { return upload_ms_; }            // texture upload in the constructor
+  double macrocell_ms() const { return macrocell_ms_; }      // grids built on this thread so far
   size_t gpu_bytes() const { return volume_->byte_size(); }
   // TF coordinate of a texel value: a * texel + b (the TF table spans [min_value, max_value]).
   float value_scale() const { return scale_; }
@@ -33,8 +37,10 @@ class GpuVolume {
  private:
   std::shared_ptr<const Volume> volume_;
   gpu::Texture texture_;
-  MacrocellGrid cells_trilinear_;
-  mutable std::optional<MacrocellGrid> cells_tricubic_;
+  std::shared_ptr<const MacrocellGrid> cells_trilinear_;
+  mutable std::shared_ptr<const MacrocellGrid> cells_tricubic_;
+  double upload_ms_ = 0.0;
+  mutable double macrocell_ms_ = 0.0;
   float scale_ = 1.f, bias_ = 0.f;
   double lo_ = 0, hi_ = 1;
   uint64_t serial_ = 0;

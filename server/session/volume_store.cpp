@@ -31,6 +31,8 @@ std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::p
   // Header-sized check first would need every format's header reader; loading is bounded by the
   // voxel limit, and the budget is checked before the volume is kept.
   auto vol = std::make_shared<Volume>(load_volume(path, options_));
+  // Here, on the loader pool, not at first render: the em volume's grids take ~1 s of CPU.
+  VolumeMacrocells cells = build_volume_macrocells(*vol);
   const int64_t bytes = int64_t(vol->byte_size());
   std::lock_guard lock(m_);
   int64_t resident = 0;
@@ -54,6 +56,7 @@ std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::p
   e->id = id;
   e->path = path;
   e->volume = std::move(vol);
+  e->macrocells = std::move(cells);
   e->preloaded = preloaded;
   entries_[id] = e;
   if (default_.empty()) default_ = id;

@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/macrocells.h"
 #include "core/volume.h"
 #include "core/volume_io.h"
 
@@ -20,6 +21,8 @@ struct VolumeEntry {
   std::string id;
   std::filesystem::path path;
   std::shared_ptr<const Volume> volume;
+  // Built with the volume on the loader pool; the render thread passes them to GpuVolume.
+  VolumeMacrocells macrocells;
   bool preloaded = false;
   nlohmann::json info(bool with_histogram) const;
 };

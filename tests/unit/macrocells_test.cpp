@@ -58,7 +58,8 @@ void check_against_brute_force(const Volume& v, const MacrocellGrid& g) {
         ASSERT_EQ(g.min[idx], float(mn)) << a << "," << b << "," << c;
         ASSERT_EQ(g.max[idx], float(mx)) << a << "," << b << "," << c;
         const double mean = sum / double(cnt);
-        ASSERT_NEAR(g.stddev[idx], std::sqrt(std::max(0.0, sum2 / double(cnt) - mean * mean)), 1e-4);
+        const double sd = std::sqrt(std::max(0.0, sum2 / double(cnt) - mean * mean));
+        ASSERT_NEAR(g.stddev[idx], sd, std::max(1e-4, 1e-6 * sd));  // stored as float: relative for 16-bit
       }
 }
 
@@ -72,6 +73,47 @@ TEST(Macrocells, MinMaxEqualBruteForceOnOddDims) {
         for (int a = 0; a < 3; ++a) EXPECT_EQ(g.grid[a], cells_along(d[a], cell));
         check_against_brute_force(v, g);
       }
+}
+
+// The builder reads each voxel type directly; every type must give the brute-force answer.
+TEST(Macrocells, MinMaxEqualBruteForceForEveryVoxelType) {
+  std::mt19937 rng(7);
+  for (SourceType t : {SourceType::U8, SourceType::I8, SourceType::U16, SourceType::I16}) {
+    VolumeHeader h;
+    h.dims = {19, 12, 10};
+    h.source = t;
+    Volume v(h);
+    std::uniform_int_distribution<int> u(0, t == SourceType::U8 || t == SourceType::I8 ? 255 : 65535);
+    for (int64_t i = 0; i < v.voxel_count(); ++i) {
+      if (v.type() == VoxelType::U8) v.data()[i] = uint8_t(u(rng));
+      else reinterpret_cast<uint16_t*>(v.data())[i] = uint16_t(u(rng));
+    }
+    v.finalize_statistics();
+    for (auto support : {FilterSupport::Trilinear, FilterSupport::Tricubic}) {
+      SCOPED_TRACE(to_string(t));
+      check_against_brute_force(v, build_macrocells(v, 4, support));
+    }
+  }
+}
+
+TEST(Macrocells, VolumeGridsAreBothSupportsAndChecked) {
+  Volume v = random_volume({30, 20, 12}, 3), other = random_volume({30, 20, 30}, 4);
+  const VolumeMacrocells m = build_volume_macrocells(v);
+  ASSERT_TRUE(m.trilinear && m.tricubic);
+  EXPECT_EQ(m.trilinear->support, FilterSupport::Trilinear);
+  EXPECT_EQ(m.tricubic->support, FilterSupport::Tricubic);
+  check_against_brute_force(v, *m.trilinear);
+  check_against_brute_force(v, *m.tricubic);
+  EXPECT_NO_THROW(check_macrocells(*m.trilinear, v, FilterSupport::Trilinear));
+  // A grid of another volume, or of the other support, is refused by name.
+  try {
+    check_macrocells(*m.trilinear, other, FilterSupport::Trilinear);
+    ADD_FAILURE() << "a grid of another volume was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("do not fit the 30x20x30 volume"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(check_macrocells(*m.trilinear, v, FilterSupport::Tricubic), std::invalid_argument);
+  EXPECT_THROW(check_macrocells(build_macrocells(v, 3), v, FilterSupport::Trilinear), std::invalid_argument);
 }
 
 TEST(Macrocells, DefaultGridIsAtMost64PerAxis) {

@@ -1,0 +1,67 @@
+// Macrocell grids off the render thread (issue 9, point 7): the store builds them with the
+// volume on the loader pool, GpuVolume takes them and builds nothing on the render thread.
+#include <filesystem>
+
+#include "core/volume_writer.h"
+#include "gpu/gpu_fixture.h"
+#include "session/volume_store.h"
+
+using namespace peakcast;
+
+namespace {
+
+ResolvedScene scene(const Volume& v, const char* filter) {
+  const double lo = v.min_value, hi = v.max_value;
+  return test::make_scene(
+      v, {{"tf", {{"points", {{lo, 0, 0, 0, 0}, {lo + 0.5 * (hi - lo), 1, 0.5, 0.2, 0.0}, {hi, 1, 1, 1, 0.8}}}}},
+          {"render", {{"filter", filter}}}});
+}
+
+}  // namespace
+
+TEST(VolumeCells, StoreBuildsBothGridsWithTheVolume) {
+  const auto dir = std::filesystem::temp_directory_path() / ("peakcast_cells_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  auto v = test::make_volume(GeneratorKind::Blobs, {40, 33, 21}, SourceType::U8);
+  write_volume(dir / "b.nrrd", *v);
+  VolumeStore store({dir}, int64_t(1) << 30);
+  auto e = store.get("b.nrrd");
+  std::filesystem::remove_all(dir);
+  ASSERT_TRUE(e->macrocells.trilinear && e->macrocells.tricubic);
+  const MacrocellGrid want_lin = build_macrocells(*e->volume, 0, FilterSupport::Trilinear);
+  const MacrocellGrid want_cub = build_macrocells(*e->volume, 0, FilterSupport::Tricubic);
+  EXPECT_EQ(e->macrocells.trilinear->min, want_lin.min);
+  EXPECT_EQ(e->macrocells.trilinear->max, want_lin.max);
+  EXPECT_EQ(e->macrocells.tricubic->min, want_cub.min);
+  EXPECT_EQ(e->macrocells.tricubic->max, want_cub.max);
+}
+
+TEST(VolumeCells, GpuVolumeUsesTheGivenGridsAndRendersTheSame) {
+  auto v = test::make_volume(GeneratorKind::Blobs, {40, 33, 21}, SourceType::U8);
+  const VolumeMacrocells cells = build_volume_macrocells(*v);
+  render::GpuVolume given(v, cells), built(v);
+  for (const char* filter : {"trilinear", "tricubic"}) {
+    const ResolvedScene s = scene(*v, filter);
+    render::RenderStats a, b;
+    const Image ia = test::render_gpu(given, s, render::GpuPath::Fragment, &a);
+    const Image ib = test::render_gpu(built, s, render::GpuPath::Fragment, &b);
+    EXPECT_EQ(ia.rgba, ib.rgba) << filter;
+    EXPECT_GT(a.empty_cells, 0) << filter << ": the TF should leave cells empty (skipping in use)";
+    EXPECT_EQ(a.empty_cells, b.empty_cells) << filter;
+  }
+  EXPECT_EQ(&given.macrocells(Filter::Trilinear), cells.trilinear.get());
+  EXPECT_EQ(&given.macrocells(Filter::Tricubic), cells.tricubic.get());
+  EXPECT_EQ(given.macrocell_ms(), 0.0) << "grids were built on the render thread";
+  EXPECT_GT(built.macrocell_ms(), 0.0);
+}
+
+TEST(VolumeCells, GpuVolumeRefusesGridsOfAnotherVolume) {
+  auto v = test::make_volume(GeneratorKind::Blobs, {40, 33, 21}, SourceType::U8);
+  auto w = test::make_volume(GeneratorKind::Blobs, {40, 33, 40}, SourceType::U8);
+  try {
+    render::GpuVolume gv(v, build_volume_macrocells(*w));
+    ADD_FAILURE() << "grids of a 40x33x40 volume were accepted for a 40x33x21 one";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("do not fit the 40x33x21 volume"), std::string::npos) << e.what();
+  }
+}
