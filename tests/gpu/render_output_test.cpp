@@ -1,6 +1,7 @@
 // The render request (issue 9, points 6 and 2): the 8-bit output equals encode::to_rgb8 of the
 // float output; tiles equal the same pixels of a full render; stats as one JSON form.
 #include <cmath>
+#include <fstream>
 #include <set>
 
 #include "encode/png.h"
@@ -203,6 +204,16 @@ TEST(RenderStats, JsonUsesTheStreamKeysAndToStringMatches) {
   EXPECT_EQ(j["samples_per_ray"].get<double>(), st.samples_mean);
   EXPECT_EQ(j["variant"].get<std::string>(), st.variant);
   EXPECT_GT(j["peaks"].get<int>(), 0);
+  // Every key is declared in the stream's stats message with a matching type (the schema has
+  // additionalProperties: false, so a key missing there breaks the net tests' validation).
+  const json schema = json::parse(std::ifstream(std::string(PEAKCAST_SOURCE_DIR) + "/proto/server_messages.schema.json"));
+  const json& props = schema["$defs"]["stats"]["properties"];
+  for (auto& [k, val] : j.items()) {
+    ASSERT_TRUE(props.contains(k)) << k << " is not in $defs/stats";
+    const std::string type = props[k]["type"];
+    const bool ok = type == "string" ? val.is_string() : type == "integer" ? val.is_number_integer() : val.is_number();
+    EXPECT_TRUE(ok) << k << ": schema says " << type << ", to_json gives " << val.dump();
+  }
   const std::string text = st.to_string();
   for (auto& [k, val] : j.items()) {
     const std::string shown = k + "=" + (val.is_string() ? val.get<std::string>() : val.dump());
