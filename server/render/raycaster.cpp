@@ -45,17 +45,29 @@ RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const Mac
   return u;
 }
 
+// Moves the entry named `key` to the front of a most-recent-first cache; nullptr when absent.
+template <class T>
+T* cache_find(std::vector<T>& cache, const std::string& key) {
+  auto it = std::find_if(cache.begin(), cache.end(), [&](const T& e) { return e.key == key; });
+  if (it == cache.end()) return nullptr;
+  std::rotate(cache.begin(), it, it + 1);
+  return &cache.front();
+}
+
+// Puts `e` at the front, dropping the least recently used entry beyond `cap`.
+template <class T>
+T& cache_insert(std::vector<T>& cache, T e, size_t cap) {
+  if (cache.size() >= cap) cache.pop_back();
+  cache.insert(cache.begin(), std::move(e));
+  return cache.front();
+}
+
 }  // namespace
 
 Raycaster::Raycaster(gpu::ShaderCache& shaders) : shaders_(shaders) {
   ubo_ = gpu::make_buffer();
   glNamedBufferStorage(ubo_.id(), sizeof(RayUniforms), nullptr, GL_DYNAMIC_STORAGE_BIT);
   vao_ = gpu::make_vertex_array();
-  tf_texture_ = gpu::make_texture(GL_TEXTURE_1D);
-  glTextureStorage1D(tf_texture_.id(), 1, GL_RGBA32F, TransferFunction::kTableSize);
-  glTextureParameteri(tf_texture_.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-  glTextureParameteri(tf_texture_.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-  glTextureParameteri(tf_texture_.id(), GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
 }
 
 const gpu::Program& Raycaster::program(const VariantKey& key) {
@@ -110,11 +122,19 @@ VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPa
 
   // Per-frame state that depends on the TF: table and macrocell occupancy.
   const std::string tf_sig = tf_signature(s.tf, gv.tf_lo(), gv.tf_hi());
-  if (tf_sig != tf_table_key_) {
+  TfTable* tf_table = cache_find(tf_tables_, tf_sig);
+  if (!tf_table) {
+    TfTable e{tf_sig, gpu::make_texture(GL_TEXTURE_1D)};
+    glTextureStorage1D(e.texture.id(), 1, GL_RGBA32F, TransferFunction::kTableSize);
+    glTextureParameteri(e.texture.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTextureParameteri(e.texture.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTextureParameteri(e.texture.id(), GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     const std::vector<float> table = s.tf.bake(TransferFunction::kTableSize, gv.tf_lo(), gv.tf_hi());
-    glTextureSubImage1D(tf_texture_.id(), 0, 0, TransferFunction::kTableSize, GL_RGBA, GL_FLOAT, table.data());
-    tf_table_key_ = tf_sig;
+    glTextureSubImage1D(e.texture.id(), 0, 0, TransferFunction::kTableSize, GL_RGBA, GL_FLOAT, table.data());
+    tf_table = &cache_insert(tf_tables_, std::move(e), kCacheEntries);
+    ++table_builds_;
   }
+  glBindTextureUnit(1, tf_table->texture.id());
   const auto t_tables = Clock::now();
   const std::vector<Peak> peaks =
       s.scene.render.classification == Classification::Peaks ? find_peaks(s.tf) : std::vector<Peak>{};
@@ -122,37 +142,40 @@ VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPa
   for (const auto& p : peaks) peak_values.push_back(p.value);
   // Occupancy depends on the grid, the TF over the value range and the peaks: a camera move
   // reuses it (and its texture).
-  const std::string occ_key = s.scene.render.space_skipping
-                                  ? tf_sig + " cells " +
-                                        std::to_string(gv.serial()) + " " + cells.to_string() + " peaks " +
-                                        std::to_string(peaks.size())
-                                  : std::string();
-  const bool occ_fresh = occ_key != occupancy_key_;
-  if (occ_fresh) {
-    occupancy_ = s.scene.render.space_skipping ? classify_cells(cells, s.tf, gv.tf_lo(), gv.tf_hi(), peak_values)
-                                               : Occupancy{};
-    occupancy_key_ = occ_key;
+  Occupancy no_skipping;
+  const Occupancy* occ = &no_skipping;
+  OccupancyEntry* occ_entry = nullptr;
+  if (s.scene.render.space_skipping) {
+    const std::string occ_key = tf_sig + " cells " + std::to_string(gv.serial()) + " " + cells.to_string() +
+                                " peaks " + std::to_string(peaks.size());
+    occ_entry = cache_find(occupancy_cache_, occ_key);
+    if (!occ_entry) {
+      occ_entry = &cache_insert(
+          occupancy_cache_, OccupancyEntry{occ_key, classify_cells(cells, s.tf, gv.tf_lo(), gv.tf_hi(), peak_values), {}},
+          kCacheEntries);
+      ++table_builds_;
+    }
+    occ = &occ_entry->occupancy;
   }
-  const Occupancy& occ = occupancy_;
-  const VariantKey key = choose_variant(s, occ.empty_cells, path, peaks.size());
+  const VariantKey key = choose_variant(s, occ->empty_cells, path, peaks.size());
   upload_tables(gv, s, key.peaks ? peaks : std::vector<Peak>{});
   const double table_ms = ms_since(t_tables);
-  if (key.space_skipping && !occ_fresh && occupancy_texture_) {
-    glBindTextureUnit(2, occupancy_texture_.id());
-  } else if (key.space_skipping) {
-    occupancy_texture_ = gpu::make_texture(GL_TEXTURE_3D);
-    glTextureStorage3D(occupancy_texture_.id(), 1, GL_R8UI, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]),
-                       GLsizei(cells.grid[2]));
-    // Integer textures are complete only with NEAREST filtering.
-    glTextureParameteri(occupancy_texture_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTextureParameteri(occupancy_texture_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTextureSubImage3D(occupancy_texture_.id(), 0, 0, 0, 0, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]),
-                        GLsizei(cells.grid[2]), GL_RED_INTEGER, GL_UNSIGNED_BYTE, occ.occupied.data());
-    glBindTextureUnit(2, occupancy_texture_.id());
+  if (key.space_skipping) {
+    gpu::Texture& tex = occ_entry->texture;
+    if (!tex) {
+      tex = gpu::make_texture(GL_TEXTURE_3D);
+      glTextureStorage3D(tex.id(), 1, GL_R8UI, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]), GLsizei(cells.grid[2]));
+      // Integer textures are complete only with NEAREST filtering.
+      glTextureParameteri(tex.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+      glTextureParameteri(tex.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+      glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+      glTextureSubImage3D(tex.id(), 0, 0, 0, 0, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]),
+                          GLsizei(cells.grid[2]), GL_RED_INTEGER, GL_UNSIGNED_BYTE, occ->occupied.data());
+    }
+    glBindTextureUnit(2, tex.id());
   }
   if (stats) {
-    stats->empty_cells = occ.empty_cells;
+    stats->empty_cells = occ->empty_cells;
     stats->peaks = peaks.size();
     stats->table_ms = table_ms;
   }
@@ -170,54 +193,58 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
       << r.max_peaks << ' ' << r.secant_iterations << ' ' << r.preint_table_size << ' ' << r.preint_method << ' '
       << peaks.size() << ' '
       << (r.classification == Classification::Preint ? s.step : 0.0);
-  if (key.str() == tables_key_) {
-    if (peak_table_) glBindTextureUnit(4, peak_table_.id());
-    if (tf_points_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, tf_points_.id());
-    if (preint_table_) glBindTextureUnit(5, preint_table_.id());
+  if (const Tables* t = cache_find(tables_cache_, key.str())) {
+    if (t->peak_table) glBindTextureUnit(4, t->peak_table.id());
+    if (t->tf_points) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, t->tf_points.id());
+    if (t->preint_table) glBindTextureUnit(5, t->preint_table.id());
+    tables_ = t->sizes;
     return;
   }
-  tables_key_ = key.str();
-  tables_ = RayTables{};
+  Tables t;
+  t.key = key.str();
   if (r.classification == Classification::Peaks) {
     const PeakTable table = build_peak_table(peaks, lo, hi, r.peak_table_bins);
     std::vector<float> texels(table.texels.size());
     for (size_t k = 0; k < texels.size(); ++k)  // to TF coordinates; -1 = none
       texels[k] = table.texels[k] == PeakTable::kNoPeak ? -1.f : float((table.texels[k] - lo) / (hi - lo));
-    peak_table_ = gpu::make_texture(GL_TEXTURE_2D_ARRAY);
-    glTextureStorage3D(peak_table_.id(), 1, GL_RGBA32F, table.bins, table.bins, table.layers);
-    glTextureSubImage3D(peak_table_.id(), 0, 0, 0, 0, table.bins, table.bins, table.layers, GL_RGBA, GL_FLOAT,
+    t.peak_table = gpu::make_texture(GL_TEXTURE_2D_ARRAY);
+    glTextureStorage3D(t.peak_table.id(), 1, GL_RGBA32F, table.bins, table.bins, table.layers);
+    glTextureSubImage3D(t.peak_table.id(), 0, 0, 0, 0, table.bins, table.bins, table.layers, GL_RGBA, GL_FLOAT,
                         texels.data());
-    glTextureParameteri(peak_table_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTextureParameteri(peak_table_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glBindTextureUnit(4, peak_table_.id());
+    glTextureParameteri(t.peak_table.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(t.peak_table.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glBindTextureUnit(4, t.peak_table.id());
     std::vector<glm::vec4> points;
     for (const auto& p : s.tf.points) {
       points.emplace_back(float((p.value - lo) / (hi - lo)), 0.f, 0.f, 0.f);
       points.emplace_back(float(p.r), float(p.g), float(p.b), float(p.a));
     }
-    tf_points_ = gpu::make_buffer();
-    glNamedBufferStorage(tf_points_.id(), GLsizeiptr(points.size() * sizeof(glm::vec4)), points.data(), 0);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, tf_points_.id());
-    tables_.peak_bins = table.bins;
-    tables_.peak_layers = table.layers;
-    tables_.max_peaks = r.max_peaks;
-    tables_.secant_iterations = r.secant_iterations;
-    tables_.tf_points = int(s.tf.points.size());
-    tables_.peak_count = peaks.size();
+    t.tf_points = gpu::make_buffer();
+    glNamedBufferStorage(t.tf_points.id(), GLsizeiptr(points.size() * sizeof(glm::vec4)), points.data(), 0);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, t.tf_points.id());
+    t.sizes.peak_bins = table.bins;
+    t.sizes.peak_layers = table.layers;
+    t.sizes.max_peaks = r.max_peaks;
+    t.sizes.secant_iterations = r.secant_iterations;
+    t.sizes.tf_points = int(s.tf.points.size());
+    t.sizes.peak_count = peaks.size();
   }
   if (r.classification == Classification::Preint) {
     const PreintegrationTable table = build_preintegration(s.tf, lo, hi, s.step, r.preint_table_size,
                                                            preint_method(r));
-    preint_table_ = gpu::make_texture(GL_TEXTURE_2D);
-    glTextureStorage2D(preint_table_.id(), 1, GL_RGBA32F, table.size, table.size);
-    glTextureSubImage2D(preint_table_.id(), 0, 0, 0, table.size, table.size, GL_RGBA, GL_FLOAT, table.rgba.data());
-    glTextureParameteri(preint_table_.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTextureParameteri(preint_table_.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTextureParameteri(preint_table_.id(), GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTextureParameteri(preint_table_.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glBindTextureUnit(5, preint_table_.id());
-    tables_.preint_size = table.size;
+    t.preint_table = gpu::make_texture(GL_TEXTURE_2D);
+    glTextureStorage2D(t.preint_table.id(), 1, GL_RGBA32F, table.size, table.size);
+    glTextureSubImage2D(t.preint_table.id(), 0, 0, 0, table.size, table.size, GL_RGBA, GL_FLOAT, table.rgba.data());
+    glTextureParameteri(t.preint_table.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTextureParameteri(t.preint_table.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTextureParameteri(t.preint_table.id(), GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(t.preint_table.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glBindTextureUnit(5, t.preint_table.id());
+    t.sizes.preint_size = table.size;
   }
+  tables_ = t.sizes;
+  cache_insert(tables_cache_, std::move(t), kCacheEntries);
+  ++table_builds_;
 }
 
 Image Raycaster::render_bare(const GpuVolume& gv, const ResolvedScene& s, GpuPath path, const Image& full,
@@ -249,8 +276,7 @@ RenderResult Raycaster::draw(const GpuVolume& gv, const ResolvedScene& s, const 
   const RayUniforms u = make_uniforms(gv, s, cells, tables_, rect);
   glNamedBufferSubData(ubo_.id(), 0, sizeof u, &u);
   glBindBufferBase(GL_UNIFORM_BUFFER, 0, ubo_.id());
-  gv.bind(0);
-  glBindTextureUnit(1, tf_texture_.id());
+  gv.bind(0);  // the TF table (unit 1) and the other per-TF tables were bound by prepare()
   Targets& t = targets(w, h, output);
   glUseProgram(prog.id());
 

@@ -40,6 +40,9 @@ class Raycaster {
   // with its per-pixel sample counts, reconstruction only.
   Image render_bare(const GpuVolume& volume, const ResolvedScene& scene, GpuPath path, const Image& full,
                     RenderStats* stats = nullptr);
+  // TF tables, peak/preintegration tables and occupancy grids built so far (for tests: tiles
+  // interleaved with another session's frames must not rebuild them).
+  size_t table_builds() const { return table_builds_; }
   // For the layout test: the linked program of a variant.
   const gpu::Program& program(const VariantKey& key);
 
@@ -63,14 +66,30 @@ class Raycaster {
   gpu::ShaderCache& shaders_;
   gpu::Buffer ubo_;
   gpu::VertexArray vao_;
-  gpu::Texture tf_texture_, occupancy_texture_, budget_texture_;
-  gpu::Texture peak_table_, preint_table_;
-  gpu::Buffer tf_points_;
+  gpu::Texture budget_texture_;
+  // Per-TF state in small caches, most recent first: sessions with different TFs (and a still's
+  // tiles between their frames) take turns without rebuilding tables at every draw.
+  struct TfTable {  // the 1D TF table over the value range
+    std::string key;
+    gpu::Texture texture;
+  };
+  struct Tables {  // peak table + TF points, or the preintegration table
+    std::string key;
+    RayTables sizes;
+    gpu::Texture peak_table, preint_table;
+    gpu::Buffer tf_points;
+  };
+  struct OccupancyEntry {  // macrocell classification of one volume's grid under one TF
+    std::string key;
+    Occupancy occupancy;
+    gpu::Texture texture;
+  };
+  static constexpr size_t kCacheEntries = 4;
+  std::vector<TfTable> tf_tables_;
+  std::vector<Tables> tables_cache_;
+  std::vector<OccupancyEntry> occupancy_cache_;
   RayTables tables_;  // what the current frame's tables hold (for the uniforms and stats)
-  std::string tf_table_key_;  // the TF (and value range) the 1D table holds
-  std::string tables_key_;    // the inputs tables_ was built from
-  Occupancy occupancy_;      // macrocell classification for occupancy_key_
-  std::string occupancy_key_;
+  size_t table_builds_ = 0;
   std::vector<Targets> targets_;  // most recently used first
 };
 

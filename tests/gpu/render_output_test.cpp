@@ -141,6 +141,28 @@ TEST(Tiles, EqualTheFullRenderExactly) {
   }
 }
 
+// A still's tiles between another session's frames (another TF, another classification) reuse
+// the tables and occupancy both built at their first draw: nothing is rebuilt per tile.
+TEST(Tiles, InterleavedWithAnotherTfRebuildNothing) {
+  auto v = blobs();
+  render::GpuVolume gv(v);
+  const auto all = scenes(*v);
+  for (auto [a, b] : {std::pair{all[3].second, all[2].second}, std::pair{all[0].second, all[3].second}}) {
+    json other_tf = tf_over_range(*v, {{0.0, 0, 0, 0, 0}, {0.4, 0.2, 0.5, 1.0, 0.3}, {1.0, 1, 1, 1, 0.8}});
+    b["tf"] = other_tf;
+    const ResolvedScene still = test::make_scene(*v, a), view = test::make_scene(*v, b);
+    auto& caster = *test::gpu().caster;
+    draw(gv, still, render::GpuPath::Fragment, render::RenderOutput::Rgb8, render::PixelRect{0, 0, 8, 8});
+    draw(gv, view, render::GpuPath::Fragment, render::RenderOutput::Rgb8);
+    const size_t built = caster.table_builds();
+    for (const auto& r : render::tile_grid(still.scene.width, still.scene.height, 32, 32)) {
+      draw(gv, still, render::GpuPath::Fragment, render::RenderOutput::Rgb8, r);
+      draw(gv, view, render::GpuPath::Fragment, render::RenderOutput::Rgb8);
+    }
+    EXPECT_EQ(caster.table_builds(), built);
+  }
+}
+
 TEST(Tiles, RefusesRectanglesOutsideTheImage) {
   auto v = blobs();
   render::GpuVolume gv(v);
