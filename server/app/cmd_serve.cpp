@@ -32,6 +32,17 @@ void add_serve_command(CLI::App& app, Runner& run) {
   s->add_option("--idle-timeout", *idle, "seconds without a client message before closing")->check(CLI::Range(1, 86400));
   s->add_option("--max-fps", cfg->max_fps, "frames per second per session")->check(CLI::Range(1.0, 240.0));
   s->add_option("--gpu-budget-mib", *budget_mib, "MiB of volume textures on the GPU")->check(CLI::Range(int64_t(1), int64_t(1) << 24));
+  s->add_option("--max-queued-stills", cfg->max_queued_stills,
+                "REST stills waiting or rendering at once; beyond, 503 with Retry-After")
+      ->check(CLI::Range(size_t(1), size_t(1024)))
+      ->envname("PEAKCAST_MAX_QUEUED_STILLS");
+  s->add_option("--max-still-samples", cfg->max_still_samples,
+                "cost cap of one REST still: pixels x estimated samples per ray; beyond, 422")
+      ->check(CLI::Range(1e3, 1e15))
+      ->envname("PEAKCAST_MAX_STILL_SAMPLES");
+  s->add_option("--still-band-samples", cfg->still_band_samples,
+                "estimated samples per band of a still (bands alternate with viewers' frames)")
+      ->check(CLI::Range(1e3, 1e12));
   s->add_option("--io-threads", cfg->io_threads, "network threads")->check(CLI::Range(1, 64));
   s->add_option("--encode-threads", cfg->encode_threads, "JPEG encode threads")->check(CLI::Range(1, 64));
   s->add_option("--web-dir", *web, "the browser client's files");

@@ -24,11 +24,18 @@ Listener::Listener(asio::io_context& ioc, tcp::endpoint endpoint, AppContext& ap
 
 void Listener::run() { accept(); }
 
+void Listener::stop() {
+  asio::post(acceptor_.get_executor(), [self = shared_from_this()] {
+    beast::error_code ec;
+    self->acceptor_.close(ec);
+  });
+}
+
 void Listener::accept() {
   acceptor_.async_accept(asio::make_strand(ioc_), [self = shared_from_this()](beast::error_code ec, tcp::socket s) {
     if (ec) {
       fail(ec, "accept");
-      if (ec == asio::error::operation_aborted) return;
+      if (ec == asio::error::operation_aborted || !self->acceptor_.is_open()) return;
     } else {
       std::make_shared<HttpSession>(std::move(s), self->app_)->run();
     }

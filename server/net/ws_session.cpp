@@ -14,13 +14,19 @@ WsSession::~WsSession() { release(); }
 // of this object.
 void WsSession::release() {
   if (session_) app_.render.remove_session(session_->id());
-  if (counted_) app_.ws_sessions--;
+  if (counted_) app_.ws_sessions.release();
   counted_ = false;
 }
 
+void WsSession::shut_down() {
+  asio::post(ws_.get_executor(), [self = shared_from_this()] {
+    self->close(websocket::close_code::going_away, "the server is shutting down");
+  });
+}
+
 void WsSession::run(Request upgrade) {
-  counted_ = true;
-  app_.ws_sessions++;
+  counted_ = true;  // the slot was reserved by the upgrade (SessionRegistry::try_reserve)
+  app_.ws_sessions.track(shared_from_this());
   ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
   ws_.read_message_max(limits::kMaxWsReadBytes);
   ws_.set_option(websocket::stream_base::decorator(
@@ -107,7 +113,7 @@ void WsSession::handle(const std::string& text) {
   using namespace protocol;
   ClientMessage msg = parse_client_message(text);
   if (auto* ping = std::get_if<PingMsg>(&msg)) {
-    return queue_text(nlohmann::json{{"type", "pong"}, {"id", ping->id}}.dump());
+    return queue_text(pong_message(ping->id));
   }
   if (auto* hello = std::get_if<Hello>(&msg)) {
     if (session_) throw ProtocolError("bad_message", "hello: the session has already started");
@@ -141,8 +147,7 @@ void WsSession::handle(const std::string& text) {
         if constexpr (std::is_same_v<T, VolumeMsg>) {
           with_volume(m.volume, [this](std::shared_ptr<VolumeEntry> entry) {
             session_->set_volume(entry);
-            queue_text(
-                nlohmann::json{{"type", "volume"}, {"volume", entry->info(true)}, {"state", session_->state_json()}}.dump());
+            queue_text(volume_message(entry->info(true), session_->state_json()));
             app_.render.notify();
           });
         }
@@ -157,24 +162,22 @@ void WsSession::start_session(const protocol::Hello& hello, std::shared_ptr<Volu
   session_ = session;
   nlohmann::json vols = nlohmann::json::array();
   for (const auto& v : app_.volumes.list()) vols.push_back(v->info(false));
-  nlohmann::json welcome = {
-      {"type", "welcome"},
-      {"session", session_->id()},
-      {"volume", volume->info(true)},
-      {"volumes", vols},
-      {"state", session_->state_json()},
-      {"capabilities", render::capabilities()},
-      {"gl_renderer", app_.render.gl_renderer()},
-      {"limits",
-       {{"max_message_bytes", limits::kMaxWsMessageBytes},
-        {"max_viewport_side", limits::kMaxViewportSide},
-        {"max_viewport_pixels", limits::kMaxViewportPixels},
-        {"max_frames_in_flight", limits::kMaxFramesInFlight},
-        {"max_tf_points", kMaxTfPoints},
-        {"idle_timeout_s", app_.config.idle_timeout.count()},
-        {"still_delay_ms", limits::kStillDelay.count()},
-        {"max_fps", app_.config.max_fps}}}};
-  queue_text(welcome.dump());
+  protocol::Welcome welcome;
+  welcome.session = session_->id();
+  welcome.volume = volume->info(true);
+  welcome.volumes = vols;
+  welcome.state = session_->state_json();
+  welcome.capabilities = render::capabilities();
+  welcome.gl_renderer = app_.render.gl_renderer();
+  welcome.limits = {{"max_message_bytes", limits::kMaxWsMessageBytes},
+                    {"max_viewport_side", limits::kMaxViewportSide},
+                    {"max_viewport_pixels", limits::kMaxViewportPixels},
+                    {"max_frames_in_flight", limits::kMaxFramesInFlight},
+                    {"max_tf_points", kMaxTfPoints},
+                    {"idle_timeout_s", app_.config.idle_timeout.count()},
+                    {"still_delay_ms", limits::kStillDelay.count()},
+                    {"max_fps", app_.config.max_fps}};
+  queue_text(protocol::welcome_message(welcome));
   app_.render.add_session(session_);
 }
 

@@ -20,7 +20,10 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
  public:
   WsSession(tcp::socket&& socket, AppContext& app, bool authorized);
   ~WsSession() override;
+  // The upgrade has reserved this session's slot in app.ws_sessions; the session gives it back.
   void run(Request upgrade);
+  // Any thread: sends a close frame (going away) after what is queued; the server is stopping.
+  void shut_down();
 
   // FrameSink: called from encode threads.
   void deliver_frame(std::vector<uint8_t> bytes, uint32_t frame_id, bool final) override;
