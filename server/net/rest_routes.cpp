@@ -204,13 +204,17 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
   if (req.method() != http::verb::get && req.method() != http::verb::head)
     return send(error_response(req, http::status::method_not_allowed, "bad_request", "GET only"));
   if (path == "/api/health") {
-    count(app, "health", http::status::ok);
-    return send(json_response(req, http::status::ok,
-                              nlohmann::json{{"status", "ok"},
+    const bool stopping = app.stopping.load();
+    const auto status = stopping ? http::status::service_unavailable : http::status::ok;
+    count(app, "health", status);
+    return send(json_response(req, status,
+                              nlohmann::json{{"status", stopping ? "stopping" : "ok"},
                                              {"gl_renderer", app.render.gl_renderer()},
                                              {"sessions", app.ws_sessions.count()},
                                              {"max_sessions", app.config.max_sessions},
-                                             {"volumes", app.volumes.list().size()}}
+                                             {"volumes", app.volumes.list().size()},
+                                             {"stills_queued", app.render.stills_pending()},
+                                             {"max_queued_stills", app.config.max_queued_stills}}
                                   .dump()));
   }
   if (path == "/api/volumes") {
