@@ -10,6 +10,7 @@
 #include <boost/asio/thread_pool.hpp>
 
 #include "core/metrics.h"
+#include "net/connection_slot.h"
 #include "net/session_registry.h"
 #include "session/gpu_residency.h"
 #include "session/limits.h"
@@ -44,6 +45,7 @@ struct AppContext {
   VolumeStore volumes;
   RenderService render;
   SessionRegistry ws_sessions;
+  ConnectionCounter connections{limits::kMaxConnections, limits::kMaxConnectionsPerAddress};
   std::atomic<bool> stopping{false};  // graceful shutdown under way: refuse new work
   std::atomic<uint64_t> next_session{1};
   // Volume loads run here, never on an io thread (an 800 MB stack takes seconds). Declared last:

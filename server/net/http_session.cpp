@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <atomic>
 
+#include "net/connection_slot.h"
 #include "net/ws_session.h"
 
 namespace peakcast::net {
 
-HttpSession::HttpSession(tcp::socket&& socket, AppContext& app) : stream_(std::move(socket)), app_(app) {}
+HttpSession::HttpSession(tcp::socket&& socket, AppContext& app, std::shared_ptr<ConnectionSlot> slot)
+    : stream_(std::move(socket)), app_(app), slot_(std::move(slot)) {}
 
 void HttpSession::run() {
   asio::dispatch(stream_.get_executor(), [self = shared_from_this()] { self->read(); });
@@ -105,7 +107,7 @@ void HttpSession::upgrade(Request req) {
   }
   const bool authorized = app_.config.token.empty() || token == app_.config.token;
   stream_.expires_never();
-  std::make_shared<WsSession>(stream_.release_socket(), app_, authorized)->run(std::move(req));
+  std::make_shared<WsSession>(stream_.release_socket(), app_, authorized, std::move(slot_))->run(std::move(req));
 }
 
 void HttpSession::write(Response res) {

@@ -14,7 +14,7 @@ namespace peakcast::net {
 
 class HttpSession : public std::enable_shared_from_this<HttpSession> {
  public:
-  HttpSession(tcp::socket&& socket, AppContext& app);
+  HttpSession(tcp::socket&& socket, AppContext& app, std::shared_ptr<class ConnectionSlot> slot);
   void run();
 
  private:
@@ -29,6 +29,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   beast::flat_buffer buffer_;
   AppContext& app_;
   std::optional<http::request_parser<http::string_body>> parser_;
+  std::shared_ptr<ConnectionSlot> slot_;
   bool pending_ = false;  // a request is being answered (on the strand)
 };
 

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include "net/connection_slot.h"
 #include "net/http_session.h"
 
 namespace peakcast::net {
@@ -37,7 +38,17 @@ void Listener::accept() {
       fail(ec, "accept");
       if (ec == asio::error::operation_aborted || !self->acceptor_.is_open()) return;
     } else {
-      std::make_shared<HttpSession>(std::move(s), self->app_)->run();
+      // Beyond the connection cap the socket is closed at once: a flood of idle connections
+      // cannot exhaust descriptors or memory.
+      beast::error_code aec;
+      const auto peer = s.remote_endpoint(aec);
+      if (auto slot = aec ? nullptr : self->app_.connections.take(peer.address().to_string())) {
+        std::make_shared<HttpSession>(std::move(s), self->app_, std::move(slot))->run();
+      } else {
+        self->app_.metrics.add("peakcast_connections_refused_total", "", 1);
+        beast::error_code ignored;
+        s.close(ignored);
+      }
     }
     self->accept();
   });

@@ -233,6 +233,7 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
   }
   if (path == "/metrics") {
     app.metrics.set("peakcast_sessions", "", app.ws_sessions.count());
+    app.metrics.set("peakcast_connections", "", app.connections.open());
     Response res{http::status::ok, req.version()};
     res.set(http::field::content_type, "text/plain; version=0.0.4");
     res.body() = app.metrics.prometheus_text();

@@ -16,6 +16,11 @@ constexpr int kMaxViewportSide = 8192;                   // pixels, after the de
 constexpr int64_t kMaxViewportPixels = 4096ll * 4096;    // pixels per streamed frame
 constexpr double kMinDpr = 0.25, kMaxDpr = 4.0;          // device pixel ratio
 constexpr int kMaxFramesInFlight = 2;                    // un-acknowledged frames per client
+constexpr int kMaxConnections = 256;                     // open TCP connections (HTTP + WebSocket); beyond: closed at accept
+constexpr int kMaxConnectionsPerAddress = 32;            // of those, from one client address: one host cannot take them all
+constexpr double kMaxMessagesPerSecond = 250;            // per WebSocket client, sustained; faster senders are read more slowly (TCP backpressure)
+constexpr double kMessageBurst = 500;                    // messages a client may send at once before the rate applies
+constexpr std::chrono::seconds kWsWriteTimeout{30};      // one frame or message not written in this time: the client is too slow, closed
 constexpr size_t kMaxQueuedTextMessages = 64;            // per client; beyond, the client is too slow: closed
 constexpr int kDefaultMaxSessions = 16;                  // (cfg) concurrent WebSocket sessions
 constexpr std::chrono::seconds kDefaultIdleTimeout{600}; // (cfg) no message from the client for this long
