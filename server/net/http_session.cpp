@@ -55,18 +55,22 @@ void HttpSession::on_read(beast::error_code ec) {
   if (pending_) watch_for_close(cancelled);
 }
 
-// While an answer is pending (a still in the queue), notice a client that hangs up: the socket
-// turns readable with nothing to read (EOF or reset). Readable with data is a pipelined request:
-// stop watching, it is read after the answer.
+// While an answer is pending (a still in the queue), notice a client that hangs up: a peek at
+// the socket reads end-of-stream or an error. Data is a pipelined request: stop watching, it is
+// read after the answer. Readiness can be spurious (nothing to read yet): then wait again.
 void HttpSession::watch_for_close(std::shared_ptr<std::atomic<bool>> cancelled) {
   stream_.socket().async_wait(tcp::socket::wait_read, [self = shared_from_this(), cancelled](beast::error_code ec) {
     if (ec || !self->pending_) return;
-    beast::error_code ec2;
-    const size_t n = self->stream_.socket().available(ec2);
-    if (ec2 || n == 0) {
-      cancelled->store(true);
-      self->app_.render.notify();  // the scheduler drops it now, not at its turn
-    }
+    auto& sock = self->stream_.socket();
+    char byte;
+    beast::error_code peek, ignored;
+    sock.non_blocking(true, ignored);
+    const size_t n = sock.receive(asio::buffer(&byte, 1), tcp::socket::message_peek, peek);
+    sock.non_blocking(false, ignored);
+    if (peek == asio::error::would_block || peek == asio::error::try_again) return self->watch_for_close(cancelled);
+    if (!peek && n > 0) return;
+    cancelled->store(true);       // end of stream or a reset
+    self->app_.render.notify();   // the scheduler drops it now, not at its turn
   });
 }
 
