@@ -23,8 +23,8 @@ class Server {
 
  private:
   std::unique_ptr<AppContext> app_;
-  std::shared_ptr<class Listener> listener_;
   asio::io_context ioc_;
+  std::shared_ptr<class Listener> listener_;  // after ioc_: destroyed before the context it uses
   std::vector<std::thread> threads_;
   uint16_t port_ = 0;
   bool stopped_ = false;
