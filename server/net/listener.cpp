@@ -1,6 +1,6 @@
 #include "net/listener.h"
 
-#include <cstdio>
+#include "core/log.h"
 
 #include "net/connection_slot.h"
 #include "net/http_session.h"
@@ -12,7 +12,7 @@ void fail(beast::error_code ec, const char* what) {
       ec == asio::error::eof || ec == beast::error::timeout || ec == asio::error::connection_reset ||
       ec == asio::error::broken_pipe)
     return;
-  std::fprintf(stderr, "peakcast: %s: %s\n", what, ec.message().c_str());
+  log::warn("connection error", {{"where", what}, {"error", ec.message()}});
 }
 
 Listener::Listener(asio::io_context& ioc, tcp::endpoint endpoint, AppContext& app)

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <thread>
 
+#include "core/log.h"
 #include "net/listener.h"
 #include "net/ws_session.h"
 
@@ -14,8 +15,8 @@ namespace peakcast::net {
 Server::Server(ServerConfig config) : app_(std::make_unique<AppContext>(std::move(config))), ioc_(app_->config.io_threads) {
   for (const auto& v : app_->config.volumes) {
     auto e = app_->volumes.preload(v);
-    std::printf("peakcast: loaded %s as '%s' (%s) in %.0f ms\n", v.c_str(), e->id.c_str(),
-                e->volume->to_string().c_str(), e->volume->load_ms);
+    log::info("volume loaded", {{"path", v.string()}, {"id", e->id}, {"volume", e->volume->to_string()},
+                                {"load_ms", e->volume->load_ms}});
   }
 }
 
@@ -39,8 +40,7 @@ void Server::run_until_signal() {
   // kShutdownGrace, leave anyway.
   std::thread([] {
     std::this_thread::sleep_for(limits::kShutdownGrace);
-    std::fprintf(stderr, "peakcast: shutdown took longer than %lld ms: exiting now\n",
-                 static_cast<long long>(limits::kShutdownGrace.count()));
+    log::error("shutdown took too long: exiting now", {{"grace_ms", limits::kShutdownGrace.count()}});
     std::_Exit(1);
   }).detach();
   stop();
@@ -53,6 +53,7 @@ void Server::stop() {
   if (stopped_) return;
   stopped_ = true;
   const auto t0 = std::chrono::steady_clock::now();
+  log::info("shutting down", {{"sessions", app_->ws_sessions.count()}, {"stills", app_->render.stills_pending()}});
   app_->stopping = true;
   if (listener_) listener_->stop();
   for (auto& ws : app_->ws_sessions.live()) ws->shut_down();
