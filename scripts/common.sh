@@ -7,7 +7,7 @@ BUILD_DIR=${PEAKCAST_BUILD_DIR:-$PEAKCAST_ROOT/build}
 
 # Build and run-time packages (Debian 12 names).
 PEAKCAST_PACKAGES=(
-  build-essential cmake pkg-config git
+  build-essential cmake pkg-config git ccache
   libgtest-dev libgmock-dev
   libepoxy-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev
   libopenimageio-dev libturbojpeg0-dev libboost1.74-dev
@@ -15,7 +15,7 @@ PEAKCAST_PACKAGES=(
   python3 python3-jsonschema python3-websockets python3-pil
 )
 # Only the test command needs these (browser tests: Debian's chromium + playwright-core).
-PEAKCAST_TEST_PACKAGES=(chromium nodejs python3-vtk9 xvfb xauth)
+PEAKCAST_TEST_PACKAGES=(chromium nodejs python3-vtk9 xvfb xauth clang libclang-rt-14-dev)
 
 install_packages() {
   local missing=()
@@ -47,10 +47,24 @@ install_node_modules() {
   fi
 }
 
-build_peakcast() {
-  local type=${1:-Release}
-  if [[ ! -f $BUILD_DIR/CMakeCache.txt ]]; then
-    cmake -S "$PEAKCAST_ROOT" -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE="$type"
+# ccache when present: rebuilds on the same machine (CI after a session, sanitizer and fuzz build
+# directories sharing sources) reuse objects.
+peakcast_ccache_flags() {
+  if command -v ccache >/dev/null; then
+    export CCACHE_BASEDIR=$PEAKCAST_ROOT CCACHE_DIR=${CCACHE_DIR:-$HOME/.cache/ccache} CCACHE_MAXSIZE=${CCACHE_MAXSIZE:-10G}
+    echo "-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache"
   fi
-  cmake --build "$BUILD_DIR" -j"$(nproc)"
+}
+
+# build_peakcast TYPE [DIR [extra cmake args...]]: configure once, then build incrementally;
+# PEAKCAST_TARGETS (e.g. "peakcast_label_unit peakcast_label_net") limits what is built.
+build_peakcast() {
+  local type=${1:-Release} dir=${2:-$BUILD_DIR}
+  shift 2 || shift $#
+  if [[ ! -f $dir/CMakeCache.txt ]]; then
+    cmake -S "$PEAKCAST_ROOT" -B "$dir" -DCMAKE_BUILD_TYPE="$type" $(peakcast_ccache_flags) "$@"
+  fi
+  local targets=()
+  for t in ${PEAKCAST_TARGETS:-}; do targets+=(--target "$t"); done
+  cmake --build "$dir" -j"$(nproc)" "${targets[@]}"
 }

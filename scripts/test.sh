@@ -1,9 +1,83 @@
 #!/usr/bin/env bash
-# The README's second command: install what is missing, build, run every CTest label
-# (unit, gpu, numeric, net, browser). Exits non-zero on any failure.
+# The README's second command: install what is missing, build, run every test.
+#   bash scripts/test.sh            everything: all CTest labels in the Release build, then the
+#                                   unit and net labels under ASan+UBSan, the net label under TSan,
+#                                   and every fuzz target for 30 s (PEAKCAST_FUZZ_SECONDS)
+#   bash scripts/test.sh -L unit    only the Release build's CTest, with these ctest arguments
+# Each part is timed; the last line sums the tests of every part ("N passed, N failed").
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 install_packages "${PEAKCAST_PACKAGES[@]}" "${PEAKCAST_TEST_PACKAGES[@]}"
 install_node_modules
-build_peakcast Release
-cd "$BUILD_DIR"
-ctest --output-on-failure -j"$(nproc)" --timeout 900 "$@"
+
+declare -a part_names part_secs
+passed=0 failed=0
+# part NAME CMD...: runs CMD, records its wall time; a failing part is counted, the run goes on.
+part() {
+  local name=$1 start=$SECONDS rc=0
+  shift
+  echo "== peakcast test part: $name"
+  "$@" || rc=$?
+  part_names+=("$name")
+  part_secs+=($((SECONDS - start)))
+  [[ $rc -eq 0 ]] || { echo "== part '$name' failed (exit $rc)"; any_failed=1; }
+  return 0
+}
+# ctest_counted DIR ARGS...: ctest, adding its counts to the totals.
+ctest_counted() {
+  local dir=$1 log
+  shift
+  log=$(mktemp)
+  (cd "$dir" && ctest --output-on-failure -j"$(nproc)" --timeout 900 "$@") 2>&1 | tee "$log"
+  local rc=${PIPESTATUS[0]}
+  local total fails
+  total=$(grep -oE 'tests passed, [0-9]+ tests failed out of [0-9]+' "$log" | grep -oE '[0-9]+$' | tail -1)
+  fails=$(grep -oE '[0-9]+ tests failed out of' "$log" | grep -oE '^[0-9]+' | tail -1)
+  passed=$((passed + ${total:-0} - ${fails:-0}))
+  failed=$((failed + ${fails:-0}))
+  rm -f "$log"
+  return "$rc"
+}
+# fuzz_counted SECONDS: every fuzz target, each counted as one test.
+fuzz_counted() {
+  local log rc
+  log=$(mktemp)
+  bash "$PEAKCAST_ROOT/scripts/fuzz.sh" "$1" 2>&1 | tee "$log"
+  rc=${PIPESTATUS[0]}
+  local line
+  line=$(grep -E '^fuzz: [0-9]+ passed, [0-9]+ failed' "$log" | tail -1)
+  passed=$((passed + $(echo "$line" | grep -oE '[0-9]+ passed' | grep -oE '[0-9]+' || echo 0)))
+  failed=$((failed + $(echo "$line" | grep -oE '[0-9]+ failed' | grep -oE '[0-9]+' || echo 1)))
+  rm -f "$log"
+  return "$rc"
+}
+any_failed=0
+
+part "build (Release)" build_peakcast Release
+if [[ $# -gt 0 ]]; then
+  part "ctest $*" ctest_counted "$BUILD_DIR" "$@"
+else
+  part "tests: all labels" ctest_counted "$BUILD_DIR"
+  if [[ -z ${PEAKCAST_SKIP_SANITIZERS:-} ]]; then
+    asan=$PEAKCAST_ROOT/build-asan tsan=$PEAKCAST_ROOT/build-tsan
+    # Sanitizer builds hold only what their labels run (CMake targets peakcast_label_<label>).
+    part "build (ASan+UBSan)" env PEAKCAST_TARGETS="peakcast_label_unit peakcast_label_net" \
+      build_peakcast RelWithDebInfo "$asan" -DPEAKCAST_SANITIZE=ON
+    # Mesa keeps allocations until exit: leak checks only where no GL runs (the unit label).
+    part "tests: unit under ASan+UBSan" env UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+      ASAN_OPTIONS=detect_leaks=1 ctest_counted "$asan" -L unit
+    part "tests: net under ASan+UBSan" env UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+      ASAN_OPTIONS=detect_leaks=0 ctest_counted "$asan" -L net
+    part "build (TSan)" env PEAKCAST_TARGETS=peakcast_label_net build_peakcast RelWithDebInfo "$tsan" -DPEAKCAST_TSAN=ON
+    part "tests: net under TSan" env TSAN_OPTIONS="halt_on_error=1 suppressions=$PEAKCAST_ROOT/tests/tsan.supp" \
+      ctest_counted "$tsan" -L net
+  fi
+  if [[ -z ${PEAKCAST_SKIP_FUZZ:-} ]]; then
+    part "fuzz (${PEAKCAST_FUZZ_SECONDS:-30} s per target)" fuzz_counted "${PEAKCAST_FUZZ_SECONDS:-30}"
+  fi
+fi
+
+echo "== wall time by part"
+for i in "${!part_names[@]}"; do printf '%6d s  %s\n' "${part_secs[$i]}" "${part_names[$i]}"; done
+printf '%6d s  total\n' "$SECONDS"
+echo "$passed passed, $failed failed"
+[[ $any_failed -eq 0 && $failed -eq 0 ]]

@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "app/commands.h"
+#include "core/log.h"
 #include "gpu/shader_cache.h"
 #include "net/server.h"
 
@@ -32,11 +33,31 @@ void add_serve_command(CLI::App& app, Runner& run) {
   s->add_option("--idle-timeout", *idle, "seconds without a client message before closing")->check(CLI::Range(1, 86400));
   s->add_option("--max-fps", cfg->max_fps, "frames per second per session")->check(CLI::Range(1.0, 240.0));
   s->add_option("--gpu-budget-mib", *budget_mib, "MiB of volume textures on the GPU")->check(CLI::Range(int64_t(1), int64_t(1) << 24));
+  s->add_option("--max-queued-stills", cfg->max_queued_stills,
+                "REST stills waiting or rendering at once; beyond, 503 with Retry-After")
+      ->check(CLI::Range(size_t(1), size_t(1024)))
+      ->envname("PEAKCAST_MAX_QUEUED_STILLS");
+  s->add_option("--max-still-samples", cfg->max_still_samples,
+                "cost cap of one REST still: pixels x estimated samples per ray; beyond, 422")
+      ->check(CLI::Range(1e3, 1e15))
+      ->envname("PEAKCAST_MAX_STILL_SAMPLES");
+  s->add_option("--still-band-samples", cfg->still_band_samples,
+                "estimated samples per band of a still (bands alternate with viewers' frames)")
+      ->check(CLI::Range(1e3, 1e12));
+  auto log_level = std::make_shared<std::string>("info");
+  auto log_format = std::make_shared<std::string>("text");
+  s->add_option("--log-level", *log_level, "debug | info | warn | error | off (stderr)")
+      ->check(CLI::IsMember({"debug", "info", "warn", "error", "off"}))
+      ->envname("PEAKCAST_LOG_LEVEL");
+  s->add_option("--log-format", *log_format, "text | json (one JSON object per line)")
+      ->check(CLI::IsMember({"text", "json"}))
+      ->envname("PEAKCAST_LOG_FORMAT");
   s->add_option("--io-threads", cfg->io_threads, "network threads")->check(CLI::Range(1, 64));
   s->add_option("--encode-threads", cfg->encode_threads, "JPEG encode threads")->check(CLI::Range(1, 64));
   s->add_option("--web-dir", *web, "the browser client's files");
   s->callback([=, &run] {
     run = [=] {
+      log::configure(log::parse_level(*log_level), log::parse_format(*log_format));
       net::ServerConfig c = *cfg;
       for (auto& d : *data) c.data_dirs.emplace_back(d);
       for (auto& v : *vols) c.volumes.emplace_back(v);
@@ -46,8 +67,10 @@ void add_serve_command(CLI::App& app, Runner& run) {
       c.shader_dir = gpu::default_shader_dir();
       net::Server server(c);
       server.start();
+      // This line on stdout is the contract scripts and tests wait for; the log goes to stderr.
       std::printf("peakcast: serving on http://%s:%u (GL: %s)\n", c.bind.c_str(), unsigned(server.port()),
                   server.app().render.gl_renderer().c_str());
+      log::info("serving", {{"bind", c.bind}, {"port", server.port()}, {"gl", server.app().render.gl_renderer()}});
       std::fflush(stdout);
       server.run_until_signal();
       std::printf("peakcast: stopped\n");

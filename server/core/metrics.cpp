@@ -58,6 +58,13 @@ Metrics::Metrics() {
   def("peakcast_http_requests_total", "counter", "REST requests by route and status");
   def("peakcast_ws_errors_total", "counter", "Error replies sent on WebSocket sessions, by code");
   def("peakcast_gpu_volumes", "gauge", "Volumes resident on the GPU");
+  def("peakcast_stills_queued", "gauge", "REST stills waiting or rendering");
+  def("peakcast_still_wait_ms", "histogram", "REST still: queued to first band rendered, milliseconds");
+  def("peakcast_stills_total", "counter", "REST stills by outcome (done, refused_queue, refused_cost, cancelled, shutting_down, render_failed)");
+  def("peakcast_connections", "gauge", "Open TCP connections (HTTP and WebSocket)");
+  def("peakcast_connections_refused_total", "counter", "TCP connections closed at accept: connection caps reached");
+  def("peakcast_ws_paced_total", "counter", "WebSocket reads delayed by the per-client message rate");
+  def("peakcast_ws_write_timeouts_total", "counter", "WebSocket clients closed because a write did not finish in time");
   def("peakcast_gpu_volume_bytes", "gauge", "Bytes of volume textures resident on the GPU");
 }
 

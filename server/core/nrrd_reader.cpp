@@ -1,5 +1,6 @@
 // NRRD (teem's format): attached .nrrd and detached .nhdr headers, raw and gzip encodings,
 // `spacings` or axis-aligned `space directions`, single, LIST and printf-style `data file`s.
+#include <cctype>
 #include <cmath>
 #include <algorithm>
 #include <cstdio>
@@ -49,12 +50,55 @@ std::vector<std::string> split_vectors(const std::string& s) {
   return out;
 }
 
-std::string format_name(const fs::path& file, const std::string& fmt, long long value) {
-  if (std::count(fmt.begin(), fmt.end(), '%') != 1 || fmt.find("%n") != std::string::npos)
-    throw VolumeError(file, "data file pattern must hold exactly one integer conversion");
-  char buf[4096];
-  std::snprintf(buf, sizeof buf, fmt.c_str(), value);
-  return buf;
+// The `data file: <pattern> <min> <max> <step>` form names slices with a printf-style pattern.
+// File text never reaches a format function: the pattern is parsed here and must hold exactly one
+// integer conversion `%[flags][width]d` (or `i`; flags from "-+ 0#", width at most 32), with `%%` for
+// a literal percent sign. Anything else is refused naming the pattern.
+std::string format_name(const fs::path& file, const std::string& pattern, long long value) {
+  auto refuse = [&](const std::string& why) {
+    throw VolumeError(file, "data file pattern '" + pattern.substr(0, 200) + "': " + why +
+                                " (allowed: one %d with optional flags and width, and %%)");
+  };
+  std::string prefix, suffix, flags;
+  int width = 0;
+  bool seen = false;
+  for (size_t i = 0; i < pattern.size(); ++i) {
+    std::string& out = seen ? suffix : prefix;
+    if (pattern[i] != '%') {
+      out += pattern[i];
+      continue;
+    }
+    if (++i >= pattern.size()) refuse("ends in a lone %");
+    if (pattern[i] == '%') {
+      out += '%';
+      continue;
+    }
+    if (seen) refuse("more than one conversion");
+    while (i < pattern.size() && std::string("-+ 0#").find(pattern[i]) != std::string::npos) flags += pattern[i++];
+    while (i < pattern.size() && std::isdigit(static_cast<unsigned char>(pattern[i]))) {
+      width = width * 10 + (pattern[i++] - '0');
+      if (width > 32) refuse("field width over 32");
+    }
+    if (i >= pattern.size() || (pattern[i] != 'd' && pattern[i] != 'i'))
+      refuse("only the integer conversions %d and %i are allowed");
+    seen = true;
+  }
+  if (!seen) refuse("no %d conversion");
+  // Format the number ourselves: sign, zero or space padding, left alignment.
+  const bool left = flags.find('-') != std::string::npos;
+  const bool zero = !left && flags.find('0') != std::string::npos;
+  std::string digits = std::to_string(value < 0 ? -(value + 1) + 1ull : static_cast<unsigned long long>(value));
+  std::string sign = value < 0 ? "-" : flags.find('+') != std::string::npos ? "+" : flags.find(' ') != std::string::npos ? " " : "";
+  std::string number;
+  const size_t len = sign.size() + digits.size();
+  if (size_t(width) > len) {
+    const size_t pad = size_t(width) - len;
+    number = left ? sign + digits + std::string(pad, ' ')
+                  : zero ? sign + std::string(pad, '0') + digits : std::string(pad, ' ') + sign + digits;
+  } else {
+    number = sign + digits;
+  }
+  return prefix + number + suffix;
 }
 
 }  // namespace

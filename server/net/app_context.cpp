@@ -4,9 +4,13 @@ namespace peakcast::net {
 
 AppContext::AppContext(ServerConfig c)
     : config(std::move(c)),
-      volumes(config.data_dirs, config.gpu_budget_bytes),
-      render(volumes, metrics,
-             RenderServiceOptions{config.shader_dir, config.encode_threads, config.max_fps, limits::kStillDelay}) {}
+      residency(config.gpu_budget_bytes),
+      volumes(config.data_dirs, residency),
+      render(residency, metrics,
+             RenderServiceOptions{config.shader_dir, config.encode_threads,
+                                  SchedulerOptions{config.max_queued_stills, config.still_band_samples,
+                                                   limits::kStillDelay, config.max_fps}}),
+      ws_sessions(config.max_sessions) {}
 
 std::string path_of(const std::string& target) { return target.substr(0, target.find('?')); }
 

@@ -10,6 +10,9 @@
 #include <boost/asio/thread_pool.hpp>
 
 #include "core/metrics.h"
+#include "net/connection_slot.h"
+#include "net/session_registry.h"
+#include "session/gpu_residency.h"
 #include "session/limits.h"
 #include "session/render_service.h"
 #include "session/volume_store.h"
@@ -27,6 +30,9 @@ struct ServerConfig {
   std::chrono::seconds idle_timeout = limits::kDefaultIdleTimeout;
   double max_fps = limits::kDefaultMaxFps;
   int64_t gpu_budget_bytes = limits::kDefaultGpuBudgetBytes;
+  size_t max_queued_stills = limits::kDefaultMaxQueuedStills;
+  double max_still_samples = limits::kDefaultMaxStillSamples;
+  double still_band_samples = limits::kStillBandSamples;
   int io_threads = 2;
   int encode_threads = 2;
   std::filesystem::path web_dir, shader_dir;
@@ -35,9 +41,12 @@ struct ServerConfig {
 struct AppContext {
   ServerConfig config;
   Metrics metrics;
+  GpuResidency residency;  // the GPU budget's one owner
   VolumeStore volumes;
   RenderService render;
-  std::atomic<int> ws_sessions{0};
+  SessionRegistry ws_sessions;
+  ConnectionCounter connections{limits::kMaxConnections, limits::kMaxConnectionsPerAddress};
+  std::atomic<bool> stopping{false};  // graceful shutdown under way: refuse new work
   std::atomic<uint64_t> next_session{1};
   // Volume loads run here, never on an io thread (an 800 MB stack takes seconds). Declared last:
   // joined first on destruction, while the volumes it fills still exist.

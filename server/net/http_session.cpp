@@ -1,12 +1,15 @@
 #include "net/http_session.h"
 
 #include <algorithm>
+#include <atomic>
 
+#include "net/connection_slot.h"
 #include "net/ws_session.h"
 
 namespace peakcast::net {
 
-HttpSession::HttpSession(tcp::socket&& socket, AppContext& app) : stream_(std::move(socket)), app_(app) {}
+HttpSession::HttpSession(tcp::socket&& socket, AppContext& app, std::shared_ptr<ConnectionSlot> slot)
+    : stream_(std::move(socket)), app_(app), slot_(std::move(slot)) {}
 
 void HttpSession::run() {
   asio::dispatch(stream_.get_executor(), [self = shared_from_this()] { self->read(); });
@@ -37,8 +40,37 @@ void HttpSession::on_read(beast::error_code ec) {
   Request req = parser_->release();
   if (websocket::is_upgrade(req)) return upgrade(std::move(req));
   auto self = shared_from_this();
-  handle_request(app_, std::move(req), [self](Response res) {
-    asio::post(self->stream_.get_executor(), [self, res = std::move(res)]() mutable { self->write(std::move(res)); });
+  auto cancelled = std::make_shared<std::atomic<bool>>(false);
+  pending_ = true;
+  handle_request(
+      app_, std::move(req),
+      [self](Response res) {
+        asio::post(self->stream_.get_executor(), [self, res = std::move(res)]() mutable {
+          self->pending_ = false;
+          self->stream_.socket().cancel();  // ends watch_for_close's wait before the write starts
+          self->write(std::move(res));
+        });
+      },
+      cancelled);
+  if (pending_) watch_for_close(cancelled);
+}
+
+// While an answer is pending (a still in the queue), notice a client that hangs up: a peek at
+// the socket reads end-of-stream or an error. Data is a pipelined request: stop watching, it is
+// read after the answer. Readiness can be spurious (nothing to read yet): then wait again.
+void HttpSession::watch_for_close(std::shared_ptr<std::atomic<bool>> cancelled) {
+  stream_.socket().async_wait(tcp::socket::wait_read, [self = shared_from_this(), cancelled](beast::error_code ec) {
+    if (ec || !self->pending_) return;
+    auto& sock = self->stream_.socket();
+    char byte;
+    beast::error_code peek, ignored;
+    sock.non_blocking(true, ignored);
+    const size_t n = sock.receive(asio::buffer(&byte, 1), tcp::socket::message_peek, peek);
+    sock.non_blocking(false, ignored);
+    if (peek == asio::error::would_block || peek == asio::error::try_again) return self->watch_for_close(cancelled);
+    if (!peek && n > 0) return;
+    cancelled->store(true);       // end of stream or a reset
+    self->app_.render.notify();   // the scheduler drops it now, not at its turn
   });
 }
 
@@ -65,22 +97,27 @@ void HttpSession::upgrade(Request req) {
     app_.metrics.add("peakcast_http_requests_total", "route=\"ws\",code=\"401\"", 1);
     return write(error_response(req, http::status::unauthorized, "unauthorized", "wrong bearer token"));
   }
-  if (app_.ws_sessions.load() >= app_.config.max_sessions) {
+  // The slot is reserved now, atomically: simultaneous upgrades cannot exceed the cap. The
+  // WebSocket session owns the reservation from here on and gives it back when it ends.
+  if (app_.stopping.load() || !app_.ws_sessions.try_reserve()) {
     app_.metrics.add("peakcast_http_requests_total", "route=\"ws\",code=\"503\"", 1);
-    auto res = error_response(req, http::status::service_unavailable, "session_limit",
-                              "the server holds its maximum of " + std::to_string(app_.config.max_sessions) +
-                                  " sessions; try again later");
+    auto res = app_.stopping.load()
+                   ? error_response(req, http::status::service_unavailable, "shutting_down", "the server is shutting down")
+                   : error_response(req, http::status::service_unavailable, "session_limit",
+                                    "the server holds its maximum of " + std::to_string(app_.config.max_sessions) +
+                                        " sessions; try again later");
     res.set(http::field::retry_after, "5");
     return write(std::move(res));
   }
   const bool authorized = app_.config.token.empty() || token == app_.config.token;
   stream_.expires_never();
-  std::make_shared<WsSession>(stream_.release_socket(), app_, authorized)->run(std::move(req));
+  std::make_shared<WsSession>(stream_.release_socket(), app_, authorized, std::move(slot_))->run(std::move(req));
 }
 
 void HttpSession::write(Response res) {
   const bool close = res.need_eof();
   auto sp = std::make_shared<Response>(std::move(res));
+  stream_.expires_after(limits::kHttpWriteTimeout);  // the read's deadline may be long past (a queued still)
   http::async_write(stream_, *sp, [self = shared_from_this(), sp, close](beast::error_code ec, std::size_t) {
     if (ec) return fail(ec, "http write");
     if (close) {

@@ -2,6 +2,7 @@
 // Origin allow-list, the bearer token and the session cap checked first).
 #pragma once
 
+#include <atomic>
 #include <memory>
 #include <optional>
 
@@ -13,7 +14,7 @@ namespace peakcast::net {
 
 class HttpSession : public std::enable_shared_from_this<HttpSession> {
  public:
-  HttpSession(tcp::socket&& socket, AppContext& app);
+  HttpSession(tcp::socket&& socket, AppContext& app, std::shared_ptr<class ConnectionSlot> slot);
   void run();
 
  private:
@@ -22,11 +23,14 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   void upgrade(Request req);
   void write(Response res);
   bool origin_allowed(const Request& req) const;
+  void watch_for_close(std::shared_ptr<std::atomic<bool>> cancelled);
 
   beast::tcp_stream stream_;
   beast::flat_buffer buffer_;
   AppContext& app_;
   std::optional<http::request_parser<http::string_body>> parser_;
+  std::shared_ptr<ConnectionSlot> slot_;
+  bool pending_ = false;  // a request is being answered (on the strand)
 };
 
 }  // namespace peakcast::net

@@ -12,6 +12,7 @@ class Listener : public std::enable_shared_from_this<Listener> {
  public:
   Listener(asio::io_context& ioc, tcp::endpoint endpoint, AppContext& app);
   void run();
+  void stop();  // any thread: no more connections are accepted
   uint16_t port() const { return acceptor_.local_endpoint().port(); }
 
  private:

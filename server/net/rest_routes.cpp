@@ -1,5 +1,6 @@
 #include "net/rest_routes.h"
 
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -51,13 +52,29 @@ Response static_file(const Request& req, const fs::path& root, std::string path)
 
 // The scene is valid and its volume loaded: resolve, queue on the render thread, answer later.
 void submit_still(AppContext& app, const Request& req, const Scene& scene, std::shared_ptr<VolumeEntry> vol,
-                  std::function<void(Response)> send) {
+                  std::function<void(Response)> send, std::shared_ptr<std::atomic<bool>> cancelled) {
   StillJob job;
+  job.cancelled = std::move(cancelled);
   try {
     job.scene = resolve_scene(scene, *vol->volume);
   } catch (const SceneError& e) {
     count(app, "render", http::status::bad_request);
     return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
+  }
+  // The cost cap: a still whose estimated samples exceed it would hold the render thread for
+  // minutes; refused before it queues, naming the limit.
+  const double cost = estimated_still_samples(job.scene);
+  if (cost > app.config.max_still_samples) {
+    count(app, "render", http::status::unprocessable_entity);
+    app.metrics.add("peakcast_stills_total", "outcome=\"refused_cost\"", 1);
+    char text[256];
+    std::snprintf(text, sizeof text,
+                  "this still needs about %.3g samples (%d x %d pixels x %.0f samples per ray); the server's limit "
+                  "max_still_samples is %.3g: use a smaller image or a larger render.step",
+                  cost, job.scene.scene.width, job.scene.scene.height, estimated_samples_per_ray(job.scene),
+                  app.config.max_still_samples);
+    auto res = error_response(req, http::status::unprocessable_entity, "too_costly", text);
+    return send(std::move(res));
   }
   const std::string format = query_param(std::string(req.target()), "format");
   const std::string accept(req[http::field::accept]);
@@ -84,10 +101,14 @@ void submit_still(AppContext& app, const Request& req, const Scene& scene, std::
   const bool keep_alive = req.keep_alive();
   job.done = [&app, send, version, keep_alive](StillResult r) {
     if (!r.error.empty()) {
-      count(app, "render", http::status::internal_server_error);
+      const auto status = r.error_code == "shutting_down" || r.error_code == "cancelled"
+                              ? http::status::service_unavailable
+                              : http::status::internal_server_error;
+      count(app, "render", status);
       Request fake;
       fake.version(version);
-      return send(error_response(fake, http::status::internal_server_error, "render_failed", r.error));
+      fake.keep_alive(false);
+      return send(error_response(fake, status, r.error_code.empty() ? "render_failed" : r.error_code, r.error));
     }
     Response res{http::status::ok, version};
     res.set(http::field::content_type, r.content_type);
@@ -95,16 +116,31 @@ void submit_still(AppContext& app, const Request& req, const Scene& scene, std::
     res.set("X-Encode-Ms", std::to_string(r.encode_ms));
     res.set("X-Samples-Per-Ray", std::to_string(r.samples_per_ray));
     res.set("X-Variant", r.variant);
+    res.set("X-Wait-Ms", std::to_string(r.wait_ms));
+    res.set("X-Bands", std::to_string(r.bands));
     res.body().assign(r.bytes.begin(), r.bytes.end());
     res.keep_alive(keep_alive);
     res.prepare_payload();
     count(app, "render", http::status::ok);
     send(std::move(res));
   };
-  app.render.submit_still(std::move(job));
+  if (!app.render.submit_still(std::move(job))) {
+    const bool stopping = app.stopping.load();
+    count(app, "render", http::status::service_unavailable);
+    app.metrics.add("peakcast_stills_total", stopping ? "outcome=\"shutting_down\"" : "outcome=\"refused_queue\"", 1);
+    auto res = stopping ? error_response(req, http::status::service_unavailable, "shutting_down",
+                                         "the server is shutting down")
+                        : error_response(req, http::status::service_unavailable, "queue_full",
+                                         "the still queue holds its maximum of " +
+                                             std::to_string(app.config.max_queued_stills) +
+                                             " renders (max_queued_stills); retry later");
+    res.set(http::field::retry_after, std::to_string(limits::kStillRetryAfter.count()));
+    send(std::move(res));
+  }
 }
 
-void render_still(AppContext& app, const Request& req, std::function<void(Response)> send) {
+void render_still(AppContext& app, const Request& req, std::function<void(Response)> send,
+                  std::shared_ptr<std::atomic<bool>> cancelled) {
   Scene scene;
   try {
     scene = parse_scene_text(req.body());
@@ -113,9 +149,10 @@ void render_still(AppContext& app, const Request& req, std::function<void(Respon
     count(app, "render", http::status::bad_request);
     return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
   }
-  if (auto vol = app.volumes.find(scene.volume)) return submit_still(app, req, scene, std::move(vol), std::move(send));
+  if (auto vol = app.volumes.find(scene.volume))
+    return submit_still(app, req, scene, std::move(vol), std::move(send), std::move(cancelled));
   // Not loaded yet: load on the loader pool, never on this io thread.
-  asio::post(app.loader, [&app, req, scene, send = std::move(send)] {
+  asio::post(app.loader, [&app, req, scene, send = std::move(send), cancelled] {
     std::shared_ptr<VolumeEntry> vol;
     try {
       vol = app.volumes.get(scene.volume);
@@ -123,7 +160,7 @@ void render_still(AppContext& app, const Request& req, std::function<void(Respon
       count(app, "render", http::status::not_found);
       return send(error_response(req, http::status::not_found, "volume_error", e.what()));
     }
-    submit_still(app, req, scene, std::move(vol), send);
+    submit_still(app, req, scene, std::move(vol), send, cancelled);
   });
 }
 
@@ -143,7 +180,8 @@ Response error_response(const Request& req, http::status status, const std::stri
   return json_response(req, status, nlohmann::json{{"error", code}, {"message", message}}.dump());
 }
 
-void handle_request(AppContext& app, Request req, std::function<void(Response)> send) {
+void handle_request(AppContext& app, Request req, std::function<void(Response)> send,
+                    std::shared_ptr<std::atomic<bool>> cancelled) {
   const std::string path = path_of(std::string(req.target()));
   const bool api = path.rfind("/api/", 0) == 0 || path == "/metrics";
   if (api && path != "/api/health" && !app.config.token.empty() &&
@@ -156,18 +194,27 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
   if (path == "/api/render") {
     if (req.method() != http::verb::post)
       return send(error_response(req, http::status::method_not_allowed, "bad_request", "POST a scene"));
-    return render_still(app, req, std::move(send));
+    if (app.stopping.load()) {
+      auto res = error_response(req, http::status::service_unavailable, "shutting_down", "the server is shutting down");
+      res.set(http::field::retry_after, std::to_string(limits::kStillRetryAfter.count()));
+      return send(std::move(res));
+    }
+    return render_still(app, req, std::move(send), std::move(cancelled));
   }
   if (req.method() != http::verb::get && req.method() != http::verb::head)
     return send(error_response(req, http::status::method_not_allowed, "bad_request", "GET only"));
   if (path == "/api/health") {
-    count(app, "health", http::status::ok);
-    return send(json_response(req, http::status::ok,
-                              nlohmann::json{{"status", "ok"},
+    const bool stopping = app.stopping.load();
+    const auto status = stopping ? http::status::service_unavailable : http::status::ok;
+    count(app, "health", status);
+    return send(json_response(req, status,
+                              nlohmann::json{{"status", stopping ? "stopping" : "ok"},
                                              {"gl_renderer", app.render.gl_renderer()},
-                                             {"sessions", app.ws_sessions.load()},
+                                             {"sessions", app.ws_sessions.count()},
                                              {"max_sessions", app.config.max_sessions},
-                                             {"volumes", app.volumes.list().size()}}
+                                             {"volumes", app.volumes.list().size()},
+                                             {"stills_queued", app.render.stills_pending()},
+                                             {"max_queued_stills", app.config.max_queued_stills}}
                                   .dump()));
   }
   if (path == "/api/volumes") {
@@ -185,7 +232,8 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
     return send(json_response(req, http::status::ok, v->info(true).dump()));
   }
   if (path == "/metrics") {
-    app.metrics.set("peakcast_sessions", "", app.ws_sessions.load());
+    app.metrics.set("peakcast_sessions", "", app.ws_sessions.count());
+    app.metrics.set("peakcast_connections", "", app.connections.open());
     Response res{http::status::ok, req.version()};
     res.set(http::field::content_type, "text/plain; version=0.0.4");
     res.body() = app.metrics.prometheus_text();

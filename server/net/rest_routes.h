@@ -3,7 +3,9 @@
 #pragma once
 
 #include <boost/beast/http.hpp>
+#include <atomic>
 #include <functional>
+#include <memory>
 
 #include "net/app_context.h"
 
@@ -16,7 +18,10 @@ using Response = http::response<http::string_body>;
 Response json_response(const Request& req, http::status status, const std::string& body);
 Response error_response(const Request& req, http::status status, const std::string& code, const std::string& message);
 
-// Calls `send` exactly once, on any thread (the caller re-posts onto its strand).
-void handle_request(AppContext& app, Request req, std::function<void(Response)> send);
+// Calls `send` exactly once, on any thread (the caller re-posts onto its strand). `cancelled` is
+// set by the connection when its client goes away before the answer: a queued or rendering still
+// then stops (at the next band) and its answer is dropped.
+void handle_request(AppContext& app, Request req, std::function<void(Response)> send,
+                    std::shared_ptr<std::atomic<bool>> cancelled = std::make_shared<std::atomic<bool>>(false));
 
 }  // namespace peakcast::net

@@ -1,17 +1,22 @@
 #include "net/server.h"
 
 #include <csignal>
+#include <chrono>
 #include <cstdio>
+#include <cstdlib>
+#include <thread>
 
+#include "core/log.h"
 #include "net/listener.h"
+#include "net/ws_session.h"
 
 namespace peakcast::net {
 
 Server::Server(ServerConfig config) : app_(std::make_unique<AppContext>(std::move(config))), ioc_(app_->config.io_threads) {
   for (const auto& v : app_->config.volumes) {
     auto e = app_->volumes.preload(v);
-    std::printf("peakcast: loaded %s as '%s' (%s) in %.0f ms\n", v.c_str(), e->id.c_str(),
-                e->volume->to_string().c_str(), e->volume->load_ms);
+    log::info("volume loaded", {{"path", v.string()}, {"id", e->id}, {"volume", e->volume->to_string()},
+                                {"load_ms", e->volume->load_ms}});
   }
 }
 
@@ -20,9 +25,9 @@ Server::~Server() { stop(); }
 void Server::start() {
   app_->render.start();
   auto address = asio::ip::make_address(app_->config.bind);
-  auto listener = std::make_shared<Listener>(ioc_, tcp::endpoint{address, app_->config.port}, *app_);
-  port_ = listener->port();
-  listener->run();
+  listener_ = std::make_shared<Listener>(ioc_, tcp::endpoint{address, app_->config.port}, *app_);
+  port_ = listener_->port();
+  listener_->run();
   for (int i = 0; i < std::max(1, app_->config.io_threads); ++i) threads_.emplace_back([this] { ioc_.run(); });
 }
 
@@ -31,16 +36,33 @@ void Server::run_until_signal() {
   asio::signal_set signals(signals_ctx, SIGINT, SIGTERM);
   signals.async_wait([](beast::error_code, int) {});
   signals_ctx.run();
+  // Containers send SIGKILL after a grace period: if the graceful path below has not finished by
+  // kShutdownGrace, leave anyway.
+  std::thread([] {
+    std::this_thread::sleep_for(limits::kShutdownGrace);
+    log::error("shutdown took too long: exiting now", {{"grace_ms", limits::kShutdownGrace.count()}});
+    std::_Exit(1);
+  }).detach();
   stop();
 }
 
+// Graceful: stop accepting, refuse new and queued work, end the current render at band
+// granularity, send every WebSocket a close frame, give answers and close frames a moment to go
+// out, then stop the io threads.
 void Server::stop() {
   if (stopped_) return;
   stopped_ = true;
+  const auto t0 = std::chrono::steady_clock::now();
+  log::info("shutting down", {{"sessions", app_->ws_sessions.count()}, {"stills", app_->render.stills_pending()}});
+  app_->stopping = true;
+  if (listener_) listener_->stop();
+  for (auto& ws : app_->ws_sessions.live()) ws->shut_down();
+  app_->render.stop();
+  while (app_->ws_sessions.count() > 0 && std::chrono::steady_clock::now() - t0 < limits::kCloseFlush)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
   ioc_.stop();
   for (auto& t : threads_) t.join();
   threads_.clear();
-  app_->render.stop();
 }
 
 }  // namespace peakcast::net

@@ -17,13 +17,14 @@ class Server {
   // Binds, starts the render thread and the io threads. Throws (address in use, no GL).
   void start();
   uint16_t port() const { return port_; }
-  void run_until_signal();  // SIGINT / SIGTERM
-  void stop();
+  void run_until_signal();  // SIGINT / SIGTERM, then stop(); exits the process if that takes past kShutdownGrace
+  void stop();              // graceful; idempotent
   AppContext& app() { return *app_; }
 
  private:
   std::unique_ptr<AppContext> app_;
   asio::io_context ioc_;
+  std::shared_ptr<class Listener> listener_;  // after ioc_: destroyed before the context it uses
   std::vector<std::thread> threads_;
   uint16_t port_ = 0;
   bool stopped_ = false;

@@ -1,12 +1,21 @@
 #include "net/ws_session.h"
 
+#include "net/connection_slot.h"
 #include "render/variant.h"
 #include "session/protocol.h"
 
 namespace peakcast::net {
 
-WsSession::WsSession(tcp::socket&& socket, AppContext& app, bool authorized)
-    : ws_(std::move(socket)), app_(app), authorized_(authorized), idle_(ws_.get_executor()) {}
+WsSession::WsSession(tcp::socket&& socket, AppContext& app, bool authorized, std::shared_ptr<ConnectionSlot> slot)
+    : ws_(std::move(socket)),
+      app_(app),
+      authorized_(authorized),
+      idle_(ws_.get_executor()),
+      pace_(ws_.get_executor()),
+      write_timer_(ws_.get_executor()),
+      slot_(std::move(slot)),
+      tokens_(limits::kMessageBurst),
+      tokens_at_(Clock::now()) {}
 
 WsSession::~WsSession() { release(); }
 
@@ -14,13 +23,19 @@ WsSession::~WsSession() { release(); }
 // of this object.
 void WsSession::release() {
   if (session_) app_.render.remove_session(session_->id());
-  if (counted_) app_.ws_sessions--;
+  if (counted_) app_.ws_sessions.release();
   counted_ = false;
 }
 
+void WsSession::shut_down() {
+  asio::post(ws_.get_executor(), [self = shared_from_this()] {
+    self->close(websocket::close_code::going_away, "the server is shutting down");
+  });
+}
+
 void WsSession::run(Request upgrade) {
-  counted_ = true;
-  app_.ws_sessions++;
+  counted_ = true;  // the slot was reserved by the upgrade (SessionRegistry::try_reserve)
+  app_.ws_sessions.track(shared_from_this());
   ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
   ws_.read_message_max(limits::kMaxWsReadBytes);
   ws_.set_option(websocket::stream_base::decorator(
@@ -45,11 +60,13 @@ void WsSession::read() {
   ws_.async_read(buffer_, [self = shared_from_this()](beast::error_code ec, std::size_t) {
     if (ec == websocket::error::message_too_big) {  // Beast has already closed with 1009
       self->idle_.cancel();
+      self->pace_.cancel();
       self->release();
       return;
     }
     if (ec) {
       self->idle_.cancel();
+      self->pace_.cancel();
       self->release();
       return fail(ec, "ws read");
     }
@@ -67,7 +84,40 @@ void WsSession::on_message() {
     buffer_.consume(buffer_.size());
     guarded([&] { handle(text); });
   }
-  if (!closing_) read();
+  if (!closing_) read_when_allowed();
+}
+
+// A token bucket: kMessageBurst messages at once, kMaxMessagesPerSecond sustained. Past it the
+// next read waits, so TCP backpressure slows the sender; no message is dropped, and a flood of
+// edits costs the io thread no more than the rate.
+void WsSession::read_when_allowed() {
+  const auto now = Clock::now();
+  tokens_ = std::min(limits::kMessageBurst,
+                     tokens_ + std::chrono::duration<double>(now - tokens_at_).count() * limits::kMaxMessagesPerSecond);
+  tokens_at_ = now;
+  if (tokens_ >= 1.0) {
+    tokens_ -= 1.0;
+    return read();
+  }
+  app_.metrics.add("peakcast_ws_paced_total", "", 1);
+  pace_.expires_after(std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>((1.0 - tokens_) / limits::kMaxMessagesPerSecond)));
+  pace_.async_wait([self = shared_from_this()](beast::error_code ec) {
+    if (ec || self->closing_) return;
+    self->read_when_allowed();
+  });
+}
+
+// A write that does not finish in kWsWriteTimeout means a client that does not read: closed.
+void WsSession::arm_write_timer() {
+  write_timer_.expires_after(limits::kWsWriteTimeout);
+  write_timer_.async_wait([weak = weak_from_this()](beast::error_code ec) {
+    if (ec) return;  // the write finished
+    if (auto self = weak.lock()) {
+      self->app_.metrics.add("peakcast_ws_write_timeouts_total", "", 1);
+      beast::get_lowest_layer(self->ws_).close();  // a close frame could not be written either
+    }
+  });
 }
 
 void WsSession::guarded(const std::function<void()>& fn) {
@@ -107,7 +157,7 @@ void WsSession::handle(const std::string& text) {
   using namespace protocol;
   ClientMessage msg = parse_client_message(text);
   if (auto* ping = std::get_if<PingMsg>(&msg)) {
-    return queue_text(nlohmann::json{{"type", "pong"}, {"id", ping->id}}.dump());
+    return queue_text(pong_message(ping->id));
   }
   if (auto* hello = std::get_if<Hello>(&msg)) {
     if (session_) throw ProtocolError("bad_message", "hello: the session has already started");
@@ -141,8 +191,7 @@ void WsSession::handle(const std::string& text) {
         if constexpr (std::is_same_v<T, VolumeMsg>) {
           with_volume(m.volume, [this](std::shared_ptr<VolumeEntry> entry) {
             session_->set_volume(entry);
-            queue_text(
-                nlohmann::json{{"type", "volume"}, {"volume", entry->info(true)}, {"state", session_->state_json()}}.dump());
+            queue_text(volume_message(entry->info(true), session_->state_json()));
             app_.render.notify();
           });
         }
@@ -157,24 +206,22 @@ void WsSession::start_session(const protocol::Hello& hello, std::shared_ptr<Volu
   session_ = session;
   nlohmann::json vols = nlohmann::json::array();
   for (const auto& v : app_.volumes.list()) vols.push_back(v->info(false));
-  nlohmann::json welcome = {
-      {"type", "welcome"},
-      {"session", session_->id()},
-      {"volume", volume->info(true)},
-      {"volumes", vols},
-      {"state", session_->state_json()},
-      {"capabilities", render::capabilities()},
-      {"gl_renderer", app_.render.gl_renderer()},
-      {"limits",
-       {{"max_message_bytes", limits::kMaxWsMessageBytes},
-        {"max_viewport_side", limits::kMaxViewportSide},
-        {"max_viewport_pixels", limits::kMaxViewportPixels},
-        {"max_frames_in_flight", limits::kMaxFramesInFlight},
-        {"max_tf_points", kMaxTfPoints},
-        {"idle_timeout_s", app_.config.idle_timeout.count()},
-        {"still_delay_ms", limits::kStillDelay.count()},
-        {"max_fps", app_.config.max_fps}}}};
-  queue_text(welcome.dump());
+  protocol::Welcome welcome;
+  welcome.session = session_->id();
+  welcome.volume = volume->info(true);
+  welcome.volumes = vols;
+  welcome.state = session_->state_json();
+  welcome.capabilities = render::capabilities();
+  welcome.gl_renderer = app_.render.gl_renderer();
+  welcome.limits = {{"max_message_bytes", limits::kMaxWsMessageBytes},
+                    {"max_viewport_side", limits::kMaxViewportSide},
+                    {"max_viewport_pixels", limits::kMaxViewportPixels},
+                    {"max_frames_in_flight", limits::kMaxFramesInFlight},
+                    {"max_tf_points", kMaxTfPoints},
+                    {"idle_timeout_s", app_.config.idle_timeout.count()},
+                    {"still_delay_ms", limits::kStillDelay.count()},
+                    {"max_fps", app_.config.max_fps}};
+  queue_text(protocol::welcome_message(welcome));
   app_.render.add_session(session_);
 }
 
@@ -236,10 +283,12 @@ void WsSession::write_next() {
     return;
   }
   writing_ = true;
+  arm_write_timer();
   Outgoing& o = queue_.front();
   ws_.binary(o.binary);
   auto done = [self = shared_from_this()](beast::error_code ec, std::size_t bytes) {
     self->writing_ = false;
+    self->write_timer_.cancel();
     if (ec) {
       self->queue_.clear();
       return fail(ec, "ws write");
@@ -269,6 +318,7 @@ void WsSession::close(websocket::close_code code, const std::string& reason) {
   close_code_ = code;
   close_reason_ = reason;
   idle_.cancel();
+  pace_.cancel();
   if (session_) app_.render.remove_session(session_->id());
   // Frames still queued are dropped; text (the error that explains the close) is sent first.
   for (auto it = queue_.begin() + (writing_ ? 1 : 0); it != queue_.end();) {

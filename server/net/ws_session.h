@@ -18,9 +18,12 @@ namespace peakcast::net {
 
 class WsSession : public FrameSink, public std::enable_shared_from_this<WsSession> {
  public:
-  WsSession(tcp::socket&& socket, AppContext& app, bool authorized);
+  WsSession(tcp::socket&& socket, AppContext& app, bool authorized, std::shared_ptr<class ConnectionSlot> slot);
   ~WsSession() override;
+  // The upgrade has reserved this session's slot in app.ws_sessions; the session gives it back.
   void run(Request upgrade);
+  // Any thread: sends a close frame (going away) after what is queued; the server is stopping.
+  void shut_down();
 
   // FrameSink: called from encode threads.
   void deliver_frame(std::vector<uint8_t> bytes, uint32_t frame_id, bool final) override;
@@ -47,6 +50,8 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   void enqueue(Outgoing out);
   void write_next();
   void arm_idle_timer();
+  void read_when_allowed();  // the message rate: a fast sender is read later, never dropped
+  void arm_write_timer();
   void close(websocket::close_code code, const std::string& reason);
   void release();
 
@@ -60,7 +65,10 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   std::shared_ptr<Session> session_;
   bool starting_ = false;  // hello accepted, volume loading
   std::deque<Outgoing> queue_;
-  asio::steady_timer idle_;
+  asio::steady_timer idle_, pace_, write_timer_;
+  std::shared_ptr<ConnectionSlot> slot_;
+  double tokens_;                     // message-rate bucket (limits::kMessageBurst at most)
+  Clock::time_point tokens_at_;
 };
 
 }  // namespace peakcast::net

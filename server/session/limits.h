@@ -16,13 +16,25 @@ constexpr int kMaxViewportSide = 8192;                   // pixels, after the de
 constexpr int64_t kMaxViewportPixels = 4096ll * 4096;    // pixels per streamed frame
 constexpr double kMinDpr = 0.25, kMaxDpr = 4.0;          // device pixel ratio
 constexpr int kMaxFramesInFlight = 2;                    // un-acknowledged frames per client
+constexpr int kMaxConnections = 256;                     // open TCP connections (HTTP + WebSocket); beyond: closed at accept
+constexpr int kMaxConnectionsPerAddress = 32;            // of those, from one client address: one host cannot take them all
+constexpr double kMaxMessagesPerSecond = 250;            // per WebSocket client, sustained; faster senders are read more slowly (TCP backpressure)
+constexpr double kMessageBurst = 500;                    // messages a client may send at once before the rate applies
+constexpr std::chrono::seconds kWsWriteTimeout{30};      // one frame or message not written in this time: the client is too slow, closed
 constexpr size_t kMaxQueuedTextMessages = 64;            // per client; beyond, the client is too slow: closed
 constexpr int kDefaultMaxSessions = 16;                  // (cfg) concurrent WebSocket sessions
 constexpr std::chrono::seconds kDefaultIdleTimeout{600}; // (cfg) no message from the client for this long
 constexpr std::chrono::seconds kHandshakeTimeout{10};    // HTTP request / WebSocket handshake
+constexpr std::chrono::seconds kHttpWriteTimeout{60};    // writing one HTTP response (a large still to a slow client)
 constexpr std::chrono::milliseconds kStillDelay{150};    // input quiet this long -> one final frame
 constexpr double kDefaultMaxFps = 60.0;                  // (cfg) frames per second per session
 constexpr int64_t kDefaultGpuBudgetBytes = int64_t(4) << 30;  // (cfg) volume bytes resident on the GPU
 constexpr int kMaxPingIdLength = 64;                     // characters
+constexpr size_t kDefaultMaxQueuedStills = 4;            // (cfg) REST stills waiting or rendering; beyond: 503 + Retry-After
+constexpr double kDefaultMaxStillSamples = 8e9;          // (cfg) estimated samples (pixels x samples per ray) of one still; beyond: 422
+constexpr double kStillBandSamples = 1.5e7;              // estimated samples per band of a still: bounds a viewer's wait (~50-100 ms on llvmpipe)
+constexpr std::chrono::seconds kStillRetryAfter{5};      // Retry-After of a 503 for a full still queue
+constexpr std::chrono::milliseconds kShutdownGrace{4000};  // SIGTERM -> forced exit, if the graceful path has not finished
+constexpr std::chrono::milliseconds kCloseFlush{1000};   // SIGTERM: time given to WebSocket close frames and answers
 
 }  // namespace peakcast::limits

@@ -180,6 +180,33 @@ std::string error_message(const std::string& code, const std::string& message) {
   return json{{"type", "error"}, {"code", code}, {"message", message}}.dump();
 }
 
+std::string pong_message(const std::string& id) { return json{{"type", "pong"}, {"id", id}}.dump(); }
+
+std::string volume_message(const json& volume_info, const json& state) {
+  return json{{"type", "volume"}, {"volume", volume_info}, {"state", state}}.dump();
+}
+
+std::string welcome_message(const Welcome& w) {
+  return json{{"type", "welcome"},         {"session", w.session},
+              {"volume", w.volume},        {"volumes", w.volumes},
+              {"state", w.state},          {"capabilities", w.capabilities},
+              {"gl_renderer", w.gl_renderer}, {"limits", w.limits}}
+      .dump();
+}
+
+std::string stats_message(uint32_t frame, bool final, int width, int height, const json& render_stats,
+                          double encode_ms, size_t bytes) {
+  json m = render_stats;
+  m["type"] = "stats";
+  m["frame"] = frame;
+  m["final"] = final;
+  m["width"] = width;
+  m["height"] = height;
+  m["encode_ms"] = encode_ms;
+  m["bytes"] = bytes;
+  return m.dump();
+}
+
 namespace {
 template <typename T>
 void put(std::vector<uint8_t>& out, size_t off, T v) {

@@ -78,7 +78,19 @@ using ClientMessage = std::variant<Hello, CameraMsg, TfMsg, RenderMsg, QualityMs
 // Throws ProtocolError (bad_json, too_large, bad_message, unknown_type).
 ClientMessage parse_client_message(const std::string& text);
 
+// Server -> client text messages (proto/server_messages.schema.json), built here only.
 std::string error_message(const std::string& code, const std::string& message);
+std::string pong_message(const std::string& id);
+// A volume switch: the new volume's info (with histogram) and the session's reset state.
+std::string volume_message(const nlohmann::json& volume_info, const nlohmann::json& state);
+struct Welcome {
+  std::string session, gl_renderer;
+  nlohmann::json volume, volumes, state, capabilities, limits;
+};
+std::string welcome_message(const Welcome& w);
+// Per-frame stats: `render_stats` is RenderStats' JSON form (the same keys the CLI writes).
+std::string stats_message(uint32_t frame, bool final, int width, int height, const nlohmann::json& render_stats,
+                          double encode_ms, size_t bytes);
 
 // Binary frame: this header, then the image bytes (JPEG, or PNG for a final frame when asked).
 struct FrameHeader {

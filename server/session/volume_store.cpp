@@ -22,42 +22,28 @@ nlohmann::json VolumeEntry::info(bool with_histogram) const {
   return j;
 }
 
-VolumeStore::VolumeStore(std::vector<fs::path> dirs, int64_t budget, LoadOptions options)
-    : dirs_(std::move(dirs)), budget_(budget), options_(options) {}
+VolumeStore::VolumeStore(std::vector<fs::path> dirs, GpuResidency& residency, LoadOptions options)
+    : dirs_(std::move(dirs)), residency_(residency), options_(options) {}
 
 std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::path& path, bool preloaded) {
   std::lock_guard load(load_m_);
   if (auto e = find(id)) return e;
-  // Header-sized check first would need every format's header reader; loading is bounded by the
-  // voxel limit, and the budget is checked before the volume is kept.
-  auto vol = std::make_shared<Volume>(load_volume(path, options_));
-  // Here, on the loader pool, not at first render: the em volume's grids take ~1 s of CPU.
-  VolumeMacrocells cells = build_volume_macrocells(*vol);
-  const int64_t bytes = int64_t(vol->byte_size());
-  std::lock_guard lock(m_);
-  int64_t resident = 0;
-  for (auto& [_, e] : entries_) resident += int64_t(e->volume->byte_size());
-  if (resident + bytes > budget_) {
-    // Drop volumes no session uses (the store holds the only reference), oldest id first.
-    for (auto it = entries_.begin(); it != entries_.end() && resident + bytes > budget_;) {
-      if (!it->second->preloaded && it->second.use_count() == 1) {
-        resident -= int64_t(it->second->volume->byte_size());
-        it = entries_.erase(it);
-      } else {
-        ++it;
-      }
-    }
-  }
-  if (resident + bytes > budget_)
-    throw VolumeError(path, "GPU memory budget: this volume needs " + std::to_string(bytes >> 20) +
-                                " MiB, " + std::to_string(resident >> 20) + " MiB of " + std::to_string(budget_ >> 20) +
-                                " MiB are in use by volumes that sessions are viewing");
   auto e = std::make_shared<VolumeEntry>();
   e->id = id;
   e->path = path;
-  e->volume = std::move(vol);
-  e->macrocells = std::move(cells);
+  e->volume = std::make_shared<Volume>(load_volume(path, options_));
   e->preloaded = preloaded;
+  // The residency owns the budget; when the volume does not fit it lets the store drop volumes
+  // no session views (the store holds the only reference), oldest id first.
+  residency_.admit(e, [this] {
+    std::lock_guard lock(m_);
+    for (auto it = entries_.begin(); it != entries_.end();)
+      it = !it->second->preloaded && it->second.use_count() == 1 ? entries_.erase(it) : std::next(it);
+  });
+  // Here, on the loader pool, not on the render thread at first use (GpuVolume takes them): the
+  // em volume's two grids take ~0.6 s of CPU. After admission, so a refused volume costs none.
+  e->macrocells = build_volume_macrocells(*e->volume);
+  std::lock_guard lock(m_);
   entries_[id] = e;
   if (default_.empty()) default_ = id;
   return e;
@@ -96,13 +82,6 @@ std::vector<std::shared_ptr<VolumeEntry>> VolumeStore::list() const {
 std::string VolumeStore::default_id() const {
   std::lock_guard lock(m_);
   return default_;
-}
-
-int64_t VolumeStore::resident_bytes() const {
-  std::lock_guard lock(m_);
-  int64_t total = 0;
-  for (auto& [_, e] : entries_) total += int64_t(e->volume->byte_size());
-  return total;
 }
 
 }  // namespace peakcast

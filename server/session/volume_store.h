@@ -1,5 +1,6 @@
 // The server's volumes: loaded from the configured data directories (or preloaded by the
-// operator), shared by every session that views them, within a GPU memory budget (DESIGN §2, §6).
+// operator), shared by every session that views them. The GPU memory budget belongs to the
+// GpuResidency: the store asks it before keeping a volume (DESIGN §2, §6).
 #pragma once
 
 #include <filesystem>
@@ -14,6 +15,7 @@
 #include "core/macrocells.h"
 #include "core/volume.h"
 #include "core/volume_io.h"
+#include "session/gpu_residency.h"
 
 namespace peakcast {
 
@@ -29,23 +31,21 @@ struct VolumeEntry {
 
 class VolumeStore {
  public:
-  VolumeStore(std::vector<std::filesystem::path> data_dirs, int64_t gpu_budget_bytes, LoadOptions options = {});
+  VolumeStore(std::vector<std::filesystem::path> data_dirs, GpuResidency& residency, LoadOptions options = {});
 
   // Operator-given volumes (--volume): any readable path. Throws VolumeError.
   std::shared_ptr<VolumeEntry> preload(const std::filesystem::path& path);
-  // An id of a loaded volume, or a path inside a data directory (loaded now). Loading past the
-  // GPU budget first drops volumes nobody uses, then refuses with a VolumeError.
+  // An id of a loaded volume, or a path inside a data directory (loaded now). A volume the
+  // residency cannot admit within the GPU budget is refused with a VolumeError.
   std::shared_ptr<VolumeEntry> get(const std::string& id_or_path);
   std::shared_ptr<VolumeEntry> find(const std::string& id) const;  // nullptr when not loaded
   std::vector<std::shared_ptr<VolumeEntry>> list() const;
   std::string default_id() const;
-  int64_t resident_bytes() const;
-  int64_t budget_bytes() const { return budget_; }
 
  private:
   std::shared_ptr<VolumeEntry> add(const std::string& id, const std::filesystem::path& path, bool preloaded);
   std::vector<std::filesystem::path> dirs_;
-  int64_t budget_;
+  GpuResidency& residency_;
   LoadOptions options_;
   mutable std::mutex m_;
   std::mutex load_m_;  // one load at a time: a second request for the same file waits, then finds it

@@ -82,6 +82,13 @@ class Server:
                 self.proc.wait(10)
             except subprocess.TimeoutExpired:
                 self.proc.kill()
+        # A sanitizer build reports on the server's stderr: a report fails the test that ran it.
+        rest = self.proc.stdout.read() if self.proc.stdout else ""
+        self.log.append(rest)
+        markers = ("WARNING: ThreadSanitizer", "ERROR: AddressSanitizer", "runtime error:", "ERROR: LeakSanitizer")
+        if any(m in rest for m in markers):
+            print(rest[-30000:])
+            raise AssertionError("the server's sanitizer reported an error (above)")
         return self.proc.returncode
 
     def __enter__(self):

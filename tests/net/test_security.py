@@ -119,6 +119,28 @@ def test_volumes_only_from_data_directories():
         assert status == 200, body
 
 
+def test_crafted_nrrd_pattern_is_refused_and_the_server_lives():
+    # Issue 9: `data file: q.%s 1 9 1` reached snprintf with a user-written format (SIGSEGV).
+    with tempfile.TemporaryDirectory() as tmp:
+        pathlib.Path(tmp, "evil.nhdr").write_text(
+            "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 9\nencoding: raw\ndata file: q.%s 1 9 1\n")
+        info = subprocess.run([PEAKCAST, "info", f"{tmp}/evil.nhdr"], capture_output=True, text=True)
+        assert info.returncode == 2 and "data file pattern" in info.stderr, (info.returncode, info.stderr)
+        with Server("--data", tmp) as s:
+            status, _, body = http(s, "/api/render", "POST", json.dumps({"volume": "evil.nhdr"}).encode())
+            assert status == 404 and "data file pattern" in json.loads(body)["message"], (status, body)
+
+            async def ws():
+                c = await Client.connect(s)
+                await c.hello(64, 64)
+                await c.send({"type": "volume", "volume": "evil.nhdr"})
+                e = await c.next_text("error")
+                assert e["code"] == "volume_error" and "data file pattern" in e["message"], e
+                await c.close()
+            asyncio.run(ws())
+            assert s.alive() and http(s, "/api/health")[0] == 200
+
+
 def test_binds_loopback_by_default():
     with Server() as s:
         assert s.host == "127.0.0.1"
@@ -160,6 +182,6 @@ def test_gpu_budget_refuses_a_second_volume_and_sessions_go_on():
 
 
 if __name__ == "__main__":
-    run_tests([test_token, test_foreign_origin_refused, test_session_cap_gives_503_with_a_reason,
+    run_tests([test_crafted_nrrd_pattern_is_refused_and_the_server_lives, test_token, test_foreign_origin_refused, test_session_cap_gives_503_with_a_reason,
                test_idle_timeout_closes, test_volumes_only_from_data_directories, test_binds_loopback_by_default,
                test_body_and_image_caps, test_gpu_budget_refuses_a_second_volume_and_sessions_go_on])

@@ -1,0 +1,75 @@
+#include "session/frame_encoder.h"
+
+#include "encode/png.h"
+
+namespace peakcast {
+namespace {
+
+uint64_t micros(Clock::time_point t) {
+  return uint64_t(std::chrono::duration_cast<std::chrono::microseconds>(t.time_since_epoch()).count());
+}
+
+double ms_between(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+}  // namespace
+
+std::vector<uint8_t> encode_image(encode::JpegEncoder& enc, const std::vector<uint8_t>& rgb, int width, int height,
+                                  bool png, int quality, encode::Subsampling sub) {
+  return png ? encode::encode_png(rgb.data(), width, height) : enc.encode(rgb.data(), width, height, quality, sub);
+}
+
+void encode_viewer_frame(encode::JpegEncoder& enc, const RenderedFrame& f, FrameSink& sink, Metrics& metrics) {
+  const FrameJob& job = f.job;
+  const auto t0 = Clock::now();
+  const bool png = job.final && job.quality.final_png;
+  const int q = job.final ? job.quality.final_quality : job.quality.interactive_quality;
+  std::vector<uint8_t> bytes = encode_image(enc, f.rgb, f.width, f.height, png, q,
+                                            job.final ? encode::Subsampling::S444 : encode::Subsampling::S420);
+  const auto encoded = Clock::now();
+  const char* kind = job.final ? "kind=\"final\"" : "kind=\"interactive\"";
+  metrics.observe("peakcast_encode_ms", kind, ms_between(t0, encoded));
+  protocol::FrameHeader h;
+  h.frame_id = job.frame_id;
+  h.flags = (job.final ? protocol::FrameHeader::kFinal : protocol::FrameHeader::kInteractive) |
+            (png ? protocol::FrameHeader::kPng : 0u);
+  h.camera_version = job.camera_version;
+  h.tf_version = job.tf_version;
+  h.render_version = job.render_version;
+  h.width = uint32_t(f.width);
+  h.height = uint32_t(f.height);
+  h.quality = png ? 100u : uint32_t(q);
+  h.t_input_us = micros(job.input_time);
+  h.t_render_done_us = micros(f.rendered);
+  h.t_encode_done_us = micros(encoded);
+  const size_t image_bytes = bytes.size();
+  sink.deliver_frame(protocol::encode_frame(h, bytes), job.frame_id, job.final);
+  sink.deliver_text(protocol::stats_message(job.frame_id, job.final, f.width, f.height, f.stats,
+                                            ms_between(t0, encoded), image_bytes));
+}
+
+void encode_still(encode::JpegEncoder& enc, StillWork& w, Metrics& metrics) {
+  StillResult r;
+  const auto t0 = Clock::now();
+  try {
+    const auto rgb = encode::to_rgb8(w.image);
+    r.bytes = encode_image(enc, rgb, w.image.width, w.image.height, w.job.png, w.job.quality, encode::Subsampling::S444);
+  } catch (const std::exception& e) {
+    r.error = e.what();
+    r.error_code = "encode_failed";
+    metrics.add("peakcast_stills_total", "outcome=\"failed\"", 1);
+    return w.job.done(std::move(r));
+  }
+  r.content_type = w.job.png ? "image/png" : "image/jpeg";
+  r.encode_ms = ms_between(t0, Clock::now());
+  r.render_ms = w.render_ms;
+  r.wait_ms = ms_between(w.queued, w.started);
+  r.samples_per_ray = w.rays_hit ? w.samples_total / double(w.rays_hit) : 0.0;
+  r.bands = w.bands;
+  r.variant = w.variant;
+  metrics.add("peakcast_stills_total", "outcome=\"done\"", 1);
+  w.job.done(std::move(r));
+}
+
+}  // namespace peakcast

@@ -1,0 +1,76 @@
+#include "session/gpu_residency.h"
+
+#include <algorithm>
+#include <string>
+
+#include "render/gpu_volume.h"
+#include "session/volume_store.h"
+
+namespace peakcast {
+
+GpuResidency::GpuResidency(int64_t budget_bytes) : budget_(budget_bytes) {}
+
+GpuResidency::~GpuResidency() = default;
+
+int64_t GpuResidency::count_locked() const {
+  admitted_.erase(std::remove_if(admitted_.begin(), admitted_.end(), [](auto& w) { return w.expired(); }),
+                  admitted_.end());
+  int64_t total = 0;
+  for (auto& w : admitted_)
+    if (auto e = w.lock()) total += int64_t(e->volume->byte_size());
+  return total;
+}
+
+void GpuResidency::admit(const std::shared_ptr<VolumeEntry>& e, const std::function<void()>& release_unused) {
+  const int64_t bytes = int64_t(e->volume->byte_size());
+  if (bytes > budget_)
+    throw VolumeError(e->path, "GPU memory budget: this volume needs " + std::to_string(bytes >> 20) +
+                                   " MiB, more than the whole budget of " + std::to_string(budget_ >> 20) + " MiB");
+  bool fits;
+  {
+    std::lock_guard lock(m_);
+    fits = count_locked() + bytes <= budget_;
+  }
+  if (!fits && release_unused) release_unused();
+  std::lock_guard lock(m_);
+  const int64_t in_use = count_locked();
+  if (in_use + bytes > budget_)
+    throw VolumeError(e->path, "GPU memory budget: this volume needs " + std::to_string(bytes >> 20) + " MiB, " +
+                                   std::to_string(in_use >> 20) + " MiB of " + std::to_string(budget_ >> 20) +
+                                   " MiB are in use by volumes that sessions are viewing");
+  admitted_.push_back(e);
+}
+
+int64_t GpuResidency::counted_bytes() const {
+  std::lock_guard lock(m_);
+  return count_locked();
+}
+
+size_t GpuResidency::counted_volumes() const {
+  std::lock_guard lock(m_);
+  count_locked();
+  return admitted_.size();
+}
+
+render::GpuVolume& GpuResidency::acquire(const std::shared_ptr<VolumeEntry>& e) {
+  for (auto it = copies_.begin(); it != copies_.end();)
+    it = it->second.entry.expired() ? copies_.erase(it) : std::next(it);
+  auto& c = copies_[e.get()];
+  if (!c.gpu) {
+    c.entry = e;
+    c.gpu = std::make_unique<render::GpuVolume>(e->volume, e->macrocells);  // grids built by the loader
+  }
+  return *c.gpu;
+}
+
+int64_t GpuResidency::gpu_bytes() const {
+  int64_t total = 0;
+  for (auto& [_, c] : copies_) total += int64_t(c.gpu->gpu_bytes());
+  return total;
+}
+
+size_t GpuResidency::gpu_volumes() const { return copies_.size(); }
+
+void GpuResidency::release_gpu() { copies_.clear(); }
+
+}  // namespace peakcast

@@ -1,0 +1,55 @@
+// The one owner of the GPU memory budget for volumes (DESIGN §2, §6). The volume store asks it
+// before keeping a volume (admit, on the loader pool); the render thread asks it for a volume's
+// GPU copy (acquire), made on first use and freed once nobody holds the volume any more. A volume
+// counts against the budget from admission until the last session viewing it lets go.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+namespace peakcast {
+
+struct VolumeEntry;
+namespace render {
+class GpuVolume;
+}
+
+class GpuResidency {
+ public:
+  explicit GpuResidency(int64_t budget_bytes);
+  ~GpuResidency();
+  GpuResidency(const GpuResidency&) = delete;
+  GpuResidency& operator=(const GpuResidency&) = delete;
+
+  int64_t budget() const { return budget_; }
+  // Any thread. Counts `e` against the budget. When it does not fit, `release_unused` is called
+  // once (without locks held) to let the store drop volumes nobody views; then the count is taken
+  // again. Throws VolumeError naming the budget when it still does not fit.
+  void admit(const std::shared_ptr<VolumeEntry>& e, const std::function<void()>& release_unused);
+  int64_t counted_bytes() const;  // admitted volumes somebody still holds
+  size_t counted_volumes() const;
+
+  // Render thread only: the volume's GPU copy (uploaded on first use). Copies of volumes nobody
+  // holds any more are freed first.
+  render::GpuVolume& acquire(const std::shared_ptr<VolumeEntry>& e);
+  int64_t gpu_bytes() const;     // render thread: bytes of the GPU copies alive
+  size_t gpu_volumes() const;    // render thread
+  void release_gpu();            // render thread, before its GL context goes
+
+ private:
+  int64_t count_locked() const;  // prunes expired entries first
+  const int64_t budget_;
+  mutable std::mutex m_;
+  mutable std::vector<std::weak_ptr<VolumeEntry>> admitted_;
+  struct Copy {
+    std::weak_ptr<VolumeEntry> entry;
+    std::unique_ptr<render::GpuVolume> gpu;
+  };
+  std::map<const VolumeEntry*, Copy> copies_;  // render thread only
+};
+
+}  // namespace peakcast

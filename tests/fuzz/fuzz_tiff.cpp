@@ -1,0 +1,31 @@
+// Any bytes as a multi-page TIFF read through OpenImageIO: loaded within a 4096-voxel limit or
+// refused with a VolumeError, never a crash or a big allocation. Seeds: tests/fuzz/seeds/fuzz_tiff
+// (small real stacks and broken ones).
+#include <unistd.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "core/volume_io.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  static const std::filesystem::path file = [] {
+    auto d = std::filesystem::temp_directory_path() / ("peakcast_fuzz_tiff_" + std::to_string(getpid()));
+    std::filesystem::create_directories(d);
+    return d / "stack.tif";
+  }();
+  {
+    std::ofstream out(file, std::ios::binary);
+    out.write(reinterpret_cast<const char*>(data), std::streamsize(size));
+  }
+  peakcast::LoadOptions opt;
+  opt.max_voxels = 4096;
+  try {
+    peakcast::load_volume(file, opt);
+  } catch (const peakcast::VolumeError&) {
+  }
+  return 0;
+}

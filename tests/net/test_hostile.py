@@ -1,0 +1,241 @@
+#!/usr/bin/env python3
+"""Slow and hostile clients (issue 14): each is bounded by a named limit in server/session/limits.h
+and none moves a normal viewer's frame rate by more than half (stated bound: the viewer keeps at
+least MIN_SHARE of its frame rate measured alone in the same run)."""
+import asyncio, base64, json, os, pathlib, resource, socket, struct, sys, threading, time
+
+sys.path.insert(0, str(pathlib.Path(__file__).parent))
+from harness import *  # noqa: F401,F403
+
+MIN_SHARE = 0.5
+ATTACKER = "127.0.0.2"  # another loopback address: a different client host for the per-address cap
+
+
+def raw_ws(server, source=ATTACKER):
+    """A WebSocket opened by hand, so the test controls every byte (and how slowly it reads)."""
+    s = socket.socket()
+    s.bind((source, 0))
+    s.settimeout(30)
+    s.connect((server.host, server.port))
+    key = base64.b64encode(os.urandom(16)).decode()
+    s.sendall((f"GET /ws HTTP/1.1\r\nHost: t\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+               f"Sec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n\r\n").encode())
+    head = b""
+    while b"\r\n\r\n" not in head:
+        head += s.recv(1)
+    assert b" 101 " in head.split(b"\r\n")[0], head
+    return s
+
+
+def ws_frame(payload, opcode=1, length=None):
+    """A masked client frame; `length` may lie about the payload size."""
+    n = len(payload) if length is None else length
+    if n < 126:
+        head = struct.pack("!BB", 0x80 | opcode, 0x80 | n)
+    elif n < 65536:
+        head = struct.pack("!BBH", 0x80 | opcode, 0x80 | 126, n)
+    else:
+        head = struct.pack("!BBQ", 0x80 | opcode, 0x80 | 127, n)
+    mask = os.urandom(4)
+    return head + mask + bytes(b ^ mask[i % 4] for i, b in enumerate(payload))
+
+
+HELLO = json.dumps({"type": "hello", "viewport": {"width": 512, "height": 512}}).encode()
+
+
+async def viewer_fps(server, seconds=3.0):
+    """A normal viewer orbiting at 30 Hz: frames received per second."""
+    c = await Client.connect(server)
+    w = await c.hello(256, 256)
+    cam = w["state"]["camera"]
+    await c.next_frame()
+    n, t0, k = 0, time.time(), 0
+    while time.time() - t0 < seconds:
+        k += 1
+        cam = dict(cam, eye=[cam["eye"][0] + 0.5, cam["eye"][1], cam["eye"][2]])
+        await c.send({"type": "camera", "camera": cam})
+        try:
+            while True:
+                m = await c.recv(1 / 30)
+                if "image" in m:
+                    n += 1
+        except asyncio.TimeoutError:
+            pass
+    await c.close()
+    return n / (time.time() - t0)
+
+
+def measure(server, name, hostile):
+    """The viewer's frame rate while `hostile` (a thread) runs, against alone."""
+    alone = asyncio.run(viewer_fps(server))
+    stop = threading.Event()
+    result = {}
+    t = threading.Thread(target=hostile, args=(stop, result), daemon=True)
+    t.start()
+    time.sleep(0.3)
+    during = asyncio.run(viewer_fps(server))
+    stop.set()
+    t.join(30)
+    share = during / alone if alone else 0
+    print(f"  {name:<28} alone {alone:5.1f} fps, during {during:5.1f} fps ({share:.0%}) {result}")
+    assert server.alive(), "the server died"
+    assert share >= MIN_SHARE, f"{name}: the viewer kept only {share:.0%} of its frame rate"
+    return result
+
+
+def test_slow_reader_is_bounded():
+    def slow(stop, result):
+        s = raw_ws(SERVER)
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+        s.sendall(ws_frame(HELLO))
+        got, t0 = 0, time.time()
+        while not stop.is_set():
+            try:
+                b = s.recv(1)  # 1 byte/s
+            except OSError:
+                break
+            if not b:
+                break
+            got += 1
+            time.sleep(1.0)
+        result["bytes_read"] = got
+        s.close()
+    measure(SERVER, "reader at 1 byte/s", slow)
+
+
+def test_1000_connections_are_capped_per_address():
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    resource.setrlimit(resource.RLIMIT_NOFILE, (min(hard, 4096), hard))
+
+    def flood(stop, result):
+        socks = []
+        for _ in range(1000):
+            s = socket.socket()
+            s.bind((ATTACKER, 0))
+            s.settimeout(2)
+            try:
+                s.connect((SERVER.host, SERVER.port))
+                socks.append(s)
+            except OSError:
+                s.close()
+        # The server keeps at most kMaxConnectionsPerAddress of them; the others are closed at once.
+        time.sleep(0.5)
+        open_ = 0
+        for s in socks:
+            s.setblocking(False)
+            try:
+                open_ += s.recv(1) != b""
+            except BlockingIOError:
+                open_ += 1
+            except OSError:
+                pass
+        result["held_open"] = open_
+        stop.wait(10)
+        for s in socks:
+            s.close()
+    r = measure(SERVER, "1000 connections", flood)
+    assert r["held_open"] <= 32, r
+
+
+def test_1_gb_frame_header_is_refused_unread():
+    def huge(stop, result):
+        s = raw_ws(SERVER)
+        s.sendall(ws_frame(b"", length=1 << 30)[:14])  # the header alone: 1 GiB promised
+        s.settimeout(5)
+        data = b""
+        try:
+            while True:
+                b = s.recv(4096)
+                if not b:
+                    break
+                data += b
+        except OSError:
+            pass
+        # The server answers with a close frame 1009 (message too big) and hangs up.
+        result["close_code"] = struct.unpack("!H", data[2:4])[0] if len(data) >= 4 and data[0] == 0x88 else None
+        stop.wait()
+    rss0 = SERVER.rss_kib()
+    r = measure(SERVER, "1 GiB frame header", huge)
+    assert r["close_code"] == 1009, r
+    assert SERVER.rss_kib() - rss0 < 200 * 1024, "no allocation for the promised size"
+
+
+def test_ping_only_client_is_paced():
+    def pings(stop, result):
+        async def run():
+            c = await Client.connect(SERVER)
+            n, t0 = 0, time.time()
+            while not stop.is_set() and time.time() - t0 < 4:
+                await c.send({"type": "ping", "id": str(n)})
+                n += 1
+                if n % 50 == 0:
+                    await asyncio.sleep(0)
+            # It never reads: the server answers until kMaxQueuedTextMessages pongs wait unread, then
+            # closes it (1008, client too slow).
+            code = None
+            try:
+                while True:
+                    await c.recv(2)
+            except asyncio.TimeoutError:
+                pass
+            except websockets.exceptions.ConnectionClosed as e:
+                code = e.rcvd.code if e.rcvd else None
+            result.update(sent=n, pongs=len([t for t in c.texts if t["type"] == "pong"]), close=code)
+            c.ws.transport.abort()
+        asyncio.run(run())
+    r = measure(SERVER, "pings only, never reading", pings)
+    assert r["pongs"] > 0 and r["close"] == 1008, r
+
+
+def test_10000_tf_edits_per_second_are_paced():
+    def edits(stop, result):
+        async def run():
+            c = await Client.connect(SERVER)
+            await c.hello(64, 64)
+            n, t0 = 0, time.time()
+            while not stop.is_set() and time.time() - t0 < 4:
+                for _ in range(100):
+                    v = 50 + (n % 100)
+                    await c.send({"type": "tf", "tf": {"points": [[0, 0, 0, 0, 0], [v, 1, 0.5, 0.2, 0.5], [255, 1, 1, 1, 0]]}})
+                    n += 1
+                await asyncio.sleep(0.01)
+            result["sent_per_s"] = round(n / (time.time() - t0))
+            c.ws.transport.abort()  # not a polite close: the server would read the backlog first
+        asyncio.run(run())
+    r = measure(SERVER, "10,000 TF edits per second", edits)
+    paced = float(re.search(r"peakcast_ws_paced_total ([0-9.e+]+)", http(SERVER, "/metrics")[2].decode()).group(1))
+    assert paced > 0, "the message rate limit never applied"
+
+
+def test_slowloris_is_cut_by_the_request_timeout():
+    def trickle(stop, result):
+        s = socket.socket()
+        s.bind((ATTACKER, 0))
+        s.connect((SERVER.host, SERVER.port))
+        t0 = time.time()
+        request = b"GET /api/health HTTP/1.1\r\nHost: t\r\nX-Slow: " + b"a" * 200
+        closed_after = None
+        for b in request:
+            try:
+                s.sendall(bytes([b]))
+                s.settimeout(0.5)
+                if s.recv(1024) == b"":
+                    closed_after = time.time() - t0
+                    break
+            except socket.timeout:
+                continue
+            except OSError:
+                closed_after = time.time() - t0
+                break
+        result["closed_after_s"] = round(closed_after, 1) if closed_after else None
+        stop.wait()
+    r = measure(SERVER, "slowloris headers", trickle)
+    # kHandshakeTimeout (10 s) covers the whole request; a few seconds' slack for the trickle loop.
+    assert r["closed_after_s"] is not None and r["closed_after_s"] < 14, r
+
+
+if __name__ == "__main__":
+    with Server() as SERVER:
+        run_tests([test_slow_reader_is_bounded, test_1000_connections_are_capped_per_address,
+                   test_1_gb_frame_header_is_refused_unread, test_ping_only_client_is_paced,
+                   test_10000_tf_edits_per_second_are_paced, test_slowloris_is_cut_by_the_request_timeout])
