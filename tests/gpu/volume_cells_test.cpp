@@ -4,6 +4,7 @@
 
 #include "core/volume_writer.h"
 #include "gpu/gpu_fixture.h"
+#include "session/gpu_residency.h"
 #include "session/volume_store.h"
 
 using namespace peakcast;
@@ -24,7 +25,8 @@ TEST(VolumeCells, StoreBuildsBothGridsWithTheVolume) {
   std::filesystem::create_directories(dir);
   auto v = test::make_volume(GeneratorKind::Blobs, {40, 33, 21}, SourceType::U8);
   write_volume(dir / "b.nrrd", *v);
-  VolumeStore store({dir}, int64_t(1) << 30);
+  GpuResidency residency(int64_t(1) << 30);
+  VolumeStore store({dir}, residency);
   auto e = store.get("b.nrrd");
   std::filesystem::remove_all(dir);
   ASSERT_TRUE(e->macrocells.trilinear && e->macrocells.tricubic);
