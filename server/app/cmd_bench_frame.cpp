@@ -165,15 +165,16 @@ void run_switch(const SwitchArgs& a) {
       const auto t0 = Clock::now();
       render::GpuVolume gv(vol, cells);
       const auto t1 = Clock::now();
-      caster.render(gv, lin, render::GpuPath::Fragment);
+      render::RenderStats st;
+      caster.render(gv, lin, render::GpuPath::Fragment, &st);
       const double first = ms_since(t1);
       const auto t2 = Clock::now();
       caster.render(gv, cub, render::GpuPath::Fragment);
       const double first_cubic = ms_since(t2);
       const double stall = ms_since(t0);
-      std::printf("%-28s %9.0f %10.0f %13.0f %14.0f %15.0f %14.0f\n",
+      std::printf("%-28s %9.0f %10.0f %13.0f %14.0f %15.0f %14.0f   (first frame: GPU %.0f ms, tables %.0f ms)\n",
                   prebuilt ? "loader pool (after)" : "render thread (before)", loader_ms, gv.upload_ms(),
-                  gv.macrocell_ms(), first, first_cubic, stall);
+                  gv.macrocell_ms(), first, first_cubic, stall, st.render_ms, st.table_ms);
       std::fflush(stdout);
     }
   std::printf("stall_ms: render-thread time from GpuVolume construction through the first trilinear and the first "
