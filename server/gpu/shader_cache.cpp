@@ -86,6 +86,7 @@ std::string translate_log(const std::string& log, const std::vector<std::string>
 const Program& ShaderCache::get(const std::string& key, const std::vector<std::string>& stages,
                                 const std::vector<std::string>& defines) {
   if (auto it = programs_.find(key); it != programs_.end()) return it->second;
+  ++compiles_;
   Program program(glCreateProgram());
   std::vector<Shader> shaders;
   for (const auto& file : stages) {

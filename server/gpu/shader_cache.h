@@ -38,11 +38,13 @@ class ShaderCache {
   const Program& get(const std::string& key, const std::vector<std::string>& stages,
                      const std::vector<std::string>& defines);
   size_t size() const { return programs_.size(); }
+  size_t compiles() const { return compiles_; }  // programs compiled and linked so far (cache misses)
   const std::filesystem::path& dir() const { return dir_; }
 
  private:
   std::filesystem::path dir_;
   std::map<std::string, Program> programs_;
+  size_t compiles_ = 0;
 };
 
 // Default shader directory: $PEAKCAST_SHADER_DIR, else the one next to the source tree.

@@ -259,7 +259,15 @@ TEST(PeakModes, PeaksOnlyAddsNoDvrAndDvrOnlyIsPostclassification) {
 
 // Preintegration on a smooth TF agrees with the converged DVR reference.
 TEST(Preintegration, AgreesWithTheConvergedDvrReferenceOnASmoothTf) {
-  for (auto vol : {marschner_lobb(), heptane()}) {
+  // Measured on llvmpipe (80x64, step 2): Marschner-Lobb preintegration 34.4 dB, postclassification
+  // 33.7 dB; heptane 41.8 and 40.0 dB. Bounds 1.5 dB below; preintegration must not lose to
+  // postclassification on a smooth TF (a table built for the wrong step or range does).
+  const struct {
+    std::shared_ptr<const Volume> vol;
+    double min_preint, min_post;
+  } cases[] = {{marschner_lobb(), 32.9, 32.2}, {heptane(), 40.3, 38.5}};
+  for (const auto& c : cases) {
+    auto vol = c.vol;
     render::GpuVolume gv(vol);
     const double lo = vol->min_value, span = vol->max_value - vol->min_value;
     json tf = {{"points",
@@ -276,7 +284,9 @@ TEST(Preintegration, AgreesWithTheConvergedDvrReferenceOnASmoothTf) {
     const auto ea = reference::compare(a, ref.image), eb = reference::compare(b, ref.image);
     std::printf("%s step 2: preintegration %.1f dB, postclassification %.1f dB vs converged DVR\n", vol->name.c_str(),
                 ea.psnr, eb.psnr);
-    EXPECT_GE(ea.psnr, 30.0);
+    EXPECT_GE(ea.psnr, c.min_preint) << vol->name;
+    EXPECT_GE(eb.psnr, c.min_post) << vol->name;
+    EXPECT_GE(ea.psnr, eb.psnr) << vol->name << ": preintegration should not lose to postclassification";
   }
 }
 

@@ -27,11 +27,21 @@ TEST(ShaderCache, CompileErrorNamesFileAndLine) {
 TEST(ShaderCache, ProgramsAreCachedByKey) {
   auto& g = test::gpu();
   render::VariantKey k;
-  const size_t before = g.shaders->size();
-  const auto& a = g.caster->program(k);
+  const auto& a = g.caster->program(k);  // compiled now or by an earlier test
+  const size_t compiles = g.shaders->compiles(), size = g.shaders->size();
   const auto& b = g.caster->program(k);
   EXPECT_EQ(a.id(), b.id());
-  EXPECT_LE(g.shaders->size(), before + 1);
+  EXPECT_EQ(g.shaders->compiles(), compiles) << "a second get() of the same key must not compile again";
+  EXPECT_EQ(g.shaders->size(), size);
+  // A new key compiles exactly once.
+  render::VariantKey other = k;
+  other.shading = !k.shading;
+  other.tricubic = !k.tricubic;
+  const auto& c = g.caster->program(other);
+  const size_t after_other = g.shaders->compiles();
+  EXPECT_LE(after_other, compiles + 1);
+  EXPECT_EQ(g.caster->program(other).id(), c.id());
+  EXPECT_EQ(g.shaders->compiles(), after_other);
 }
 
 TEST(ShaderCache, UniformBlockOffsetsMatchTheHostStruct) {

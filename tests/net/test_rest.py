@@ -17,7 +17,8 @@ SCENE = {"volume": "heptane_151", "image": {"width": 200, "height": 160},
 def test_health_and_volumes():
     status, _, body = http(SERVER, "/api/health")
     h = json.loads(body)
-    assert status == 200 and h["status"] == "ok" and "llvmpipe" in h["gl_renderer"] or h["gl_renderer"]
+    assert status == 200 and h["status"] == "ok" and h["gl_renderer"], h
+    assert h["stills_queued"] == 0 and h["max_queued_stills"] >= 1, h
     status, _, body = http(SERVER, "/api/volumes")
     v = json.loads(body)
     assert v["default"] == "heptane_151" and v["volumes"][0]["dims"] == [151, 151, 151]

@@ -20,7 +20,9 @@ async def test_hello_then_frames_decode():
     assert img.size == (first["width"], first["height"])
     final = first if first["final"] else await c.next_frame(final=True)
     assert (final["width"], final["height"]) == (200, 150) and final["quality"] >= 95
-    assert decode_image(final["image"]).getextrema() != ((0, 0), (0, 0), (0, 0)) or True
+    # The default view of heptane (default TF over the value range) shows something: not all black.
+    extrema = decode_image(final["image"]).getextrema()
+    assert max(hi for _, hi in extrema) >= 32, f"the default view is black: {extrema}"
     stats = [t for t in c.texts if t["type"] == "stats"]
     assert stats and stats[-1]["variant"].startswith("frag")
     await c.close()
@@ -45,7 +47,8 @@ async def test_still_frame_matches_cli_render():
         subprocess.run([PEAKCAST, "render", str(p), "-o", f"{tmp}/cli.png"], check=True, capture_output=True)
         value = psnr(decode_image(frame["image"]), Image.open(f"{tmp}/cli.png"))
     print(f"  still frame vs CLI render: PSNR {value:.1f} dB")
-    assert value >= 40.0
+    # The same scene through the same renderer and the same 8-bit conversion: identical pixels.
+    assert value == 200.0, f"the streamed PNG differs from the CLI render ({value:.1f} dB)"
 
 
 async def test_progressive_interactive_then_final():
