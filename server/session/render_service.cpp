@@ -10,15 +10,6 @@
 #include "session/frame_encoder.h"
 
 namespace peakcast {
-namespace {
-// TEMPORARY (until the raycaster renders tiles and has RenderStats::to_json): a band is cut from
-// a full render.
-nlohmann::json stats_json(const render::RenderStats& st) {
-  return {{"render_ms", st.render_ms},   {"table_ms", st.table_ms},     {"samples_per_ray", st.samples_mean},
-          {"samples_per_ray_max", st.samples_max}, {"variant", st.variant}, {"peaks", st.peaks},
-          {"empty_macrocells", st.empty_cells}};
-}
-}  // namespace
 
 // GL state that lives on the render thread only.
 struct RenderService::Impl {
@@ -103,17 +94,22 @@ void RenderService::render_frame(Scheduler::Work& w) {
     return;
   }
   try {
+    // 8-bit RGB straight from the GPU (3 bytes per pixel); the per-pixel sample counts (4 more)
+    // only for final frames, whose stats the client shows.
     render::RenderStats st;
-    Image img = impl_->caster->render(residency_.acquire(job.volume), job.scene, render::GpuPath::Fragment, &st);
+    render::RenderRequest req;
+    req.output = render::RenderOutput::Rgb8;
+    req.sample_stats = job.final;
+    render::RenderResult out = impl_->caster->render(residency_.acquire(job.volume), job.scene, req, &st);
     metrics_.set("peakcast_gpu_volumes", "", double(residency_.gpu_volumes()));
     metrics_.set("peakcast_gpu_volume_bytes", "", double(residency_.gpu_bytes()));
     RenderedFrame f;
     f.rendered = Clock::now();
     metrics_.observe("peakcast_render_ms", job.final ? "kind=\"final\"" : "kind=\"interactive\"", st.render_ms);
-    f.rgb = encode::to_rgb8(img);
-    f.width = img.width;
-    f.height = img.height;
-    f.stats = stats_json(st);
+    f.width = out.rgb8.width;
+    f.height = out.rgb8.height;
+    f.rgb = std::move(out.rgb8.rgb);
+    f.stats = st.to_json();
     f.job = std::move(job);
     pool_->submit([this, f = std::move(f), sink](encode::JpegEncoder& enc) {
       encode_viewer_frame(enc, f, *sink, metrics_);
@@ -129,12 +125,12 @@ void RenderService::render_band(Scheduler::Work& w) {
   if (sw.bands == 0) metrics_.observe("peakcast_still_wait_ms", "", std::chrono::duration<double, std::milli>(
                                                                           sw.started - sw.queued).count());
   try {
+    // Float output, as `peakcast render` does: the assembled still equals the CLI's image.
     render::RenderStats st;
-    Image full = impl_->caster->render(residency_.acquire(sw.job.volume), sw.job.scene, render::GpuPath::Fragment, &st);
-    for (int y = w.y0; y < w.y0 + w.rows; ++y) {
-      std::copy_n(full.pixel(0, y), size_t(full.width) * 4, sw.image.pixel(0, y));
-      std::copy_n(&full.samples[size_t(y) * full.width], full.width, &sw.image.samples[size_t(y) * full.width]);
-    }
+    render::RenderRequest req;
+    req.tile = render::PixelRect{0, w.y0, sw.job.scene.scene.width, w.rows};
+    render::RenderResult band = impl_->caster->render(residency_.acquire(sw.job.volume), sw.job.scene, req, &st);
+    render::place_tile(sw.image, band.rect, band.image);
     sw.render_ms += st.render_ms;
     sw.samples_total += st.samples_total;
     sw.rays_hit += st.rays_hit;
