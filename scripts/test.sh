@@ -10,7 +10,15 @@ install_packages "${PEAKCAST_PACKAGES[@]}" "${PEAKCAST_TEST_PACKAGES[@]}"
 install_node_modules
 
 declare -a part_names part_secs
-passed=0 failed=0
+tally=$(mktemp)  # "passed failed" lines from every part (parts may run in subshells)
+trap 'rm -f "$tally"' EXIT
+# with_env VAR=value... CMD: runs CMD (a function too) with those variables, in a subshell.
+with_env() {
+  (
+    while [[ $1 == *=* ]]; do export "$1"; shift; done
+    "$@"
+  )
+}
 # part NAME CMD...: runs CMD, records its wall time; a failing part is counted, the run goes on.
 part() {
   local name=$1 start=$SECONDS rc=0
@@ -32,8 +40,7 @@ ctest_counted() {
   local total fails
   total=$(grep -oE 'tests passed, [0-9]+ tests failed out of [0-9]+' "$log" | grep -oE '[0-9]+$' | tail -1)
   fails=$(grep -oE '[0-9]+ tests failed out of' "$log" | grep -oE '^[0-9]+' | tail -1)
-  passed=$((passed + ${total:-0} - ${fails:-0}))
-  failed=$((failed + ${fails:-0}))
+  echo "$((${total:-0} - ${fails:-0})) ${fails:-0}" >>"$tally"
   rm -f "$log"
   return "$rc"
 }
@@ -45,8 +52,7 @@ fuzz_counted() {
   rc=${PIPESTATUS[0]}
   local line
   line=$(grep -E '^fuzz: [0-9]+ passed, [0-9]+ failed' "$log" | tail -1)
-  passed=$((passed + $(echo "$line" | grep -oE '[0-9]+ passed' | grep -oE '[0-9]+' || echo 0)))
-  failed=$((failed + $(echo "$line" | grep -oE '[0-9]+ failed' | grep -oE '[0-9]+' || echo 1)))
+  echo "$(echo "$line" | grep -oE '[0-9]+ passed' | grep -oE '[0-9]+' || echo 0) $(echo "$line" | grep -oE '[0-9]+ failed' | grep -oE '[0-9]+' || echo 1)" >>"$tally"
   rm -f "$log"
   return "$rc"
 }
@@ -60,15 +66,15 @@ else
   if [[ -z ${PEAKCAST_SKIP_SANITIZERS:-} ]]; then
     asan=$PEAKCAST_ROOT/build-asan tsan=$PEAKCAST_ROOT/build-tsan
     # Sanitizer builds hold only what their labels run (CMake targets peakcast_label_<label>).
-    part "build (ASan+UBSan)" env PEAKCAST_TARGETS="peakcast_label_unit peakcast_label_net" \
+    part "build (ASan+UBSan)" with_env PEAKCAST_TARGETS="peakcast_label_unit peakcast_label_net" \
       build_peakcast RelWithDebInfo "$asan" -DPEAKCAST_SANITIZE=ON
     # Mesa keeps allocations until exit: leak checks only where no GL runs (the unit label).
-    part "tests: unit under ASan+UBSan" env UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+    part "tests: unit under ASan+UBSan" with_env UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
       ASAN_OPTIONS=detect_leaks=1 ctest_counted "$asan" -L unit
-    part "tests: net under ASan+UBSan" env UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+    part "tests: net under ASan+UBSan" with_env UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
       ASAN_OPTIONS=detect_leaks=0 ctest_counted "$asan" -L net
-    part "build (TSan)" env PEAKCAST_TARGETS=peakcast_label_net build_peakcast RelWithDebInfo "$tsan" -DPEAKCAST_TSAN=ON
-    part "tests: net under TSan" env TSAN_OPTIONS="halt_on_error=1 suppressions=$PEAKCAST_ROOT/tests/tsan.supp" \
+    part "build (TSan)" with_env PEAKCAST_TARGETS=peakcast_label_net build_peakcast RelWithDebInfo "$tsan" -DPEAKCAST_TSAN=ON
+    part "tests: net under TSan" with_env TSAN_OPTIONS="halt_on_error=1 suppressions=$PEAKCAST_ROOT/tests/tsan.supp" \
       ctest_counted "$tsan" -L net
   fi
   if [[ -z ${PEAKCAST_SKIP_FUZZ:-} ]]; then
@@ -79,5 +85,7 @@ fi
 echo "== wall time by part"
 for i in "${!part_names[@]}"; do printf '%6d s  %s\n' "${part_secs[$i]}" "${part_names[$i]}"; done
 printf '%6d s  total\n' "$SECONDS"
+passed=$(awk '{p += $1} END {print p + 0}' "$tally")
+failed=$(awk '{f += $2} END {print f + 0}' "$tally")
 echo "$passed passed, $failed failed"
 [[ $any_failed -eq 0 && $failed -eq 0 ]]
