@@ -8,7 +8,7 @@
 #include <fstream>
 #include <string>
 
-#include "core/volume_io.h"
+#include "fuzz_load.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 1) return 0;
@@ -18,16 +18,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     std::ofstream(d / "data.raw") << std::string(512, 'x');  // a detached data file headers may name
     return d;
   }();
-  const auto file = dir / (data[0] & 1 ? "h.mha" : "h.mhd");
-  {
-    std::ofstream out(file, std::ios::binary);
-    out.write(reinterpret_cast<const char*>(data + 1), std::streamsize(size - 1));
-  }
-  peakcast::LoadOptions opt;
-  opt.max_voxels = 4096;
-  try {
-    peakcast::load_volume(file, opt);
-  } catch (const peakcast::VolumeError&) {
-  }
+  fuzz_load(dir / (data[0] & 1 ? "h.mha" : "h.mhd"), data + 1, size - 1);
   return 0;
 }

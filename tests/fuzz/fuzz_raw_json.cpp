@@ -8,7 +8,7 @@
 #include <fstream>
 #include <string>
 
-#include "core/volume_io.h"
+#include "fuzz_load.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static const std::filesystem::path dir = [] {
@@ -18,15 +18,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     std::ofstream(d / "other.raw") << std::string(64, 'y');
     return d;
   }();
-  {
-    std::ofstream out(dir / "v.raw.json", std::ios::binary);
-    out.write(reinterpret_cast<const char*>(data), std::streamsize(size));
-  }
-  peakcast::LoadOptions opt;
-  opt.max_voxels = 4096;
-  try {
-    peakcast::load_volume(dir / "v.raw", opt);
-  } catch (const peakcast::VolumeError&) {
-  }
+  fuzz_load(dir / "v.raw.json", data, size, dir / "v.raw");
   return 0;
 }

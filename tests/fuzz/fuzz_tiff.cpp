@@ -9,7 +9,7 @@
 #include <fstream>
 #include <string>
 
-#include "core/volume_io.h"
+#include "fuzz_load.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static const std::filesystem::path file = [] {
@@ -17,15 +17,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     std::filesystem::create_directories(d);
     return d / "stack.tif";
   }();
-  {
-    std::ofstream out(file, std::ios::binary);
-    out.write(reinterpret_cast<const char*>(data), std::streamsize(size));
-  }
-  peakcast::LoadOptions opt;
-  opt.max_voxels = 4096;
-  try {
-    peakcast::load_volume(file, opt);
-  } catch (const peakcast::VolumeError&) {
-  }
+  fuzz_load(file, data, size);
   return 0;
 }

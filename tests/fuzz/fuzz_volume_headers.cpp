@@ -8,7 +8,7 @@
 #include <fstream>
 #include <string>
 
-#include "core/volume_io.h"
+#include "fuzz_load.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size < 1) return 0;
@@ -19,17 +19,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     return d;
   }();
   static const char* ext[] = {".nrrd", ".nhdr", ".mhd", ".mha", ".json"};
-  const auto file = dir / (std::string("h") + ext[data[0] % 5]);
-  {
-    std::ofstream out(file, std::ios::binary);
-    out.write(reinterpret_cast<const char*>(data + 1), std::streamsize(size - 1));
-  }
-  peakcast::LoadOptions opt;
-  opt.max_voxels = 4096;
-  try {
-    peakcast::load_volume(file, opt);
-  } catch (const peakcast::VolumeError&) {
-  } catch (const std::invalid_argument&) {
-  }
+  fuzz_load(dir / (std::string("h") + ext[data[0] % 5]), data + 1, size - 1);
   return 0;
 }
