@@ -16,7 +16,9 @@ void add_serve_command(CLI::App& app, Runner& run);    // serve
 void add_bench_serve_command(CLI::App& bench, Runner& run);  // bench serve
 void add_bench_frame_commands(CLI::App& bench, Runner& run);  // bench readback, bench volume-switch
 
-// Exit codes: 0 ok, 1 failure of the job, 2 bad input (file, scene, arguments).
+// Exit codes: 0 ok, 1 failure of the job (GL, EGL, shader, I/O while writing), 2 bad input
+// (file, scene, arguments).
+constexpr int kExitFailure = 1;
 constexpr int kExitBadInput = 2;
 
 }  // namespace peakcast::app

@@ -3,6 +3,8 @@
 #include <exception>
 
 #include "app/commands.h"
+#include "core/scene.h"
+#include "core/volume_io.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"peakcast " PEAKCAST_VERSION " - peak-finding volume ray caster and render server"};
@@ -17,10 +19,21 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
+  auto fail = [](const std::exception& e, int code) {
+    std::fprintf(stderr, "peakcast: error: %s\n", e.what());
+    return code;
+  };
   try {
     return run ? run() : 0;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "peakcast: error: %s\n", e.what());
-    return peakcast::app::kExitBadInput;
+  } catch (const peakcast::VolumeError& e) {
+    return fail(e, peakcast::app::kExitBadInput);
+  } catch (const peakcast::SceneError& e) {
+    return fail(e, peakcast::app::kExitBadInput);
+  } catch (const nlohmann::json::exception& e) {
+    return fail(e, peakcast::app::kExitBadInput);
+  } catch (const std::invalid_argument& e) {
+    return fail(e, peakcast::app::kExitBadInput);
+  } catch (const std::exception& e) {  // GL, EGL, shaders, writing output
+    return fail(e, peakcast::app::kExitFailure);
   }
 }

@@ -1,5 +1,6 @@
 #include "gpu/gl_objects.h"
 
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
@@ -32,7 +33,9 @@ VertexArray make_vertex_array() {
 #ifndef NDEBUG
 void check_gl(const char* what) {
   if (GLenum e = glGetError(); e != GL_NO_ERROR)
-    throw std::runtime_error(std::string("GL error 0x") + std::to_string(e) + " after " + what);
+    char code[16];
+    std::snprintf(code, sizeof code, "0x%04x", unsigned(e));
+    throw std::runtime_error(std::string("GL error ") + code + " after " + what);
 }
 #endif
 
