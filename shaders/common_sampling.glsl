@@ -1,7 +1,7 @@
 // Field reconstruction: hardware trilinear, or the cubic B-spline from 8 trilinear fetches
 // (Sigg & Hadwiger 2005, cited as [29] in Knoll et al.). Positions in voxel coordinates
 // (voxel i at i); values in TF coordinates.
-layout(binding = 0) uniform sampler3D u_volume;
+layout(binding = UNIT_VOLUME) uniform sampler3D u_volume;
 
 float texel_to_tf(float v) { return v * u_value_map.x + u_value_map.y; }
 

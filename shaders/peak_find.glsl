@@ -1,7 +1,7 @@
 // Peak finding between samples (Knoll et al. 2009 §4.2, Algorithm 1, DESIGN §3 errata).
 // C++ twins: core/peaks.cpp (table lookup) and reference/cpu_raycaster.cpp (root solving).
-layout(binding = 4) uniform sampler2DArray u_peak_table;  // RGBA32F: 4 peak values per layer, -1 = none
-layout(std430, binding = 0) readonly buffer TfPoints {
+layout(binding = UNIT_PEAK_TABLE) uniform sampler2DArray u_peak_table;  // RGBA32F: 4 peak values per layer, NO_PEAK_TEXEL = none
+layout(std430, binding = SSBO_TF_POINTS) readonly buffer TfPoints {
   vec4 tf_points[];  // per TF point: (value in TF coordinates, 0, 0, 0), then (r, g, b, a)
 };
 
@@ -56,7 +56,7 @@ bool find_peaks(Ray r, float t0, float f0, float t1, float f1, inout RayResult r
     vec4 slots = texelFetch(u_peak_table, ivec3(i, j, layer), 0);
     for (int s = 0; s < 4; ++s) {
       float v = slots[s];
-      if (v < -0.5) {
+      if (v == NO_PEAK_TEXEL) {
         done = true;
         break;
       }

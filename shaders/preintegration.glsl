@@ -1,6 +1,6 @@
 // Pre-integrated classification: the segment's colour (opacity-weighted) and opacity from the
 // 2D table built by core/preintegration.cpp for the current step.
-layout(binding = 5) uniform sampler2D u_preint;
+layout(binding = UNIT_PREINT) uniform sampler2D u_preint;
 
 vec4 preint_lookup(float s_front, float s_back) {
   float n = u_tables.x;

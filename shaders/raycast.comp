@@ -12,11 +12,11 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 #ifdef RGB8_OUTPUT
-layout(rgba8ui, binding = 0) uniform writeonly uimage2D u_out_color;
+layout(rgba8ui, binding = IMAGE_COLOR) uniform writeonly uimage2D u_out_color;
 #else
-layout(rgba32f, binding = 0) uniform writeonly image2D u_out_color;
+layout(rgba32f, binding = IMAGE_COLOR) uniform writeonly image2D u_out_color;
 #endif
-layout(r32f, binding = 1) uniform writeonly image2D u_out_samples;
+layout(r32f, binding = IMAGE_SAMPLES) uniform writeonly image2D u_out_samples;
 
 void main() {
   ivec2 id = ivec2(gl_GlobalInvocationID.xy);  // in the tile, rows from the top

@@ -6,7 +6,7 @@
 // inside occupied macrocells, so it changes no sample that contributes.
 
 #ifdef SPACE_SKIPPING
-layout(binding = 2) uniform usampler3D u_occupancy;  // 1 = some voxel of the cell is visible
+layout(binding = UNIT_OCCUPANCY) uniform usampler3D u_occupancy;  // 1 = some voxel of the cell is visible
 #endif
 
 struct RayResult {
@@ -149,7 +149,7 @@ RayResult cast_ray(vec2 pixel) {
 #ifdef BARE_SAMPLING
 // Benchmark baseline: the same rays and the same number of samples as a full render (its
 // per-pixel sample counts arrive in u_budget), reconstruction only: no TF, no compositing.
-layout(binding = 3) uniform sampler2D u_budget;
+layout(binding = UNIT_BUDGET) uniform sampler2D u_budget;
 
 RayResult cast_ray_bare(vec2 pixel, ivec2 texel) {
   RayResult res;

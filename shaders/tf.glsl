@@ -1,6 +1,6 @@
 // Transfer-function lookup (8192-entry table over the volume's value range, sampled at texel
 // centres) and the opacity correction for the step actually taken (DESIGN §4a).
-layout(binding = 1) uniform sampler1D u_tf;
+layout(binding = UNIT_TF) uniform sampler1D u_tf;
 
 vec4 tf_lookup(float s) {
   float size = u_value_map.z;

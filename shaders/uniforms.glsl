@@ -1,7 +1,7 @@
 // The ray-cast uniform block. Mirrored by server/render/gpu_layout.h (std140; a test compares
 // the offsets GL reports with the C++ struct). Positions are relative to the box centre so
 // that a camera far away keeps float precision (see ray_setup.glsl).
-layout(std140, binding = 0) uniform RayUniforms {
+layout(std140, binding = UBO_RAY) uniform RayUniforms {
   vec4 u_p0;         // xyz: point of the view axis nearest the box centre; w: unused
   vec4 u_right;      // xyz: camera right; w: half width of the image plane per unit depth (or world units, ortho)
   vec4 u_up;         // xyz: camera up; w: half height likewise

@@ -1,5 +1,8 @@
 // Render controls built from the capabilities the server's welcome lists, so a method that
-// lands on the server later appears here without a client change.
+// lands on the server later appears here without a client change. Each build (one per welcome)
+// owns the listeners of its inputs and releases them when the next build replaces them.
+import { Disposer } from './disposer.js';
+
 const LABELS = {
   classification: 'classification', peak_mode: 'peak mode', max_peaks: 'max peaks', sampling: 'sampling',
   s_k: 's_k', step: 'step (world units)', filter: 'filter', virtual_samples: 'virtual samples',
@@ -10,11 +13,13 @@ export class RenderControls extends EventTarget {
   constructor(container, disposer) {
     super();
     this.container = container;
-    this.disposer = disposer;
+    this.built = new Disposer();
     this.inputs = {};
+    disposer.add(() => this.built.dispose());
   }
 
   build(capabilities, current = {}) {
+    this.built.dispose();
     this.container.replaceChildren();
     this.inputs = {};
     const add = (key, input) => {
@@ -22,7 +27,7 @@ export class RenderControls extends EventTarget {
       label.append(LABELS[key] ?? key, input);
       this.container.append(label);
       this.inputs[key] = input;
-      this.disposer.listen(input, 'change', () => this.#changed(key));
+      this.built.listen(input, 'change', () => this.#changed(key));
     };
     for (const key of ['classification', 'peak_mode', 'max_peaks', 'sampling', 'filter', 'virtual_samples']) {
       const options = capabilities[key];

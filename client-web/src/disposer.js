@@ -9,4 +9,5 @@ export class Disposer {
   }
   interval(fn, ms) { const id = setInterval(fn, ms); return this.add(() => clearInterval(id)); }
   dispose() { while (this.#items.length) this.#items.pop()(); }
+  get size() { return this.#items.length; }  // releases held (tests check it stays flat across reconnects)
 }

@@ -3,7 +3,7 @@
 import { CameraController } from './camera.js';
 import { RenderControls } from './controls.js';
 import { Disposer } from './disposer.js';
-import { readState, stateUrl, writeState } from './state-url.js';
+import { readState, stateUrl, takeTokenFromUrl, writeState } from './state-url.js';
 import { StatsOverlay } from './stats.js';
 import { Stream } from './stream.js';
 import { TfEditor } from './tf-editor.js';
@@ -13,8 +13,9 @@ const $ = (id) => document.getElementById(id);
 const disposer = new Disposer();
 const canvas = $('frame');
 const ctx2d = canvas.getContext('2d');
-const params = new URLSearchParams(location.search);
-let token = params.get('token') || sessionStorage.getItem('peakcast-token') || '';
+// An access token in the address (?token=) moves to this tab's sessionStorage and out of the
+// address bar at once, so no shared link, bookmark or history entry carries it.
+let token = takeTokenFromUrl() || sessionStorage.getItem('peakcast-token') || '';
 
 // What the client knows of its session; sent again in hello after a reconnect.
 const app = { volume: null, camera: null, tf: null, render: {}, cameraVersion: 1, welcomed: false };
@@ -24,7 +25,7 @@ if (restored) Object.assign(app, { volume: restored.volume, camera: restored.cam
 const stats = new StatsOverlay($('stats'));
 const camera = new CameraController(canvas, disposer);
 const tfEditor = new TfEditor({ canvas: $('tf-canvas'), color: $('tf-color'), remove: $('tf-delete'), undo: $('tf-undo'),
-  redo: $('tf-redo'), preset: $('tf-preset'), iso: $('tf-iso') }, disposer);
+  redo: $('tf-redo'), preset: $('tf-preset'), iso: $('tf-iso'), point: $('tf-point') }, disposer);
 const controls = new RenderControls($('controls'), disposer);
 const picker = new VolumePicker({ select: $('volume-select'), path: $('volume-path'), open: $('volume-open'),
   progress: $('volume-progress'), info: $('volume-info') }, disposer);
@@ -77,16 +78,28 @@ disposer.listen(stream, 'volume', (e) => {
   camera.set(e.detail.state.camera, { home: true, silent: true });
 });
 disposer.listen(stream, 'stats', (e) => { stats.stats(e.detail); $('variant').textContent = e.detail.variant; });
+const errorEl = $('error');
+let errorTimer = 0;
+disposer.add(() => clearTimeout(errorTimer));
 disposer.listen(stream, 'error', (e) => {
   console.warn('peakcast:', e.detail.code, e.detail.message);
-  if (e.detail.code === 'volume_error') picker.failed(e.detail.message);
+  if (e.detail.code === 'volume_error') return picker.failed(e.detail.message);
+  if (e.detail.code === 'unauthorized') return;  // the status banner and token form say it
+  errorEl.textContent = `${e.detail.code}: ${e.detail.message}`;  // what the server refused, and why
+  errorEl.hidden = false;
+  clearTimeout(errorTimer);
+  errorTimer = setTimeout(() => { errorEl.hidden = true; }, 8000);
 });
+disposer.listen(errorEl, 'click', () => { errorEl.hidden = true; });
 
 disposer.listen(stream, 'frame', (e) => {
   const { frame, bitmap } = e.detail;
   const vp = viewport();
-  canvas.width = Math.round(vp.width * vp.dpr);
-  canvas.height = Math.round(vp.height * vp.dpr);
+  const w = Math.round(vp.width * vp.dpr), h = Math.round(vp.height * vp.dpr);
+  if (canvas.width !== w || canvas.height !== h) {  // resizing reallocates and clears: only on change
+    canvas.width = w;
+    canvas.height = h;
+  }
   ctx2d.imageSmoothingEnabled = true;
   ctx2d.drawImage(bitmap, 0, 0, canvas.width, canvas.height);  // interactive frames are upscaled
   bitmap.close();
@@ -165,10 +178,10 @@ disposer.listen($('shot'), 'click', async () => {
   setTimeout(() => URL.revokeObjectURL(url), 1000);
 });
 disposer.listen($('share'), 'click', async () => {
-  const url = stateUrl(share());
+  const url = stateUrl(share());  // never carries the token (state-url.js)
   try { await navigator.clipboard.writeText(url); $('share-done').textContent = 'copied'; } catch { $('share-done').textContent = url; }
 });
 
 disposer.listen(window, 'pagehide', () => disposer.dispose());
-window.peakcast = { app, stats, stream, camera, tfEditor };  // for tests and the console
+window.peakcast = { app, stats, stream, camera, tfEditor, controls, disposer };  // for tests and the console
 stream.connect();

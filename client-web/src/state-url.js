@@ -11,9 +11,27 @@ export function readState() {
   }
 }
 
+// The page's query without the access token: a link to share or keep never carries it.
+function searchWithoutToken() {
+  const params = new URLSearchParams(location.search);
+  params.delete('token');
+  const s = params.toString();
+  return s ? `?${s}` : '';
+}
+
 export function stateUrl(state) {
   const b64 = btoa(unescape(encodeURIComponent(JSON.stringify(state)))).replace(/\+/g, '-').replace(/\//g, '_').replace(/=+$/, '');
-  return `${location.origin}${location.pathname}${location.search}#state=${b64}`;
+  return `${location.origin}${location.pathname}${searchWithoutToken()}#state=${b64}`;
+}
+
+// ?token=... on load: returns it (kept for this tab in sessionStorage) and removes it from the
+// address bar and the history entry.
+export function takeTokenFromUrl() {
+  const token = new URLSearchParams(location.search).get('token');
+  if (token === null) return '';
+  sessionStorage.setItem('peakcast-token', token);
+  history.replaceState(history.state, '', `${location.pathname}${searchWithoutToken()}${location.hash}`);
+  return token;
 }
 
 let timer = 0;

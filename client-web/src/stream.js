@@ -66,12 +66,16 @@ export class Stream extends EventTarget {
       try {
         const blob = new Blob([frame.image], { type: frame.png ? 'image/png' : 'image/jpeg' });
         const bitmap = await createImageBitmap(blob);
+        if (this.#closed) {  // disposed while decoding: nobody will draw or close it
+          bitmap.close();
+          break;
+        }
         frame.decodedAt = performance.now();
         this.#emit('frame', { frame, bitmap });  // the listener owns and closes the bitmap
       } catch (e) {
         this.#emit('error', { code: 'decode', message: String(e) });
       } finally {
-        this.send({ type: 'ack', frame: frame.id });
+        this.send({ type: 'ack', frame: frame.id });  // no-op once disposed
       }
     }
     this.#decoding = false;

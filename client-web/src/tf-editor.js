@@ -1,6 +1,7 @@
 // The transfer-function editor: the volume's histogram (log scale) under the piecewise-linear
 // opacity curve; add, drag, delete points, a colour per point, detected peaks marked, presets,
-// undo/redo. Every edit emits the full TF with a new version.
+// undo/redo, keyboard control. Every edit emits the full TF with a new version; a drag emits at
+// most one per animation frame (the newest), however fast the pointer moves.
 import { findPeaks, interpolate, preset, TfHistory } from './tf-model.js';
 
 const hex = (rgb) => '#' + rgb.map((c) => Math.round(c * 255).toString(16).padStart(2, '0')).join('');
@@ -12,6 +13,7 @@ export class TfEditor extends EventTarget {
   selected = -1;
   #history = new TfHistory();
   #drag = null;
+  #frameRequest = 0;  // a coalesced emit waiting for the next animation frame
 
   constructor(ui, disposer) {
     super();
@@ -22,6 +24,9 @@ export class TfEditor extends EventTarget {
     disposer.listen(c, 'pointerdown', (e) => this.#down(e));
     disposer.listen(c, 'pointermove', (e) => this.#move(e));
     disposer.listen(c, 'pointerup', () => this.#up());
+    disposer.listen(c, 'pointercancel', () => this.#up());  // the browser took the gesture: the drag ends here
+    disposer.listen(c, 'keydown', (e) => this.#key(e));
+    disposer.add(() => cancelAnimationFrame(this.#frameRequest));
     disposer.listen(c, 'dblclick', (e) => this.#remove(this.#hit(e)));
     disposer.listen(ui.color, 'input', () => this.#recolor());
     disposer.listen(ui.remove, 'click', () => this.#remove(this.selected));
@@ -82,6 +87,7 @@ export class TfEditor extends EventTarget {
     this.#drag = { index: i };
     this.canvas.setPointerCapture(e.pointerId);
     this.draw();
+    this.#announce();
   }
 
   #move(e) {
@@ -92,10 +98,49 @@ export class TfEditor extends EventTarget {
     pts[i][0] = Math.min(hi, Math.max(lo, this.#value(p.x)));
     pts[i][4] = this.#alpha(p.y);
     this.draw();
-    this.#emit();
+    this.#emitSoon();
   }
 
-  #up() { this.#drag = null; }
+  #up() {
+    this.#drag = null;
+    this.#flush();  // the drag's last position goes out now, not a frame later
+  }
+
+  // Keyboard: PageDown/PageUp (or n/p) select the next/previous point, arrows move it (value by
+  // 1% of the range, opacity by 0.02; Shift: 10x), Delete/Backspace remove it.
+  #key(e) {
+    const n = this.points.length;
+    if (!n) return;
+    const big = e.shiftKey ? 10 : 1;
+    let i = this.selected;
+    if (e.key === 'PageDown' || e.key === 'n') i = i < 0 ? 0 : Math.min(n - 1, i + 1);
+    else if (e.key === 'PageUp' || e.key === 'p') i = i < 0 ? n - 1 : Math.max(0, i - 1);
+    else if (e.key === 'Delete' || e.key === 'Backspace') { this.#remove(i); this.#announce(); e.preventDefault(); return; }
+    else if (i >= 0 && e.key.startsWith('Arrow')) {
+      this.#history.push(this.points);
+      const p = this.points[i], span = this.hi - this.lo;
+      if (e.key === 'ArrowLeft' || e.key === 'ArrowRight') {
+        const lo = i > 0 ? this.points[i - 1][0] : this.lo - span, hi = i + 1 < n ? this.points[i + 1][0] : this.hi + span;
+        p[0] = Math.min(hi, Math.max(lo, p[0] + (e.key === 'ArrowRight' ? 1 : -1) * 0.01 * big * span));
+      } else {
+        p[4] = Math.min(1, Math.max(0, p[4] + (e.key === 'ArrowUp' ? 1 : -1) * 0.02 * big));
+      }
+      this.draw();
+      this.#emitSoon();
+    } else return;
+    e.preventDefault();
+    if (i !== this.selected) {
+      this.selected = i;
+      this.ui.color.value = hex(this.points[i].slice(1, 4));
+      this.draw();
+    }
+    this.#announce();
+  }
+
+  #announce() {
+    const p = this.points[this.selected];
+    if (this.ui.point) this.ui.point.textContent = p ? `point ${this.selected + 1} of ${this.points.length}: value ${p[0].toPrecision(5)}, opacity ${p[4].toFixed(2)}` : '';
+  }
 
   #remove(i) {
     if (i < 0 || this.points.length <= 1) return;
@@ -117,7 +162,15 @@ export class TfEditor extends EventTarget {
 
   #restore(points) { if (points) this.set(points, { silent: false }); }
 
+  #emitSoon() {
+    if (!this.#frameRequest) this.#frameRequest = requestAnimationFrame(() => { this.#frameRequest = 0; this.#emit(); });
+  }
+
+  #flush() { if (this.#frameRequest) this.#emit(); }
+
   #emit() {
+    cancelAnimationFrame(this.#frameRequest);  // this emit carries the newest points
+    this.#frameRequest = 0;
     this.version++;
     this.dispatchEvent(new CustomEvent('change', { detail: { points: structuredClone(this.points), version: this.version } }));
   }

@@ -1,4 +1,5 @@
 #include "core/occupancy.h"
+#include "core/value_range.h"
 
 #include <algorithm>
 #include <chrono>
@@ -23,7 +24,7 @@ Occupancy classify_cells(const MacrocellGrid& grid, const TransferFunction& tf, 
     const int level = 31 - __builtin_clz(unsigned(b - a + 1));
     return std::max(sparse[size_t(level)][size_t(a)], sparse[size_t(level)][size_t(b - (1 << level) + 1)]);
   };
-  const double scale = hi > lo ? double(n - 1) / (hi - lo) : 0.0;
+  const double scale = double(n - 1) / table_range(lo, hi).width();
   Occupancy out;
   out.occupied.resize(grid.size());
   for (size_t c = 0; c < grid.size(); ++c) {

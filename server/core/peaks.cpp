@@ -1,4 +1,5 @@
 #include "core/peaks.h"
+#include "core/value_range.h"
 
 #include <algorithm>
 #include <chrono>
@@ -35,7 +36,7 @@ PeakTable build_peak_table(const std::vector<Peak>& all, double lo, double hi, i
   PeakTable t;
   t.bins = bins;
   t.lo = lo;
-  t.hi = hi > lo ? hi : lo + 1.0;
+  t.hi = table_range(lo, hi).hi;
   std::vector<double> v;
   for (const auto& p : all)
     if (p.value > lo && p.value <= t.hi) v.push_back(p.value);  // (lo, hi]: f >= lo always

@@ -7,6 +7,7 @@
 #include <glm/vec3.hpp>
 
 #include "core/parallel.h"
+#include "core/value_range.h"
 
 namespace peakcast {
 namespace {
@@ -36,7 +37,7 @@ PreintegrationTable build_preintegration(const TransferFunction& tf, double lo, 
   PreintegrationTable t;
   t.size = n;
   t.lo = lo;
-  t.hi = hi > lo ? hi : lo + 1.0;
+  t.hi = table_range(lo, hi).hi;
   t.step = step;
   t.rgba.assign(size_t(n) * n * 4, 0.f);
   const double ds = (t.hi - lo) / (n - 1);

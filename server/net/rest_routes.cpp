@@ -8,6 +8,7 @@
 #include <boost/asio/post.hpp>
 
 #include "render/variant.h"
+#include "session/limits.h"
 
 namespace fs = std::filesystem;
 namespace asio = boost::asio;
@@ -91,9 +92,11 @@ void submit_still(AppContext& app, const Request& req, const Scene& scene, std::
     } catch (...) {
       job.quality = -1;
     }
-    if (job.quality < 10 || job.quality > 100) {
+    if (job.quality < limits::kMinJpegQuality || job.quality > limits::kMaxJpegQuality) {
       count(app, "render", http::status::bad_request);
-      return send(error_response(req, http::status::bad_request, "bad_request", "quality must be 10..100"));
+      return send(error_response(req, http::status::bad_request, "bad_request",
+                                 "quality must be " + std::to_string(limits::kMinJpegQuality) + ".." +
+                                     std::to_string(limits::kMaxJpegQuality)));
     }
   }
   job.volume = std::move(vol);

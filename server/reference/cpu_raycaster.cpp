@@ -11,6 +11,7 @@
 #include "reference/field.h"
 #include "reference/ray_events.h"
 #include "reference/shading.h"
+#include "core/value_range.h"
 
 namespace peakcast::reference {
 namespace {
@@ -30,8 +31,9 @@ struct Frame {
     const glm::dvec3 center = (s.box_min + s.box_max) * 0.5;
     half = (s.box_max - s.box_min) * 0.5;
     view = setup_view(s.camera, center, s.scene.width, s.scene.height);
-    lo = v.min_value;
-    hi = v.max_value > v.min_value ? v.max_value : v.min_value + 1.0;
+    const ValueRange range = table_range(v.min_value, v.max_value);
+    lo = range.lo;
+    hi = range.hi;
     min_spacing = std::min({v.spacing.x, v.spacing.y, v.spacing.z});
   }
   glm::dvec3 voxel(const Ray& r, double t) const { return (r.o + t * r.d + half) / v.spacing; }

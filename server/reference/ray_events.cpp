@@ -60,8 +60,9 @@ RaySplit split_ray(const Volume& vol, Filter filter, const Ray& r, const glm::dv
     // Monotone pieces [ua, ub] (in t) with a function to bisect on.
     std::vector<double> knots = {ta};
     Cubic p{};
-    const bool cubic = filter == Filter::Trilinear;
-    if (cubic) {
+    // Trilinear: along the ray inside one cell the field is exactly a cubic polynomial in t.
+    const bool field_is_cubic_in_t = filter == Filter::Trilinear;
+    if (field_is_cubic_in_t) {
       p = fit(field(ta), field(ta + (tb - ta) / 3), field(ta + 2 * (tb - ta) / 3), field(tb));
       // Roots of p'(u) = c1 + 2 c2 u + 3 c3 u^2 inside (0, 1).
       const double A = 3 * p.c[3], B = 2 * p.c[2], C = p.c[1];
@@ -85,7 +86,7 @@ RaySplit split_ray(const Volume& vol, Filter filter, const Ray& r, const glm::dv
       for (int k = 1; k < 8; ++k) knots.push_back(ta + (tb - ta) * k / 8.0);
     }
     knots.push_back(tb);
-    auto f = [&](double t) { return cubic ? p((t - ta) / (tb - ta)) : field(t); };
+    auto f = [&](double t) { return field_is_cubic_in_t ? p((t - ta) / (tb - ta)) : field(t); };
     for (size_t k = 0; k + 1 < knots.size(); ++k) {
       const double a = knots[k], b = knots[k + 1];
       const double fa = f(a), fb = f(b);

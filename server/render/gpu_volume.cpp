@@ -1,4 +1,5 @@
 #include "render/gpu_volume.h"
+#include "core/value_range.h"
 
 #include <atomic>
 #include <chrono>
@@ -56,8 +57,9 @@ GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cell
   gpu::check_gl("volume upload");
   upload_ms_ = ms_since(t0);
 
-  lo_ = v.min_value;
-  hi_ = v.max_value > v.min_value ? v.max_value : v.min_value + 1.0;
+  const ValueRange range = table_range(v.min_value, v.max_value);
+  lo_ = range.lo;
+  hi_ = range.hi;
   scale_ = float(texel_to_stored / (hi_ - lo_));
   bias_ = float((v.value_offset - lo_) / (hi_ - lo_));
   if (!cells_trilinear_) {

@@ -7,6 +7,7 @@
 #include "core/occupancy.h"
 #include "core/preintegration.h"
 #include "render/gpu_layout.h"
+#include "render/shader_interface.h"
 
 namespace peakcast::render {
 namespace {
@@ -134,7 +135,7 @@ VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPa
     tf_table = &cache_insert(tf_tables_, std::move(e), kCacheEntries);
     ++table_builds_;
   }
-  glBindTextureUnit(1, tf_table->texture.id());
+  glBindTextureUnit(kUnitTf, tf_table->texture.id());
   const auto t_tables = Clock::now();
   const std::vector<Peak> peaks =
       s.scene.render.classification == Classification::Peaks ? find_peaks(s.tf) : std::vector<Peak>{};
@@ -172,7 +173,7 @@ VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPa
       glTextureSubImage3D(tex.id(), 0, 0, 0, 0, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]),
                           GLsizei(cells.grid[2]), GL_RED_INTEGER, GL_UNSIGNED_BYTE, occ->occupied.data());
     }
-    glBindTextureUnit(2, tex.id());
+    glBindTextureUnit(kUnitOccupancy, tex.id());
   }
   if (stats) {
     stats->empty_cells = occ->empty_cells;
@@ -194,9 +195,9 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
       << peaks.size() << ' '
       << (r.classification == Classification::Preint ? s.step : 0.0);
   if (const Tables* t = cache_find(tables_cache_, key.str())) {
-    if (t->peak_table) glBindTextureUnit(4, t->peak_table.id());
-    if (t->tf_points) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, t->tf_points.id());
-    if (t->preint_table) glBindTextureUnit(5, t->preint_table.id());
+    if (t->peak_table) glBindTextureUnit(kUnitPeakTable, t->peak_table.id());
+    if (t->tf_points) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboTfPoints, t->tf_points.id());
+    if (t->preint_table) glBindTextureUnit(kUnitPreint, t->preint_table.id());
     tables_ = t->sizes;
     return;
   }
@@ -205,15 +206,15 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
   if (r.classification == Classification::Peaks) {
     const PeakTable table = build_peak_table(peaks, lo, hi, r.peak_table_bins);
     std::vector<float> texels(table.texels.size());
-    for (size_t k = 0; k < texels.size(); ++k)  // to TF coordinates; -1 = none
-      texels[k] = table.texels[k] == PeakTable::kNoPeak ? -1.f : float((table.texels[k] - lo) / (hi - lo));
+    for (size_t k = 0; k < texels.size(); ++k)  // to TF coordinates
+      texels[k] = table.texels[k] == PeakTable::kNoPeak ? kNoPeakTexel : float((table.texels[k] - lo) / (hi - lo));
     t.peak_table = gpu::make_texture(GL_TEXTURE_2D_ARRAY);
     glTextureStorage3D(t.peak_table.id(), 1, GL_RGBA32F, table.bins, table.bins, table.layers);
     glTextureSubImage3D(t.peak_table.id(), 0, 0, 0, 0, table.bins, table.bins, table.layers, GL_RGBA, GL_FLOAT,
                         texels.data());
     glTextureParameteri(t.peak_table.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTextureParameteri(t.peak_table.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glBindTextureUnit(4, t.peak_table.id());
+    glBindTextureUnit(kUnitPeakTable, t.peak_table.id());
     std::vector<glm::vec4> points;
     for (const auto& p : s.tf.points) {
       points.emplace_back(float((p.value - lo) / (hi - lo)), 0.f, 0.f, 0.f);
@@ -221,7 +222,7 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
     }
     t.tf_points = gpu::make_buffer();
     glNamedBufferStorage(t.tf_points.id(), GLsizeiptr(points.size() * sizeof(glm::vec4)), points.data(), 0);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, t.tf_points.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboTfPoints, t.tf_points.id());
     t.sizes.peak_bins = table.bins;
     t.sizes.peak_layers = table.layers;
     t.sizes.max_peaks = r.max_peaks;
@@ -239,7 +240,7 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
     glTextureParameteri(t.preint_table.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     glTextureParameteri(t.preint_table.id(), GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     glTextureParameteri(t.preint_table.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glBindTextureUnit(5, t.preint_table.id());
+    glBindTextureUnit(kUnitPreint, t.preint_table.id());
     t.sizes.preint_size = table.size;
   }
   tables_ = t.sizes;
@@ -258,7 +259,7 @@ Image Raycaster::render_bare(const GpuVolume& gv, const ResolvedScene& s, GpuPat
   glTextureSubImage2D(budget_texture_.id(), 0, 0, 0, w, h, GL_RED, GL_FLOAT, budget.data());
   glTextureParameteri(budget_texture_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
   glTextureParameteri(budget_texture_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-  glBindTextureUnit(3, budget_texture_.id());
+  glBindTextureUnit(kUnitBudget, budget_texture_.id());
   VariantKey key = choose_variant(s, 0, path);
   key.shading = false;
   key.bare_sampling = true;
@@ -275,16 +276,16 @@ RenderResult Raycaster::draw(const GpuVolume& gv, const ResolvedScene& s, const 
   const gpu::Program& prog = program(key);
   const RayUniforms u = make_uniforms(gv, s, cells, tables_, rect);
   glNamedBufferSubData(ubo_.id(), 0, sizeof u, &u);
-  glBindBufferBase(GL_UNIFORM_BUFFER, 0, ubo_.id());
-  gv.bind(0);  // the TF table (unit 1) and the other per-TF tables were bound by prepare()
+  glBindBufferBase(GL_UNIFORM_BUFFER, kUboRay, ubo_.id());
+  gv.bind(kUnitVolume);  // the TF table and the other per-TF tables were bound by prepare()
   Targets& t = targets(w, h, output);
   glUseProgram(prog.id());
 
   glFinish();
   const auto t0 = Clock::now();
   if (path == GpuPath::Compute) {
-    glBindImageTexture(0, t.color.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, key.rgb8 ? GL_RGBA8UI : GL_RGBA32F);
-    glBindImageTexture(1, t.samples.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
+    glBindImageTexture(kImageColor, t.color.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, key.rgb8 ? GL_RGBA8UI : GL_RGBA32F);
+    glBindImageTexture(kImageSamples, t.samples.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
     glDispatchCompute(GLuint((w + 7) / 8), GLuint((h + 7) / 8), 1);
     glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
   } else {

@@ -1,10 +1,32 @@
 #include "render/variant.h"
 
+#include <sstream>
+
+#include "render/shader_interface.h"
+
 namespace peakcast::render {
 
+std::vector<std::string> interface_defines() {
+  std::ostringstream no_peak;
+  no_peak.precision(9);
+  no_peak << std::showpoint << kNoPeakTexel;
+  return {"UNIT_VOLUME " + std::to_string(kUnitVolume),
+          "UNIT_TF " + std::to_string(kUnitTf),
+          "UNIT_OCCUPANCY " + std::to_string(kUnitOccupancy),
+          "UNIT_BUDGET " + std::to_string(kUnitBudget),
+          "UNIT_PEAK_TABLE " + std::to_string(kUnitPeakTable),
+          "UNIT_PREINT " + std::to_string(kUnitPreint),
+          "IMAGE_COLOR " + std::to_string(kImageColor),
+          "IMAGE_SAMPLES " + std::to_string(kImageSamples),
+          "UBO_RAY " + std::to_string(kUboRay),
+          "SSBO_TF_POINTS " + std::to_string(kSsboTfPoints),
+          "NO_PEAK_TEXEL " + no_peak.str()};
+}
+
+// The variant's switches, then the host interface (the program file, .frag or .comp, is
+// chosen by the path: no define for it).
 std::vector<std::string> VariantKey::defines() const {
   std::vector<std::string> d;
-  if (path == GpuPath::Compute) d.push_back("COMPUTE");
   if (tricubic) d.push_back("TRICUBIC");
   if (shading) d.push_back("SHADING");
   if (space_skipping) d.push_back("SPACE_SKIPPING");
@@ -17,6 +39,7 @@ std::vector<std::string> VariantKey::defines() const {
   }
   if (preintegration) d.push_back("PREINTEGRATION");
   if (rgb8) d.push_back("RGB8_OUTPUT");
+  for (auto& i : interface_defines()) d.push_back(std::move(i));
   return d;
 }
 

@@ -104,8 +104,8 @@ ClientMessage parse_client_message(const std::string& text) {
   if (type == "hello") {
     only_keys(j, "hello", {"token", "volume", "viewport", "state"});
     Hello h;
-    if (j.contains("token")) h.token = string_of(j["token"], "hello.token", 256);
-    if (j.contains("volume")) h.volume = string_of(j["volume"], "hello.volume", 1024);
+    if (j.contains("token")) h.token = string_of(j["token"], "hello.token", limits::kMaxTokenLength);
+    if (j.contains("volume")) h.volume = string_of(j["volume"], "hello.volume", limits::kMaxVolumeNameLength);
     if (!j.contains("viewport")) bad("hello.viewport: required");
     h.viewport = parse_viewport(j["viewport"], "hello.viewport");
     if (j.contains("state")) h.state = parse_state(j["state"]);
@@ -142,8 +142,8 @@ ClientMessage parse_client_message(const std::string& text) {
     only_keys(j, "quality", {"interactive_scale", "interactive_quality", "final_quality", "final_format"});
     QualityMsg q;
     if (j.contains("interactive_scale")) q.interactive_scale = number_in(j["interactive_scale"], "quality.interactive_scale", 0.1, 1.0);
-    if (j.contains("interactive_quality")) q.interactive_quality = int_in(j["interactive_quality"], "quality.interactive_quality", 10, 100);
-    if (j.contains("final_quality")) q.final_quality = int_in(j["final_quality"], "quality.final_quality", 10, 100);
+    if (j.contains("interactive_quality")) q.interactive_quality = int_in(j["interactive_quality"], "quality.interactive_quality", limits::kMinJpegQuality, limits::kMaxJpegQuality);
+    if (j.contains("final_quality")) q.final_quality = int_in(j["final_quality"], "quality.final_quality", limits::kMinJpegQuality, limits::kMaxJpegQuality);
     if (j.contains("final_format")) {
       q.final_format = string_of(j["final_format"], "quality.final_format", 8);
       if (*q.final_format != "jpeg" && *q.final_format != "png") bad("quality.final_format: jpeg or png");
@@ -159,7 +159,7 @@ ClientMessage parse_client_message(const std::string& text) {
   if (type == "volume") {
     only_keys(j, "volume", {"volume"});
     if (!j.contains("volume")) bad("volume.volume: required");
-    return VolumeMsg{string_of(j["volume"], "volume.volume", 1024)};
+    return VolumeMsg{string_of(j["volume"], "volume.volume", limits::kMaxVolumeNameLength)};
   }
   if (type == "ack") {
     only_keys(j, "ack", {"frame"});

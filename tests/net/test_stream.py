@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """WebSocket streaming against a real server (issue 5): first frame, still == CLI render, progressive
 quality, coalescing, flow control with a non-acking client, hostile messages, disconnects."""
-import asyncio, json, pathlib, subprocess, sys, tempfile, time
+import asyncio, json, os, pathlib, subprocess, sys, tempfile, time
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from harness import *  # noqa: F401,F403
@@ -87,27 +87,42 @@ async def test_fast_input_coalesces():
 async def test_non_acking_client_gets_two_frames_and_costs_nothing():
     c = await Client.connect(SERVER, ack=False)
     await c.hello(320, 240)
-    rss0 = SERVER.rss_kib()
     cam = dict(SCENE_CAMERA)
-    end = time.time() + 4
-    i = 0
-    while time.time() < end:
-        i += 1
-        cam = dict(cam, eye=[75 + (i % 50), -160, 230])
-        await c.send({"type": "camera", "camera": cam})
+
+    async def spam(seconds, i):
+        end = time.time() + seconds
+        while time.time() < end:
+            i += 1
+            await c.send({"type": "camera", "camera": dict(cam, eye=[75 + (i % 50), -160, 230])})
+            try:
+                await asyncio.wait_for(c.recv(), 0.01)
+            except asyncio.TimeoutError:
+                pass
+        return i
+
+    async def drain():
         try:
-            await asyncio.wait_for(c.recv(), 0.01)
+            while True:
+                await asyncio.wait_for(c.recv(), 1.0)
         except asyncio.TimeoutError:
             pass
-    try:
-        while True:
-            await asyncio.wait_for(c.recv(), 1.0)
-    except asyncio.TimeoutError:
-        pass
+
+    # Warm up until the two unacknowledged frames are out: the session's render
+    # buffers and encoder exist from then on, so what follows measures only the
+    # cost of a client that keeps talking and never acknowledges.
+    i = await spam(1.5, 0)
+    await drain()
+    assert len(c.frames) == 2, len(c.frames)
+    rss0 = SERVER.rss_kib()
+    i = await spam(4, i)
+    await drain()
     rss1 = SERVER.rss_kib()
     print(f"  {i} camera messages, {len(c.frames)} frames without acks; server RSS {rss0} -> {rss1} KiB")
     assert len(c.frames) == 2, len(c.frames)
-    assert rss1 - rss0 < 20 * 1024, "server memory grew with a non-acking client"
+    # A sanitizer's shadow memory and allocator bookkeeping grow with any work;
+    # the bound there only catches a per-message leak of frames.
+    bound = 20 * 1024 if os.environ.get("PEAKCAST_SANITIZER", "none") == "none" else 64 * 1024
+    assert rss1 - rss0 < bound, f"server memory grew by {rss1 - rss0} KiB with a non-acking client"
     # Acking resumes the stream, with the newest state.
     for f in c.frames:
         await c.send({"type": "ack", "frame": f["id"]})

@@ -1,0 +1,32 @@
+// The binding points and encodings the ray-cast shaders share with the host (like the uniform
+// block in gpu_layout.h): one definition here, handed to every shader as #defines by
+// interface_defines(), so GLSL never carries a bare unit number (shaders/README.md lists them).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace peakcast::render {
+
+// Texture units (sampler bindings).
+constexpr unsigned kUnitVolume = 0;      // sampler3D: the scalar volume
+constexpr unsigned kUnitTf = 1;          // sampler1D: the baked TF table
+constexpr unsigned kUnitOccupancy = 2;   // usampler3D: 1 = some voxel of the macrocell is visible
+constexpr unsigned kUnitBudget = 3;      // sampler2D: per-pixel sample budget (progressive frames)
+constexpr unsigned kUnitPeakTable = 4;   // sampler2DArray: peak values per (f_front, f_back) bin
+constexpr unsigned kUnitPreint = 5;      // sampler2D: preintegration table
+// Image units (compute path outputs).
+constexpr unsigned kImageColor = 0;
+constexpr unsigned kImageSamples = 1;
+// Buffer bindings.
+constexpr unsigned kUboRay = 0;          // std140 RayUniforms
+constexpr unsigned kSsboTfPoints = 0;    // TF points for the peak root solve
+
+// A peak-table texel with no peak. Peak values are TF coordinates in [0, 1], so any negative
+// value is free; the CPU table's own sentinel is PeakTable::kNoPeak (data units, unbounded).
+constexpr float kNoPeakTexel = -1.0f;
+
+// "NAME value" pairs for the shader preamble.
+std::vector<std::string> interface_defines();
+
+}  // namespace peakcast::render
