@@ -1,7 +1,7 @@
 """Shared by the net tests: start a real `peakcast serve` on a free loopback port, talk to it over
 HTTP and WebSocket (Debian's python3-websockets), validate every server message against proto/,
 decode frames. Each test file runs its functions and ends with 'N passed, N failed'."""
-import asyncio, io, json, math, os, pathlib, re, signal, struct, subprocess, sys, tempfile, time, traceback
+import asyncio, io, json, math, os, pathlib, re, signal, struct, subprocess, sys, tempfile, threading, time, traceback
 import urllib.request, urllib.error
 
 import jsonschema
@@ -54,6 +54,10 @@ class Server:
             m = re.search(r"serving on http://([\d.]+):(\d+)", line)
             if m:
                 self.host, self.port = m.group(1), int(m.group(2))
+                # Keep reading the server's output, so a long test never fills the pipe (the
+                # server would block writing its log).
+                self.reader = threading.Thread(target=self._drain, daemon=True)
+                self.reader.start()
                 return
         self.proc.kill()
         raise RuntimeError("server did not start: " + "".join(self.log))
@@ -72,6 +76,10 @@ class Server:
                 return int(line.split()[1])
         return 0
 
+    def _drain(self):
+        for line in self.proc.stdout:
+            self.log.append(line)
+
     def alive(self):
         return self.proc.poll() is None
 
@@ -83,8 +91,8 @@ class Server:
             except subprocess.TimeoutExpired:
                 self.proc.kill()
         # A sanitizer build reports on the server's stderr: a report fails the test that ran it.
-        rest = self.proc.stdout.read() if self.proc.stdout else ""
-        self.log.append(rest)
+        self.reader.join(10)
+        rest = "".join(self.log)
         markers = ("WARNING: ThreadSanitizer", "ERROR: AddressSanitizer", "runtime error:", "ERROR: LeakSanitizer")
         if any(m in rest for m in markers):
             print(rest[-30000:])
