@@ -1,9 +1,12 @@
 // The ray caster shared by the fragment and compute entry points (raycast.frag, raycast.comp).
 // Classification: post (TF table per sample), peaks (PEAKS: Knoll's peak finding between
 // samples, with PEAK_XOR / PEAKS_ONLY modes) or pre-integrated segments (PREINTEGRATION).
-// Samples lie on the lattice t_i = t_enter + i * step, i = 0..floor((t_exit - t_enter) / step),
-// computed from i (no accumulated t += dt drift). Space skipping visits only the lattice points
-// inside occupied macrocells, so it changes no sample that contributes.
+// Samples lie on the ray's lattice (sampling.glsl: uniform or DIFFERENTIAL), indices
+// 0..lattice_index(t_exit), computed from the index (no accumulated t += dt drift). Space
+// skipping visits only the lattice points inside occupied macrocells, so it changes no sample
+// that contributes; ADAPTIVE visits only the multiples of each cell's multiplier.
+
+#include "sampling.glsl"
 
 #ifdef SPACE_SKIPPING
 layout(binding = UNIT_OCCUPANCY) uniform usampler3D u_occupancy;  // 1 = some voxel of the cell is visible
@@ -19,6 +22,12 @@ vec3 voxel_coords(vec3 p) { return (p + u_box_half.xyz) / u_spacing.xyz; }
 #if defined(PEAKS) || defined(PREINTEGRATION)
 #define SEGMENTS  // methods that look at the segment between consecutive samples
 #endif
+#if defined(DIFFERENTIAL) || defined(ADAPTIVE)
+#define VARYING_STEPS  // segments differ from the preintegration table's step
+#endif
+#if defined(SPACE_SKIPPING) || defined(ADAPTIVE)
+#define CELL_TRAVERSAL  // the 3D-DDA over macrocells
+#endif
 
 #ifdef PEAKS
 #include "peak_find.glsl"
@@ -27,20 +36,21 @@ vec3 voxel_coords(vec3 p) { return (p + u_box_half.xyz) / u_spacing.xyz; }
 #include "preintegration.glsl"
 #endif
 
-// The previous sample, for segment methods: a segment exists only between consecutive lattice
-// indices.
+// The previous sample, for segment methods: a segment joins consecutive visits unless lattice
+// points between them were skipped (g_gap: an empty macrocell's).
 float g_prev_t, g_prev_f;
-int g_prev_i;
+bool g_have_prev, g_gap;
 
-// Visits lattice index i: peaks in the segment ending here, then the sample (post-classified,
-// or the pre-integrated segment). Returns true when the ray is opaque enough to stop.
-bool visit(Ray r, float t_enter, int i, inout RayResult res) {
-  float dt = u_box_half.w;
-  float t = t_enter + float(i) * dt;
+// Visits lattice index i, standing for the step to index i + m: peaks in the segment ending
+// here, then the sample (post-classified, or the pre-integrated segment). Returns true when the
+// ray is opaque enough to stop.
+bool visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
+  float dt = lattice_step(L, float(i), float(m));
+  float t = lattice_t(L, float(i));
   vec3 x = voxel_coords(r.o + t * r.d);
   float f = sample_field(x);
   res.samples += 1.0;
-  bool segment = g_prev_i == i - 1;
+  bool segment = g_have_prev && !g_gap;
   bool peak_hit = false;
 #ifdef PEAKS
   if (segment) peak_hit = find_peaks(r, g_prev_t, g_prev_f, t, f, res);
@@ -48,6 +58,12 @@ bool visit(Ray r, float t_enter, int i, inout RayResult res) {
 #if defined(PREINTEGRATION)
   if (segment) {
     vec4 c = preint_lookup(g_prev_f, f);
+#ifdef VARYING_STEPS
+    if (c.a > 0.0) {  // the table holds segments of the uniform step: correct for this one's length
+      float a = correct_opacity_for(c.a, t - g_prev_t, u_box_half.w);
+      c = vec4(c.rgb * (a / c.a), a);
+    }
+#endif
     if (c.a > 0.0) {
       vec3 rgb = c.rgb / c.a;
 #ifdef SHADING
@@ -73,7 +89,8 @@ bool visit(Ray r, float t_enter, int i, inout RayResult res) {
 #endif
   g_prev_t = t;
   g_prev_f = f;
-  g_prev_i = i;
+  g_have_prev = true;
+  g_gap = false;
   return res.acc.a >= u_dims.w;
 }
 
@@ -81,22 +98,24 @@ RayResult cast_ray(vec2 pixel) {
   RayResult res;
   res.acc = vec4(0.0);
   res.samples = 0.0;
-  g_prev_i = -2;
+  g_have_prev = false;
+  g_gap = false;
   Ray r = make_ray(pixel);
   vec2 span = intersect_box(r);
   if (!(span.x <= span.y)) {  // missed (also false for NaN)
     res.samples = -1.0;
     return res;
   }
-  float dt = u_box_half.w;
-  int last = int(min(floor((span.y - span.x) / dt), u_value_map.w - 1.0));
-#ifndef SPACE_SKIPPING
+  Lattice L = ray_lattice(r, span.x);
+  int last = int(min(floor(lattice_index(L, span.y)), u_value_map.w - 1.0));
+#ifndef CELL_TRAVERSAL
   for (int i = 0; i <= last; ++i)
-    if (visit(r, span.x, i, res)) break;
+    if (visit(r, L, i, 1, res)) break;
 #else
   // 3D-DDA over the macrocell grid (Amanatides & Woo) in voxel coordinates. Each occupied cell
-  // visits the lattice indices inside it; segment methods also visit one index on each side, so
-  // the segments that leave or enter the cell are not lost.
+  // visits the lattice indices inside it (the multiples of its multiplier M with ADAPTIVE);
+  // segment methods also visit one more on each side, so the segments that leave or enter the
+  // cell are not lost.
   float edge = u_cells.w;
   vec3 x0 = voxel_coords(r.o + span.x * r.d);
   vec3 dv = r.d / u_spacing.xyz;
@@ -120,17 +139,31 @@ RayResult cast_ray(vec2 pixel) {
     float t_out = min(min(t_max.x, t_max.y), t_max.z);
     bool final_cell = t_out >= span.y || any(lessThan(cell, ivec3(0))) || any(greaterThanEqual(cell, grid));
     // Lattice points with t in [t_in, t_out); all remaining ones in the last cell.
-    int first = int(ceil((t_in - span.x) / dt));
-    int end = final_cell ? last : min(last, int(ceil((t_out - span.x) / dt)) - 1);
-    bool occupied = texelFetch(u_occupancy, clamp(cell, ivec3(0), grid - 1), 0).r != 0u;
-    if (occupied) {
-#ifdef SEGMENTS
-      first -= 1;
-      end = min(last, end + 1);
+    int first = int(ceil(lattice_index(L, t_in)));
+    int end = final_cell ? last : min(last, int(ceil(lattice_index(L, t_out))) - 1);
+    ivec3 c = clamp(cell, ivec3(0), grid - 1);
+#ifdef SPACE_SKIPPING
+    bool occupied = texelFetch(u_occupancy, c, 0).r != 0u;
+#else
+    bool occupied = true;
 #endif
-      for (int i = max(next, first); i <= end; ++i)
-        if (visit(r, span.x, i, res)) return res;
+#ifdef ADAPTIVE
+    int m = int(texelFetch(u_stride, c, 0).r);
+#else
+    const int m = 1;
+#endif
+    if (occupied) {
+      int lo = ((first + m - 1) / m) * m;  // first multiple of m in the cell
+#ifdef SEGMENTS
+      lo -= m;
+      end = min(last, (end / m + 1) * m);  // the first multiple of m past the cell
+#endif
+      lo = max(lo, next);
+      for (int i = ((lo + m - 1) / m) * m; i <= end; i += m)
+        if (visit(r, L, i, m, res)) return res;
       next = max(next, end + 1);
+    } else if (max(next, first) <= end) {
+      g_gap = true;  // lattice points skipped: no segment across this cell
     }
     if (final_cell || next > last) break;
     // Step to the neighbour across the nearest face; ties step every tied axis at once.
@@ -159,7 +192,8 @@ RayResult cast_ray_bare(vec2 pixel, ivec2 texel) {
   vec2 span = intersect_box(r);
   int budget = int(texelFetch(u_budget, texel, 0).r);
   float sum = 0.0;
-  for (int i = 0; i < budget; ++i) sum += sample_field(voxel_coords(r.o + (span.x + float(i) * u_box_half.w) * r.d));
+  Lattice L = ray_lattice(r, span.x);
+  for (int i = 0; i < budget; ++i) sum += sample_field(voxel_coords(r.o + lattice_t(L, float(i)) * r.d));
   res.acc = vec4(sum * 1e-9);  // keeps the loop from being optimised away
   res.samples = float(budget);
   return res;

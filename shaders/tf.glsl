@@ -10,3 +10,9 @@ vec4 tf_lookup(float s) {
 float correct_opacity(float a, float dt) {
   return 1.0 - pow(max(1.0 - a, 0.0), dt / u_spacing.w);
 }
+
+// The same correction from a reference length other than the opacity unit (preintegrated
+// segments of the table's step, used for a segment of length dt).
+float correct_opacity_for(float a, float dt, float reference) {
+  return 1.0 - pow(max(1.0 - a, 0.0), dt / reference);
+}

@@ -6,7 +6,7 @@ layout(std140, binding = UBO_RAY) uniform RayUniforms {
   vec4 u_right;      // xyz: camera right; w: half width of the image plane per unit depth (or world units, ortho)
   vec4 u_up;         // xyz: camera up; w: half height likewise
   vec4 u_forward;    // xyz: view direction; w: distance eye -> p0 along it
-  vec4 u_box_half;   // xyz: half the box extent (world); w: step (world units)
+  vec4 u_box_half;   // xyz: half the box extent (world); w: uniform step (world units)
   vec4 u_spacing;    // xyz: voxel spacing; w: opacity unit (world units)
   vec4 u_dims;       // xyz: voxels per axis; w: early-termination opacity
   vec4 u_value_map;  // x, y: texel value -> TF coordinate (a*v + b); z: TF size; w: max samples
@@ -14,5 +14,5 @@ layout(std140, binding = UBO_RAY) uniform RayUniforms {
   vec4 u_cells;      // xyz: macrocell grid; w: cell edge in voxels
   ivec4 u_image;     // x, y: full image size in pixels; z, w: first pixel of this draw (tile)
   vec4 u_peaks;      // x: peak-table bins; y: layers; z: max peaks per segment; w: secant iterations
-  vec4 u_tables;     // x: preintegration table size; y: TF point count (exact TF at peaks)
+  vec4 u_tables;     // x: preintegration table size; y: TF point count (exact TF at peaks); z: differential k; w: minimum step
 };

@@ -261,6 +261,7 @@ ResolvedScene resolve_scene(const Scene& s, const Volume& v) {
   const double min_spacing = std::min({v.spacing.x, v.spacing.y, v.spacing.z});
   r.tf.opacity_unit = s.opacity_unit > 0 ? s.opacity_unit : min_spacing;
   r.step = s.render.step > 0 ? s.render.step : min_spacing;
+  r.min_spacing = min_spacing;
   if (r.step < kMinStepFraction * min_spacing)
     throw SceneError("render.step: " + std::to_string(r.step) + " is below " + std::to_string(kMinStepFraction) +
                      " x the smallest spacing");

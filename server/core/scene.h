@@ -72,6 +72,7 @@ struct ResolvedScene {
   Camera camera;
   TransferFunction tf;  // with opacity_unit set
   double step = 1.0;
+  double min_spacing = 1.0;  // the volume's smallest voxel spacing
   glm::dvec3 box_min, box_max;
 };
 ResolvedScene resolve_scene(const Scene& s, const Volume& v);

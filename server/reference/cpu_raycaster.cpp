@@ -8,6 +8,7 @@
 #include "core/parallel.h"
 #include "core/peaks.h"
 #include "core/preintegration.h"
+#include "core/sampling.h"
 #include "reference/field.h"
 #include "reference/ray_events.h"
 #include "reference/shading.h"
@@ -101,24 +102,47 @@ Image for_each_pixel(const Frame& fr, PixelFn fn) {
 Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceOptions& opt) {
   const Frame fr(v, s);
   const RenderSettings& rs = s.scene.render;
-  const double dt = opt.step > 0 ? opt.step : s.step;
+  SamplingPlan plan = plan_sampling(s, opt.step_scale);
+  if (opt.step > 0 && !plan.differential) plan.step = opt.step;
+  const double dt = plan.step;  // the uniform step: the preintegration table's segment length
   const double stop = opt.early_termination ? rs.early_termination : 2.0;
   const bool peaks_on = rs.classification == Classification::Peaks && rs.peak_mode != PeakMode::DvrOnly;
   const bool preint = rs.classification == Classification::Preint;
   const bool dvr_on = !(peaks_on && rs.peak_mode == PeakMode::PeaksOnly);
+  // Steps that differ from the table's: preintegrated segments corrected for their length.
+  const bool varying_steps = plan.differential || rs.adaptive;
   const PeakTable table = build_peak_table(peaks_on ? find_peaks(s.tf) : std::vector<Peak>{}, fr.lo, fr.hi,
                                            rs.peak_table_bins);
   const PreintegrationTable pre =
       preint ? build_preintegration(s.tf, fr.lo, fr.hi, dt, rs.preint_table_size, preint_method(rs)) : PreintegrationTable{};
+  MacrocellGrid cells;
+  std::vector<uint8_t> multiplier;
+  if (rs.adaptive) {
+    cells = build_macrocells(v, 0, rs.filter == Filter::Tricubic ? FilterSupport::Tricubic : FilterSupport::Trilinear);
+    multiplier = adaptive_multipliers(cells, volume_stddev(v));
+  }
+  // The adaptive multiplier of the macrocell holding the sample at t (the GPU's 3D-DDA cell).
+  auto stride_at = [&](const Ray& r, double t) {
+    if (!rs.adaptive) return 1;
+    const glm::dvec3 x = fr.voxel(r, t) / double(cells.cell);
+    int64_t c[3];
+    for (int a = 0; a < 3; ++a) c[a] = std::clamp<int64_t>(int64_t(std::floor(x[a])), 0, cells.grid[size_t(a)] - 1);
+    return int(multiplier[cells.index(c[0], c[1], c[2])]);
+  };
   return for_each_pixel(fr, [&](const Ray& r, double t0, double t1, Accum& acc, double& samples) {
-    const int64_t last = int64_t(std::floor((t1 - t0) / dt));
+    const RayLattice lattice = ray_lattice(plan, fr.view, r, t0);
+    const int64_t last = std::min<int64_t>(int64_t(std::floor(lattice.index_at(t1))), kMaxSamplesPerRay - 1);
     double t_prev = 0, f_prev = 0;
+    bool first = true;
     for (int64_t i = 0; i <= last; ++i) {
-      const double t = t0 + double(i) * dt;
+      const double t = lattice.t(double(i));
+      const int m = stride_at(r, t);
+      if (i % m != 0) continue;
+      const double step = lattice.step(double(i), m);  // the step this sample stands for
       const double f = fr.field(r, t);
       samples += 1;
       bool peak_hit = false;
-      if (peaks_on && i > 0) {
+      if (peaks_on && !first) {
         for (double pv : peaks_crossed(table, f_prev, f, rs.max_peaks)) {
           const double tr = solve_root(fr, r, t_prev, f_prev, t, f, pv, rs.secant_iterations, samples);
           const glm::dvec4 c = s.tf.eval(pv);
@@ -128,16 +152,21 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
         }
       }
       if (preint) {
-        if (i > 0) {
-          const glm::dvec4 c = lookup_preintegration(pre, f_prev, f);
+        if (!first) {
+          glm::dvec4 c = lookup_preintegration(pre, f_prev, f);
+          if (varying_steps && c.a > 0) {
+            const double a = correct_opacity(c.a, t - t_prev, dt);
+            c = glm::dvec4(glm::dvec3(c) * (a / c.a), a);
+          }
           if (c.a > 0) acc.add(fr.lit(glm::dvec3(c) / c.a, r, t), c.a);
         }
       } else if (dvr_on && !(peak_hit && rs.peak_mode == PeakMode::Xor)) {
         const glm::dvec4 c = s.tf.eval(f);
-        if (c.a > 0) acc.add(fr.lit(glm::dvec3(c), r, t), correct_opacity(c.a, dt, s.tf.opacity_unit));
+        if (c.a > 0) acc.add(fr.lit(glm::dvec3(c), r, t), correct_opacity(c.a, step, s.tf.opacity_unit));
       }
       t_prev = t;
       f_prev = f;
+      first = false;
       if (acc.alpha >= stop) break;
     }
   });

@@ -26,6 +26,7 @@ std::string tf_signature(const TransferFunction& tf, double lo, double hi) {
 
 RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const MacrocellGrid& cells,
                           const RayTables& t, const PixelRect& rect) {
+  const SamplingPlan plan = plan_sampling(s);
   const Volume& v = gv.volume();
   const glm::dvec3 center = (s.box_min + s.box_max) * 0.5;
   const ViewSetup view = setup_view(s.camera, center, s.scene.width, s.scene.height);
@@ -34,7 +35,7 @@ RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const Mac
   u.right = glm::vec4(glm::vec3(view.right), float(view.half_w));
   u.up = glm::vec4(glm::vec3(view.up), float(view.half_h));
   u.forward = glm::vec4(glm::vec3(view.forward), float(view.dist));
-  u.box_half = glm::vec4(glm::vec3((s.box_max - s.box_min) * 0.5), float(s.step));
+  u.box_half = glm::vec4(glm::vec3((s.box_max - s.box_min) * 0.5), float(plan.step));
   u.spacing = glm::vec4(glm::vec3(v.spacing), float(s.tf.opacity_unit));
   u.dims = glm::vec4(float(v.dims()[0]), float(v.dims()[1]), float(v.dims()[2]), float(s.scene.render.early_termination));
   u.value_map = glm::vec4(gv.value_scale(), gv.value_bias(), float(TransferFunction::kTableSize), float(kMaxSamplesPerRay));
@@ -42,7 +43,7 @@ RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const Mac
   u.cells = glm::vec4(float(cells.grid[0]), float(cells.grid[1]), float(cells.grid[2]), float(cells.cell));
   u.image = glm::ivec4(s.scene.width, s.scene.height, rect.x, rect.y);
   u.peaks = glm::vec4(float(t.peak_bins), float(t.peak_layers), float(t.max_peaks), float(t.secant_iterations));
-  u.tables = glm::vec4(float(t.preint_size), float(t.tf_points), 0.f, 0.f);
+  u.tables = glm::vec4(float(t.preint_size), float(t.tf_points), float(plan.k), float(plan.min_step));
   return u;
 }
 
@@ -175,12 +176,32 @@ VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPa
     }
     glBindTextureUnit(kUnitOccupancy, tex.id());
   }
+  if (key.adaptive) bind_multipliers(gv, cells);
   if (stats) {
     stats->empty_cells = occ->empty_cells;
     stats->peaks = peaks.size();
     stats->table_ms = table_ms;
   }
   return key;
+}
+
+// The adaptive multipliers of a volume's grid: data only (no TF), so built once per grid.
+void Raycaster::bind_multipliers(const GpuVolume& gv, const MacrocellGrid& cells) {
+  const std::string key = std::to_string(gv.serial()) + " " + cells.to_string();
+  StrideEntry* e = cache_find(stride_cache_, key);
+  if (!e) {
+    const std::vector<uint8_t> m = adaptive_multipliers(cells, volume_stddev(gv.volume()));
+    StrideEntry n{key, gpu::make_texture(GL_TEXTURE_3D)};
+    glTextureStorage3D(n.texture.id(), 1, GL_R8UI, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]), GLsizei(cells.grid[2]));
+    glTextureParameteri(n.texture.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(n.texture.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    glTextureSubImage3D(n.texture.id(), 0, 0, 0, 0, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]),
+                        GLsizei(cells.grid[2]), GL_RED_INTEGER, GL_UNSIGNED_BYTE, m.data());
+    e = &cache_insert(stride_cache_, std::move(n), kCacheEntries);
+    ++table_builds_;
+  }
+  glBindTextureUnit(kUnitStride, e->texture.id());
 }
 
 void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const std::vector<Peak>& peaks) {
@@ -193,7 +214,7 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
   key << tf_signature(s.tf, lo, hi) << ' ' << to_string(r.classification) << ' ' << r.peak_table_bins << ' '
       << r.max_peaks << ' ' << r.secant_iterations << ' ' << r.preint_table_size << ' ' << r.preint_method << ' '
       << peaks.size() << ' '
-      << (r.classification == Classification::Preint ? s.step : 0.0);
+      << (r.classification == Classification::Preint ? plan_sampling(s).step : 0.0);
   if (const Tables* t = cache_find(tables_cache_, key.str())) {
     if (t->peak_table) glBindTextureUnit(kUnitPeakTable, t->peak_table.id());
     if (t->tf_points) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboTfPoints, t->tf_points.id());
@@ -231,7 +252,7 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
     t.sizes.peak_count = peaks.size();
   }
   if (r.classification == Classification::Preint) {
-    const PreintegrationTable table = build_preintegration(s.tf, lo, hi, s.step, r.preint_table_size,
+    const PreintegrationTable table = build_preintegration(s.tf, lo, hi, plan_sampling(s).step, r.preint_table_size,
                                                            preint_method(r));
     t.preint_table = gpu::make_texture(GL_TEXTURE_2D);
     glTextureStorage2D(t.preint_table.id(), 1, GL_RGBA32F, table.size, table.size);
@@ -337,6 +358,7 @@ RenderResult Raycaster::draw(const GpuVolume& gv, const ResolvedScene& s, const 
         stats->samples_total += n;
         stats->samples_max = std::max<double>(stats->samples_max, n);
         stats->rays_hit++;
+        if (n >= float(kMaxSamplesPerRay)) stats->rays_at_cap++;
       }
       stats->samples_mean = stats->rays_hit ? stats->samples_total / double(stats->rays_hit) : 0.0;
     }

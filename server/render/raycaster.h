@@ -9,6 +9,7 @@
 #include "core/image.h"
 #include "core/occupancy.h"
 #include "core/peaks.h"
+#include "core/sampling.h"
 #include "core/scene.h"
 #include "gpu/gl_objects.h"
 #include "gpu/shader_cache.h"
@@ -60,6 +61,7 @@ class Raycaster {
   VariantKey prepare(const GpuVolume& volume, const ResolvedScene& scene, GpuPath path, RenderStats* stats);
   // Builds and binds the peak table + TF points or the preintegration table the scene needs.
   void upload_tables(const GpuVolume& volume, const ResolvedScene& scene, const std::vector<Peak>& peaks);
+  void bind_multipliers(const GpuVolume& volume, const MacrocellGrid& cells);
   RenderResult draw(const GpuVolume& volume, const ResolvedScene& scene, const VariantKey& key, const PixelRect& rect,
                     bool read_samples, RenderStats* stats);
 
@@ -88,12 +90,16 @@ class Raycaster {
   std::vector<TfTable> tf_tables_;
   std::vector<Tables> tables_cache_;
   std::vector<OccupancyEntry> occupancy_cache_;
+  struct StrideEntry {  // adaptive multipliers of one volume's grid
+    std::string key;
+    gpu::Texture texture;
+  };
+  std::vector<StrideEntry> stride_cache_;
   RayTables tables_;  // what the current frame's tables hold (for the uniforms and stats)
   size_t table_builds_ = 0;
   std::vector<Targets> targets_;  // most recently used first
 };
 
-// Maximum samples per ray the shader will take (guards runaway loops).
-constexpr int kMaxSamplesPerRay = 1 << 20;
+using peakcast::kMaxSamplesPerRay;
 
 }  // namespace peakcast::render

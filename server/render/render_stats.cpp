@@ -13,6 +13,7 @@ nlohmann::json RenderStats::to_json() const {
     j["samples_per_ray"] = samples_mean;
     j["samples_per_ray_max"] = samples_max;
     j["rays_hit"] = rays_hit;
+    j["rays_at_sample_cap"] = rays_at_cap;
   }
   return j;
 }
@@ -23,7 +24,7 @@ std::string RenderStats::to_string() const {
   s << "RenderStats{";
   bool first = true;
   for (const char* key : {"variant", "render_ms", "readback_ms", "table_ms", "samples_per_ray", "samples_per_ray_max",
-                          "rays_hit", "peaks", "empty_macrocells", "tiles"}) {
+                          "rays_hit", "rays_at_sample_cap", "peaks", "empty_macrocells", "tiles"}) {
     if (!j.contains(key)) continue;
     s << (first ? "" : " ") << key << "=" << (j[key].is_string() ? j[key].get<std::string>() : j[key].dump());
     first = false;
@@ -40,9 +41,10 @@ void RenderStats::merge(const RenderStats& t) {
   samples_total += t.samples_total;
   samples_max = std::max(samples_max, t.samples_max);
   rays_hit += t.rays_hit;
+  rays_at_cap += t.rays_at_cap;
   samples_mean = rays_hit ? samples_total / double(rays_hit) : 0.0;
   tiles += t.tiles;
-  if (!has_samples) samples_total = samples_mean = samples_max = 0.0, rays_hit = 0;
+  if (!has_samples) samples_total = samples_mean = samples_max = 0.0, rays_hit = rays_at_cap = 0;
 }
 
 }  // namespace peakcast::render

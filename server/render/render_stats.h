@@ -22,13 +22,14 @@ struct RenderStats {
   double samples_max = 0.0;
   double samples_total = 0.0;
   int64_t rays_hit = 0;
+  int64_t rays_at_cap = 0;  // rays that reached kMaxSamplesPerRay (core/sampling.h)
   int64_t empty_cells = 0;
   size_t peaks = 0;
   int tiles = 1;  // draws that made the image (merge() counts them)
   std::string variant;
 
   // Keys: render_ms, readback_ms, table_ms, variant, peaks, empty_macrocells, tiles and, with
-  // sample counts, samples_per_ray, samples_per_ray_max, rays_hit. The stream adds its frame
+  // sample counts, samples_per_ray, samples_per_ray_max, rays_hit, rays_at_sample_cap. The stream adds its frame
   // keys (type, frame, final, width, height, encode_ms, bytes) to this object.
   nlohmann::json to_json() const;
   // The same keys and values as to_json, as "key=value" pairs in a fixed order.

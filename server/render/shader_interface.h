@@ -15,6 +15,7 @@ constexpr unsigned kUnitOccupancy = 2;   // usampler3D: 1 = some voxel of the ma
 constexpr unsigned kUnitBudget = 3;      // sampler2D: per-pixel sample budget (progressive frames)
 constexpr unsigned kUnitPeakTable = 4;   // sampler2DArray: peak values per (f_front, f_back) bin
 constexpr unsigned kUnitPreint = 5;      // sampler2D: preintegration table
+constexpr unsigned kUnitStride = 6;      // usampler3D: adaptive step multiplier per macrocell
 // Image units (compute path outputs).
 constexpr unsigned kImageColor = 0;
 constexpr unsigned kImageSamples = 1;

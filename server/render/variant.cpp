@@ -16,6 +16,7 @@ std::vector<std::string> interface_defines() {
           "UNIT_BUDGET " + std::to_string(kUnitBudget),
           "UNIT_PEAK_TABLE " + std::to_string(kUnitPeakTable),
           "UNIT_PREINT " + std::to_string(kUnitPreint),
+          "UNIT_STRIDE " + std::to_string(kUnitStride),
           "IMAGE_COLOR " + std::to_string(kImageColor),
           "IMAGE_SAMPLES " + std::to_string(kImageSamples),
           "UBO_RAY " + std::to_string(kUboRay),
@@ -31,6 +32,8 @@ std::vector<std::string> VariantKey::defines() const {
   if (shading) d.push_back("SHADING");
   if (space_skipping) d.push_back("SPACE_SKIPPING");
   if (orthographic) d.push_back("ORTHOGRAPHIC");
+  if (differential) d.push_back("DIFFERENTIAL");
+  if (adaptive) d.push_back("ADAPTIVE");
   if (bare_sampling) d.push_back("BARE_SAMPLING");
   if (peaks) {
     d.push_back("PEAKS");
@@ -51,6 +54,8 @@ std::string VariantKey::name() const {
   if (shading) n += "+shade";
   if (space_skipping) n += "+skip";
   if (orthographic) n += "+ortho";
+  if (differential) n += "+diff";
+  if (adaptive) n += "+adaptive";
   if (bare_sampling) n += "+bare";
   if (rgb8) n += "+rgb8";
   return n;
@@ -60,20 +65,18 @@ nlohmann::json capabilities() {
   return {{"classification", {"post", "preint", "peaks"}},
           {"peak_mode", {"dvr+peaks", "xor", "peaks_only", "dvr_only"}},
           {"max_peaks", {1, 2, 3, 4}},
-          {"sampling", {"uniform"}},
+          {"sampling", {"uniform", "differential"}},
           {"filter", {"trilinear", "tricubic"}},
           {"virtual_samples", {0}},
           {"shading", true},
           {"space_skipping", true},
-          {"adaptive", false},
+          {"adaptive", true},
           {"ray_texture", false},
           {"still_formats", {"jpeg", "png"}}};
 }
 
 void require_supported(const RenderSettings& r) {
-  if (r.sampling != Sampling::Uniform) throw SceneError("render.sampling: 'differential' is not implemented yet");
   if (r.virtual_samples != 0) throw SceneError("render.virtual_samples: virtual samples are not implemented yet");
-  if (r.adaptive) throw SceneError("render.adaptive: adaptive sampling is not implemented yet");
   if (!r.ray_texture.is_null()) throw SceneError("render.ray_texture: ray textures are not implemented yet");
 }
 
@@ -84,6 +87,8 @@ VariantKey choose_variant(const ResolvedScene& s, int64_t empty_cells, GpuPath p
   k.shading = s.scene.render.shading;
   k.space_skipping = s.scene.render.space_skipping && empty_cells > 0;
   k.orthographic = s.camera.orthographic;
+  k.differential = s.scene.render.sampling == Sampling::Differential && !s.camera.orthographic;
+  k.adaptive = s.scene.render.adaptive;
   const RenderSettings& r = s.scene.render;
   // dvr_only, or a TF without peaks, leaves the peak-finding code out (plain postclassification).
   k.peaks = r.classification == Classification::Peaks && r.peak_mode != PeakMode::DvrOnly &&

@@ -159,10 +159,12 @@ std::optional<FrameJob> Session::take_job(Clock::time_point now, std::chrono::mi
     dirty_ = final_pending_ = false;  // validated on input; nothing renderable
     return std::nullopt;
   }
-  if (!job.final) {  // reduced resolution and a coarser step while the input moves
+  if (!job.final) {  // reduced resolution and coarser sampling while the input moves
     job.scene.scene.width = std::max(1, int(job.scene.scene.width * quality_.interactive_scale));
     job.scene.scene.height = std::max(1, int(job.scene.scene.height * quality_.interactive_scale));
-    job.scene.step *= 2.0;
+    // Uniform: twice the step. Differential: the footprint of the smaller image already makes
+    // the steps 1 / interactive_scale longer (s_k counts pixels), so s_k stays.
+    if (job.scene.scene.render.sampling != Sampling::Differential) job.scene.step *= 2.0;
   }
   job.frame_id = next_frame_id_++;
   job.camera_version = camera_version_;

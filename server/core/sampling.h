@@ -1,0 +1,67 @@
+// Where the samples of a ray lie (DESIGN §3 "Sampling", §4a; Knoll §5-§6.2). One definition for
+// the GL ray caster (shaders/raycast_body.glsl mirrors it) and the CPU twin (reference/).
+//
+// Every ray samples a lattice that starts at its entry into the box:
+//     t_j = t_enter + j * (B + A * j / 2),   j = 0, 1, 2, ...
+// computed from j (never accumulated), relative to the box entry (a local origin: no
+// cancellation for a camera far away). Uniform sampling: A = 0, B = the step.
+// Differential sampling (Knoll eq. 14-18): the eye-based sequence T(x) = a x^2 / 2 + b x with
+// b = k = s_k * |u dx + v dy| (the world-space footprint of a pixel's diagonal on the image
+// plane through the camera's focal point) and a = k * |dD/dx| (eq. 10, per ray), entered at
+// the box: A = a, B = max(b + a * x_enter, min_step), where T(x_enter) is the eye-to-entry
+// distance. The step t_{j+1} - t_j grows by a per sample. Orthographic cameras have a constant
+// footprint: differential sampling there is uniform at step max(k, min_step).
+// Adaptive sampling (Knoll §6.2): a macrocell with multiplier M visits only the lattice indices
+// that are multiples of M (eq. 19 is exactly that for the differential lattice); each sample's
+// step is t_{j+M} - t_j, so opacity is corrected for the step actually taken.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/macrocells.h"
+#include "core/scene.h"
+
+namespace peakcast {
+
+// Lattice points a ray visits at most (guards runaway loops; the GPU and the CPU twin stop at
+// the same index). Rays that reach it are counted in the frame stats (rays_at_sample_cap).
+constexpr int kMaxSamplesPerRay = 1 << 20;
+
+// No step below this fraction of the smallest spacing (the converged reference's finest step):
+// keeps s_k -> 0 finite and bounded in time.
+constexpr double kMinDifferentialStepFraction = 1.0 / 64.0;
+
+struct SamplingPlan {
+  bool differential = false;  // perspective camera with sampling = differential
+  double step = 1.0;          // uniform step (also orthographic "differential")
+  double k = 0.0;             // differential: s_k * pixel-diagonal footprint at the focal distance
+  double min_step = 0.0;      // differential: lower bound of every step
+  double pixel_du = 0.0;      // image-plane pixel width per unit depth (|u dx| in eq. 10)
+};
+
+// `step_scale` coarsens the plan (interactive frames): the uniform step, or s_k, times it.
+SamplingPlan plan_sampling(const ResolvedScene& s, double step_scale = 1.0);
+
+struct RayLattice {
+  double t0 = 0.0, A = 0.0, B = 1.0;
+  double t(double j) const { return t0 + j * (B + A * j * 0.5); }
+  // t(j + m) - t(j) without cancellation: the step a sample visited with stride m stands for.
+  double step(double j, int m) const { return m * (B + A * (j + 0.5 * m)); }
+  // The continuous index x with t(x) = t, for t >= t0 (stable form: no cancellation when A -> 0).
+  double index_at(double t) const;
+};
+
+// The lattice of ray `r` entering the box at `t_enter`.
+RayLattice ray_lattice(const SamplingPlan& plan, const ViewSetup& view, const Ray& r, double t_enter);
+
+// Adaptive multiplier per macrocell (index as MacrocellGrid::index): M = floor(2 / m + 1),
+// m = cell stddev / volume stddev, clamped to [1, kMaxAdaptiveMultiplier]; a constant cell or
+// volume (m = 0 or 0 / 0) gets the largest. Depends on the data only, never on the TF.
+constexpr int kMaxAdaptiveMultiplier = 8;
+std::vector<uint8_t> adaptive_multipliers(const MacrocellGrid& cells, double volume_stddev);
+// Standard deviation of the volume's values, from its histogram (bin centres).
+double volume_stddev(const Volume& v);
+
+}  // namespace peakcast
