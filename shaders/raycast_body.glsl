@@ -153,14 +153,22 @@ RayResult cast_ray(vec2 pixel) {
     const int m = 1;
 #endif
     if (occupied) {
-      int lo = ((first + m - 1) / m) * m;  // first multiple of m in the cell
+      // Every m-th lattice index from the first one not yet visited; each sample stands for the
+      // steps up to the next one, the cell's last for those up to the cell's end, so the cells'
+      // samples cover the ray without gaps or overlaps. Segment methods add the single indices
+      // just before and after the cell (one step each).
+      int i = max(next, first);
 #ifdef SEGMENTS
-      lo -= m;
-      end = min(last, (end / m + 1) * m);  // the first multiple of m past the cell
+      if (first - 1 >= next && visit(r, L, first - 1, 1, res)) return res;
 #endif
-      lo = max(lo, next);
-      for (int i = ((lo + m - 1) / m) * m; i <= end; i += m)
-        if (visit(r, L, i, m, res)) return res;
+      for (; i <= end; i += m)
+        if (visit(r, L, i, min(m, end + 1 - i), res)) return res;
+#ifdef SEGMENTS
+      if (end + 1 <= last) {
+        if (visit(r, L, end + 1, 1, res)) return res;
+        end += 1;
+      }
+#endif
       next = max(next, end + 1);
     } else if (max(next, first) <= end) {
       g_gap = true;  // lattice points skipped: no segment across this cell

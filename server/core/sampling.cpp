@@ -52,6 +52,48 @@ RayLattice ray_lattice(const SamplingPlan& plan, const ViewSetup& view, const Ra
   return l;
 }
 
+std::vector<CellCrossing> cells_along(const MacrocellGrid& g, const Ray& r, double t0, double t1,
+                                      const glm::dvec3& spacing, const glm::dvec3& half) {
+  std::vector<CellCrossing> out;
+  const double edge = g.cell;
+  const glm::dvec3 x0 = (r.o + t0 * r.d + half) / spacing;
+  const glm::dvec3 dv = r.d / spacing;
+  int64_t cell[3], step[3];
+  double t_max[3], t_delta[3];
+  for (int a = 0; a < 3; ++a) {
+    cell[a] = std::clamp<int64_t>(int64_t(std::floor(x0[a] / edge)), 0, g.grid[size_t(a)] - 1);
+    step[a] = dv[a] > 0 ? 1 : dv[a] < 0 ? -1 : 0;
+    if (std::abs(dv[a]) < 1e-20) {
+      t_max[a] = t_delta[a] = 3.0e38;
+    } else {
+      const double face = (double(cell[a]) + (dv[a] > 0 ? 1.0 : 0.0)) * edge;
+      t_max[a] = t0 + (face - x0[a]) / dv[a];
+      t_delta[a] = edge / std::abs(dv[a]);
+    }
+  }
+  double t_in = t0;
+  const int64_t guard = 4 * (g.grid[0] + g.grid[1] + g.grid[2]) + 4;
+  for (int64_t k = 0; k < guard; ++k) {
+    const double t_out = std::min({t_max[0], t_max[1], t_max[2]});
+    bool outside = false;
+    int64_t c[3];
+    for (int a = 0; a < 3; ++a) {
+      outside = outside || cell[a] < 0 || cell[a] >= g.grid[size_t(a)];
+      c[a] = std::clamp<int64_t>(cell[a], 0, g.grid[size_t(a)] - 1);
+    }
+    const bool final_cell = t_out >= t1 || outside;
+    out.push_back({g.index(c[0], c[1], c[2]), t_in, final_cell ? t1 : t_out});
+    if (final_cell) break;
+    for (int a = 0; a < 3; ++a)
+      if (t_max[a] <= t_out) {
+        cell[a] += step[a];
+        t_max[a] += t_delta[a];
+      }
+    t_in = t_out;
+  }
+  return out;
+}
+
 std::vector<uint8_t> adaptive_multipliers(const MacrocellGrid& cells, double vol_std) {
   std::vector<uint8_t> m(cells.size(), uint8_t(kMaxAdaptiveMultiplier));
   for (size_t c = 0; c < cells.size(); ++c) {

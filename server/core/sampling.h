@@ -11,9 +11,10 @@
 // the box: A = a, B = max(b + a * x_enter, min_step), where T(x_enter) is the eye-to-entry
 // distance. The step t_{j+1} - t_j grows by a per sample. Orthographic cameras have a constant
 // footprint: differential sampling there is uniform at step max(k, min_step).
-// Adaptive sampling (Knoll §6.2): a macrocell with multiplier M visits only the lattice indices
-// that are multiples of M (eq. 19 is exactly that for the differential lattice); each sample's
-// step is t_{j+M} - t_j, so opacity is corrected for the step actually taken.
+// Adaptive sampling (Knoll §6.2): a macrocell with multiplier M visits every M-th lattice index
+// from its first (eq. 19 is exactly that for the differential lattice); each sample stands for
+// the steps up to the next one (the cell's last: up to the cell's end), t_{j+m} - t_j, so the
+// cells cover the ray without gaps or overlaps and opacity is corrected for the step taken.
 #pragma once
 
 #include <cstdint>
@@ -55,6 +56,15 @@ struct RayLattice {
 
 // The lattice of ray `r` entering the box at `t_enter`.
 RayLattice ray_lattice(const SamplingPlan& plan, const ViewSetup& view, const Ray& r, double t_enter);
+
+// The macrocells a ray crosses between t0 and t1, in order, each with the ray parameters where
+// the ray enters and leaves it: the GL ray caster's 3D-DDA (Amanatides & Woo), in double.
+struct CellCrossing {
+  size_t cell = 0;  // MacrocellGrid::index
+  double t_in = 0, t_out = 0;
+};
+std::vector<CellCrossing> cells_along(const MacrocellGrid& grid, const Ray& r, double t0, double t1,
+                                      const glm::dvec3& spacing, const glm::dvec3& box_half);
 
 // Adaptive multiplier per macrocell (index as MacrocellGrid::index): M = floor(2 / m + 1),
 // m = cell stddev / volume stddev, clamped to [1, kMaxAdaptiveMultiplier]; a constant cell or

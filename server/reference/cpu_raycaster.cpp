@@ -121,24 +121,15 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
     cells = build_macrocells(v, 0, rs.filter == Filter::Tricubic ? FilterSupport::Tricubic : FilterSupport::Trilinear);
     multiplier = adaptive_multipliers(cells, volume_stddev(v));
   }
-  // The adaptive multiplier of the macrocell holding the sample at t (the GPU's 3D-DDA cell).
-  auto stride_at = [&](const Ray& r, double t) {
-    if (!rs.adaptive) return 1;
-    const glm::dvec3 x = fr.voxel(r, t) / double(cells.cell);
-    int64_t c[3];
-    for (int a = 0; a < 3; ++a) c[a] = std::clamp<int64_t>(int64_t(std::floor(x[a])), 0, cells.grid[size_t(a)] - 1);
-    return int(multiplier[cells.index(c[0], c[1], c[2])]);
-  };
   return for_each_pixel(fr, [&](const Ray& r, double t0, double t1, Accum& acc, double& samples) {
     const RayLattice lattice = ray_lattice(plan, fr.view, r, t0);
     const int64_t last = std::min<int64_t>(int64_t(std::floor(lattice.index_at(t1))), kMaxSamplesPerRay - 1);
     double t_prev = 0, f_prev = 0;
     bool first = true;
-    for (int64_t i = 0; i <= last; ++i) {
+    // Visits index i, standing for the m lattice steps after it; true when the ray is opaque.
+    auto visit = [&](int64_t i, int m) {
       const double t = lattice.t(double(i));
-      const int m = stride_at(r, t);
-      if (i % m != 0) continue;
-      const double step = lattice.step(double(i), m);  // the step this sample stands for
+      const double step = lattice.step(double(i), m);
       const double f = fr.field(r, t);
       samples += 1;
       bool peak_hit = false;
@@ -167,7 +158,26 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
       t_prev = t;
       f_prev = f;
       first = false;
-      if (acc.alpha >= stop) break;
+      return acc.alpha >= stop;
+    };
+    if (!rs.adaptive) {
+      for (int64_t i = 0; i <= last; ++i)
+        if (visit(i, 1)) return;
+      return;
+    }
+    // Adaptive: the cells in ray order (the GPU's traversal), every m-th index from each cell's
+    // first, the last one standing for the steps up to the cell's end.
+    int64_t next = 0;
+    const auto crossings = cells_along(cells, r, t0, t1, v.spacing, fr.half);
+    for (size_t k = 0; k < crossings.size() && next <= last; ++k) {
+      const CellCrossing& c = crossings[k];
+      const bool final_cell = k + 1 == crossings.size();
+      const int64_t first_i = int64_t(std::ceil(lattice.index_at(c.t_in)));
+      const int64_t end = final_cell ? last : std::min(last, int64_t(std::ceil(lattice.index_at(c.t_out))) - 1);
+      const int m = multiplier[c.cell];
+      for (int64_t i = std::max(next, first_i); i <= end; i += m)
+        if (visit(i, int(std::min<int64_t>(m, end + 1 - i)))) return;
+      next = std::max(next, end + 1);
     }
   });
 }

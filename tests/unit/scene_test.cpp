@@ -68,6 +68,13 @@ TEST(Scene, Refusals) {
   expect_refused(R"({"volume": "v", "render": {"filter": "nearest"}})", "render.filter");
   expect_refused(R"({"volume": "v", "render": {"max_peaks": 5}})", "render.max_peaks");
   expect_refused(R"({"volume": "v", "render": {"virtual_samples": 4}})", "render.virtual_samples");
+  expect_refused(R"({"volume": "v", "render": {"virtual_samples": 5}})", "render.virtual_samples");
+  expect_refused(R"({"volume": "v", "render": {"s_k": 0}})", "render.s_k");
+  expect_refused(R"({"volume": "v", "render": {"s_k": -1}})", "render.s_k");
+  expect_refused(R"({"volume": "v", "render": {"s_k": "4"}})", "render.s_k");
+  expect_refused(R"({"volume": "v", "render": {"s_k": NaN}})", "not valid JSON");
+  expect_refused(R"({"volume": "v", "render": {"sampling": "adaptive"}})", "render.sampling");
+  expect_refused(R"({"volume": "v", "render": {"adaptive": 1}})", "render.adaptive");
   expect_refused(R"({"volume": "v", "render": {"peak_table_bins": 32}})", "render.peak_table_bins");
   expect_refused(R"({"volume": "v", "render": {"secant_iterations": 17}})", "render.secant_iterations");
   expect_refused(R"({"volume": "v", "render": {"preint_table_size": 2048}})", "render.preint_table_size");

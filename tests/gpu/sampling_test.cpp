@@ -1,0 +1,267 @@
+// Differential and adaptive sampling (issue 10, Knoll §5, §6.2): the GL ray caster against its
+// CPU twin at the same settings, both against the converged reference; differential against
+// uniform on a close-up camera at an equal sample budget; the s_k sweep; adaptive sampling on a
+// constant volume; orthographic "differential" is uniform at the footprint.
+#include <cmath>
+#include <cstring>
+#include <tuple>
+
+#include <glm/geometric.hpp>
+
+#include "core/sampling.h"
+#include "gpu/gpu_fixture.h"
+#include "reference/cpu_raycaster.h"
+
+using namespace peakcast;
+using nlohmann::json;
+
+namespace {
+
+std::shared_ptr<Volume> ml() { return test::make_volume(GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32); }
+
+// A smooth band TF over the Marschner-Lobb range [0, 1].
+const json kBandTf = {{"points", {{0.0, 0.1, 0.2, 0.8, 0.0}, {0.45, 0.3, 0.6, 0.9, 0.05}, {0.6, 0.9, 0.6, 0.3, 0.35},
+                                  {1.0, 1.0, 1.0, 1.0, 0.0}}}};
+
+// Close-up (Knoll Fig. 6 style): the eye just outside a corner of the box, wide angle, so the
+// near samples cover many pixels and the far ones few.
+json close_camera() {
+  return {{"eye", {46, 43, 47}}, {"center", {20, 20, 20}}, {"up", {0, 1, 0}}, {"fov_y", 50}};
+}
+json far_camera() { return {{"eye", {110, 85, 140}}, {"center", {20, 20, 20}}, {"up", {0, 1, 0}}, {"fov_y", 30}}; }
+
+json scene_json(json camera, json render, int size = 64) {
+  render["early_termination"] = 1.0;
+  return {{"image", {{"width", size}, {"height", size}}}, {"camera", camera}, {"tf", kBandTf}, {"render", render}};
+}
+
+double mean_samples(const Image& img) {
+  double n = 0, sum = 0;
+  for (float s : img.samples)
+    if (s >= 0) sum += s, n += 1;
+  return n ? sum / n : 0.0;
+}
+
+struct Twin {
+  std::string name;
+  json camera, render;
+};
+
+// Measured on llvmpipe (Mesa 22.3.6): 120-131 dB for every case (the same lattice, float against
+// double); a lattice 5% off gives 31-36 dB, a wrong adaptive coverage 33 dB. The bound leaves
+// room for other GPUs' filtering precision (the uniform GpuVsCpu cases sit at 58-80 dB).
+constexpr double kMinTwinPsnr = 50.0;
+
+TEST(Differential, GpuMatchesTheCpuTwin) {
+  auto v = ml();
+  render::GpuVolume gv(v);
+  const std::vector<Twin> twins = {
+      {"close post trilinear", close_camera(), {{"sampling", "differential"}, {"s_k", 2}}},
+      {"far post trilinear", far_camera(), {{"sampling", "differential"}, {"s_k", 2}}},
+      {"close post tricubic", close_camera(), {{"sampling", "differential"}, {"s_k", 2}, {"filter", "tricubic"}}},
+      {"close peaks", close_camera(), {{"sampling", "differential"}, {"s_k", 2}, {"classification", "peaks"}}},
+      {"close preint", close_camera(), {{"sampling", "differential"}, {"s_k", 2}, {"classification", "preint"}}},
+      {"close shading, no skipping", close_camera(),
+       {{"sampling", "differential"}, {"s_k", 1}, {"shading", true}, {"space_skipping", false}}},
+  };
+  for (const auto& t : twins) {
+    const ResolvedScene s = test::make_scene(*v, scene_json(t.camera, t.render));
+    render::RenderStats st;
+    const Image g = test::render_gpu(gv, s, render::GpuPath::Fragment, &st);
+    const Image c = reference::render_reference(*v, s);
+    const auto e = reference::compare(g, c);
+    std::printf("%-28s %-36s PSNR %.1f dB, samples/ray GPU %.1f CPU %.1f\n", t.name.c_str(), st.variant.c_str(), e.psnr,
+                mean_samples(g), mean_samples(c));
+    EXPECT_NE(st.variant.find("+diff"), std::string::npos) << t.name;
+    EXPECT_GE(e.psnr, kMinTwinPsnr) << t.name;
+    if (e.psnr < kMinTwinPsnr) test::save_artifacts(g, c, "diff_twin");
+    EXPECT_NEAR(mean_samples(g), mean_samples(c), 0.02 * mean_samples(c) + 0.5) << t.name;
+  }
+}
+
+TEST(Differential, StepGrowsAlongTheRayAndEntersCellsWithoutResampling) {
+  auto v = ml();
+  const ResolvedScene s = test::make_scene(*v, scene_json(close_camera(), {{"sampling", "differential"}, {"s_k", 4}}));
+  const SamplingPlan plan = plan_sampling(s);
+  ASSERT_TRUE(plan.differential);
+  const ViewSetup view = setup_view(s.camera, (s.box_min + s.box_max) * 0.5, s.scene.width, s.scene.height);
+  const Ray r = make_ray(view, 32, 32);
+  double t0, t1;
+  ASSERT_TRUE(intersect_box(r, (s.box_max - s.box_min) * 0.5, t0, t1));
+  const RayLattice l = ray_lattice(plan, view, r, t0);
+  EXPECT_GT(l.A, 0.0);
+  double prev_step = 0;
+  for (int j = 0; j < 50; ++j) {
+    const double step = l.t(j + 1) - l.t(j);
+    EXPECT_NEAR(step, l.step(j, 1), 1e-9);
+    EXPECT_NEAR(step - prev_step, j ? l.A : step, 1e-9);  // grows by a per sample (eq. 17)
+    EXPECT_NEAR(l.index_at(l.t(j)), j, 1e-6);            // eq. 18 inverts the lattice
+    prev_step = step;
+  }
+  // A cell entered at any t restarts at the first lattice index at or after it: never one
+  // that was sampled already, never one skipped.
+  for (double t : {t0 + 0.3, t0 + 7.77, t0 + 20.0}) {
+    const double x = l.index_at(t);
+    EXPECT_GE(l.t(std::ceil(x)), t - 1e-9);
+    EXPECT_LT(l.t(std::ceil(x) - 1), t);
+  }
+}
+
+// Knoll §7.2 / Table 2: differential against uniform sampling on a close-up at the same cost.
+// Cost is the mean number of samples per ray (the machine-independent part of frame time); the
+// uniform step is matched to the differential run's count. The judge is the converged image.
+struct EqualCost {
+  double samples, psnr_diff, psnr_uniform, uniform_step;
+};
+
+EqualCost differential_vs_uniform(const Volume& v, render::GpuVolume& gv, json tf, double sk, bool early_termination) {
+  json dj = scene_json(close_camera(), {{"sampling", "differential"}, {"s_k", sk}}, 96);
+  dj["tf"] = tf;
+  if (early_termination) dj["render"].erase("early_termination");
+  const ResolvedScene sd = test::make_scene(v, dj);
+  const auto conv = reference::render_converged(v, sd, reference::OpticalModel::Dvr, 1e-4);
+  EXPECT_TRUE(conv.converged);
+  const Image d = test::render_gpu(gv, sd, render::GpuPath::Fragment);
+  EqualCost r{mean_samples(d), reference::compare(d, conv.image).psnr, 0, 1.0};
+  for (int k = 0; k < 5; ++k) {  // match the sample count (within 2%)
+    json uj = dj;
+    uj["render"].erase("sampling");
+    uj["render"]["step"] = r.uniform_step;
+    const Image u = test::render_gpu(gv, test::make_scene(v, uj), render::GpuPath::Fragment);
+    r.psnr_uniform = reference::compare(u, conv.image).psnr;
+    const double ratio = mean_samples(u) / r.samples;
+    if (std::abs(ratio - 1.0) < 0.02) break;
+    r.uniform_step *= ratio;
+  }
+  return r;
+}
+
+TEST(Differential, AgainstUniformOnACloseUpAtEqualSamples) {
+  auto v = ml();
+  render::GpuVolume gv(v);
+  const json opaque = {{"points", {{0.0, 0.1, 0.2, 0.8, 0.0}, {0.45, 0.3, 0.6, 0.9, 0.15}, {0.6, 0.9, 0.6, 0.3, 1.0},
+                                   {1.0, 1.0, 1.0, 1.0, 0.0}}}};
+  std::printf("%-22s %5s %9s %12s %12s %10s\n", "scene", "s_k", "samples", "diff_dB", "uniform_dB", "step_u");
+  for (const auto& [name, tf, et] : {std::tuple{"band", kBandTf, false}, std::tuple{"opaque, early stop", opaque, true}})
+    for (double sk : {1.0, 4.0}) {
+      const EqualCost r = differential_vs_uniform(*v, gv, tf, sk, et);
+      std::printf("%-22s %5.1f %9.1f %12.2f %12.2f %10.3f\n", name, sk, r.samples, r.psnr_diff, r.psnr_uniform,
+                  r.uniform_step);
+      // Measured on llvmpipe: differential 0.15-0.65 dB below uniform at the same sample count.
+      // Knoll's construction (eq. 14-17) grows the step by a = k |dD/dx| per sample, a few per
+      // cent over these rays, so it samples almost uniformly at the footprint-derived step; the
+      // per-ray converged image rewards no particular depth. The bound catches a broken lattice
+      // (a skipped or doubled sample costs several dB), not a win the method does not have here.
+      EXPECT_GT(r.psnr_diff, r.psnr_uniform - 1.0) << name << " s_k " << sk;
+      EXPECT_GT(r.psnr_diff, 30.0) << name << " s_k " << sk;
+    }
+}
+
+// s_k from 1e3 to 1e-3: every image finite, the samples bounded by the minimum step, and the
+// error falling as s_k falls until the minimum step takes over.
+TEST(Differential, SkSweepIsStableAndConverges) {
+  auto v = ml();
+  render::GpuVolume gv(v);
+  const ResolvedScene s0 = test::make_scene(*v, scene_json(close_camera(), {}, 48));
+  const auto conv = reference::render_converged(*v, s0, reference::OpticalModel::Dvr, 1e-4);
+  ASSERT_TRUE(conv.converged);
+  const double diag = glm::length(s0.box_max - s0.box_min);
+  const double max_samples = diag / (kMinDifferentialStepFraction * s0.min_spacing) + 2;
+  std::printf("%8s %10s %10s %10s %8s\n", "s_k", "samples", "max", "RMSE", "ms");
+  std::vector<double> rmse;
+  const std::vector<double> sks = {1e3, 1e2, 10, 1, 0.1, 1e-2, 1e-3};
+  for (double sk : sks) {
+    const ResolvedScene s = test::make_scene(*v, scene_json(close_camera(), {{"sampling", "differential"}, {"s_k", sk}}, 48));
+    render::RenderStats st;
+    const Image g = test::render_gpu(gv, s, render::GpuPath::Fragment, &st);
+    ASSERT_TRUE(test::all_finite(g)) << "s_k " << sk;
+    const auto e = reference::compare(g, conv.image);
+    rmse.push_back(e.rmse);
+    std::printf("%8g %10.1f %10.0f %10.3e %8.1f\n", sk, st.samples_mean, st.samples_max, e.rmse, st.render_ms);
+    EXPECT_LE(st.samples_max, max_samples) << "s_k " << sk;
+    EXPECT_EQ(st.rays_at_cap, 0);
+  }
+  // Falling all the way (each at most 5% above the one before: 1e3 and 1e2 both take one sample
+  // per ray); below s_k ~ 0.01 the minimum step holds the first step and only the growth a
+  // still shrinks with s_k.
+  for (size_t i = 1; i < rmse.size(); ++i) EXPECT_LT(rmse[i], rmse[i - 1] * 1.05) << "s_k " << sks[i];
+  EXPECT_LT(rmse.back(), rmse.front() * 0.01);
+}
+
+TEST(Differential, OrthographicIsUniformAtTheFootprint) {
+  auto v = ml();
+  render::GpuVolume gv(v);
+  const json cam = {{"eye", {20, 20, 120}}, {"center", {20, 20, 20}}, {"up", {0, 1, 0}}, {"projection", "orthographic"},
+                    {"height", 60}};
+  const ResolvedScene sd = test::make_scene(*v, scene_json(cam, {{"sampling", "differential"}, {"s_k", 3}}));
+  const SamplingPlan plan = plan_sampling(sd);
+  EXPECT_FALSE(plan.differential);
+  EXPECT_NEAR(plan.step, 3 * std::hypot(60.0 / 64, 60.0 / 64), 1e-9);  // s_k x the pixel diagonal
+  render::RenderStats st;
+  const Image d = test::render_gpu(gv, sd, render::GpuPath::Fragment, &st);
+  EXPECT_EQ(st.variant.find("+diff"), std::string::npos) << st.variant;
+  const Image u = test::render_gpu(gv, test::make_scene(*v, scene_json(cam, {{"step", plan.step}})), render::GpuPath::Fragment);
+  EXPECT_GE(reference::compare(d, u).psnr, 100.0);
+}
+
+// A constant volume: any step integrates it exactly (Beer-Lambert with the opacity corrected
+// for the step taken), so adaptive sampling takes the largest multiplier everywhere and must
+// give the uniform image with far fewer samples (1/8 inside a cell; each cell restarts at its
+// first lattice index, so about 1/6 over a ray).
+TEST(Adaptive, ConstantVolumeSameImageEighthOfTheSamples) {
+  auto v = test::make_volume(GeneratorKind::Blobs, {48, 48, 48}, SourceType::U8);
+  std::memset(v->data(), 100, size_t(v->voxel_count()));
+  v->finalize_statistics();
+  render::GpuVolume gv(v);
+  const json tf = {{"points", {{0, 0, 0, 0, 0}, {255, 1, 0.8, 0.5, 0.5}}}};
+  json over = {{"image", {{"width", 64}, {"height", 64}}}, {"tf", tf}, {"camera", far_camera()},
+               {"render", {{"step", 0.5}, {"early_termination", 1.0}}}};
+  render::RenderStats su, sa;
+  const Image u = test::render_gpu(gv, test::make_scene(*v, over), render::GpuPath::Fragment, &su);
+  over["render"]["adaptive"] = true;
+  const ResolvedScene sa_scene = test::make_scene(*v, over);
+  const Image a = test::render_gpu(gv, sa_scene, render::GpuPath::Fragment, &sa);
+  const auto e = reference::compare(a, u);
+  std::printf("constant volume: uniform %.1f samples/ray, adaptive %.1f (%s); PSNR %.1f dB\n", su.samples_mean,
+              sa.samples_mean, sa.variant.c_str(), e.psnr);
+  EXPECT_NE(sa.variant.find("+adaptive"), std::string::npos);
+  EXPECT_GE(e.psnr, 55.0);
+  EXPECT_LT(sa.samples_mean, su.samples_mean / 4.0);
+  EXPECT_GE(reference::compare(a, reference::render_reference(*v, sa_scene)).psnr, 55.0);
+}
+
+TEST(Adaptive, MultipliersFollowTheCellsDeviation) {
+  auto v = ml();
+  const MacrocellGrid cells = build_macrocells(*v);
+  const double vs = volume_stddev(*v);
+  ASSERT_GT(vs, 0);
+  const auto m = adaptive_multipliers(cells, vs);
+  for (size_t c = 0; c < cells.size(); ++c) {
+    const double ratio = cells.stddev[c] / vs;
+    const int want = ratio > 0 ? int(std::clamp(std::floor(2 / ratio + 1), 1.0, double(kMaxAdaptiveMultiplier)))
+                               : kMaxAdaptiveMultiplier;
+    ASSERT_EQ(int(m[c]), want) << c;
+  }
+  // Zero variance guarded: a constant volume gets the largest multiplier, not a division by 0.
+  const auto flat = adaptive_multipliers(cells, 0.0);
+  for (uint8_t x : flat) ASSERT_EQ(int(x), kMaxAdaptiveMultiplier);
+}
+
+TEST(Adaptive, GpuMatchesTheCpuTwinAndTheReference) {
+  auto v = ml();
+  render::GpuVolume gv(v);
+  for (const json& render : {json{{"adaptive", true}, {"step", 0.25}, {"space_skipping", false}},
+                             json{{"adaptive", true}, {"step", 0.25}},
+                             json{{"adaptive", true}, {"sampling", "differential"}, {"s_k", 1}}}) {
+    const ResolvedScene s = test::make_scene(*v, scene_json(far_camera(), render));
+    render::RenderStats st;
+    const Image g = test::render_gpu(gv, s, render::GpuPath::Fragment, &st);
+    const Image c = reference::render_reference(*v, s);
+    const auto e = reference::compare(g, c);
+    std::printf("%-70s %-40s PSNR %.1f dB, samples/ray %.1f vs %.1f\n", render.dump().c_str(), st.variant.c_str(), e.psnr,
+                mean_samples(g), mean_samples(c));
+    EXPECT_GE(e.psnr, kMinTwinPsnr) << render.dump();
+  }
+}
+
+}  // namespace
