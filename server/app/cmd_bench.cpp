@@ -136,6 +136,7 @@ void add_bench_commands(CLI::App& app, Runner& run) {
 
   add_bench_serve_command(*bench, run);
   add_bench_soak_command(*bench, run);
+  add_bench_sampling_command(*bench, run);
   add_bench_frame_commands(*bench, run);
 
   auto pa = std::make_shared<PeaksArgs>();
