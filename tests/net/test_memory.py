@@ -2,10 +2,10 @@
 """Memory over many sessions (issue 14, point 5): 1000 WebSocket sessions opened (hello, welcome,
 a first frame, a TF and a render-settings change) and closed, 10 at a time; the server's RSS at
 the end is within 5% of what it was after the first 100 (the warm-up: shader variants, encoder
-pools, allocator arenas). Under ASan the same run goes through the leak checker (scripts/test.sh
-runs the net label with detect_leaks=1 and the GL driver's own allocations suppressed in
-tests/lsan.supp), so a per-session leak fails there by name even when it is too small to see in
-RSS; under a sanitizer the RSS bound is not asserted (quarantine and shadow memory grow by design)."""
+pools, allocator arenas). Under a sanitizer the RSS bound is not asserted (quarantine and shadow
+memory grow by design). The leak checker sees the same layers in tests/net/session_leak_test.cpp
+(1000 sessions without GL, unit label, run under ASan with detect_leaks=1): Mesa's own
+allocations, some made from JIT code with no stack to suppress, keep LSan off for this one."""
 import asyncio, json, os, pathlib, sys, time
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
