@@ -19,10 +19,11 @@ struct RayResult {
 
 vec3 voxel_coords(vec3 p) { return (p + u_box_half.xyz) / u_spacing.xyz; }
 
-#if defined(PEAKS) || defined(PREINTEGRATION)
+#if defined(PEAKS) || defined(PREINTEGRATION) || defined(VIRTUAL_SAMPLES)
 #define SEGMENTS  // methods that look at the segment between consecutive samples
 #endif
-#if defined(DIFFERENTIAL) || defined(ADAPTIVE)
+#define EXTENSION 1  // lattice points visited on each side of an occupied cell's run
+#if defined(DIFFERENTIAL) || defined(ADAPTIVE) || defined(VIRTUAL_SAMPLES)
 #define VARYING_STEPS  // segments differ from the preintegration table's step
 #endif
 #if defined(SPACE_SKIPPING) || defined(ADAPTIVE)
@@ -41,15 +42,17 @@ vec3 voxel_coords(vec3 p) { return (p + u_box_half.xyz) / u_spacing.xyz; }
 float g_prev_t, g_prev_f;
 bool g_have_prev, g_gap;
 
-// Visits lattice index i, standing for the step to index i + m: peaks in the segment ending
-// here, then the sample (post-classified, or the pre-integrated segment). Returns true when the
-// ray is opaque enough to stop.
-bool visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
-  float dt = lattice_step(L, float(i), float(m));
-  float t = lattice_t(L, float(i));
-  vec3 x = voxel_coords(r.o + t * r.d);
-  float f = sample_field(x);
-  res.samples += 1.0;
+#ifdef VIRTUAL_SAMPLES
+#define SAMPLE_GRADIENT(x, g) (g)  // interpolated like the value (Lee §4)
+#else
+#define SAMPLE_GRADIENT(x, g) field_gradient(x)
+#endif
+
+// One sample of the ray (true or virtual) at t with value f, standing for the step dt: peaks in
+// the segment from the previous sample, then the sample (post-classified, or the pre-integrated
+// segment). g: its gradient (virtual samples only; otherwise computed at x when shading needs
+// it). Returns true when the ray is opaque enough to stop.
+bool consume(Ray r, float t, float f, vec3 x, vec3 g, float dt, inout RayResult res) {
   bool segment = g_have_prev && !g_gap;
   bool peak_hit = false;
 #ifdef PEAKS
@@ -67,7 +70,7 @@ bool visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
     if (c.a > 0.0) {
       vec3 rgb = c.rgb / c.a;
 #ifdef SHADING
-      rgb = shade(rgb, field_gradient(x), r.d);  // at the segment's end, as preintegration does
+      rgb = shade(rgb, SAMPLE_GRADIENT(x, g), r.d);  // at the segment's end, as preintegration does
 #endif
       composite(res.acc, rgb, c.a);
     }
@@ -81,7 +84,7 @@ bool visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
     if (c.a > 0.0) {
       vec3 rgb = c.rgb;
 #ifdef SHADING
-      rgb = shade(rgb, field_gradient(x), r.d);
+      rgb = shade(rgb, SAMPLE_GRADIENT(x, g), r.d);
 #endif
       composite(res.acc, rgb, correct_opacity(c.a, dt));
     }
@@ -94,12 +97,133 @@ bool visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
   return res.acc.a >= u_dims.w;
 }
 
+#ifdef VIRTUAL_SAMPLES
+// Virtual samples (Lee et al. 2010, §3.1, §4): between consecutive true samples j and j+1, k
+// more (VIRTUAL_SAMPLES = 3 or 7) on the Catmull-Rom spline through the true samples j-1..j+2
+// (in index space; at a run's ends the end sample is repeated), gradients likewise; each of the
+// k+1 sub-samples stands for 1/(k+1) of the step. One new true sample per step: the true samples
+// wait in a window of four and go out one step late, with the virtual ones that follow them.
+float w_t[4], w_f[4], w_dt[4];
+vec3 w_g[4];
+int w_n;  // true samples waiting (0..3 before a push)
+
+float catmull_rom(float p0, float p1, float p2, float p3, float s) {
+  return 0.5 * (2.0 * p1 + (p2 - p0) * s + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * s * s +
+                (3.0 * p1 - p0 - 3.0 * p2 + p3) * s * s * s);
+}
+vec3 catmull_rom3(vec3 p0, vec3 p1, vec3 p2, vec3 p3, float s) {
+  return 0.5 * (2.0 * p1 + (p2 - p0) * s + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * s * s +
+                (3.0 * p1 - p0 - 3.0 * p2 + p3) * s * s * s);
+}
+
+// Sends out true sample a (window slot) and the virtual samples between it and slot a + 1 that
+// lie before t_limit, with p0 = slot a - 1 (or a) and p3 = slot a + 2 (or a + 1).
+bool vs_emit(Ray r, int a, bool has_prev, bool has_next2, float t_limit, inout RayResult res) {
+  const float k = float(VIRTUAL_SAMPLES);
+  float sub = w_dt[a] / (k + 1.0);
+  if (consume(r, w_t[a], w_f[a], vec3(0.0), w_g[a], sub, res)) return true;
+  int p0 = has_prev ? a - 1 : a, p3 = has_next2 ? a + 2 : a + 1;
+  float span = w_t[a + 1] - w_t[a];
+  for (int q = 1; q <= VIRTUAL_SAMPLES; ++q) {
+    float s = float(q) / (k + 1.0);
+    if (w_t[a] + s * span > t_limit) break;
+    float f = catmull_rom(w_f[p0], w_f[a], w_f[a + 1], w_f[p3], s);
+    vec3 g = catmull_rom3(w_g[p0], w_g[a], w_g[a + 1], w_g[p3], s);
+    if (consume(r, w_t[a] + s * span, f, vec3(0.0), g, sub, res)) return true;
+  }
+  return false;
+}
+
+// Everything still waiting: the last true sample stands for its whole step.
+bool vs_flush(Ray r, inout RayResult res) {
+  bool done = res.acc.a >= u_dims.w;
+  if (!done && w_n >= 2) done = vs_emit(r, w_n - 2, w_n >= 3, false, 3.0e38, res);
+  if (!done && w_n >= 1) done = consume(r, w_t[w_n - 1], w_f[w_n - 1], vec3(0.0), w_g[w_n - 1], w_dt[w_n - 1], res);
+  w_n = 0;
+  return done;
+}
+
+bool vs_push(Ray r, float t, float f, vec3 g, float dt, inout RayResult res) {
+  if (w_n == 4) {  // slide: slot 0 went out already
+    for (int s = 0; s < 3; ++s) {
+      w_t[s] = w_t[s + 1];
+      w_f[s] = w_f[s + 1];
+      w_g[s] = w_g[s + 1];
+      w_dt[s] = w_dt[s + 1];
+    }
+    w_n = 3;
+  }
+  w_t[w_n] = t;
+  w_f[w_n] = f;
+  w_g[w_n] = g;
+  w_dt[w_n] = dt;
+  ++w_n;
+  // With samples j-1, j, j+1, j+2 (or j, j+1, j+2 at a run's start) the segment j..j+1 is known.
+  if (w_n == 3) return vs_emit(r, 0, false, true, 3.0e38, res);
+  if (w_n == 4) return vs_emit(r, 1, true, true, 3.0e38, res);
+  return false;
+}
+
+// The ray's end. When its last lattice point was visited, one more true sample past the exit
+// (index last + 1) closes the spline, and the virtual samples up to the exit go out: the ray
+// ends like a ray sampled at the sub-step would (its last sample within one sub-step of the
+// exit), not one whole step beyond it.
+void vs_finish(Ray r, Lattice L, int last, float t_exit, inout RayResult res) {
+  if (res.acc.a >= u_dims.w || w_n == 0) return;
+  if (w_t[w_n - 1] != lattice_t(L, float(last))) {  // the ray ended in a skipped cell
+    vs_flush(r, res);
+    return;
+  }
+  float t = lattice_t(L, float(last + 1));
+  vec3 x = voxel_coords(r.o + t * r.d);
+  float f = sample_field(x);
+  res.samples += 1.0;
+#ifdef SHADING
+  vec3 g = field_gradient(x);
+#else
+  vec3 g = vec3(0.0);
+#endif
+  if (vs_push(r, t, f, g, lattice_step(L, float(last + 1), 1.0), res)) return;
+  // Pending now: [..., last, last + 1]; the extra sample itself is not composited.
+  vs_emit(r, w_n - 2, w_n >= 3, false, t_exit, res);
+  w_n = 0;
+}
+#endif
+
+// Visits lattice index i, standing for the step to index i + m. Returns true when the ray is
+// opaque enough to stop.
+bool visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
+  float dt = lattice_step(L, float(i), float(m));
+  float t = lattice_t(L, float(i));
+  vec3 x = voxel_coords(r.o + t * r.d);
+  float f = sample_field(x);
+  res.samples += 1.0;
+#ifdef VIRTUAL_SAMPLES
+  if (g_gap && w_n > 0) {  // lattice points were skipped: the run before the gap ends here
+    g_gap = false;          // (its samples are contiguous among themselves)
+    if (vs_flush(r, res)) return true;
+    g_gap = true;
+  }
+#ifdef SHADING
+  vec3 g = field_gradient(x);
+#else
+  vec3 g = vec3(0.0);
+#endif
+  return vs_push(r, t, f, g, dt, res);
+#else
+  return consume(r, t, f, x, vec3(0.0), dt, res);
+#endif
+}
+
 RayResult cast_ray(vec2 pixel) {
   RayResult res;
   res.acc = vec4(0.0);
   res.samples = 0.0;
   g_have_prev = false;
   g_gap = false;
+#ifdef VIRTUAL_SAMPLES
+  w_n = 0;
+#endif
   Ray r = make_ray(pixel);
   vec2 span = intersect_box(r);
   if (!(span.x <= span.y)) {  // missed (also false for NaN)
@@ -159,12 +283,13 @@ RayResult cast_ray(vec2 pixel) {
       // just before and after the cell (one step each).
       int i = max(next, first);
 #ifdef SEGMENTS
-      if (first - 1 >= next && visit(r, L, first - 1, 1, res)) return res;
+      for (int e = EXTENSION; e >= 1; --e)
+        if (first - e >= next && visit(r, L, first - e, 1, res)) return res;
 #endif
       for (; i <= end; i += m)
         if (visit(r, L, i, min(m, end + 1 - i), res)) return res;
 #ifdef SEGMENTS
-      if (end + 1 <= last) {
+      for (int e = 1; e <= EXTENSION && end + 1 <= last; ++e) {
         if (visit(r, L, end + 1, 1, res)) return res;
         end += 1;
       }
@@ -183,6 +308,9 @@ RayResult cast_ray(vec2 pixel) {
       }
     t_in = t_out;
   }
+#endif
+#ifdef VIRTUAL_SAMPLES
+  vs_finish(r, L, last, span.y, res);
 #endif
   return res;
 }

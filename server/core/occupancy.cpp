@@ -8,7 +8,7 @@
 namespace peakcast {
 
 Occupancy classify_cells(const MacrocellGrid& grid, const TransferFunction& tf, double lo, double hi,
-                         const std::vector<double>& peak_values, int n) {
+                         const std::vector<double>& peak_values, int n, double overshoot) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::vector<float> table = tf.bake(n, lo, hi);
   // Sparse table of maxima over power-of-two runs of opacity entries.
@@ -28,10 +28,12 @@ Occupancy classify_cells(const MacrocellGrid& grid, const TransferFunction& tf, 
   Occupancy out;
   out.occupied.resize(grid.size());
   for (size_t c = 0; c < grid.size(); ++c) {
-    const int a = std::clamp(int(std::floor((grid.min[c] - lo) * scale)) - 1, 0, n - 1);
-    const int b = std::clamp(int(std::ceil((grid.max[c] - lo) * scale)) + 1, 0, n - 1);
+    const double widen = overshoot * (double(grid.max[c]) - double(grid.min[c]));
+    const double cmin = grid.min[c] - widen, cmax = grid.max[c] + widen;
+    const int a = std::clamp(int(std::floor((cmin - lo) * scale)) - 1, 0, n - 1);
+    const int b = std::clamp(int(std::ceil((cmax - lo) * scale)) + 1, 0, n - 1);
     bool visible = range_max(a, b) > 0.f;
-    for (double v : peak_values) visible = visible || (v >= grid.min[c] && v <= grid.max[c]);
+    for (double v : peak_values) visible = visible || (v >= cmin && v <= cmax);
     out.occupied[c] = visible ? 1 : 0;
     out.empty_cells += out.occupied[c] ? 0 : 1;
   }

@@ -21,8 +21,11 @@ struct Occupancy {
 // linear filtering, so each cell's range is widened by one table entry on each side.
 // With peak finding, a cell whose range holds a peak value is occupied too (a Dirac-like peak is
 // narrower than a table entry, so the opacity table alone would call it empty).
+// `overshoot`: each cell's [m, M] is widened by overshoot * (M - m) on both sides first; virtual
+// samples use 1/8, the most a Catmull-Rom segment overshoots its samples (Lee et al. eq. 8).
+constexpr double kCatmullRomOvershoot = 1.0 / 8.0;
 Occupancy classify_cells(const MacrocellGrid& grid, const TransferFunction& tf, double lo, double hi,
                          const std::vector<double>& peak_values = {},
-                         int table_size = TransferFunction::kTableSize);
+                         int table_size = TransferFunction::kTableSize, double overshoot = 0.0);
 
 }  // namespace peakcast

@@ -39,8 +39,11 @@ struct Frame {
   }
   glm::dvec3 voxel(const Ray& r, double t) const { return (r.o + t * r.d + half) / v.spacing; }
   double field(const Ray& r, double t) const { return sample(v, voxel(r, t), filter); }
-  glm::dvec3 lit(const glm::dvec3& rgb, const Ray& r, double t) const {
-    return shading ? shade(rgb, gradient(v, voxel(r, t), filter) / (hi - lo), r.d, min_spacing) : rgb;
+  glm::dvec3 lit(const glm::dvec3& rgb, const Ray& r, double t) const { return lit_with(rgb, grad(r, t), r); }
+  glm::dvec3 grad(const Ray& r, double t) const { return gradient(v, voxel(r, t), filter); }
+  // Shaded with a given gradient (data units per voxel): virtual samples interpolate it.
+  glm::dvec3 lit_with(const glm::dvec3& rgb, const glm::dvec3& g, const Ray& r) const {
+    return shading ? shade(rgb, g / (hi - lo), r.d, min_spacing) : rgb;
   }
 };
 
@@ -53,6 +56,13 @@ struct Accum {
     alpha += w;
   }
 };
+
+// Catmull-Rom through p0..p3, between p1 (u = 0) and p2 (u = 1): twin of the shader's.
+template <typename T>
+T catmull_rom(const T& p0, const T& p1, const T& p2, const T& p3, double u) {
+  return 0.5 * (2.0 * p1 + (p2 - p0) * u + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * u * u +
+                (3.0 * p1 - p0 - 3.0 * p2 + p3) * u * u * u);
+}
 
 // Twin of shaders/peak_find.glsl solve_root.
 double solve_root(const Frame& fr, const Ray& r, double t0, double f0, double t1, double f1, double v, int iters,
@@ -110,7 +120,7 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
   const bool preint = rs.classification == Classification::Preint;
   const bool dvr_on = !(peaks_on && rs.peak_mode == PeakMode::PeaksOnly);
   // Steps that differ from the table's: preintegrated segments corrected for their length.
-  const bool varying_steps = plan.differential || rs.adaptive;
+  const bool varying_steps = plan.differential || rs.adaptive || rs.virtual_samples;
   const PeakTable table = build_peak_table(peaks_on ? find_peaks(s.tf) : std::vector<Peak>{}, fr.lo, fr.hi,
                                            rs.peak_table_bins);
   const PreintegrationTable pre =
@@ -126,12 +136,9 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
     const int64_t last = std::min<int64_t>(int64_t(std::floor(lattice.index_at(t1))), kMaxSamplesPerRay - 1);
     double t_prev = 0, f_prev = 0;
     bool first = true;
-    // Visits index i, standing for the m lattice steps after it; true when the ray is opaque.
-    auto visit = [&](int64_t i, int m) {
-      const double t = lattice.t(double(i));
-      const double step = lattice.step(double(i), m);
-      const double f = fr.field(r, t);
-      samples += 1;
+    // One sample (true or virtual) at t with value f and gradient g (raw units), standing for
+    // `step`; true when the ray is opaque. Twin of consume() in shaders/raycast_body.glsl.
+    auto consume = [&](double t, double f, const glm::dvec3& g, double step) {
       bool peak_hit = false;
       if (peaks_on && !first) {
         for (double pv : peaks_crossed(table, f_prev, f, rs.max_peaks)) {
@@ -149,20 +156,83 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
             const double a = correct_opacity(c.a, t - t_prev, dt);
             c = glm::dvec4(glm::dvec3(c) * (a / c.a), a);
           }
-          if (c.a > 0) acc.add(fr.lit(glm::dvec3(c) / c.a, r, t), c.a);
+          if (c.a > 0) acc.add(fr.lit_with(glm::dvec3(c) / c.a, g, r), c.a);
         }
       } else if (dvr_on && !(peak_hit && rs.peak_mode == PeakMode::Xor)) {
         const glm::dvec4 c = s.tf.eval(f);
-        if (c.a > 0) acc.add(fr.lit(glm::dvec3(c), r, t), correct_opacity(c.a, step, s.tf.opacity_unit));
+        if (c.a > 0) acc.add(fr.lit_with(glm::dvec3(c), g, r), correct_opacity(c.a, step, s.tf.opacity_unit));
       }
       t_prev = t;
       f_prev = f;
       first = false;
       return acc.alpha >= stop;
     };
+    // Virtual samples (Lee §3.1, §4): the same window of four true samples as the shader's.
+    const int k_virtual = rs.virtual_samples;
+    struct True {
+      double t, f, step;
+      glm::dvec3 g;
+    };
+    std::vector<True> w;  // waiting true samples, at most 4
+    auto emit = [&](size_t a, bool has_prev, bool has_next2, double t_limit) {
+      const double sub = w[a].step / (k_virtual + 1);
+      if (consume(w[a].t, w[a].f, w[a].g, sub)) return true;
+      const size_t p0 = has_prev ? a - 1 : a, p3 = has_next2 ? a + 2 : a + 1;
+      const double span = w[a + 1].t - w[a].t;
+      for (int q = 1; q <= k_virtual; ++q) {
+        const double u = double(q) / (k_virtual + 1);
+        if (w[a].t + u * span > t_limit) break;
+        const double f = catmull_rom(w[p0].f, w[a].f, w[a + 1].f, w[p3].f, u);
+        const glm::dvec3 g = catmull_rom(w[p0].g, w[a].g, w[a + 1].g, w[p3].g, u);
+        if (consume(w[a].t + u * span, f, g, sub)) return true;
+      }
+      return false;
+    };
+    auto flush = [&]() {
+      bool done = acc.alpha >= stop;
+      const size_t n = w.size();
+      if (!done && n >= 2) done = emit(n - 2, n >= 3, false, HUGE_VAL);
+      if (!done && n >= 1) done = consume(w[n - 1].t, w[n - 1].f, w[n - 1].g, w[n - 1].step);
+      w.clear();
+      return done;
+    };
+    // Visits index i, standing for the m lattice steps after it; true when the ray is opaque.
+    auto visit = [&](int64_t i, int m) {
+      const double t = lattice.t(double(i));
+      const double step = lattice.step(double(i), m);
+      const double f = fr.field(r, t);
+      samples += 1;
+      const glm::dvec3 g = fr.shading || k_virtual ? fr.grad(r, t) : glm::dvec3(0.0);
+      if (!k_virtual) return consume(t, f, g, step);
+      if (w.size() == 4) w.erase(w.begin());
+      w.push_back({t, f, step, g});
+      if (w.size() == 3) return emit(0, false, true, HUGE_VAL);
+      if (w.size() == 4) return emit(1, true, true, HUGE_VAL);
+      return false;
+    };
+    // The ray's end (twin of vs_finish): one more true sample past the exit closes the spline;
+    // the virtual samples up to the exit go out.
+    auto finish = [&]() {
+      if (!k_virtual) return;
+      if (acc.alpha >= stop || w.empty()) return;
+      if (w.back().t != lattice.t(double(last))) {
+        flush();
+        return;
+      }
+      const double t = lattice.t(double(last + 1));
+      samples += 1;
+      const glm::dvec3 g = fr.shading ? fr.grad(r, t) : glm::dvec3(0.0);
+      if (w.size() == 4) w.erase(w.begin());
+      w.push_back({t, fr.field(r, t), lattice.step(double(last + 1), 1), g});
+      if (w.size() == 3 && emit(0, false, true, HUGE_VAL)) return;
+      if (w.size() == 4 && emit(1, true, true, HUGE_VAL)) return;
+      emit(w.size() - 2, w.size() >= 3, false, t1);
+      w.clear();
+    };
     if (!rs.adaptive) {
       for (int64_t i = 0; i <= last; ++i)
         if (visit(i, 1)) return;
+      finish();
       return;
     }
     // Adaptive: the cells in ray order (the GPU's traversal), every m-th index from each cell's
@@ -179,6 +249,7 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
         if (visit(i, int(std::min<int64_t>(m, end + 1 - i)))) return;
       next = std::max(next, end + 1);
     }
+    finish();
   });
 }
 

@@ -148,12 +148,16 @@ VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPa
   const Occupancy* occ = &no_skipping;
   OccupancyEntry* occ_entry = nullptr;
   if (s.scene.render.space_skipping) {
+    // Virtual samples overshoot the true ones by up to 1/8 of a cell's range (Lee eq. 8); they
+    // sample without skipping (variant.cpp), but the empty-cell count reported stays honest.
+    const double overshoot = s.scene.render.virtual_samples ? kCatmullRomOvershoot : 0.0;
     const std::string occ_key = tf_sig + " cells " + std::to_string(gv.serial()) + " " + cells.to_string() +
-                                " peaks " + std::to_string(peaks.size());
+                                " peaks " + std::to_string(peaks.size()) + " overshoot " + std::to_string(overshoot);
     occ_entry = cache_find(occupancy_cache_, occ_key);
     if (!occ_entry) {
       occ_entry = &cache_insert(
-          occupancy_cache_, OccupancyEntry{occ_key, classify_cells(cells, s.tf, gv.tf_lo(), gv.tf_hi(), peak_values), {}},
+          occupancy_cache_, OccupancyEntry{occ_key, classify_cells(cells, s.tf, gv.tf_lo(), gv.tf_hi(), peak_values,
+                                                            TransferFunction::kTableSize, overshoot), {}},
           kCacheEntries);
       ++table_builds_;
     }

@@ -21,6 +21,7 @@ struct VariantKey {
   bool orthographic = false;
   bool differential = false;  // Knoll §5, perspective cameras only (orthographic: uniform at the footprint)
   bool adaptive = false;      // Knoll §6.2 per-macrocell step multipliers (brings the cell traversal)
+  int virtual_samples = 0;    // Lee 2010: 0, 3 or 7 Catmull-Rom samples between true ones
   bool bare_sampling = false;  // benchmark baseline only
   bool peaks = false;          // peak finding between samples
   PeakMode peak_mode = PeakMode::DvrPlusPeaks;
@@ -34,7 +35,7 @@ struct VariantKey {
 // What this build renders; the server's welcome lists it so clients build their controls from it.
 nlohmann::json capabilities();
 // Throws SceneError naming the key for settings the schema allows but this renderer does not
-// implement yet (virtual samples, ray textures).
+// implement yet (ray textures).
 void require_supported(const RenderSettings& r);
 
 // peak_count: peaks of the scene's TF (no peaks -> no peak-finding code).
