@@ -131,7 +131,8 @@ class SoakClient : public std::enable_shared_from_this<SoakClient> {
       return;
     }
     if (kind_ == Kind::Vanisher && now >= vanish_at_) return vanish();
-    if (welcomed_) random_message(now);
+    // The last second is quiet: every answer to what was sent arrives before the close.
+    if (welcomed_ && now + std::chrono::seconds(1) < end_) random_message(now);
     timer_.expires_after(std::chrono::microseconds(16667));  // 60 Hz
     timer_.async_wait([self = shared_from_this()](beast::error_code ec) {
       if (!ec) self->tick();

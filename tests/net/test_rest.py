@@ -49,9 +49,13 @@ def test_rest_jpeg_and_refusals():
     assert headers["Content-Type"] == "image/jpeg"
     for q in ("format=gif", "quality=0", "quality=abc"):
         assert http(SERVER, "/api/render?" + q, "POST", json.dumps(SCENE).encode())[0] == 400, q
-    bad = dict(SCENE, render={"sampling": "differential"})
-    status, _, body = http(SERVER, "/api/render", "POST", json.dumps(bad).encode())
-    assert status == 400 and b"not implemented" in body
+    # Differential, adaptive and virtual samples render; ray textures are refused by name.
+    for ok in ({"sampling": "differential", "s_k": 2}, {"adaptive": True}, {"virtual_samples": 3}):
+        status, _, _ = http(SERVER, "/api/render", "POST", json.dumps(dict(SCENE, render=ok)).encode())
+        assert status == 200, (ok, status)
+    for bad, key in (({"s_k": -1}, b"render.s_k"), ({"virtual_samples": 5}, b"render.virtual_samples")):
+        status, _, body = http(SERVER, "/api/render", "POST", json.dumps(dict(SCENE, render=bad)).encode())
+        assert status == 400 and key in body, (bad, status, body)
 
 
 def test_sixteen_sessions_share_one_gpu_copy():
