@@ -52,6 +52,24 @@ struct Twin {
 // room for other GPUs' filtering precision (the uniform GpuVsCpu cases sit at 58-80 dB).
 constexpr double kMinTwinPsnr = 50.0;
 
+// Each case rendered by the GL ray caster and by its CPU twin at the same settings; the variant
+// must contain `marker`.
+void check_twins(const Volume& v, const render::GpuVolume& gv, const std::vector<Twin>& twins, const std::string& marker) {
+  for (const auto& t : twins) {
+    const ResolvedScene s = test::make_scene(v, scene_json(t.camera, t.render));
+    render::RenderStats st;
+    const Image g = test::render_gpu(gv, s, render::GpuPath::Fragment, &st);
+    const Image c = reference::render_reference(v, s);
+    const auto e = reference::compare(g, c);
+    std::printf("%-30s %-40s PSNR %.1f dB, samples/ray GPU %.1f CPU %.1f\n", t.name.c_str(), st.variant.c_str(), e.psnr,
+                mean_samples(g), mean_samples(c));
+    EXPECT_NE(st.variant.find(marker), std::string::npos) << t.name;
+    EXPECT_GE(e.psnr, kMinTwinPsnr) << t.name;
+    if (e.psnr < kMinTwinPsnr) test::save_artifacts(g, c, "twin");
+    EXPECT_NEAR(mean_samples(g), mean_samples(c), 0.02 * mean_samples(c) + 0.5) << t.name;
+  }
+}
+
 TEST(Differential, GpuMatchesTheCpuTwin) {
   auto v = ml();
   render::GpuVolume gv(v);
@@ -64,19 +82,7 @@ TEST(Differential, GpuMatchesTheCpuTwin) {
       {"close shading, no skipping", close_camera(),
        {{"sampling", "differential"}, {"s_k", 1}, {"shading", true}, {"space_skipping", false}}},
   };
-  for (const auto& t : twins) {
-    const ResolvedScene s = test::make_scene(*v, scene_json(t.camera, t.render));
-    render::RenderStats st;
-    const Image g = test::render_gpu(gv, s, render::GpuPath::Fragment, &st);
-    const Image c = reference::render_reference(*v, s);
-    const auto e = reference::compare(g, c);
-    std::printf("%-28s %-36s PSNR %.1f dB, samples/ray GPU %.1f CPU %.1f\n", t.name.c_str(), st.variant.c_str(), e.psnr,
-                mean_samples(g), mean_samples(c));
-    EXPECT_NE(st.variant.find("+diff"), std::string::npos) << t.name;
-    EXPECT_GE(e.psnr, kMinTwinPsnr) << t.name;
-    if (e.psnr < kMinTwinPsnr) test::save_artifacts(g, c, "diff_twin");
-    EXPECT_NEAR(mean_samples(g), mean_samples(c), 0.02 * mean_samples(c) + 0.5) << t.name;
-  }
+  check_twins(*v, gv, twins, "+diff");
 }
 
 TEST(Differential, StepGrowsAlongTheRayAndEntersCellsWithoutResampling) {
@@ -281,18 +287,7 @@ TEST(VirtualSamples, GpuMatchesTheCpuTwin) {
        {{"virtual_samples", 3}, {"step", 1.0}, {"shading", true}, {"space_skipping", false}}},
       {"close vs3 differential", close_camera(), {{"virtual_samples", 3}, {"sampling", "differential"}, {"s_k", 1}}},
   };
-  for (const auto& t : twins) {
-    const ResolvedScene s = test::make_scene(*v, scene_json(t.camera, t.render));
-    render::RenderStats st;
-    const Image g = test::render_gpu(gv, s, render::GpuPath::Fragment, &st);
-    const Image c = reference::render_reference(*v, s);
-    const auto e = reference::compare(g, c);
-    std::printf("%-30s %-40s PSNR %.1f dB, samples/ray GPU %.1f CPU %.1f\n", t.name.c_str(), st.variant.c_str(), e.psnr,
-                mean_samples(g), mean_samples(c));
-    EXPECT_NE(st.variant.find("+vs"), std::string::npos) << t.name;
-    EXPECT_GE(e.psnr, kMinTwinPsnr) << t.name;
-    if (e.psnr < kMinTwinPsnr) test::save_artifacts(g, c, "vs_twin");
-  }
+  check_twins(*v, gv, twins, "+vs");
 }
 
 // Lee Table 1 style: tricubic at step 1 with 3 virtual samples against tricubic at step 1/4
