@@ -9,6 +9,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "app/bench_util.h"
 #include "app/commands.h"
 #include "core/generators.h"
 #include "core/volume_io.h"
@@ -67,11 +68,6 @@ std::shared_ptr<Volume> load_or_make(const BenchVolume& bv, const fs::path& dir)
     generate_to_file(bv.spec, file);
   }
   return std::make_shared<Volume>(load_volume(file));
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
 }  // namespace

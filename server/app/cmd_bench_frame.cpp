@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <memory>
 
+#include "app/bench_util.h"
 #include "app/commands.h"
 #include "core/generators.h"
 #include "core/volume_io.h"
@@ -21,11 +22,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
-}
 
 // A file, or a generator kind made in memory at a modest size (blobs 256^3 like bench raycast).
 std::shared_ptr<Volume> bench_volume(const std::string& what) {

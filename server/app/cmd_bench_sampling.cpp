@@ -9,6 +9,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "app/bench_util.h"
 #include "app/commands.h"
 #include "core/volume_io.h"
 #include "gpu/egl_context.h"
@@ -27,11 +28,6 @@ struct SamplingBenchArgs {
   int size = 128;
   int frames = 3;
 };
-
-double median_of(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
-}
 
 int run_sampling_bench(const SamplingBenchArgs& a) {
   auto ctx = gpu::EglContext::create();
@@ -76,7 +72,7 @@ int run_sampling_bench(const SamplingBenchArgs& a) {
           img = caster.render(gv, s, render::GpuPath::Fragment, &st);
           if (f > 0) ms.push_back(st.render_ms);
         }
-        std::printf("%-16s %-5s %-26s %9.2f %8.1f %9.2f\n", vol->name.c_str(), view, name.c_str(), median_of(ms),
+        std::printf("%-16s %-5s %-26s %9.2f %8.1f %9.2f\n", vol->name.c_str(), view, name.c_str(), median(ms),
                     st.samples_mean, reference::compare(img, conv.image).psnr);
         std::fflush(stdout);
       }

@@ -13,6 +13,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "app/bench_util.h"
 #include "app/commands.h"
 #include "core/generators.h"
 #include "gpu/shader_cache.h"
@@ -145,12 +146,6 @@ class BenchClient : public std::enable_shared_from_this<BenchClient> {
   uint32_t version_ = 1;
   std::map<uint32_t, Clock::time_point> sent_;
 };
-
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return NAN;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, size_t(p * double(v.size() - 1) + 0.5))];
-}
 
 struct ServeBenchArgs {
   std::vector<int> clients{1, 4, 16};

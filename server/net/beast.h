@@ -1,6 +1,8 @@
 // Beast/Asio names used across server/net, and the one failure reporter.
 #pragma once
 
+#include <utility>  // Boost 1.74's asio/awaitable.hpp uses std::exchange without including it
+
 #include <boost/asio.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>

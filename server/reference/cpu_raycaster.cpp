@@ -136,9 +136,11 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
     const int64_t last = std::min<int64_t>(int64_t(std::floor(lattice.index_at(t1))), kMaxSamplesPerRay - 1);
     double t_prev = 0, f_prev = 0;
     bool first = true;
-    // One sample (true or virtual) at t with value f and gradient g (raw units), standing for
-    // `step`; true when the ray is opaque. Twin of consume() in shaders/raycast_body.glsl.
-    auto consume = [&](double t, double f, const glm::dvec3& g, double step) {
+    // One sample (true or virtual) at t with value f, standing for `step`; g: its gradient (raw
+    // units) when interpolated, else null and computed at t if shading needs it. True when the
+    // ray is opaque. Twin of consume() in shaders/raycast_body.glsl.
+    auto consume = [&](double t, double f, const glm::dvec3* g, double step) {
+      auto lit = [&](const glm::dvec3& rgb) { return fr.shading ? fr.lit_with(rgb, g ? *g : fr.grad(r, t), r) : rgb; };
       bool peak_hit = false;
       if (peaks_on && !first) {
         for (double pv : peaks_crossed(table, f_prev, f, rs.max_peaks)) {
@@ -156,11 +158,11 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
             const double a = correct_opacity(c.a, t - t_prev, dt);
             c = glm::dvec4(glm::dvec3(c) * (a / c.a), a);
           }
-          if (c.a > 0) acc.add(fr.lit_with(glm::dvec3(c) / c.a, g, r), c.a);
+          if (c.a > 0) acc.add(lit(glm::dvec3(c) / c.a), c.a);
         }
       } else if (dvr_on && !(peak_hit && rs.peak_mode == PeakMode::Xor)) {
         const glm::dvec4 c = s.tf.eval(f);
-        if (c.a > 0) acc.add(fr.lit_with(glm::dvec3(c), g, r), correct_opacity(c.a, step, s.tf.opacity_unit));
+        if (c.a > 0) acc.add(lit(glm::dvec3(c)), correct_opacity(c.a, step, s.tf.opacity_unit));
       }
       t_prev = t;
       f_prev = f;
@@ -176,7 +178,7 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
     std::vector<True> w;  // waiting true samples, at most 4
     auto emit = [&](size_t a, bool has_prev, bool has_next2, double t_limit) {
       const double sub = w[a].step / (k_virtual + 1);
-      if (consume(w[a].t, w[a].f, w[a].g, sub)) return true;
+      if (consume(w[a].t, w[a].f, &w[a].g, sub)) return true;
       const size_t p0 = has_prev ? a - 1 : a, p3 = has_next2 ? a + 2 : a + 1;
       const double span = w[a + 1].t - w[a].t;
       for (int q = 1; q <= k_virtual; ++q) {
@@ -184,7 +186,7 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
         if (w[a].t + u * span > t_limit) break;
         const double f = catmull_rom(w[p0].f, w[a].f, w[a + 1].f, w[p3].f, u);
         const glm::dvec3 g = catmull_rom(w[p0].g, w[a].g, w[a + 1].g, w[p3].g, u);
-        if (consume(w[a].t + u * span, f, g, sub)) return true;
+        if (consume(w[a].t + u * span, f, &g, sub)) return true;
       }
       return false;
     };
@@ -192,7 +194,7 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
       bool done = acc.alpha >= stop;
       const size_t n = w.size();
       if (!done && n >= 2) done = emit(n - 2, n >= 3, false, HUGE_VAL);
-      if (!done && n >= 1) done = consume(w[n - 1].t, w[n - 1].f, w[n - 1].g, w[n - 1].step);
+      if (!done && n >= 1) done = consume(w[n - 1].t, w[n - 1].f, &w[n - 1].g, w[n - 1].step);
       w.clear();
       return done;
     };
@@ -202,10 +204,9 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
       const double step = lattice.step(double(i), m);
       const double f = fr.field(r, t);
       samples += 1;
-      const glm::dvec3 g = fr.shading || k_virtual ? fr.grad(r, t) : glm::dvec3(0.0);
-      if (!k_virtual) return consume(t, f, g, step);
+      if (!k_virtual) return consume(t, f, nullptr, step);
       if (w.size() == 4) w.erase(w.begin());
-      w.push_back({t, f, step, g});
+      w.push_back({t, f, step, fr.shading ? fr.grad(r, t) : glm::dvec3(0.0)});
       if (w.size() == 3) return emit(0, false, true, HUGE_VAL);
       if (w.size() == 4) return emit(1, true, true, HUGE_VAL);
       return false;

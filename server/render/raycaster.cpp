@@ -47,6 +47,19 @@ RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const Mac
   return u;
 }
 
+// One byte per macrocell (occupancy, adaptive multiplier) as an R8UI 3D texture in grid order.
+gpu::Texture make_cell_texture(const MacrocellGrid& cells, const std::vector<uint8_t>& bytes) {
+  gpu::Texture tex = gpu::make_texture(GL_TEXTURE_3D);
+  glTextureStorage3D(tex.id(), 1, GL_R8UI, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]), GLsizei(cells.grid[2]));
+  // Integer textures are complete only with NEAREST filtering.
+  glTextureParameteri(tex.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+  glTextureParameteri(tex.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+  glTextureSubImage3D(tex.id(), 0, 0, 0, 0, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]), GLsizei(cells.grid[2]),
+                      GL_RED_INTEGER, GL_UNSIGNED_BYTE, bytes.data());
+  return tex;
+}
+
 // Moves the entry named `key` to the front of a most-recent-first cache; nullptr when absent.
 template <class T>
 T* cache_find(std::vector<T>& cache, const std::string& key) {
@@ -168,16 +181,7 @@ VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPa
   const double table_ms = ms_since(t_tables);
   if (key.space_skipping) {
     gpu::Texture& tex = occ_entry->texture;
-    if (!tex) {
-      tex = gpu::make_texture(GL_TEXTURE_3D);
-      glTextureStorage3D(tex.id(), 1, GL_R8UI, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]), GLsizei(cells.grid[2]));
-      // Integer textures are complete only with NEAREST filtering.
-      glTextureParameteri(tex.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-      glTextureParameteri(tex.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-      glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-      glTextureSubImage3D(tex.id(), 0, 0, 0, 0, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]),
-                          GLsizei(cells.grid[2]), GL_RED_INTEGER, GL_UNSIGNED_BYTE, occ->occupied.data());
-    }
+    if (!tex) tex = make_cell_texture(cells, occ->occupied);
     glBindTextureUnit(kUnitOccupancy, tex.id());
   }
   if (key.adaptive) bind_multipliers(gv, cells);
@@ -194,14 +198,7 @@ void Raycaster::bind_multipliers(const GpuVolume& gv, const MacrocellGrid& cells
   const std::string key = std::to_string(gv.serial()) + " " + cells.to_string();
   StrideEntry* e = cache_find(stride_cache_, key);
   if (!e) {
-    const std::vector<uint8_t> m = adaptive_multipliers(cells, volume_stddev(gv.volume()));
-    StrideEntry n{key, gpu::make_texture(GL_TEXTURE_3D)};
-    glTextureStorage3D(n.texture.id(), 1, GL_R8UI, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]), GLsizei(cells.grid[2]));
-    glTextureParameteri(n.texture.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTextureParameteri(n.texture.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    glTextureSubImage3D(n.texture.id(), 0, 0, 0, 0, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]),
-                        GLsizei(cells.grid[2]), GL_RED_INTEGER, GL_UNSIGNED_BYTE, m.data());
+    StrideEntry n{key, make_cell_texture(cells, adaptive_multipliers(cells, volume_stddev(gv.volume())))};
     e = &cache_insert(stride_cache_, std::move(n), kCacheEntries);
     ++table_builds_;
   }
@@ -211,6 +208,7 @@ void Raycaster::bind_multipliers(const GpuVolume& gv, const MacrocellGrid& cells
 void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const std::vector<Peak>& peaks) {
   const RenderSettings& r = s.scene.render;
   const double lo = gv.tf_lo(), hi = gv.tf_hi();
+  const double preint_step = plan_sampling(s).step;  // segments the table is built for
   // The tables depend on the TF, the value range, the method's sizes and (preintegration) the
   // step: a frame that changes none of them (a camera move) reuses what is bound.
   std::ostringstream key;
@@ -218,7 +216,7 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
   key << tf_signature(s.tf, lo, hi) << ' ' << to_string(r.classification) << ' ' << r.peak_table_bins << ' '
       << r.max_peaks << ' ' << r.secant_iterations << ' ' << r.preint_table_size << ' ' << r.preint_method << ' '
       << peaks.size() << ' '
-      << (r.classification == Classification::Preint ? plan_sampling(s).step : 0.0);
+      << (r.classification == Classification::Preint ? preint_step : 0.0);
   if (const Tables* t = cache_find(tables_cache_, key.str())) {
     if (t->peak_table) glBindTextureUnit(kUnitPeakTable, t->peak_table.id());
     if (t->tf_points) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboTfPoints, t->tf_points.id());
@@ -256,7 +254,7 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
     t.sizes.peak_count = peaks.size();
   }
   if (r.classification == Classification::Preint) {
-    const PreintegrationTable table = build_preintegration(s.tf, lo, hi, plan_sampling(s).step, r.preint_table_size,
+    const PreintegrationTable table = build_preintegration(s.tf, lo, hi, preint_step, r.preint_table_size,
                                                            preint_method(r));
     t.preint_table = gpu::make_texture(GL_TEXTURE_2D);
     glTextureStorage2D(t.preint_table.id(), 1, GL_RGBA32F, table.size, table.size);

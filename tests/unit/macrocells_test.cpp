@@ -5,6 +5,7 @@
 #include <random>
 
 #include "core/macrocells.h"
+#include "core/occupancy.h"
 #include "unit/test_util.h"
 
 using namespace peakcast;
@@ -134,6 +135,33 @@ TEST(Macrocells, ValueOffsetApplied) {
   MacrocellGrid g = build_macrocells(v, 8);
   EXPECT_EQ(g.min[0], -100.f);
   EXPECT_EQ(g.max[0], -100.f);
+}
+
+}  // namespace
+
+namespace {
+
+// Lee eq. 8: with virtual samples a cell's [m, M] is widened by (M - m)/8 before classification,
+// so a cell whose Catmull-Rom samples can overshoot into the TF's visible range is kept.
+TEST(Occupancy, CatmullRomOvershootWidensTheCellsRange) {
+  MacrocellGrid g;
+  g.grid = {2, 1, 1};
+  g.min = {0.0f, 0.9f};
+  g.max = {0.8f, 1.0f};
+  g.stddev = {0.1f, 0.01f};
+  TransferFunction tf;
+  tf.points = {{0.0, 0, 0, 0, 0}, {0.85, 1, 1, 1, 0}, {0.86, 1, 1, 1, 1}, {1.0, 1, 1, 1, 1}};
+  const Occupancy plain = classify_cells(g, tf, 0.0, 1.0);
+  EXPECT_EQ(plain.occupied, (std::vector<uint8_t>{0, 1}));
+  // [0, 0.8] widened by 0.1 reaches 0.9, past the TF's first visible value.
+  const Occupancy widened = classify_cells(g, tf, 0.0, 1.0, {}, TransferFunction::kTableSize, kCatmullRomOvershoot);
+  EXPECT_EQ(widened.occupied, (std::vector<uint8_t>{1, 1}));
+  EXPECT_EQ(widened.empty_cells, 0);
+  // Peaks likewise: 0.88 lies outside [0, 0.8] but inside the widened range.
+  TransferFunction dark;
+  dark.points = {{0.0, 0, 0, 0, 0}, {1.0, 0, 0, 0, 0}};
+  EXPECT_EQ(classify_cells(g, dark, 0.0, 1.0, {0.88}).occupied[0], 0);
+  EXPECT_EQ(classify_cells(g, dark, 0.0, 1.0, {0.88}, TransferFunction::kTableSize, kCatmullRomOvershoot).occupied[0], 1);
 }
 
 }  // namespace
