@@ -38,9 +38,11 @@ vec3 voxel_coords(vec3 p) { return (p + u_box_half.xyz) / u_spacing.xyz; }
 #endif
 
 // The previous sample, for segment methods: a segment joins consecutive visits unless lattice
-// points between them were skipped (g_gap: an empty macrocell's).
+// points between them were skipped (g_gap: an empty macrocell's). g_expect: the lattice index
+// that continues the last visit without a gap.
 float g_prev_t, g_prev_f;
 bool g_have_prev, g_gap;
+int g_expect;
 
 #ifdef VIRTUAL_SAMPLES
 #define SAMPLE_GRADIENT(x, g) (g)  // interpolated like the value (Lee §4)
@@ -198,6 +200,8 @@ bool visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
   vec3 x = voxel_coords(r.o + t * r.d);
   float f = sample_field(x);
   res.samples += 1.0;
+  if (i != g_expect) g_gap = true;  // lattice points between the last visit and this one were skipped
+  g_expect = i + m;
 #ifdef VIRTUAL_SAMPLES
   if (g_gap && w_n > 0) {  // lattice points were skipped: the run before the gap ends here
     g_gap = false;          // (its samples are contiguous among themselves)
@@ -221,6 +225,7 @@ RayResult cast_ray(vec2 pixel) {
   res.samples = 0.0;
   g_have_prev = false;
   g_gap = false;
+  g_expect = 0;
 #ifdef VIRTUAL_SAMPLES
   w_n = 0;
 #endif
@@ -238,7 +243,7 @@ RayResult cast_ray(vec2 pixel) {
 #else
   // 3D-DDA over the macrocell grid (Amanatides & Woo) in voxel coordinates. Each occupied cell
   // visits the lattice indices inside it (the multiples of its multiplier M with ADAPTIVE);
-  // segment methods also visit one more on each side, so the segments that leave or enter the
+  // segment methods also visit EXTENSION more on each side, so the segments that leave or enter the
   // cell are not lost.
   float edge = u_cells.w;
   vec3 x0 = voxel_coords(r.o + span.x * r.d);
@@ -289,14 +294,12 @@ RayResult cast_ray(vec2 pixel) {
       for (; i <= end; i += m)
         if (visit(r, L, i, min(m, end + 1 - i), res)) return res;
 #ifdef SEGMENTS
-      for (int e = 1; e <= EXTENSION && end + 1 <= last; ++e) {
-        if (visit(r, L, end + 1, 1, res)) return res;
-        end += 1;
-      }
+      // Never a point visited already (a thin cell's points may all be the last one's extension).
+      for (int j = max(next, end + 1); j <= min(last, end + EXTENSION); ++j)
+        if (visit(r, L, j, 1, res)) return res;
+      end = min(last, end + EXTENSION);
 #endif
       next = max(next, end + 1);
-    } else if (max(next, first) <= end) {
-      g_gap = true;  // lattice points skipped: no segment across this cell
     }
     if (final_cell || next > last) break;
     // Step to the neighbour across the nearest face; ties step every tied axis at once.

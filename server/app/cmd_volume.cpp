@@ -42,7 +42,7 @@ struct InfoArgs {
 void add_volume_commands(CLI::App& app, Runner& run) {
   auto mv = std::make_shared<MakeVolumeArgs>();
   auto* make = app.add_subcommand("make-volume", "Write a procedural volume (raw+JSON, NRRD or MetaImage by extension)");
-  make->add_option("kind", mv->kind, "marschner-lobb | blobs | fire | em | sphere | ramp")->required();
+  make->add_option("kind", mv->kind, "marschner-lobb | blobs | fire | em | sphere | ramp | vessels")->required();
   make->add_option("--dims", mv->dims, "X Y Z (default depends on the kind; em: 900 500 930)")->expected(3);
   make->add_option("--out,-o", mv->out, "output file: .raw (+.json sidecar), .nrrd, .nhdr, .mhd, .mha")->required();
   make->add_option("--seed", mv->seed, "random seed (output is a pure function of it)");

@@ -5,27 +5,14 @@
 #include <stdexcept>
 #include <vector>
 
+#include "core/hash.h"
 #include "core/parallel.h"
+#include "core/vessel_tree.h"
 
 namespace peakcast {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-uint64_t splitmix(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
-
-double hash01(uint64_t seed, int64_t a, int64_t b, int64_t c, uint64_t salt = 0) {
-  uint64_t h = splitmix(seed ^ salt);
-  h = splitmix(h ^ uint64_t(a));
-  h = splitmix(h ^ uint64_t(b));
-  h = splitmix(h ^ uint64_t(c));
-  return double(h >> 11) * (1.0 / 9007199254740992.0);
-}
 
 // Marschner & Lobb 1994, f_M = 6, alpha = 0.25, on [-1, 1]^3.
 double marschner_lobb(double x, double y, double z) {
@@ -104,7 +91,19 @@ void quantise(const std::vector<double>& v, uint8_t* out, double scale) {
 }
 
 // Fills slices [z0, z1) in the spec's source type, little-endian (signed types as signed).
-void fill_slab(const GeneratorSpec& s, const std::vector<Blob>& blobs, int64_t z0, int64_t z1, uint8_t* out) {
+// What a kind computes once per volume rather than per voxel.
+struct Prepared {
+  std::vector<Blob> blobs;
+  VesselTree vessels;
+};
+Prepared prepare(const GeneratorSpec& s) {
+  Prepared p;
+  if (s.kind == GeneratorKind::Blobs) p.blobs = make_blobs(s.seed, 12);
+  if (s.kind == GeneratorKind::Vessels) p.vessels = make_vessel_tree(s.seed, s.dims);
+  return p;
+}
+
+void fill_slab(const GeneratorSpec& s, const Prepared& pre, int64_t z0, int64_t z1, uint8_t* out) {
   const int64_t nx = s.dims[0], ny = s.dims[1];
   const size_t row_bytes = size_t(nx) * source_bytes(s.type);
   parallel_for(size_t((z1 - z0) * ny), [&](size_t row) {
@@ -113,7 +112,9 @@ void fill_slab(const GeneratorSpec& s, const std::vector<Blob>& blobs, int64_t z
     for (int64_t i = 0; i < nx; ++i) {
       if (s.kind == GeneratorKind::Blobs) {
         auto u = [](int64_t q, int64_t n) { return n > 1 ? double(q) / double(n - 1) : 0.5; };
-        v[i] = blobs_value(blobs, u(i, nx), u(j, ny), u(k, s.dims[2]));
+        v[i] = blobs_value(pre.blobs, u(i, nx), u(j, ny), u(k, s.dims[2]));
+      } else if (s.kind == GeneratorKind::Vessels) {
+        v[i] = pre.vessels.value(i, j, k);
       } else {
         v[i] = generator_value(s, i, j, k);
       }
@@ -146,19 +147,21 @@ GeneratorKind parse_generator_kind(const std::string& n) {
   if (n == "em") return GeneratorKind::Em;
   if (n == "sphere") return GeneratorKind::Sphere;
   if (n == "ramp") return GeneratorKind::Ramp;
+  if (n == "vessels") return GeneratorKind::Vessels;
   throw std::invalid_argument("unknown volume kind '" + n +
-                              "' (marschner-lobb, blobs, fire, em, sphere, ramp)");
+                              "' (marschner-lobb, blobs, fire, em, sphere, ramp, vessels)");
 }
 
 const char* to_string(GeneratorKind k) {
-  static const char* names[] = {"marschner-lobb", "blobs", "fire", "em", "sphere", "ramp"};
+  static const char* names[] = {"marschner-lobb", "blobs", "fire", "em", "sphere", "ramp", "vessels"};
   return names[int(k)];
 }
 
 SourceType default_type(GeneratorKind k) {
   switch (k) {
     case GeneratorKind::Blobs: return SourceType::U8;
-    case GeneratorKind::Em: return SourceType::U16;
+    case GeneratorKind::Em:
+    case GeneratorKind::Vessels: return SourceType::U16;
     default: return SourceType::F32;
   }
 }
@@ -168,6 +171,7 @@ Dims default_dims(GeneratorKind k) {
     case GeneratorKind::MarschnerLobb: return {41, 41, 41};
     case GeneratorKind::Em: return {900, 500, 930};
     case GeneratorKind::Fire: return {151, 151, 151};
+    case GeneratorKind::Vessels: return {128, 128, 128};
     default: return {64, 64, 64};
   }
 }
@@ -186,6 +190,7 @@ double generator_value(const GeneratorSpec& s, int64_t i, int64_t j, int64_t k) 
       return std::clamp(1.0 - 2.0 * std::sqrt(dx * dx + dy * dy + dz * dz), 0.0, 1.0);
     }
     case GeneratorKind::Ramp: return x;  // linear in x: trilinear interpolation is exact
+    case GeneratorKind::Vessels: return make_vessel_tree(s.seed, s.dims).value(i, j, k);
   }
   return 0.0;
 }
@@ -196,7 +201,7 @@ Volume generate_volume(const GeneratorSpec& s) {
   h.spacing = s.spacing;
   h.source = s.type;
   Volume v(h);
-  fill_slab(s, make_blobs(s.seed, 12), 0, s.dims[2], v.data());
+  fill_slab(s, prepare(s), 0, s.dims[2], v.data());
   const size_t n = size_t(v.voxel_count());
   if (s.type == SourceType::I8)
     for (size_t i = 0; i < n; ++i) v.data()[i] ^= 0x80;
@@ -215,12 +220,12 @@ void generate_to_file(const GeneratorSpec& s, const std::filesystem::path& out, 
   for (int a = 0; a < 3; ++a)
     if (s.dims[a] <= 0) throw std::invalid_argument("every dimension must be >= 1");
   SlabWriter writer(out, h, options);
-  const auto blobs = make_blobs(s.seed, 12);
+  const Prepared pre = prepare(s);
   const int64_t slab = 16;
   std::vector<uint8_t> buf(size_t(s.dims[0] * s.dims[1] * slab) * source_bytes(s.type));
   for (int64_t z0 = 0; z0 < s.dims[2]; z0 += slab) {
     const int64_t z1 = std::min(s.dims[2], z0 + slab);
-    fill_slab(s, blobs, z0, z1, buf.data());
+    fill_slab(s, pre, z0, z1, buf.data());
     writer.write(buf.data(), size_t(s.dims[0] * s.dims[1] * (z1 - z0)) * source_bytes(s.type));
   }
   writer.close();

@@ -11,7 +11,7 @@
 
 namespace peakcast {
 
-enum class GeneratorKind { MarschnerLobb, Blobs, Fire, Em, Sphere, Ramp };
+enum class GeneratorKind { MarschnerLobb, Blobs, Fire, Em, Sphere, Ramp, Vessels };
 
 struct GeneratorSpec {
   GeneratorKind kind = GeneratorKind::Blobs;

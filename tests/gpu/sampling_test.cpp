@@ -302,7 +302,7 @@ TEST(VirtualSamples, StepOnePlusThreeAgainstStepQuarter) {
     const char* name;
     json render;
     double psnr = 0, ms = 0, spr = 0;
-    Image img;
+    Image img = {};
   };
   std::vector<Row> rows = {{"tricubic x1", {{"filter", "tricubic"}, {"step", 1.0}}},
                            {"tricubic x4", {{"filter", "tricubic"}, {"step", 0.25}}},
