@@ -200,11 +200,12 @@ bool visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
   vec3 x = voxel_coords(r.o + t * r.d);
   float f = sample_field(x);
   res.samples += 1.0;
-  if (i != g_expect) g_gap = true;  // lattice points between the last visit and this one were skipped
+  bool gap = i != g_expect;  // lattice points between the last visit and this one were skipped
   g_expect = i + m;
+  if (gap) g_gap = true;  // until the next sample is consumed: no segment across the gap
 #ifdef VIRTUAL_SAMPLES
-  if (g_gap && w_n > 0) {  // lattice points were skipped: the run before the gap ends here
-    g_gap = false;          // (its samples are contiguous among themselves)
+  if (gap && w_n > 0) {  // the run before the gap ends here
+    g_gap = false;       // (its samples are contiguous among themselves)
     if (vs_flush(r, res)) return true;
     g_gap = true;
   }

@@ -131,4 +131,27 @@ std::string MacrocellGrid::to_string() const {
   return s.str();
 }
 
+MacrocellGrid dilate_ranges(const MacrocellGrid& g, int ring) {
+  MacrocellGrid out = g;
+  if (ring <= 0) return out;
+  // Separable: the min/max over a window along each axis in turn.
+  for (int axis = 0; axis < 3; ++axis) {
+    const std::vector<float> lo = out.min, hi = out.max;
+    for (int64_t c = 0; c < g.grid[2]; ++c)
+      for (int64_t b = 0; b < g.grid[1]; ++b)
+        for (int64_t a = 0; a < g.grid[0]; ++a) {
+          int64_t at[3] = {a, b, c};
+          const int64_t from = std::max<int64_t>(0, at[axis] - ring), to = std::min(g.grid[axis] - 1, at[axis] + ring);
+          const size_t i = g.index(a, b, c);
+          for (int64_t x = from; x <= to; ++x) {
+            at[axis] = x;
+            const size_t j = g.index(at[0], at[1], at[2]);
+            out.min[i] = std::min(out.min[i], lo[j]);
+            out.max[i] = std::max(out.max[i], hi[j]);
+          }
+        }
+  }
+  return out;
+}
+
 }  // namespace peakcast

@@ -44,6 +44,10 @@ struct VolumeMacrocells {
   double build_ms = 0.0;  // both grids, wall time
 };
 VolumeMacrocells build_volume_macrocells(const Volume& volume);
+// Each cell's [min, max] widened to the union over the cells within `ring` cells of it (a cube
+// of 2 ring + 1 cells per axis): the values a Catmull-Rom window reaching `ring` cells away can
+// read (virtual samples, Lee §3.2). ring 0 returns the grid unchanged.
+MacrocellGrid dilate_ranges(const MacrocellGrid& g, int ring);
 // Throws std::invalid_argument unless `g` is a default-cell grid of `volume`'s dims with the
 // given support (a grid of another volume would skip visible cells).
 void check_macrocells(const MacrocellGrid& g, const Volume& volume, FilterSupport support);

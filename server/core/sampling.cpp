@@ -26,6 +26,25 @@ SamplingPlan plan_sampling(const ResolvedScene& s, double step_scale) {
   return p;
 }
 
+double longest_step(const SamplingPlan& plan, const ResolvedScene& s) {
+  if (!plan.differential) return plan.step;
+  double far = 0.0;
+  for (int c = 0; c < 8; ++c) {
+    const glm::dvec3 corner(c & 1 ? s.box_max.x : s.box_min.x, c & 2 ? s.box_max.y : s.box_min.y,
+                            c & 4 ? s.box_max.z : s.box_min.z);
+    far = std::max(far, glm::length(corner - s.camera.eye));
+  }
+  // a = k |dD/dx| <= k * pixel_du (the footprint grows no faster than on the axis).
+  return plan.min_step + std::sqrt(plan.k * plan.k + 2.0 * plan.k * plan.pixel_du * far);
+}
+
+int virtual_sample_ring(const SamplingPlan& plan, const ResolvedScene& s, int cell_edge) {
+  const double mult = s.scene.render.adaptive ? kMaxAdaptiveMultiplier : 1.0;
+  const double reach = 2.0 * longest_step(plan, s) * mult / s.min_spacing;  // voxels, at most
+  const double ring = std::ceil(reach / std::max(cell_edge, 1));
+  return std::isfinite(ring) && ring <= kMaxVirtualSampleRing ? int(ring) : -1;
+}
+
 double RayLattice::index_at(double t) const {
   const double d = std::max(0.0, t - t0);
   return 2.0 * d / (B + std::sqrt(B * B + 2.0 * A * d));

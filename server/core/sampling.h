@@ -57,6 +57,16 @@ struct RayLattice {
 // The lattice of ray `r` entering the box at `t_enter`.
 RayLattice ray_lattice(const SamplingPlan& plan, const ViewSetup& view, const Ray& r, double t_enter);
 
+// The longest step any ray of the scene takes (world units, before adaptive multipliers):
+// the uniform step, or for differential sampling the step at the box corner farthest from the
+// eye, sqrt(b^2 + 2 a d) (eq. 17 solved for the distance d) plus the minimum step.
+double longest_step(const SamplingPlan& plan, const ResolvedScene& s);
+
+// How many macrocells away a virtual sample's Catmull-Rom window (two steps either side) can
+// read, or -1 when more than kMaxVirtualSampleRing: skipping is then not worth its dilation.
+constexpr int kMaxVirtualSampleRing = 3;
+int virtual_sample_ring(const SamplingPlan& plan, const ResolvedScene& s, int cell_edge);
+
 // The macrocells a ray crosses between t0 and t1, in order, each with the ray parameters where
 // the ray enters and leaves it: the GL ray caster's 3D-DDA (Amanatides & Woo), in double.
 struct CellCrossing {

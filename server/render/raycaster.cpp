@@ -160,17 +160,25 @@ VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPa
   Occupancy no_skipping;
   const Occupancy* occ = &no_skipping;
   OccupancyEntry* occ_entry = nullptr;
-  if (s.scene.render.space_skipping) {
-    // Virtual samples overshoot the true ones by up to 1/8 of a cell's range (Lee eq. 8); they
-    // sample without skipping (variant.cpp), but the empty-cell count reported stays honest.
-    const double overshoot = s.scene.render.virtual_samples ? kCatmullRomOvershoot : 0.0;
+  // A virtual sample reads a Catmull-Rom window two steps either side: its cell's range is the
+  // union over the cells that window can reach (ring), widened by Lee's (M - m)/8 (eq. 8), the
+  // most the spline overshoots its samples. Windows reaching too far sample without skipping.
+  const bool vs = s.scene.render.virtual_samples != 0;
+  const int ring = vs ? virtual_sample_ring(plan_sampling(s), s, cells.cell) : 0;
+  if (s.scene.render.space_skipping && ring >= 0) {
+    const double overshoot = vs ? vs_widening_ : 0.0;
+    const int reach = vs && vs_widening_ > 0.0 ? ring : 0;  // widening 0 (a test's): neither
     const std::string occ_key = tf_sig + " cells " + std::to_string(gv.serial()) + " " + cells.to_string() +
-                                " peaks " + std::to_string(peaks.size()) + " overshoot " + std::to_string(overshoot);
+                                " peaks " + std::to_string(peaks.size()) + " overshoot " + std::to_string(overshoot) +
+                                " ring " + std::to_string(reach);
     occ_entry = cache_find(occupancy_cache_, occ_key);
     if (!occ_entry) {
       occ_entry = &cache_insert(
-          occupancy_cache_, OccupancyEntry{occ_key, classify_cells(cells, s.tf, gv.tf_lo(), gv.tf_hi(), peak_values,
-                                                            TransferFunction::kTableSize, overshoot), {}},
+          occupancy_cache_,
+          OccupancyEntry{occ_key,
+                         classify_cells(reach ? dilate_ranges(cells, reach) : cells, s.tf, gv.tf_lo(), gv.tf_hi(),
+                                        peak_values, TransferFunction::kTableSize, overshoot),
+                         {}},
           kCacheEntries);
       ++table_builds_;
     }

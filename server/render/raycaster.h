@@ -44,6 +44,10 @@ class Raycaster {
   // TF tables, peak/preintegration tables and occupancy grids built so far (for tests: tiles
   // interleaved with another session's frames must not rebuild them).
   size_t table_builds() const { return table_builds_; }
+  // How far the cells' value ranges are widened for virtual samples, as a fraction of each
+  // range: Lee's 1/8 (kCatmullRomOvershoot). Tests set 0 to show the skipped-cell streaks it
+  // prevents (Lee Fig. 14).
+  void set_virtual_sample_widening(double fraction) { vs_widening_ = fraction; }
   // For the layout test: the linked program of a variant.
   const gpu::Program& program(const VariantKey& key);
 
@@ -97,6 +101,7 @@ class Raycaster {
   std::vector<StrideEntry> stride_cache_;
   RayTables tables_;  // what the current frame's tables hold (for the uniforms and stats)
   size_t table_builds_ = 0;
+  double vs_widening_ = kCatmullRomOvershoot;
   std::vector<Targets> targets_;  // most recently used first
 };
 

@@ -86,10 +86,9 @@ VariantKey choose_variant(const ResolvedScene& s, int64_t empty_cells, GpuPath p
   k.path = path;
   k.tricubic = s.scene.render.filter == Filter::Tricubic;
   k.shading = s.scene.render.shading;
-  // Virtual samples need unbroken runs of true samples (the Catmull-Rom window): with cells
-  // skipped, the runs restart at every gap and the image changes (28-33 dB against the
-  // unskipped one on sharp TFs, even with Lee's (M - m)/8 widening), so they sample densely.
-  k.space_skipping = s.scene.render.space_skipping && empty_cells > 0 && s.scene.render.virtual_samples == 0;
+  // Virtual samples skip cells too: their cells' ranges are widened by Lee's (M - m)/8 and
+  // each occupied run brings two true samples on either side (the Catmull-Rom window).
+  k.space_skipping = s.scene.render.space_skipping && empty_cells > 0;
   k.orthographic = s.camera.orthographic;
   k.differential = s.scene.render.sampling == Sampling::Differential && !s.camera.orthographic;
   k.adaptive = s.scene.render.adaptive;
