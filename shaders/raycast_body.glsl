@@ -105,9 +105,11 @@ bool consume(Ray r, float t, float f, vec3 x, vec3 g, float dt, inout RayResult 
 // (in index space; at a run's ends the end sample is repeated), gradients likewise; each of the
 // k+1 sub-samples stands for 1/(k+1) of the step. One new true sample per step: the true samples
 // wait in a window of four and go out one step late, with the virtual ones that follow them.
-float w_t[4], w_f[4], w_dt[4];
-vec3 w_g[4];
-int w_n;  // true samples waiting (0..3 before a push)
+// The window is right-aligned in registers (newest in .w, no dynamic indexing: on llvmpipe an
+// indexed array lives in memory, which cost more than the tricubic fetches it saves).
+vec4 w_t, w_f, w_dt;
+vec3 w_g0, w_g1, w_g2, w_g3;
+int w_n;  // true samples waiting (0..4), the newest w_n of the window
 
 float catmull_rom(float p0, float p1, float p2, float p3, float s) {
   return 0.5 * (2.0 * p1 + (p2 - p0) * s + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * s * s +
@@ -118,52 +120,55 @@ vec3 catmull_rom3(vec3 p0, vec3 p1, vec3 p2, vec3 p3, float s) {
                 (3.0 * p1 - p0 - 3.0 * p2 + p3) * s * s * s);
 }
 
-// Sends out true sample a (window slot) and the virtual samples between it and slot a + 1 that
-// lie before t_limit, with p0 = slot a - 1 (or a) and p3 = slot a + 2 (or a + 1).
-bool vs_emit(Ray r, int a, bool has_prev, bool has_next2, float t_limit, inout RayResult res) {
+// Sends out the true sample at t1 (value f1, step dt1) and the virtual samples between it and
+// the next one (t2) that lie before t_limit, on the spline through f0..f3 (g0..g3).
+bool vs_segment(Ray r, float t1, float t2, float dt1, vec4 f, vec3 g0, vec3 g1, vec3 g2, vec3 g3, float t_limit,
+                inout RayResult res) {
   const float k = float(VIRTUAL_SAMPLES);
-  float sub = w_dt[a] / (k + 1.0);
-  if (consume(r, w_t[a], w_f[a], vec3(0.0), w_g[a], sub, res)) return true;
-  int p0 = has_prev ? a - 1 : a, p3 = has_next2 ? a + 2 : a + 1;
-  float span = w_t[a + 1] - w_t[a];
+  float sub = dt1 / (k + 1.0);
+  if (consume(r, t1, f.y, vec3(0.0), g1, sub, res)) return true;
+  float span = t2 - t1;
   for (int q = 1; q <= VIRTUAL_SAMPLES; ++q) {
     float s = float(q) / (k + 1.0);
-    if (w_t[a] + s * span > t_limit) break;
-    float f = catmull_rom(w_f[p0], w_f[a], w_f[a + 1], w_f[p3], s);
-    vec3 g = catmull_rom3(w_g[p0], w_g[a], w_g[a + 1], w_g[p3], s);
-    if (consume(r, w_t[a] + s * span, f, vec3(0.0), g, sub, res)) return true;
+    if (t1 + s * span > t_limit) break;
+    float v = catmull_rom(f.x, f.y, f.z, f.w, s);
+    vec3 g = catmull_rom3(g0, g1, g2, g3, s);
+    if (consume(r, t1 + s * span, v, vec3(0.0), g, sub, res)) return true;
   }
   return false;
+}
+
+// The segment between the two newest samples (.z, .w), the spline's end: p3 repeats .w, p0 is
+// .y when there is one.
+bool vs_last_segment(Ray r, float t_limit, inout RayResult res) {
+  bool prev = w_n >= 3;
+  return vs_segment(r, w_t.z, w_t.w, w_dt.z, vec4(prev ? w_f.y : w_f.z, w_f.z, w_f.w, w_f.w), prev ? w_g1 : w_g2,
+                    w_g2, w_g3, w_g3, t_limit, res);
 }
 
 // Everything still waiting: the last true sample stands for its whole step.
 bool vs_flush(Ray r, inout RayResult res) {
   bool done = res.acc.a >= u_dims.w;
-  if (!done && w_n >= 2) done = vs_emit(r, w_n - 2, w_n >= 3, false, 3.0e38, res);
-  if (!done && w_n >= 1) done = consume(r, w_t[w_n - 1], w_f[w_n - 1], vec3(0.0), w_g[w_n - 1], w_dt[w_n - 1], res);
+  if (!done && w_n >= 2) done = vs_last_segment(r, 3.0e38, res);
+  if (!done && w_n >= 1) done = consume(r, w_t.w, w_f.w, vec3(0.0), w_g3, w_dt.w, res);
   w_n = 0;
   return done;
 }
 
 bool vs_push(Ray r, float t, float f, vec3 g, float dt, inout RayResult res) {
-  if (w_n == 4) {  // slide: slot 0 went out already
-    for (int s = 0; s < 3; ++s) {
-      w_t[s] = w_t[s + 1];
-      w_f[s] = w_f[s + 1];
-      w_g[s] = w_g[s + 1];
-      w_dt[s] = w_dt[s + 1];
-    }
-    w_n = 3;
-  }
-  w_t[w_n] = t;
-  w_f[w_n] = f;
-  w_g[w_n] = g;
-  w_dt[w_n] = dt;
-  ++w_n;
+  w_t = vec4(w_t.yzw, t);
+  w_f = vec4(w_f.yzw, f);
+  w_dt = vec4(w_dt.yzw, dt);
+  w_g0 = w_g1;
+  w_g1 = w_g2;
+  w_g2 = w_g3;
+  w_g3 = g;
+  w_n = min(w_n + 1, 4);
   // With samples j-1, j, j+1, j+2 (or j, j+1, j+2 at a run's start) the segment j..j+1 is known.
-  if (w_n == 3) return vs_emit(r, 0, false, true, 3.0e38, res);
-  if (w_n == 4) return vs_emit(r, 1, true, true, 3.0e38, res);
-  return false;
+  if (w_n < 3) return false;
+  bool prev = w_n == 4;
+  return vs_segment(r, w_t.y, w_t.z, w_dt.y, vec4(prev ? w_f.x : w_f.y, w_f.yzw), prev ? w_g0 : w_g1, w_g1, w_g2,
+                    w_g3, 3.0e38, res);
 }
 
 // The ray's end. When its last lattice point was visited, one more true sample past the exit
@@ -172,7 +177,7 @@ bool vs_push(Ray r, float t, float f, vec3 g, float dt, inout RayResult res) {
 // exit), not one whole step beyond it.
 void vs_finish(Ray r, Lattice L, int last, float t_exit, inout RayResult res) {
   if (res.acc.a >= u_dims.w || w_n == 0) return;
-  if (w_t[w_n - 1] != lattice_t(L, float(last))) {  // the ray ended in a skipped cell
+  if (w_t.w != lattice_t(L, float(last))) {  // the ray ended in a skipped cell
     vs_flush(r, res);
     return;
   }
@@ -187,7 +192,7 @@ void vs_finish(Ray r, Lattice L, int last, float t_exit, inout RayResult res) {
 #endif
   if (vs_push(r, t, f, g, lattice_step(L, float(last + 1), 1.0), res)) return;
   // Pending now: [..., last, last + 1]; the extra sample itself is not composited.
-  vs_emit(r, w_n - 2, w_n >= 3, false, t_exit, res);
+  vs_last_segment(r, t_exit, res);
   w_n = 0;
 }
 #endif

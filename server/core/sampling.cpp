@@ -34,8 +34,10 @@ double longest_step(const SamplingPlan& plan, const ResolvedScene& s) {
                             c & 4 ? s.box_max.z : s.box_min.z);
     far = std::max(far, glm::length(corner - s.camera.eye));
   }
-  // a = k |dD/dx| <= k * pixel_du (the footprint grows no faster than on the axis).
-  return plan.min_step + std::sqrt(plan.k * plan.k + 2.0 * plan.k * plan.pixel_du * far);
+  // a = k |dD/dx| <= k * pixel_du (the footprint grows no faster than on the axis); the step
+  // from index j to j + 1 is the one at t(j) plus a/2.
+  const double a = plan.k * plan.pixel_du;
+  return plan.min_step + std::sqrt(plan.k * plan.k + 2.0 * a * far) + 0.5 * a;
 }
 
 int virtual_sample_ring(const SamplingPlan& plan, const ResolvedScene& s, int cell_edge) {

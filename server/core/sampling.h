@@ -59,7 +59,7 @@ RayLattice ray_lattice(const SamplingPlan& plan, const ViewSetup& view, const Ra
 
 // The longest step any ray of the scene takes (world units, before adaptive multipliers):
 // the uniform step, or for differential sampling the step at the box corner farthest from the
-// eye, sqrt(b^2 + 2 a d) (eq. 17 solved for the distance d) plus the minimum step.
+// eye, sqrt(b^2 + 2 a d) + a/2 (eq. 17 solved for the distance d) plus the minimum step.
 double longest_step(const SamplingPlan& plan, const ResolvedScene& s);
 
 // How many macrocells away a virtual sample's Catmull-Rom window (two steps either side) can

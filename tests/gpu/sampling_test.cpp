@@ -336,6 +336,37 @@ TEST(VirtualSamples, StepOnePlusThreeAgainstStepQuarter) {
   EXPECT_GT(reference::compare(rows[2].img, rows[1].img).psnr, 60.0);
 }
 
+// The Catmull-Rom window reaches two steps either side; longest_step bounds every step of every
+// ray (checked over all pixels of a differential close-up), and the ring follows from it.
+TEST(VirtualSamples, WindowReachBoundsEveryStep) {
+  auto v = ml();  // 41^3, spacing 1, 8-voxel cells
+  for (const auto& [render, ring] : {std::pair{json{{"step", 2.0}}, 1}, std::pair{json{{"step", 8.0}}, 2},
+                                     std::pair{json{{"step", 12.0}}, 3}, std::pair{json{{"step", 13.0}}, -1},
+                                     std::pair{json{{"step", 1.0}, {"adaptive", true}}, 2},
+                                     std::pair{json{{"step", 2.0}, {"adaptive", true}}, -1}}) {
+    const ResolvedScene s = test::make_scene(*v, scene_json(far_camera(), render));
+    EXPECT_EQ(virtual_sample_ring(plan_sampling(s), s, 8), ring) << render.dump();
+  }
+  for (double sk : {0.5, 4.0, 64.0}) {
+    const ResolvedScene s = test::make_scene(*v, scene_json(close_camera(), {{"sampling", "differential"}, {"s_k", sk}}));
+    const SamplingPlan plan = plan_sampling(s);
+    const double bound = longest_step(plan, s);
+    const ViewSetup view = setup_view(s.camera, (s.box_min + s.box_max) * 0.5, s.scene.width, s.scene.height);
+    double longest = 0.0;
+    for (int y = 0; y < s.scene.height; ++y)
+      for (int x = 0; x < s.scene.width; ++x) {
+        const Ray r = make_ray(view, x, y);
+        double t0, t1;
+        if (!intersect_box(r, (s.box_max - s.box_min) * 0.5, t0, t1)) continue;
+        const RayLattice l = ray_lattice(plan, view, r, t0);
+        longest = std::max(longest, l.step(std::floor(l.index_at(t1)), 1));  // the last, longest
+      }
+    EXPECT_GT(longest, 0.0);
+    EXPECT_LE(longest, bound) << "s_k " << sk;
+    EXPECT_GT(longest, 0.5 * bound) << "s_k " << sk << ": the bound should not be loose";
+  }
+}
+
 // Slabs 4 voxels thick across x on zero, at 0.8 except a band at 0.9 (16 <= y < 32), and one
 // voxel at 1 far from them (the value range): sampled at step 2 across the slabs, the true
 // samples of the 0.8 parts never exceed 0.8, but the Catmull-Rom segment between two 0.8

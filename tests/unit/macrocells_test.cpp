@@ -164,4 +164,32 @@ TEST(Occupancy, CatmullRomOvershootWidensTheCellsRange) {
   EXPECT_EQ(classify_cells(g, dark, 0.0, 1.0, {0.88}, TransferFunction::kTableSize, kCatmullRomOvershoot).occupied[0], 1);
 }
 
+// A virtual sample's window reaches neighbouring cells: dilate_ranges joins each cell's range
+// with those within `ring` cells (a cube), and nothing farther.
+TEST(Macrocells, DilateRangesJoinsTheNeighbourhood) {
+  MacrocellGrid g;
+  g.grid = {5, 4, 3};
+  const size_t n = size_t(5 * 4 * 3);
+  g.min.assign(n, 0.2f);
+  g.max.assign(n, 0.3f);
+  g.stddev.assign(n, 0.0f);
+  g.min[g.index(1, 1, 1)] = -1.0f;
+  g.max[g.index(3, 2, 1)] = 5.0f;
+  const MacrocellGrid same = dilate_ranges(g, 0);
+  EXPECT_EQ(same.min, g.min);
+  EXPECT_EQ(same.max, g.max);
+  const MacrocellGrid d = dilate_ranges(g, 1);
+  for (int64_t c = 0; c < 3; ++c)
+    for (int64_t b = 0; b < 4; ++b)
+      for (int64_t a = 0; a < 5; ++a) {
+        const bool near_lo = std::abs(a - 1) <= 1 && std::abs(b - 1) <= 1 && std::abs(c - 1) <= 1;
+        const bool near_hi = std::abs(a - 3) <= 1 && std::abs(b - 2) <= 1 && std::abs(c - 1) <= 1;
+        EXPECT_EQ(d.min[g.index(a, b, c)], near_lo ? -1.0f : 0.2f) << a << b << c;
+        EXPECT_EQ(d.max[g.index(a, b, c)], near_hi ? 5.0f : 0.3f) << a << b << c;
+      }
+  const MacrocellGrid d2 = dilate_ranges(g, 2);
+  EXPECT_EQ(d2.max[g.index(0, 0, 0)], 0.3f);  // (3,2,1) is 3 cells away on x
+  EXPECT_EQ(d2.max[g.index(1, 0, 0)], 5.0f);
+}
+
 }  // namespace
