@@ -163,6 +163,52 @@ TEST(Differential, AgainstUniformOnACloseUpAtEqualSamples) {
     }
 }
 
+// Knoll Fig. 6 / Table 2 on the vessel volume: a close-up of the tree (tissue clear, lumen
+// semi-transparent or nearly opaque), 128^2, space skipping on. Cost is what the GPU visits:
+// samples per ray after skipping, the part of frame time the method controls (`peakcast bench
+// sampling` prints frame times). The uniform step is matched to the differential run's count.
+TEST(Differential, AgainstUniformAtEqualCostOnAVesselCloseUp) {
+  auto v = test::make_volume(GeneratorKind::Vessels, {96, 96, 96}, SourceType::U16);
+  render::GpuVolume gv(v);
+  const double lo = v->min_value, hi = v->max_value, r = 0.5 * std::sqrt(3.0) * 95.0;
+  const glm::dvec3 c(47.5), eye = c + 1.05 * r * glm::normalize(glm::dvec3(0.55, 0.45, 0.7));
+  std::printf("%-8s %5s %9s %12s %12s %10s\n", "lumen", "s_k", "samples", "diff_dB", "uniform_dB", "step_u");
+  for (const auto& [name, mid, top] : {std::tuple{"0.3-0.6", 0.3, 0.6}, std::tuple{"0.8-1.0", 0.8, 1.0}}) {
+    json base = {{"image", {{"width", 128}, {"height", 128}}},
+                 {"camera", {{"eye", {eye.x, eye.y, eye.z}}, {"center", {c.x, c.y, c.z}}, {"up", {0, 1, 0}}, {"fov_y", 60}}},
+                 {"tf", {{"points", {{lo, 0, 0, 0, 0}, {lo + 0.3 * (hi - lo), 0.2, 0.4, 1.0, 0.0},
+                                     {lo + 0.6 * (hi - lo), 1.0, 0.8, 0.4, mid}, {hi, 1, 1, 1, top}}}}},
+                 {"render", {{"early_termination", 1.0}}}};
+    const auto conv = reference::render_converged(*v, test::make_scene(*v, base), reference::OpticalModel::Dvr, 1e-4);
+    ASSERT_TRUE(conv.converged);
+    for (double sk : {2.0, 1.0, 0.5, 0.25}) {
+      json dj = base;
+      dj["render"]["sampling"] = "differential";
+      dj["render"]["s_k"] = sk;
+      render::RenderStats sd, su;
+      const Image d = test::render_gpu(gv, test::make_scene(*v, dj), render::GpuPath::Fragment, &sd);
+      const double psnr_d = reference::compare(d, conv.image).psnr;
+      double step = 1.0, psnr_u = 0.0;
+      for (int k = 0; k < 6; ++k) {  // match the visited samples per ray (within 2%)
+        json uj = base;
+        uj["render"]["step"] = step;
+        const Image u = test::render_gpu(gv, test::make_scene(*v, uj), render::GpuPath::Fragment, &su);
+        psnr_u = reference::compare(u, conv.image).psnr;
+        const double ratio = su.samples_mean / sd.samples_mean;
+        if (std::abs(ratio - 1.0) < 0.02) break;
+        step *= ratio;
+      }
+      std::printf("%-8s %5.2f %9.1f %12.2f %12.2f %10.3f\n", name, sk, sd.samples_mean, psnr_d, psnr_u, step);
+      // Measured on llvmpipe: differential -0.7 ... +1.0 dB against uniform at equal cost (the
+      // per-ray converged image weighs every depth alike; see the README). Knoll's "lower
+      // error at equal frame time" does not hold by this measure; the bound catches a broken
+      // lattice (a skipped or doubled sample costs several dB).
+      EXPECT_GT(psnr_d, psnr_u - 1.5) << name << " s_k " << sk;
+      EXPECT_GT(psnr_d, 24.0) << name << " s_k " << sk;
+    }
+  }
+}
+
 // s_k from 1e3 to 1e-3: every image finite, the samples bounded by the minimum step, and the
 // error falling as s_k falls until the minimum step takes over.
 TEST(Differential, SkSweepIsStableAndConverges) {
