@@ -23,6 +23,7 @@ vec3 voxel_coords(vec3 p) { return (p + u_box_half.xyz) / u_spacing.xyz; }
 #define SEGMENTS  // methods that look at the segment between consecutive samples
 #endif
 #define EXTENSION 1  // lattice points visited on each side of an occupied cell's run
+#define CHUNK 4096   // lattice points per inner loop (see cast_ray)
 #if defined(DIFFERENTIAL) || defined(ADAPTIVE) || defined(VIRTUAL_SAMPLES)
 #define VARYING_STEPS  // segments differ from the preintegration table's step
 #endif
@@ -244,8 +245,15 @@ RayResult cast_ray(vec2 pixel) {
   Lattice L = ray_lattice(r, span.x);
   int last = int(min(floor(lattice_index(L, span.y)), u_value_map.w - 1.0));
 #ifndef CELL_TRAVERSAL
-  for (int i = 0; i <= last; ++i)
-    if (visit(r, L, i, 1, res)) break;
+  // Nested: llvmpipe stops any single loop after 65535 iterations (LP_MAX_TGSI_LOOP_ITERATIONS),
+  // far below the per-ray cap; chunks of CHUNK keep every loop under it.
+  bool stop = false;
+  for (int c = 0; c <= last && !stop; c += CHUNK)
+    for (int i = c; i <= min(last, c + CHUNK - 1); ++i)
+      if (visit(r, L, i, 1, res)) {
+        stop = true;
+        break;
+      }
 #else
   // 3D-DDA over the macrocell grid (Amanatides & Woo) in voxel coordinates. Each occupied cell
   // visits the lattice indices inside it (the multiples of its multiplier M with ADAPTIVE);
@@ -297,8 +305,11 @@ RayResult cast_ray(vec2 pixel) {
       for (int e = EXTENSION; e >= 1; --e)
         if (first - e >= next && visit(r, L, first - e, 1, res)) return res;
 #endif
-      for (; i <= end; i += m)
-        if (visit(r, L, i, min(m, end + 1 - i), res)) return res;
+      while (i <= end) {  // in chunks, as above
+        int chunk_end = min(end, i + (CHUNK - 1) * m);
+        for (; i <= chunk_end; i += m)
+          if (visit(r, L, i, min(m, end + 1 - i), res)) return res;
+      }
 #ifdef SEGMENTS
       // Never a point visited already (a thin cell's points may all be the last one's extension).
       for (int j = max(next, end + 1); j <= min(last, end + EXTENSION); ++j)

@@ -34,6 +34,22 @@ int run_sampling_bench(const SamplingBenchArgs& a) {
   std::printf("GL: %s\n", ctx->info().to_string().c_str());
   gpu::ShaderCache shaders(gpu::default_shader_dir());
   render::Raycaster caster(shaders);
+  struct Timed {
+    double ms = 0, spr = 0;
+    Image img;
+  };
+  auto time_render = [&](const render::GpuVolume& gv, const ResolvedScene& s) {
+    Timed t;
+    std::vector<double> ms;
+    render::RenderStats st;
+    for (int f = 0; f <= a.frames; ++f) {
+      t.img = caster.render(gv, s, render::GpuPath::Fragment, &st);
+      if (f > 0) ms.push_back(st.render_ms);
+    }
+    t.ms = median(ms);
+    t.spr = st.samples_mean;
+    return t;
+  };
   std::printf("%-16s %-5s %-26s %9s %8s %9s\n", "volume", "view", "method", "median_ms", "spr", "PSNR_dB");
   for (const auto& path : a.volumes) {
     auto vol = std::make_shared<Volume>(load_volume(path));
@@ -73,15 +89,35 @@ int run_sampling_bench(const SamplingBenchArgs& a) {
         nlohmann::json jm = jv;
         jm["render"].update(render);
         const ResolvedScene s = resolve_scene(parse_scene(jm), *vol);
-        std::vector<double> ms;
-        render::RenderStats st;
-        Image img;
-        for (int f = 0; f <= a.frames; ++f) {
-          img = caster.render(gv, s, render::GpuPath::Fragment, &st);
-          if (f > 0) ms.push_back(st.render_ms);
+        const Timed t = time_render(gv, s);
+        std::printf("%-16s %-5s %-26s %9.2f %8.1f %9.2f\n", vol->name.c_str(), view, name.c_str(), t.ms, t.spr,
+                    reference::compare(t.img, s.scene.render.filter == Filter::Tricubic ? conv_cubic.image : conv.image).psnr);
+        std::fflush(stdout);
+      }
+      // Interactive frames are rendered at half size (quality.interactive_scale): a differential
+      // scene keeps its s_k, so the larger footprint makes the steps twice as long. The
+      // alternative: uniform sampling at the step that costs the same (visited samples matched).
+      nlohmann::json jh = jv;
+      jh["image"] = {{"width", a.size / 2}, {"height", a.size / 2}};
+      const auto conv_half = reference::render_converged(*vol, resolve_scene(parse_scene(jh), *vol),
+                                                         reference::OpticalModel::Dvr, 1e-4);
+      for (double sk : {4.0, 1.0, 0.25}) {
+        nlohmann::json jd = jh;
+        jd["render"].update({{"sampling", "differential"}, {"s_k", sk}});
+        const Timed d = time_render(gv, resolve_scene(parse_scene(jd), *vol));
+        double step = vol->spacing.x;
+        Timed u;
+        for (int k = 0; k < 6; ++k) {
+          nlohmann::json ju = jh;
+          ju["render"]["step"] = step;
+          u = time_render(gv, resolve_scene(parse_scene(ju), *vol));
+          if (std::abs(u.spr / d.spr - 1.0) < 0.02) break;
+          step *= u.spr / d.spr;
         }
-        std::printf("%-16s %-5s %-26s %9.2f %8.1f %9.2f\n", vol->name.c_str(), view, name.c_str(), median(ms),
-                    st.samples_mean, reference::compare(img, s.scene.render.filter == Filter::Tricubic ? conv_cubic.image : conv.image).psnr);
+        std::printf("%-16s %-5s interactive %3d^2: differential s_k %.2f %6.2f ms %6.1f spr %6.2f dB | uniform step "
+                    "%.3f %6.2f ms %6.1f spr %6.2f dB\n",
+                    vol->name.c_str(), view, a.size / 2, sk, d.ms, d.spr, reference::compare(d.img, conv_half.image).psnr,
+                    step, u.ms, u.spr, reference::compare(u.img, conv_half.image).psnr);
         std::fflush(stdout);
       }
     }

@@ -48,6 +48,9 @@ class Raycaster {
   // range: Lee's 1/8 (kCatmullRomOvershoot). Tests set 0 to show the skipped-cell streaks it
   // prevents (Lee Fig. 14).
   void set_virtual_sample_widening(double fraction) { vs_widening_ = fraction; }
+  // The most samples a ray of this variant takes (kMaxSamplesPerRay, or less where the driver
+  // bounds a shader's loops: llvmpipe); rays that reach it are counted in the stats.
+  int sample_cap(const VariantKey& key) const;
   // For the layout test: the linked program of a variant.
   const gpu::Program& program(const VariantKey& key);
 
@@ -102,9 +105,11 @@ class Raycaster {
   RayTables tables_;  // what the current frame's tables hold (for the uniforms and stats)
   size_t table_builds_ = 0;
   double vs_widening_ = kCatmullRomOvershoot;
+  bool llvmpipe_ = false;
   std::vector<Targets> targets_;  // most recently used first
 };
 
 using peakcast::kMaxSamplesPerRay;
+constexpr int kLlvmpipeLoopBudget = 60000;  // of llvmpipe's 65535 loop iterations per invocation
 
 }  // namespace peakcast::render

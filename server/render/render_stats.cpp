@@ -14,6 +14,7 @@ nlohmann::json RenderStats::to_json() const {
     j["samples_per_ray_max"] = samples_max;
     j["rays_hit"] = rays_hit;
     j["rays_at_sample_cap"] = rays_at_cap;
+    j["sample_cap"] = sample_cap;
   }
   return j;
 }
@@ -42,6 +43,7 @@ void RenderStats::merge(const RenderStats& t) {
   samples_max = std::max(samples_max, t.samples_max);
   rays_hit += t.rays_hit;
   rays_at_cap += t.rays_at_cap;
+  sample_cap = std::max(sample_cap, t.sample_cap);
   samples_mean = rays_hit ? samples_total / double(rays_hit) : 0.0;
   tiles += t.tiles;
   if (!has_samples) samples_total = samples_mean = samples_max = 0.0, rays_hit = rays_at_cap = 0;

@@ -22,7 +22,8 @@ struct RenderStats {
   double samples_max = 0.0;
   double samples_total = 0.0;
   int64_t rays_hit = 0;
-  int64_t rays_at_cap = 0;  // rays that reached kMaxSamplesPerRay (core/sampling.h)
+  int64_t rays_at_cap = 0;  // rays that reached sample_cap
+  int sample_cap = 0;       // the per-ray cap of this frame: kMaxSamplesPerRay, or the driver's
   int64_t empty_cells = 0;
   size_t peaks = 0;
   int tiles = 1;  // draws that made the image (merge() counts them)

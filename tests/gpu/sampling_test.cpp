@@ -240,6 +240,42 @@ TEST(Differential, SkSweepIsStableAndConverges) {
   EXPECT_LT(rmse.back(), rmse.front() * 0.01);
 }
 
+// The per-ray cap: a 1199-voxel-long ray at the smallest legal step (1e-3 voxel) wants 1.2 M
+// samples. It stops at the cap (kMaxSamplesPerRay; on llvmpipe, which ends a shader's loops
+// after 65535 iterations in all, a lower one), the stats say so, and the image stays finite.
+// Under the cap every sample is taken: nothing is cut silently.
+TEST(Sampling, PerRayCapIsReportedWhenHit) {
+  auto v = test::make_volume(GeneratorKind::Ramp, {2, 2, 1200}, SourceType::F32);
+  render::GpuVolume gv(v);
+  json sj = {{"image", {{"width", 2}, {"height", 2}}},
+             {"camera", {{"eye", {0.5, 0.5, -5.0}}, {"center", {0.5, 0.5, 600.0}}, {"up", {0, 1, 0}}, {"fov_y", 0.01}}},
+             {"tf", {{"points", {{0.0, 1, 1, 1, 0.0}, {1.0, 1, 1, 1, 0.0}}}}},  // clear: no ray turns opaque
+             {"render", {{"step", 1e-3}, {"early_termination", 1.0}, {"space_skipping", false}}}};
+  const json peak_tf = {{"points", {{0.0, 1, 1, 1, 0}, {0.499, 1, 1, 1, 0}, {0.5, 1, 1, 1, 0.001}, {0.501, 1, 1, 1, 0},
+                                     {1.0, 1, 1, 1, 0}}}};
+  for (const auto& [vs, peaks] : {std::pair{0, false}, std::pair{7, false}, std::pair{0, true}, std::pair{3, true}}) {
+    sj["render"]["virtual_samples"] = vs;
+    sj["render"]["step"] = 1e-3;
+    if (peaks) {
+      sj["render"]["classification"] = "peaks";
+      sj["tf"] = peak_tf;
+    }
+    render::RenderStats st;
+    const Image g = test::render_gpu(gv, test::make_scene(*v, sj), render::GpuPath::Fragment, &st);
+    EXPECT_TRUE(test::all_finite(g));
+    ASSERT_GT(st.sample_cap, 1000) << "vs " << vs;
+    EXPECT_LE(st.sample_cap, kMaxSamplesPerRay);
+    EXPECT_EQ(st.rays_at_cap, 4) << "vs " << vs;
+    EXPECT_EQ(st.samples_max, double(st.sample_cap + (vs ? 1 : 0))) << "vs " << vs;  // + the spline's closing one
+    // Just under the cap: every lattice point of the ray, counted exactly.
+    const double step = 1199.0 / (0.9 * st.sample_cap);
+    sj["render"]["step"] = step;
+    test::render_gpu(gv, test::make_scene(*v, sj), render::GpuPath::Fragment, &st);
+    EXPECT_EQ(st.rays_at_cap, 0) << "vs " << vs;
+    EXPECT_NEAR(st.samples_max, std::floor(1199.0 / step) + 1 + (vs ? 1 : 0), 1.0) << "vs " << vs;
+  }
+}
+
 TEST(Differential, OrthographicIsUniformAtTheFootprint) {
   auto v = ml();
   render::GpuVolume gv(v);
