@@ -25,7 +25,7 @@ std::string RenderStats::to_string() const {
   s << "RenderStats{";
   bool first = true;
   for (const char* key : {"variant", "render_ms", "readback_ms", "table_ms", "samples_per_ray", "samples_per_ray_max",
-                          "rays_hit", "rays_at_sample_cap", "peaks", "empty_macrocells", "tiles"}) {
+                          "rays_hit", "rays_at_sample_cap", "sample_cap", "peaks", "empty_macrocells", "tiles"}) {
     if (!j.contains(key)) continue;
     s << (first ? "" : " ") << key << "=" << (j[key].is_string() ? j[key].get<std::string>() : j[key].dump());
     first = false;

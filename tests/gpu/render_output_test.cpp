@@ -218,7 +218,7 @@ TEST(RenderStats, JsonUsesTheStreamKeysAndToStringMatches) {
   draw(gv, s, render::GpuPath::Fragment, render::RenderOutput::Float, std::nullopt, &st);
   const json j = st.to_json();
   const std::set<std::string> want = {"render_ms", "readback_ms", "table_ms", "samples_per_ray",
-                                      "samples_per_ray_max", "rays_hit", "rays_at_sample_cap", "variant", "peaks",
+                                      "samples_per_ray_max", "rays_hit", "rays_at_sample_cap", "sample_cap", "variant", "peaks",
                                       "empty_macrocells", "tiles"};
   std::set<std::string> got;
   for (auto& [k, _] : j.items()) got.insert(k);
