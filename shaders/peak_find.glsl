@@ -87,8 +87,8 @@ bool find_peaks(Ray r, float t0, float f0, float t1, float f1, inout RayResult r
 #ifdef SHADING
     rgb = shade(rgb, field_gradient(voxel_coords(r.o + t * r.d)), r.d);
 #endif
-    composite(res.acc, rgb, c.a);  // unscaled opacity at the peak (Knoll §4.2)
-    if (res.acc.a >= u_dims.w) break;
+    composite(res.acc, rgb, c.a * PEAK_WEIGHT);  // unscaled opacity at the peak (Knoll §4.2)
+    if (res.acc.a >= STOP) break;
   }
   return count > 0;
 }

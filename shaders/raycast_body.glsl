@@ -31,6 +31,7 @@ vec3 voxel_coords(vec3 p) { return (p + u_box_half.xyz) / u_spacing.xyz; }
 #define CELL_TRAVERSAL  // the 3D-DDA over macrocells
 #endif
 
+#include "ray_texture.glsl"
 #ifdef PEAKS
 #include "peak_find.glsl"
 #endif
@@ -75,7 +76,7 @@ bool consume(Ray r, float t, float f, vec3 x, vec3 g, float dt, inout RayResult 
 #ifdef SHADING
       rgb = shade(rgb, SAMPLE_GRADIENT(x, g), r.d);  // at the segment's end, as preintegration does
 #endif
-      composite(res.acc, rgb, c.a);
+      composite(res.acc, rgb, c.a * DVR_WEIGHT);
     }
   }
 #elif !defined(PEAKS_ONLY)
@@ -89,7 +90,7 @@ bool consume(Ray r, float t, float f, vec3 x, vec3 g, float dt, inout RayResult 
 #ifdef SHADING
       rgb = shade(rgb, SAMPLE_GRADIENT(x, g), r.d);
 #endif
-      composite(res.acc, rgb, correct_opacity(c.a, dt));
+      composite(res.acc, rgb, correct_opacity(c.a, dt) * DVR_WEIGHT);
     }
   }
 #endif
@@ -97,7 +98,7 @@ bool consume(Ray r, float t, float f, vec3 x, vec3 g, float dt, inout RayResult 
   g_prev_f = f;
   g_have_prev = true;
   g_gap = false;
-  return res.acc.a >= u_dims.w;
+  return res.acc.a >= STOP;
 }
 
 #ifdef VIRTUAL_SAMPLES
@@ -149,7 +150,7 @@ bool vs_last_segment(Ray r, float t_limit, inout RayResult res) {
 
 // Everything still waiting: the last true sample stands for its whole step.
 bool vs_flush(Ray r, inout RayResult res) {
-  bool done = res.acc.a >= u_dims.w;
+  bool done = res.acc.a >= STOP;
   if (!done && w_n >= 2) done = vs_last_segment(r, 3.0e38, res);
   if (!done && w_n >= 1) done = consume(r, w_t.w, w_f.w, vec3(0.0), w_g3, w_dt.w, res);
   w_n = 0;
@@ -177,7 +178,7 @@ bool vs_push(Ray r, float t, float f, vec3 g, float dt, inout RayResult res) {
 // ends like a ray sampled at the sub-step would (its last sample within one sub-step of the
 // exit), not one whole step beyond it.
 void vs_finish(Ray r, Lattice L, int last, float t_exit, inout RayResult res) {
-  if (res.acc.a >= u_dims.w || w_n == 0) return;
+  if (res.acc.a >= STOP || w_n == 0) return;
   if (w_t.w != lattice_t(L, float(last))) {  // the ray ended in a skipped cell
     vs_flush(r, res);
     return;
@@ -243,6 +244,11 @@ RayResult cast_ray(vec2 pixel) {
     return res;
   }
   Lattice L = ray_lattice(r, span.x);
+#ifdef RAY_TEXTURE
+  float step_mult = read_ray_texture(r, pixel, span.x);
+  L.A *= step_mult;
+  L.B *= step_mult;
+#endif
   int last = int(min(floor(lattice_index(L, span.y)), u_value_map.w - 1.0));
 #ifndef CELL_TRAVERSAL
   // Nested: llvmpipe stops any single loop after 65535 iterations (LP_MAX_TGSI_LOOP_ITERATIONS),

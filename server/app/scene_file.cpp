@@ -26,7 +26,6 @@ LoadedScene load_scene_file(const fs::path& path) {
   LoadedScene out;
   out.volume = std::make_shared<Volume>(load_volume(vol));
   try {
-    render::require_supported(scene.render);
     out.scene = resolve_scene(scene, *out.volume);
   } catch (const SceneError& e) {
     throw SceneError(path.string() + ": " + e.what());

@@ -4,63 +4,15 @@
 #include <cmath>
 #include <set>
 
+#include "core/json_fields.h"
 #include "core/preintegration.h"
 
 namespace peakcast {
 namespace {
 
 using json = nlohmann::json;
+using namespace json_fields;
 
-[[noreturn]] void fail(const std::string& key, const std::string& what) { throw SceneError(key + ": " + what); }
-
-void only_keys(const json& j, const std::string& where, std::initializer_list<const char*> allowed) {
-  if (!j.is_object()) fail(where.empty() ? "scene" : where, "must be an object");
-  for (auto& item : j.items()) {
-    const std::string& k = item.key();
-    bool ok = std::any_of(allowed.begin(), allowed.end(), [&](const char* a) { return k == a; });
-    if (!ok) {
-      std::string list;
-      for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
-      fail(where.empty() ? k : where + "." + k, "unknown key (allowed: " + list + ")");
-    }
-  }
-}
-
-double number(const json& j, const std::string& key) {
-  if (!j.is_number()) fail(key, "must be a number");
-  const double v = j.get<double>();
-  if (!std::isfinite(v)) fail(key, "must be finite");
-  return v;
-}
-
-int integer(const json& j, const std::string& key, int lo, int hi) {
-  if (!j.is_number_integer() && !(j.is_number() && std::floor(j.get<double>()) == j.get<double>()))
-    fail(key, "must be an integer");
-  const double v = j.get<double>();
-  if (v < lo || v > hi) fail(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-  return int(v);
-}
-
-bool boolean(const json& j, const std::string& key) {
-  if (!j.is_boolean()) fail(key, "must be true or false");
-  return j.get<bool>();
-}
-
-glm::dvec3 vec3(const json& j, const std::string& key) {
-  if (!j.is_array() || j.size() != 3) fail(key, "must be an array of 3 numbers");
-  return {number(j[0], key + "[0]"), number(j[1], key + "[1]"), number(j[2], key + "[2]")};
-}
-
-template <typename E>
-E choice(const json& j, const std::string& key, std::initializer_list<std::pair<const char*, E>> options) {
-  if (!j.is_string()) fail(key, "must be a string");
-  std::string list;
-  for (auto& [name, value] : options) {
-    if (j.get<std::string>() == name) return value;
-    list += std::string(list.empty() ? "" : ", ") + name;
-  }
-  fail(key, "'" + j.get<std::string>() + "' is not one of " + list);
-}
 
 Camera parse_camera(const json& j) {
   only_keys(j, "camera", {"eye", "center", "up", "fov_y", "projection", "height"});
@@ -156,7 +108,10 @@ RenderSettings parse_render(const json& j) {
   }
   if (j.contains("space_skipping")) r.space_skipping = boolean(j["space_skipping"], "render.space_skipping");
   if (j.contains("adaptive")) r.adaptive = boolean(j["adaptive"], "render.adaptive");
-  if (j.contains("ray_texture")) r.ray_texture = j["ray_texture"];
+  if (j.contains("ray_texture")) {
+    parse_ray_texture(j["ray_texture"]);  // refused here, naming the key, if malformed
+    r.ray_texture = j["ray_texture"];
+  }
   return r;
 }
 
@@ -262,6 +217,14 @@ ResolvedScene resolve_scene(const Scene& s, const Volume& v) {
   r.tf.opacity_unit = s.opacity_unit > 0 ? s.opacity_unit : min_spacing;
   r.step = s.render.step > 0 ? s.render.step : min_spacing;
   r.min_spacing = min_spacing;
+  if (!s.render.ray_texture.is_null()) {
+    const RayTextureSpec spec = parse_ray_texture(s.render.ray_texture);
+    if (!spec.png.empty())
+      throw SceneError("render.ray_texture.png: reading a ray texture from a PNG is not implemented yet (give size "
+                       "and strokes)");
+    r.ray_texture = std::make_shared<const RayTexture>(build_ray_texture(spec, s.render.early_termination));
+    r.ray_texture_mapping = spec.mapping;
+  }
   if (r.step < kMinStepFraction * min_spacing)
     throw SceneError("render.step: " + std::to_string(r.step) + " is below " + std::to_string(kMinStepFraction) +
                      " x the smallest spacing");

@@ -3,6 +3,7 @@
 // zero or oversized images and degenerate cameras, naming the key.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -10,15 +11,12 @@
 #include <nlohmann/json.hpp>
 
 #include "core/camera.h"
+#include "core/ray_texture.h"
+#include "core/scene_error.h"
 #include "core/transfer_function.h"
 #include "core/volume.h"
 
 namespace peakcast {
-
-class SceneError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
 
 // Limits at the edge, with units.
 constexpr int kMaxImageSide = 8192;                 // pixels per side
@@ -74,6 +72,9 @@ struct ResolvedScene {
   double step = 1.0;
   double min_spacing = 1.0;  // the volume's smallest voxel spacing
   glm::dvec3 box_min, box_max;
+  // render.ray_texture built from its strokes at the scene's early termination; null without one.
+  std::shared_ptr<const RayTexture> ray_texture;
+  RayTextureMapping ray_texture_mapping = RayTextureMapping::View;
 };
 ResolvedScene resolve_scene(const Scene& s, const Volume& v);
 

@@ -147,7 +147,6 @@ void render_still(AppContext& app, const Request& req, std::function<void(Respon
   Scene scene;
   try {
     scene = parse_scene_text(req.body());
-    render::require_supported(scene.render);
   } catch (const SceneError& e) {
     count(app, "render", http::status::bad_request);
     return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));

@@ -1,5 +1,6 @@
 #include "reference/cpu_raycaster.h"
 
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -8,6 +9,7 @@
 #include "core/parallel.h"
 #include "core/peaks.h"
 #include "core/preintegration.h"
+#include "core/ray_texture_mapping.h"
 #include "core/sampling.h"
 #include "reference/field.h"
 #include "reference/ray_events.h"
@@ -96,7 +98,7 @@ Image for_each_pixel(const Frame& fr, PixelFn fn) {
       Accum acc;
       if (intersect_box(r, fr.half, t0, t1)) {
         samples = 0.0;
-        fn(r, t0, t1, acc, samples);
+        fn(r, t0, t1, acc, samples, x, y);
       }
       float* px = img.pixel(x, y);
       const glm::dvec3 out = acc.rgb + (1.0 - acc.alpha) * fr.s.scene.background;
@@ -115,7 +117,7 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
   SamplingPlan plan = plan_sampling(s, opt.step_scale);
   if (opt.step > 0 && !plan.differential) plan.step = opt.step;
   const double dt = plan.step;  // the uniform step: the preintegration table's segment length
-  const double stop = opt.early_termination ? rs.early_termination : 2.0;
+  const double stop_default = opt.early_termination ? rs.early_termination : 2.0;
   const bool peaks_on = rs.classification == Classification::Peaks && rs.peak_mode != PeakMode::DvrOnly;
   const bool preint = rs.classification == Classification::Preint;
   const bool dvr_on = !(peaks_on && rs.peak_mode == PeakMode::PeaksOnly);
@@ -131,8 +133,23 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
     cells = build_macrocells(v, 0, rs.filter == Filter::Tricubic ? FilterSupport::Tricubic : FilterSupport::Trilinear);
     multiplier = adaptive_multipliers(cells, volume_stddev(v));
   }
-  return for_each_pixel(fr, [&](const Ray& r, double t0, double t1, Accum& acc, double& samples) {
-    const RayLattice lattice = ray_lattice(plan, fr.view, r, t0);
+  return for_each_pixel(fr, [&](const Ray& r, double t0, double t1, Accum& acc, double& samples, int x, int y) {
+    // The ray texture's controls (twin of shaders/ray_texture.glsl): step multiplier,
+    // termination, DVR/peak blend.
+    double step_mult = 1.0, stop = stop_default, dvr_weight = 1.0, peak_weight = 1.0;
+    if (s.ray_texture) {
+      const glm::dvec2 uv = s.ray_texture_mapping == RayTextureMapping::View
+                                ? view_uv(x, y, s.scene.width, s.scene.height)
+                                : volume_uv(r.o + t0 * r.d, fr.half);
+      const auto c = sample_ray_texture(*s.ray_texture, uv);
+      step_mult = c[0];
+      if (opt.early_termination) stop = c[1];
+      dvr_weight = 1.0 - std::max(c[2], 0.0);
+      peak_weight = 1.0 + std::min(c[2], 0.0);
+    }
+    RayLattice lattice = ray_lattice(plan, fr.view, r, t0);
+    lattice.A *= step_mult;
+    lattice.B *= step_mult;
     const int64_t last = std::min<int64_t>(int64_t(std::floor(lattice.index_at(t1))), kMaxSamplesPerRay - 1);
     double t_prev = 0, f_prev = 0;
     bool first = true;
@@ -146,7 +163,7 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
         for (double pv : peaks_crossed(table, f_prev, f, rs.max_peaks)) {
           const double tr = solve_root(fr, r, t_prev, f_prev, t, f, pv, rs.secant_iterations, samples);
           const glm::dvec4 c = s.tf.eval(pv);
-          acc.add(fr.lit(glm::dvec3(c), r, tr), c.a);
+          acc.add(fr.lit(glm::dvec3(c), r, tr), c.a * peak_weight);
           peak_hit = true;
           if (acc.alpha >= stop) break;
         }
@@ -158,11 +175,11 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
             const double a = correct_opacity(c.a, t - t_prev, dt);
             c = glm::dvec4(glm::dvec3(c) * (a / c.a), a);
           }
-          if (c.a > 0) acc.add(lit(glm::dvec3(c) / c.a), c.a);
+          if (c.a > 0) acc.add(lit(glm::dvec3(c) / c.a), c.a * dvr_weight);
         }
       } else if (dvr_on && !(peak_hit && rs.peak_mode == PeakMode::Xor)) {
         const glm::dvec4 c = s.tf.eval(f);
-        if (c.a > 0) acc.add(lit(glm::dvec3(c)), correct_opacity(c.a, step, s.tf.opacity_unit));
+        if (c.a > 0) acc.add(lit(glm::dvec3(c)), correct_opacity(c.a, step, s.tf.opacity_unit) * dvr_weight);
       }
       t_prev = t;
       f_prev = f;
@@ -279,7 +296,7 @@ ConvergedImage render_converged(const Volume& v, const ResolvedScene& s, Optical
   });
   auto render_at = [&](double step) {
     // Misses keep the background (for_each_pixel with nothing to integrate), hits are filled below.
-    Image img = for_each_pixel(fr, [](const Ray&, double, double, Accum&, double&) {});
+    Image img = for_each_pixel(fr, [](const Ray&, double, double, Accum&, double&, int, int) {});
     parallel_for(size_t(h), [&](size_t row) {
       for (int x = 0; x < w; ++x) {
         const size_t k = row * size_t(w) + size_t(x);

@@ -208,12 +208,34 @@ VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPa
     glBindTextureUnit(kUnitOccupancy, tex.id());
   }
   if (key.adaptive) bind_multipliers(gv, cells);
+  if (key.ray_texture) bind_ray_texture(s);
   if (stats) {
     stats->empty_cells = occ->empty_cells;
     stats->peaks = peaks.size();
     stats->table_ms = table_ms;
   }
   return key;
+}
+
+// The ray texture as an RGB32F texture read with linear filtering between texel centres,
+// clamped at the edges (what sample_ray_texture does on the CPU); uploaded once per content.
+void Raycaster::bind_ray_texture(const ResolvedScene& s) {
+  const std::string key = s.scene.render.ray_texture.dump() + " termination " +
+                          std::to_string(s.scene.render.early_termination);
+  RayTextureEntry* e = cache_find(ray_texture_cache_, key);
+  if (!e) {
+    const RayTexture& rt = *s.ray_texture;
+    gpu::Texture tex = gpu::make_texture(GL_TEXTURE_2D);
+    glTextureStorage2D(tex.id(), 1, GL_RGB32F, rt.width(), rt.height());
+    glTextureParameteri(tex.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTextureParameteri(tex.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTextureParameteri(tex.id(), GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(tex.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    glTextureSubImage2D(tex.id(), 0, 0, 0, rt.width(), rt.height(), GL_RGB, GL_FLOAT, rt.texels().data());
+    e = &cache_insert(ray_texture_cache_, RayTextureEntry{key, std::move(tex)}, kCacheEntries);
+  }
+  glBindTextureUnit(kUnitRayTexture, e->texture.id());
 }
 
 // The adaptive multipliers of a volume's grid: data only (no TF), so built once per grid.

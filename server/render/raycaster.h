@@ -102,6 +102,12 @@ class Raycaster {
     gpu::Texture texture;
   };
   std::vector<StrideEntry> stride_cache_;
+  struct RayTextureEntry {  // a scene's ray texture (its JSON and the scene's termination)
+    std::string key;
+    gpu::Texture texture;
+  };
+  std::vector<RayTextureEntry> ray_texture_cache_;
+  void bind_ray_texture(const ResolvedScene& scene);
   RayTables tables_;  // what the current frame's tables hold (for the uniforms and stats)
   size_t table_builds_ = 0;
   double vs_widening_ = kCatmullRomOvershoot;

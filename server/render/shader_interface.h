@@ -16,6 +16,7 @@ constexpr unsigned kUnitBudget = 3;      // sampler2D: per-pixel sample budget (
 constexpr unsigned kUnitPeakTable = 4;   // sampler2DArray: peak values per (f_front, f_back) bin
 constexpr unsigned kUnitPreint = 5;      // sampler2D: preintegration table
 constexpr unsigned kUnitStride = 6;      // usampler3D: adaptive step multiplier per macrocell
+constexpr unsigned kUnitRayTexture = 7;  // sampler2D: ray texture (step, termination, blend)
 // Image units (compute path outputs).
 constexpr unsigned kImageColor = 0;
 constexpr unsigned kImageSamples = 1;

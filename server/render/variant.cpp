@@ -17,6 +17,7 @@ std::vector<std::string> interface_defines() {
           "UNIT_PEAK_TABLE " + std::to_string(kUnitPeakTable),
           "UNIT_PREINT " + std::to_string(kUnitPreint),
           "UNIT_STRIDE " + std::to_string(kUnitStride),
+          "UNIT_RAY_TEXTURE " + std::to_string(kUnitRayTexture),
           "IMAGE_COLOR " + std::to_string(kImageColor),
           "IMAGE_SAMPLES " + std::to_string(kImageSamples),
           "UBO_RAY " + std::to_string(kUboRay),
@@ -43,6 +44,8 @@ std::vector<std::string> VariantKey::defines() const {
   }
   if (preintegration) d.push_back("PREINTEGRATION");
   if (rgb8) d.push_back("RGB8_OUTPUT");
+  if (ray_texture) d.push_back("RAY_TEXTURE");
+  if (ray_texture_volume) d.push_back("RAY_TEXTURE_VOLUME");
   for (auto& i : interface_defines()) d.push_back(std::move(i));
   return d;
 }
@@ -60,6 +63,7 @@ std::string VariantKey::name() const {
   if (virtual_samples) n += "+vs" + std::to_string(virtual_samples);
   if (bare_sampling) n += "+bare";
   if (rgb8) n += "+rgb8";
+  if (ray_texture) n += ray_texture_volume ? "+raytex:volume" : "+raytex:view";
   return n;
 }
 
@@ -77,17 +81,13 @@ nlohmann::json capabilities() {
           {"still_formats", {"jpeg", "png"}}};
 }
 
-void require_supported(const RenderSettings& r) {
-  if (!r.ray_texture.is_null()) throw SceneError("render.ray_texture: ray textures are not implemented yet");
-}
-
 VariantKey choose_variant(const ResolvedScene& s, int64_t empty_cells, GpuPath path, size_t peak_count) {
   VariantKey k;
   k.path = path;
   k.tricubic = s.scene.render.filter == Filter::Tricubic;
   k.shading = s.scene.render.shading;
-  // Virtual samples skip cells too: their cells' ranges are widened by Lee's (M - m)/8 and
-  // each occupied run brings two true samples on either side (the Catmull-Rom window).
+  // Virtual samples skip cells too: their cells' ranges are joined over the Catmull-Rom
+  // window's reach and widened by Lee's (M - m)/8 (Raycaster::prepare).
   k.space_skipping = s.scene.render.space_skipping && empty_cells > 0;
   k.orthographic = s.camera.orthographic;
   k.differential = s.scene.render.sampling == Sampling::Differential && !s.camera.orthographic;
@@ -99,6 +99,8 @@ VariantKey choose_variant(const ResolvedScene& s, int64_t empty_cells, GpuPath p
             (peak_count > 0 || r.peak_mode == PeakMode::PeaksOnly);
   k.peak_mode = r.peak_mode;
   k.preintegration = r.classification == Classification::Preint;
+  k.ray_texture = s.ray_texture != nullptr;
+  k.ray_texture_volume = k.ray_texture && s.ray_texture_mapping == RayTextureMapping::Volume;
   return k;
 }
 

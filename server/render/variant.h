@@ -27,6 +27,8 @@ struct VariantKey {
   PeakMode peak_mode = PeakMode::DvrPlusPeaks;
   bool preintegration = false;
   bool rgb8 = false;  // output quantised to 8-bit RGB on the GPU (RenderOutput::Rgb8)
+  bool ray_texture = false;         // Raspe 2008 per-ray controls (any render.ray_texture)
+  bool ray_texture_volume = false;  // ... indexed by the entry point (else by the pixel)
 
   std::vector<std::string> defines() const;
   std::string name() const;  // e.g. "frag+tricubic+skip"
@@ -34,9 +36,6 @@ struct VariantKey {
 
 // What this build renders; the server's welcome lists it so clients build their controls from it.
 nlohmann::json capabilities();
-// Throws SceneError naming the key for settings the schema allows but this renderer does not
-// implement yet (ray textures).
-void require_supported(const RenderSettings& r);
 
 // peak_count: peaks of the scene's TF (no peaks -> no peak-finding code).
 VariantKey choose_variant(const ResolvedScene& scene, int64_t empty_cells, GpuPath path, size_t peak_count = 0);

@@ -18,7 +18,6 @@ void Session::touch() {
 ResolvedScene Session::resolve() const {
   Scene s = scene_;
   s.render = parse_scene({{"volume", "x"}, {"render", render_json_}}).render;
-  render::require_supported(s.render);
   s.width = viewport_.pixel_width();
   s.height = viewport_.pixel_height();
   return resolve_scene(s, *volume_->volume);

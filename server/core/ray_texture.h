@@ -1,0 +1,85 @@
+// Ray textures (Raspe & Müller 2008): a per-session 2D map of per-ray controls, painted with
+// brush strokes. Channels, one float each per texel:
+//   step         multiplier of the ray's step, [1/8, 8], default 1;
+//   termination  early-termination opacity, [0, 1], default the scene's;
+//   blend        weight between the DVR and the peak contributions, [-1, 1], default 0: b > 0
+//                fades the DVR samples' opacity by (1 - b), b < 0 the peaks' by (1 + b).
+// Mappings: `view` indexes by window position (u right, v down over the image); `volume` by
+// the ray's entry point on the volume box (ray_texture_uv in core/ray_texture_mapping.h), so
+// an edit stays on the volume when the camera moves.
+// Strokes are the state: a texture is rebuilt from its strokes (in order) whenever it is made.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace peakcast {
+
+enum class RayTextureMapping { View, Volume };
+enum class RayChannel { Step = 0, Termination = 1, Blend = 2 };
+enum class StrokeMode { Set, Add, Multiply };
+
+struct Stroke {
+  RayChannel channel = RayChannel::Step;
+  double u = 0.5, v = 0.5;  // centre, texture units [0, 1]
+  double radius = 0.1;      // (0, 1], texture units (of the texture's larger side)
+  double falloff = 0.0;     // [0, 1]: share of the radius over which the weight falls to 0
+  double value = 1.0;
+  StrokeMode mode = StrokeMode::Set;
+  int level = 0;  // 0: direct; L > 0: edits 2^L x 2^L blocks (Raspe §3.2, hierarchical)
+};
+
+// Limits at the edge.
+constexpr int kMaxRayTextureSide = 2048;
+constexpr size_t kMaxRayTextureStrokes = 100000;
+constexpr int kMaxStrokeLevel = 8;
+constexpr double kMinStepMultiplier = 1.0 / 8.0, kMaxStepMultiplier = 8.0;
+
+struct RayTextureSpec {
+  RayTextureMapping mapping = RayTextureMapping::View;
+  int width = 256, height = 256;
+  std::vector<Stroke> strokes;
+  std::string png;  // instead of size and strokes: channels in R, G, B (resolved like the volume)
+};
+
+// Throws SceneError naming the key (`where`, e.g. "render.ray_texture.strokes[3].radius").
+RayTextureSpec parse_ray_texture(const nlohmann::json& j, const std::string& where = "render.ray_texture");
+Stroke parse_stroke(const nlohmann::json& j, const std::string& where);
+nlohmann::json to_json(const Stroke& s);
+nlohmann::json to_json(const RayTextureSpec& s);
+
+// A region of level-0 texels, [x0, x1) x [y0, y1); empty when x0 >= x1 or y0 >= y1.
+struct TexelRect {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  bool empty() const { return x0 >= x1 || y0 >= y1; }
+  void merge(const TexelRect& r);
+};
+
+class RayTexture {
+ public:
+  // Every texel at the defaults; `termination` is the scene's early-termination opacity.
+  RayTexture(int width, int height, double termination);
+  int width() const { return width_; }
+  int height() const { return height_; }
+  // Applies a stroke (direct, or on its level's blocks) and returns the texels it changed.
+  TexelRect apply(const Stroke& s);
+  // step, termination, blend at texel (x, y).
+  std::array<float, 3> at(int x, int y) const;
+  // Interleaved RGB floats, row 0 = v 0 (the top of a view-aligned image).
+  const std::vector<float>& texels() const { return texels_; }
+  // True when no texel differs from the defaults.
+  bool is_identity() const;
+
+ private:
+  int width_, height_;
+  float default_termination_;
+  std::vector<float> texels_;
+};
+
+// The texture of a spec at the scene's termination: its strokes applied in order.
+RayTexture build_ray_texture(const RayTextureSpec& spec, double termination);
+
+}  // namespace peakcast
