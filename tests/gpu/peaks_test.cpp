@@ -183,15 +183,7 @@ TEST(PeakOrder, SeveralPeaksInOneSegmentComeOutInRayOrder) {
 
 // A plateau of the field exactly at the peak value: both samples of a segment equal the isovalue.
 TEST(PeakEdgeCases, NoNanWhenBothSamplesEqualTheIsovalue) {
-  VolumeHeader h;
-  h.dims = {17, 9, 9};
-  h.source = SourceType::F32;
-  auto vol = std::make_shared<Volume>(h);
-  auto* p = reinterpret_cast<float*>(vol->data());
-  for (int64_t k = 0; k < 9; ++k)
-    for (int64_t j = 0; j < 9; ++j)
-      for (int64_t i = 0; i < 17; ++i) p[i + 17 * (j + 9 * k)] = i < 4 ? 0.0f : i > 12 ? 1.0f : 0.5f;
-  vol->finalize_statistics();
+  auto vol = test::float_volume({17, 9, 9}, [](int64_t i, int64_t, int64_t) { return i < 4 ? 0.0f : i > 12 ? 1.0f : 0.5f; });
   render::GpuVolume gv(vol);
   json tf = {{"points", {{0.0, 0, 0, 0, 0}, {0.5 - 1e-6, 1, 0, 0, 0}, {0.5, 1, 0, 0, 0.7}, {0.5 + 1e-6, 1, 0, 0, 0},
                          {1.0, 0, 0, 0, 0}}}};

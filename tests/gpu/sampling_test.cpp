@@ -11,6 +11,7 @@
 #include "core/sampling.h"
 #include "gpu/gpu_fixture.h"
 #include "reference/cpu_raycaster.h"
+#include "unit/test_util.h"
 
 using namespace peakcast;
 using nlohmann::json;
@@ -454,21 +455,11 @@ TEST(VirtualSamples, WindowReachBoundsEveryStep) {
 // samples of the 0.8 parts never exceed 0.8, but the Catmull-Rom segment between two 0.8
 // samples overshoots to ~0.85.
 std::shared_ptr<Volume> slabs() {
-  VolumeHeader h;
-  h.dims = {48, 48, 48};
-  h.source = SourceType::F32;
-  auto v = std::make_shared<Volume>(h);
-  float* f = reinterpret_cast<float*>(v->data());
-  for (int64_t k = 0; k < 48; ++k)
-    for (int64_t j = 0; j < 48; ++j)
-      for (int64_t i = 0; i < 48; ++i) {
-        const bool slab = j >= 8 && j < 40 && k >= 8 && k < 40 && (i % 12) >= 4 && (i % 12) < 8 && i < 40;
-        f[i + 48 * (j + 48 * k)] = slab ? (j / 16 == 1 ? 0.9f : 0.8f) : 0.0f;
-      }
-  f[47 + 48 * (47 + 48 * 47)] = 1.0f;
-  v->name = "slabs";
-  v->finalize_statistics();
-  return v;
+  return test::float_volume({48, 48, 48}, [](int64_t i, int64_t j, int64_t k) {
+    if (i == 47 && j == 47 && k == 47) return 1.0f;
+    const bool slab = j >= 8 && j < 40 && k >= 8 && k < 40 && (i % 12) >= 4 && (i % 12) < 8 && i < 40;
+    return slab ? (j / 16 == 1 ? 0.9f : 0.8f) : 0.0f;
+  });
 }
 
 // Lee Fig. 14: a Catmull-Rom segment overshoots its true samples, so a cell whose values all

@@ -52,4 +52,17 @@ void write_file(const fs::path& p, const std::string& bytes) {
   return ::testing::AssertionSuccess();
 }
 
+std::shared_ptr<Volume> float_volume(const Dims& dims, const std::function<float(int64_t, int64_t, int64_t)>& f) {
+  VolumeHeader h;
+  h.dims = dims;
+  h.source = SourceType::F32;
+  auto v = std::make_shared<Volume>(h);
+  float* p = reinterpret_cast<float*>(v->data());
+  for (int64_t k = 0; k < dims[2]; ++k)
+    for (int64_t j = 0; j < dims[1]; ++j)
+      for (int64_t i = 0; i < dims[0]; ++i) p[i + dims[0] * (j + dims[1] * k)] = f(i, j, k);
+  v->finalize_statistics();
+  return v;
+}
+
 }  // namespace peakcast::test

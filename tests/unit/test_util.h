@@ -3,6 +3,8 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -28,5 +30,7 @@ uint64_t fnv1a(const void* data, size_t bytes);
 void write_file(const std::filesystem::path& p, const std::string& bytes);
 // True when both volumes hold the same dims, spacing, origin, types and physical values.
 ::testing::AssertionResult same_volume(const Volume& a, const Volume& b);
+// A float32 volume with value f(i, j, k) at each voxel, statistics computed.
+std::shared_ptr<Volume> float_volume(const Dims& dims, const std::function<float(int64_t, int64_t, int64_t)>& f);
 
 }  // namespace peakcast::test
