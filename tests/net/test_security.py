@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Security defaults (issue 5 point 8, DESIGN §6): token, Origin allow-list, session cap, limits,
 data directories, loopback bind, GPU memory budget."""
-import asyncio, json, pathlib, sys
+import asyncio, json, pathlib, sys, time
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from harness import *  # noqa: F401,F403
@@ -83,17 +83,33 @@ def test_session_cap_gives_503_with_a_reason():
         asyncio.run(run())
         # The same refusal over plain HTTP shows the JSON reason.
         import socket
-        with socket.create_connection((s.host, s.port)) as raw1, socket.create_connection((s.host, s.port)) as raw2:
-            key = "dGhlIHNhbXBsZSBub25jZQ=="
-            up = (f"GET /ws HTTP/1.1\r\nHost: {s.host}:{s.port}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
-                  f"Sec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n\r\n")
-            raw1.sendall(up.encode()); raw1.recv(4096)
-            raw2.sendall(up.encode()); raw2.recv(4096)
+        key = "dGhlIHNhbXBsZSBub25jZQ=="
+        up = (f"GET /ws HTTP/1.1\r\nHost: {s.host}:{s.port}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+              f"Sec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n\r\n")
+
+        def upgrade(raw):
+            raw.sendall(up.encode())
+            return raw.recv(4096).decode()
+
+        held = []
+        try:
+            # The sessions above close asynchronously: take both slots once they are free.
+            for _ in range(2):
+                for _ in range(100):
+                    raw = socket.create_connection((s.host, s.port))
+                    if upgrade(raw).startswith("HTTP/1.1 101"):
+                        held.append(raw)
+                        break
+                    raw.close()
+                    time.sleep(0.1)
+            assert len(held) == 2, "the two session slots never came free"
             with socket.create_connection((s.host, s.port)) as raw3:
-                raw3.sendall(up.encode())
-                reply = raw3.recv(4096).decode()
+                reply = upgrade(raw3)
                 assert reply.startswith("HTTP/1.1 503"), reply
                 assert '"error":"session_limit"' in reply and "Retry-After" in reply, reply
+        finally:
+            for raw in held:
+                raw.close()
 
 
 def test_idle_timeout_closes():
