@@ -222,8 +222,7 @@ ResolvedScene resolve_scene(const Scene& s, const Volume& v) {
     if (!spec.png.empty())
       throw SceneError("render.ray_texture.png: reading a ray texture from a PNG is not implemented yet (give size "
                        "and strokes)");
-    r.ray_texture = std::make_shared<const RayTexture>(build_ray_texture(spec, s.render.early_termination));
-    r.ray_texture_mapping = spec.mapping;
+    r.ray_texture = std::make_shared<const RayTextureSpec>(spec);
   }
   if (r.step < kMinStepFraction * min_spacing)
     throw SceneError("render.step: " + std::to_string(r.step) + " is below " + std::to_string(kMinStepFraction) +

@@ -72,9 +72,10 @@ struct ResolvedScene {
   double step = 1.0;
   double min_spacing = 1.0;  // the volume's smallest voxel spacing
   glm::dvec3 box_min, box_max;
-  // render.ray_texture built from its strokes at the scene's early termination; null without one.
-  std::shared_ptr<const RayTexture> ray_texture;
-  RayTextureMapping ray_texture_mapping = RayTextureMapping::View;
+  // render.ray_texture, parsed; null without one. Its texels are built where they are read
+  // (build_ray_texture at the scene's early termination): the GL ray caster on a cache miss,
+  // the CPU reference once per image; never per frame here.
+  std::shared_ptr<const RayTextureSpec> ray_texture;
 };
 ResolvedScene resolve_scene(const Scene& s, const Volume& v);
 

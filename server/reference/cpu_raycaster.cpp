@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 
 #include "core/parallel.h"
 #include "core/peaks.h"
@@ -133,15 +134,17 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
     cells = build_macrocells(v, 0, rs.filter == Filter::Tricubic ? FilterSupport::Tricubic : FilterSupport::Trilinear);
     multiplier = adaptive_multipliers(cells, volume_stddev(v));
   }
+  const std::optional<RayTexture> ray_texture =
+      s.ray_texture ? std::optional<RayTexture>(build_ray_texture(*s.ray_texture, rs.early_termination)) : std::nullopt;
   return for_each_pixel(fr, [&](const Ray& r, double t0, double t1, Accum& acc, double& samples, int x, int y) {
     // The ray texture's controls (twin of shaders/ray_texture.glsl): step multiplier,
     // termination, DVR/peak blend.
     double step_mult = 1.0, stop = stop_default, dvr_weight = 1.0, peak_weight = 1.0;
-    if (s.ray_texture) {
-      const glm::dvec2 uv = s.ray_texture_mapping == RayTextureMapping::View
+    if (ray_texture) {
+      const glm::dvec2 uv = s.ray_texture->mapping == RayTextureMapping::View
                                 ? view_uv(x, y, s.scene.width, s.scene.height)
                                 : volume_uv(r.o + t0 * r.d, fr.half);
-      const auto c = sample_ray_texture(*s.ray_texture, uv);
+      const auto c = sample_ray_texture(*ray_texture, uv);
       step_mult = c[0];
       if (opt.early_termination) stop = c[1];
       dvr_weight = 1.0 - std::max(c[2], 0.0);

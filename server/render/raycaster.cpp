@@ -8,21 +8,13 @@
 #include "core/preintegration.h"
 #include "render/gpu_layout.h"
 #include "render/shader_interface.h"
+#include "render/table_cache.h"
 
 namespace peakcast::render {
 namespace {
 
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
-
-// Everything a per-TF table depends on: the points, the opacity unit and the value range.
-std::string tf_signature(const TransferFunction& tf, double lo, double hi) {
-  std::ostringstream s;
-  s.precision(17);
-  s << lo << ' ' << hi << ' ' << tf.opacity_unit;
-  for (const auto& p : tf.points) s << ' ' << p.value << ' ' << p.r << ' ' << p.g << ' ' << p.b << ' ' << p.a;
-  return s.str();
-}
 
 RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const MacrocellGrid& cells,
                           const RayTables& t, const PixelRect& rect, int sample_cap) {
@@ -45,36 +37,6 @@ RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const Mac
   u.peaks = glm::vec4(float(t.peak_bins), float(t.peak_layers), float(t.max_peaks), float(t.secant_iterations));
   u.tables = glm::vec4(float(t.preint_size), float(t.tf_points), float(plan.k), float(plan.min_step));
   return u;
-}
-
-// One byte per macrocell (occupancy, adaptive multiplier) as an R8UI 3D texture in grid order.
-gpu::Texture make_cell_texture(const MacrocellGrid& cells, const std::vector<uint8_t>& bytes) {
-  gpu::Texture tex = gpu::make_texture(GL_TEXTURE_3D);
-  glTextureStorage3D(tex.id(), 1, GL_R8UI, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]), GLsizei(cells.grid[2]));
-  // Integer textures are complete only with NEAREST filtering.
-  glTextureParameteri(tex.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-  glTextureParameteri(tex.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  glTextureSubImage3D(tex.id(), 0, 0, 0, 0, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]), GLsizei(cells.grid[2]),
-                      GL_RED_INTEGER, GL_UNSIGNED_BYTE, bytes.data());
-  return tex;
-}
-
-// Moves the entry named `key` to the front of a most-recent-first cache; nullptr when absent.
-template <class T>
-T* cache_find(std::vector<T>& cache, const std::string& key) {
-  auto it = std::find_if(cache.begin(), cache.end(), [&](const T& e) { return e.key == key; });
-  if (it == cache.end()) return nullptr;
-  std::rotate(cache.begin(), it, it + 1);
-  return &cache.front();
-}
-
-// Puts `e` at the front, dropping the least recently used entry beyond `cap`.
-template <class T>
-T& cache_insert(std::vector<T>& cache, T e, size_t cap) {
-  if (cache.size() >= cap) cache.pop_back();
-  cache.insert(cache.begin(), std::move(e));
-  return cache.front();
 }
 
 }  // namespace
@@ -215,105 +177,6 @@ VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPa
     stats->table_ms = table_ms;
   }
   return key;
-}
-
-// The ray texture as an RGB32F texture read with linear filtering between texel centres,
-// clamped at the edges (what sample_ray_texture does on the CPU); uploaded once per content.
-void Raycaster::bind_ray_texture(const ResolvedScene& s) {
-  const std::string key = s.scene.render.ray_texture.dump() + " termination " +
-                          std::to_string(s.scene.render.early_termination);
-  RayTextureEntry* e = cache_find(ray_texture_cache_, key);
-  if (!e) {
-    const RayTexture& rt = *s.ray_texture;
-    gpu::Texture tex = gpu::make_texture(GL_TEXTURE_2D);
-    glTextureStorage2D(tex.id(), 1, GL_RGB32F, rt.width(), rt.height());
-    glTextureParameteri(tex.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTextureParameteri(tex.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTextureParameteri(tex.id(), GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTextureParameteri(tex.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-    glTextureSubImage2D(tex.id(), 0, 0, 0, rt.width(), rt.height(), GL_RGB, GL_FLOAT, rt.texels().data());
-    e = &cache_insert(ray_texture_cache_, RayTextureEntry{key, std::move(tex)}, kCacheEntries);
-  }
-  glBindTextureUnit(kUnitRayTexture, e->texture.id());
-}
-
-// The adaptive multipliers of a volume's grid: data only (no TF), so built once per grid.
-void Raycaster::bind_multipliers(const GpuVolume& gv, const MacrocellGrid& cells) {
-  const std::string key = std::to_string(gv.serial()) + " " + cells.to_string();
-  StrideEntry* e = cache_find(stride_cache_, key);
-  if (!e) {
-    StrideEntry n{key, make_cell_texture(cells, adaptive_multipliers(cells, volume_stddev(gv.volume())))};
-    e = &cache_insert(stride_cache_, std::move(n), kCacheEntries);
-    ++table_builds_;
-  }
-  glBindTextureUnit(kUnitStride, e->texture.id());
-}
-
-void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const std::vector<Peak>& peaks) {
-  const RenderSettings& r = s.scene.render;
-  const double lo = gv.tf_lo(), hi = gv.tf_hi();
-  const double preint_step = plan_sampling(s).step;  // segments the table is built for
-  // The tables depend on the TF, the value range, the method's sizes and (preintegration) the
-  // step: a frame that changes none of them (a camera move) reuses what is bound.
-  std::ostringstream key;
-  key.precision(17);
-  key << tf_signature(s.tf, lo, hi) << ' ' << to_string(r.classification) << ' ' << r.peak_table_bins << ' '
-      << r.max_peaks << ' ' << r.secant_iterations << ' ' << r.preint_table_size << ' ' << r.preint_method << ' '
-      << peaks.size() << ' '
-      << (r.classification == Classification::Preint ? preint_step : 0.0);
-  if (const Tables* t = cache_find(tables_cache_, key.str())) {
-    if (t->peak_table) glBindTextureUnit(kUnitPeakTable, t->peak_table.id());
-    if (t->tf_points) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboTfPoints, t->tf_points.id());
-    if (t->preint_table) glBindTextureUnit(kUnitPreint, t->preint_table.id());
-    tables_ = t->sizes;
-    return;
-  }
-  Tables t;
-  t.key = key.str();
-  if (r.classification == Classification::Peaks) {
-    const PeakTable table = build_peak_table(peaks, lo, hi, r.peak_table_bins);
-    std::vector<float> texels(table.texels.size());
-    for (size_t k = 0; k < texels.size(); ++k)  // to TF coordinates
-      texels[k] = table.texels[k] == PeakTable::kNoPeak ? kNoPeakTexel : float((table.texels[k] - lo) / (hi - lo));
-    t.peak_table = gpu::make_texture(GL_TEXTURE_2D_ARRAY);
-    glTextureStorage3D(t.peak_table.id(), 1, GL_RGBA32F, table.bins, table.bins, table.layers);
-    glTextureSubImage3D(t.peak_table.id(), 0, 0, 0, 0, table.bins, table.bins, table.layers, GL_RGBA, GL_FLOAT,
-                        texels.data());
-    glTextureParameteri(t.peak_table.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTextureParameteri(t.peak_table.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glBindTextureUnit(kUnitPeakTable, t.peak_table.id());
-    std::vector<glm::vec4> points;
-    for (const auto& p : s.tf.points) {
-      points.emplace_back(float((p.value - lo) / (hi - lo)), 0.f, 0.f, 0.f);
-      points.emplace_back(float(p.r), float(p.g), float(p.b), float(p.a));
-    }
-    t.tf_points = gpu::make_buffer();
-    glNamedBufferStorage(t.tf_points.id(), GLsizeiptr(points.size() * sizeof(glm::vec4)), points.data(), 0);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboTfPoints, t.tf_points.id());
-    t.sizes.peak_bins = table.bins;
-    t.sizes.peak_layers = table.layers;
-    t.sizes.max_peaks = r.max_peaks;
-    t.sizes.secant_iterations = r.secant_iterations;
-    t.sizes.tf_points = int(s.tf.points.size());
-    t.sizes.peak_count = peaks.size();
-  }
-  if (r.classification == Classification::Preint) {
-    const PreintegrationTable table = build_preintegration(s.tf, lo, hi, preint_step, r.preint_table_size,
-                                                           preint_method(r));
-    t.preint_table = gpu::make_texture(GL_TEXTURE_2D);
-    glTextureStorage2D(t.preint_table.id(), 1, GL_RGBA32F, table.size, table.size);
-    glTextureSubImage2D(t.preint_table.id(), 0, 0, 0, table.size, table.size, GL_RGBA, GL_FLOAT, table.rgba.data());
-    glTextureParameteri(t.preint_table.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTextureParameteri(t.preint_table.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTextureParameteri(t.preint_table.id(), GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTextureParameteri(t.preint_table.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    glBindTextureUnit(kUnitPreint, t.preint_table.id());
-    t.sizes.preint_size = table.size;
-  }
-  tables_ = t.sizes;
-  cache_insert(tables_cache_, std::move(t), kCacheEntries);
-  ++table_builds_;
 }
 
 Image Raycaster::render_bare(const GpuVolume& gv, const ResolvedScene& s, GpuPath path, const Image& full,

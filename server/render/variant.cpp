@@ -100,7 +100,7 @@ VariantKey choose_variant(const ResolvedScene& s, int64_t empty_cells, GpuPath p
   k.peak_mode = r.peak_mode;
   k.preintegration = r.classification == Classification::Preint;
   k.ray_texture = s.ray_texture != nullptr;
-  k.ray_texture_volume = k.ray_texture && s.ray_texture_mapping == RayTextureMapping::Volume;
+  k.ray_texture_volume = k.ray_texture && s.ray_texture->mapping == RayTextureMapping::Volume;
   return k;
 }
 

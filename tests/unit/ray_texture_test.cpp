@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/generators.h"
 #include "core/ray_texture.h"
 #include "core/scene.h"
 
@@ -142,6 +143,21 @@ TEST(ray_texture, BadSpecsAndStrokesAreRefusedNamingTheKey) {
   many["strokes"] = json::array();
   for (size_t i = 0; i <= kMaxRayTextureStrokes; ++i) many["strokes"].push_back(stroke("step", 0.5, 0.5, 0.1, 1.0));
   expect_refused(many, "render.ray_texture.strokes");
+}
+
+// PNG input is not built yet: a scene naming one is refused when resolved, naming the key.
+TEST(ray_texture, PngInputIsRefusedUntilItExists) {
+  GeneratorSpec g;
+  g.kind = GeneratorKind::Ramp;
+  g.dims = {4, 4, 4};
+  const Volume v = generate_volume(g);
+  const Scene s = parse_scene({{"volume", "v"}, {"render", {{"ray_texture", {{"mapping", "view"}, {"png", "paint.png"}}}}}});
+  try {
+    resolve_scene(s, v);
+    ADD_FAILURE() << "a png ray texture was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("render.ray_texture.png"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
