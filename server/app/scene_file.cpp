@@ -3,6 +3,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/ray_texture_png.h"
 #include "core/volume_io.h"
 #include "render/variant.h"
 
@@ -18,6 +19,16 @@ LoadedScene load_scene_file(const fs::path& path) {
   Scene scene;
   try {
     scene = parse_scene_text(text.str());
+  } catch (const SceneError& e) {
+    throw SceneError(path.string() + ": " + e.what());
+  }
+  // A ray-texture PNG, like the volume, is found relative to the scene file.
+  const PngLocator beside_scene = [&](const std::string& png) {
+    fs::path p = png;
+    return p.is_relative() ? path.parent_path() / p : p;
+  };
+  try {
+    scene.render.ray_texture = load_ray_texture_png(scene.render.ray_texture, beside_scene);
   } catch (const SceneError& e) {
     throw SceneError(path.string() + ": " + e.what());
   }

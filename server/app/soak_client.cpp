@@ -107,6 +107,7 @@ class SoakClient : public std::enable_shared_from_this<SoakClient> {
       self->queue_.clear();
       self->buffer_.clear();
       self->closing_ = self->welcomed_ = false;
+      self->strokes_ = 0;  // a new session has no ray texture
       self->vanish_at_ = Clock::now() + std::chrono::milliseconds(std::uniform_int_distribution<int>(100, 800)(self->rng_));
       self->start();
     });
@@ -134,9 +135,15 @@ class SoakClient : public std::enable_shared_from_this<SoakClient> {
       send(json{{"type", "ping"}, {"id", "p" + std::to_string(++pings_)}}.dump());
       expect();
     } else {
-      // A ray-texture stroke (proto/messages.md): refused with an error until ray textures land.
-      send(json{{"type", "stroke"}, {"channel", "step"}, {"center", {u(rng_), u(rng_)}}, {"radius", 0.05},
-                {"falloff", 0.5}, {"value", 2.0}, {"mode", "set"}, {"level", 0}}.dump());
+      // A ray-texture stroke (proto/messages.md), answered by a stroke_ack; the first one sets
+      // up a view-aligned texture on this connection.
+      if (strokes_ == 0)
+        send(json{{"type", "render"}, {"render", {{"ray_texture", {{"mapping", "view"}, {"size", {128, 128}}}}}}}.dump());
+      send(json{{"type", "stroke"},
+                {"seq", ++strokes_},
+                {"stroke", {{"channel", "step"}, {"center", {u(rng_), u(rng_)}}, {"radius", 0.05}, {"falloff", 0.5},
+                            {"value", 2.0}, {"mode", "set"}, {"level", strokes_ % 3}}}}
+               .dump());
       expect();
     }
   }
@@ -191,7 +198,7 @@ class SoakClient : public std::enable_shared_from_this<SoakClient> {
       camera_version_ = j["state"]["versions"].value("camera", 1u);
       tf_version_ = j["state"]["versions"].value("tf", 1u);
       welcomed_ = true;
-    } else if (type == "pong" || (type == "error" && j.value("code", "") == "unknown_type")) {
+    } else if (type == "pong" || type == "stroke_ack") {
       std::lock_guard lock(out_.m);
       out_.answers++;
     } else if (type == "error") {
@@ -217,6 +224,7 @@ class SoakClient : public std::enable_shared_from_this<SoakClient> {
   double radius_ = 1, angle_ = 0, lo_ = 0, hi_ = 1;
   uint32_t camera_version_ = 1, tf_version_ = 1;
   uint64_t pings_ = 0;
+  uint32_t strokes_ = 0;  // on this connection's ray texture
   unsigned gen_ = 0;  // connection number: handlers of a vanished connection do nothing
   std::map<uint32_t, Clock::time_point> sent_;
 };

@@ -1,6 +1,7 @@
 #include "core/ray_texture.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 #include "core/json_fields.h"
@@ -48,6 +49,11 @@ double brush_weight(double r, double falloff) {
   if (r <= inner) return 1.0;
   const double x = (r - inner) / falloff;
   return 1.0 - x * x * (3.0 - 2.0 * x);
+}
+
+uint64_t new_lineage() {
+  static std::atomic<uint64_t> next{1};
+  return next++;
 }
 
 }  // namespace
@@ -101,20 +107,22 @@ Stroke parse_stroke(const json& j, const std::string& where) {
 RayTextureSpec parse_ray_texture(const json& j, const std::string& where) {
   only_keys(j, where, {"mapping", "size", "strokes", "png"});
   RayTextureSpec spec;
+  spec.lineage = new_lineage();
   if (!j.contains("mapping")) fail(where + ".mapping", "is required (view or volume)");
   spec.mapping = choice<RayTextureMapping>(j["mapping"], where + ".mapping",
                                            {{"view", RayTextureMapping::View}, {"volume", RayTextureMapping::Volume}});
   if (j.contains("png")) {
-    if (j.contains("size") || j.contains("strokes")) fail(where, "takes either png or size and strokes, not both");
+    if (j.contains("size")) fail(where, "takes either png or size, not both (a PNG has its own size)");
     if (!j["png"].is_string() || j["png"].get<std::string>().empty()) fail(where + ".png", "must be a file path");
     spec.png = j["png"].get<std::string>();
-    return spec;
+    if (spec.png.size() > 4096) fail(where + ".png", "is longer than 4096 characters");
+  } else {
+    if (!j.contains("size")) fail(where + ".size", "is required ([width, height]) unless png is given");
+    const json& size = j["size"];
+    if (!size.is_array() || size.size() != 2) fail(where + ".size", "must be [width, height]");
+    spec.width = integer(size[0], where + ".size[0]", 1, kMaxRayTextureSide);
+    spec.height = integer(size[1], where + ".size[1]", 1, kMaxRayTextureSide);
   }
-  if (!j.contains("size")) fail(where + ".size", "is required ([width, height]) unless png is given");
-  const json& size = j["size"];
-  if (!size.is_array() || size.size() != 2) fail(where + ".size", "must be [width, height]");
-  spec.width = integer(size[0], where + ".size[0]", 1, kMaxRayTextureSide);
-  spec.height = integer(size[1], where + ".size[1]", 1, kMaxRayTextureSide);
   if (j.contains("strokes")) {
     const json& strokes = j["strokes"];
     if (!strokes.is_array()) fail(where + ".strokes", "must be an array");
@@ -136,14 +144,30 @@ json to_json(const Stroke& s) {
 
 json to_json(const RayTextureSpec& s) {
   json j = {{"mapping", s.mapping == RayTextureMapping::View ? "view" : "volume"}};
-  if (!s.png.empty()) {
+  if (!s.png.empty())
     j["png"] = s.png;
-    return j;
-  }
-  j["size"] = {s.width, s.height};
+  else
+    j["size"] = {s.width, s.height};
   j["strokes"] = json::array();
   for (const auto& st : s.strokes) j["strokes"].push_back(to_json(st));
   return j;
+}
+
+std::shared_ptr<const RayTextureSpec> with_stroke(const RayTextureSpec& spec, const Stroke& s) {
+  if (spec.strokes.size() >= kMaxRayTextureStrokes)
+    throw SceneError("stroke: the ray texture holds " + std::to_string(spec.strokes.size()) +
+                     " strokes already, the most it takes (clear it or send it anew without strokes)");
+  auto next = std::make_shared<RayTextureSpec>(spec);
+  next->strokes.push_back(s);
+  return next;
+}
+
+RayTexture::RayTexture(const RayTextureImage& image)
+    : width_(image.width), height_(image.height), default_termination_(1.0f), texels_(image.texels) {
+  if (width_ < 1 || height_ < 1 || width_ > kMaxRayTextureSide || height_ > kMaxRayTextureSide ||
+      texels_.size() != size_t(width_) * size_t(height_) * 3)
+    throw SceneError("render.ray_texture: image of " + std::to_string(width_) + "x" + std::to_string(height_) +
+                     " texels does not fit the limits or its data");
 }
 
 RayTexture::RayTexture(int width, int height, double termination)
@@ -206,7 +230,9 @@ bool RayTexture::is_identity() const {
 }
 
 RayTexture build_ray_texture(const RayTextureSpec& spec, double termination) {
-  RayTexture t(spec.width, spec.height, termination);
+  if (!spec.png.empty() && !spec.image)
+    throw SceneError("render.ray_texture.png: " + spec.png + " was not read (internal: no PNG loader on this path)");
+  RayTexture t = spec.image ? RayTexture(*spec.image) : RayTexture(spec.width, spec.height, termination);
   for (const auto& s : spec.strokes) t.apply(s);
   return t;
 }

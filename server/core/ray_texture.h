@@ -7,10 +7,14 @@
 // Mappings: `view` indexes by window position (u right, v down over the image); `volume` by
 // the ray's entry point on the volume box (ray_texture_uv in core/ray_texture_mapping.h), so
 // an edit stays on the volume when the camera moves.
-// Strokes are the state: a texture is rebuilt from its strokes (in order) whenever it is made.
+// Strokes are the state: a texture is its starting image (defaults, or a PNG) with its strokes
+// applied in order. A spec is immutable once made; a painted stroke makes a new spec of the same
+// lineage (with_stroke), so a renderer holding the first n strokes applies only the rest.
 #pragma once
 
 #include <array>
+#include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -38,11 +42,23 @@ constexpr size_t kMaxRayTextureStrokes = 100000;
 constexpr int kMaxStrokeLevel = 8;
 constexpr double kMinStepMultiplier = 1.0 / 8.0, kMaxStepMultiplier = 8.0;
 
+// Level-0 texels read from an image (core/ray_texture_png.h): interleaved step, termination,
+// blend, row 0 = v 0.
+struct RayTextureImage {
+  int width = 0, height = 0;
+  std::vector<float> texels;
+};
+
 struct RayTextureSpec {
   RayTextureMapping mapping = RayTextureMapping::View;
   int width = 256, height = 256;
   std::vector<Stroke> strokes;
-  std::string png;  // instead of size and strokes: channels in R, G, B (resolved like the volume)
+  // Instead of size: a PNG whose R, G, B are the channels (core/ray_texture_png.h), resolved like
+  // the volume; strokes apply over it. `image` holds its texels once read (null before).
+  std::string png;
+  std::shared_ptr<const RayTextureImage> image;
+  // One edit history: every parse starts a new lineage; with_stroke keeps it.
+  uint64_t lineage = 0;
 };
 
 // Throws SceneError naming the key (`where`, e.g. "render.ray_texture.strokes[3].radius").
@@ -50,6 +66,8 @@ RayTextureSpec parse_ray_texture(const nlohmann::json& j, const std::string& whe
 Stroke parse_stroke(const nlohmann::json& j, const std::string& where);
 nlohmann::json to_json(const Stroke& s);
 nlohmann::json to_json(const RayTextureSpec& s);
+// The spec with one more stroke, same lineage. Throws SceneError beyond kMaxRayTextureStrokes.
+std::shared_ptr<const RayTextureSpec> with_stroke(const RayTextureSpec& spec, const Stroke& s);
 
 // A region of level-0 texels, [x0, x1) x [y0, y1); empty when x0 >= x1 or y0 >= y1.
 struct TexelRect {
@@ -62,6 +80,7 @@ class RayTexture {
  public:
   // Every texel at the defaults; `termination` is the scene's early-termination opacity.
   RayTexture(int width, int height, double termination);
+  explicit RayTexture(const RayTextureImage& image);
   int width() const { return width_; }
   int height() const { return height_; }
   // Applies a stroke (direct, or on its level's blocks) and returns the texels it changed.
@@ -72,6 +91,8 @@ class RayTexture {
   const std::vector<float>& texels() const { return texels_; }
   // True when no texel differs from the defaults.
   bool is_identity() const;
+  // The texture as a view of its image: what a PNG of it reads back as (rounded to 8 bits).
+  RayTextureImage image() const { return {width_, height_, texels_}; }
 
  private:
   int width_, height_;
@@ -79,7 +100,8 @@ class RayTexture {
   std::vector<float> texels_;
 };
 
-// The texture of a spec at the scene's termination: its strokes applied in order.
+// The texture of a spec at the scene's termination: its image (or the defaults), then its
+// strokes in order. Throws SceneError when the spec names a PNG that was never read.
 RayTexture build_ray_texture(const RayTextureSpec& spec, double termination);
 
 }  // namespace peakcast

@@ -109,8 +109,7 @@ RenderSettings parse_render(const json& j) {
   if (j.contains("space_skipping")) r.space_skipping = boolean(j["space_skipping"], "render.space_skipping");
   if (j.contains("adaptive")) r.adaptive = boolean(j["adaptive"], "render.adaptive");
   if (j.contains("ray_texture")) {
-    parse_ray_texture(j["ray_texture"]);  // refused here, naming the key, if malformed
-    r.ray_texture = j["ray_texture"];
+    r.ray_texture = std::make_shared<const RayTextureSpec>(parse_ray_texture(j["ray_texture"]));
   }
   return r;
 }
@@ -198,7 +197,7 @@ json scene_to_json(const Scene& s) {
                  {"early_termination", r.early_termination}, {"space_skipping", r.space_skipping},
                  {"adaptive", r.adaptive}};
   if (r.step > 0) j["render"]["step"] = r.step;
-  if (!r.ray_texture.is_null()) j["render"]["ray_texture"] = r.ray_texture;
+  if (r.ray_texture) j["render"]["ray_texture"] = to_json(*r.ray_texture);
   return j;
 }
 
@@ -217,12 +216,10 @@ ResolvedScene resolve_scene(const Scene& s, const Volume& v) {
   r.tf.opacity_unit = s.opacity_unit > 0 ? s.opacity_unit : min_spacing;
   r.step = s.render.step > 0 ? s.render.step : min_spacing;
   r.min_spacing = min_spacing;
-  if (!s.render.ray_texture.is_null()) {
-    const RayTextureSpec spec = parse_ray_texture(s.render.ray_texture);
-    if (!spec.png.empty())
-      throw SceneError("render.ray_texture.png: reading a ray texture from a PNG is not implemented yet (give size "
-                       "and strokes)");
-    r.ray_texture = std::make_shared<const RayTextureSpec>(spec);
+  if (s.render.ray_texture) {
+    if (!s.render.ray_texture->png.empty() && !s.render.ray_texture->image)
+      throw SceneError("render.ray_texture.png: " + s.render.ray_texture->png + " was not read (load_ray_texture_png)");
+    r.ray_texture = s.render.ray_texture;
   }
   if (r.step < kMinStepFraction * min_spacing)
     throw SceneError("render.step: " + std::to_string(r.step) + " is below " + std::to_string(kMinStepFraction) +

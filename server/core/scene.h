@@ -46,7 +46,8 @@ struct RenderSettings {
   double early_termination = 1.0 - 1.0 / 255.0;
   bool space_skipping = true;
   bool adaptive = false;
-  nlohmann::json ray_texture;  // null when absent
+  // Parsed once, shared and immutable (a painted stroke makes a new spec); null when absent.
+  std::shared_ptr<const RayTextureSpec> ray_texture;
 };
 
 struct Scene {
@@ -72,9 +73,9 @@ struct ResolvedScene {
   double step = 1.0;
   double min_spacing = 1.0;  // the volume's smallest voxel spacing
   glm::dvec3 box_min, box_max;
-  // render.ray_texture, parsed; null without one. Its texels are built where they are read
-  // (build_ray_texture at the scene's early termination): the GL ray caster on a cache miss,
-  // the CPU reference once per image; never per frame here.
+  // render.ray_texture (its PNG read); null without one. Its texels are built where they are
+  // read (build_ray_texture at the scene's early termination): the GL ray caster keeps them
+  // per lineage and applies only new strokes, the CPU reference builds them once per image.
   std::shared_ptr<const RayTextureSpec> ray_texture;
 };
 ResolvedScene resolve_scene(const Scene& s, const Volume& v);

@@ -1,5 +1,7 @@
 #include "net/app_context.h"
 
+#include "core/volume_io.h"
+
 namespace peakcast::net {
 
 AppContext::AppContext(ServerConfig c)
@@ -11,6 +13,17 @@ AppContext::AppContext(ServerConfig c)
                                   SchedulerOptions{config.max_queued_stills, config.still_band_samples,
                                                    limits::kStillDelay, config.max_fps}}),
       ws_sessions(config.max_sessions) {}
+
+PngLocator AppContext::png_locator() const {
+  return [dirs = config.data_dirs](const std::string& png) {
+    if (dirs.empty()) throw SceneError("render.ray_texture.png: the server has no data directory to read PNGs from");
+    try {
+      return resolve_in_roots(png, dirs);
+    } catch (const VolumeError& e) {
+      throw SceneError(std::string("render.ray_texture.png: ") + e.what());
+    }
+  };
+}
 
 std::string path_of(const std::string& target) { return target.substr(0, target.find('?')); }
 

@@ -10,6 +10,7 @@
 #include <boost/asio/thread_pool.hpp>
 
 #include "core/metrics.h"
+#include "core/ray_texture_png.h"
 #include "net/connection_slot.h"
 #include "net/session_registry.h"
 #include "session/gpu_residency.h"
@@ -53,6 +54,8 @@ struct AppContext {
   boost::asio::thread_pool loader{1};
 
   explicit AppContext(ServerConfig c);
+  // Ray-texture PNGs, like volumes given by path, are read only from inside the data directories.
+  PngLocator png_locator() const;
 };
 
 // Bearer token from "Authorization: Bearer X" or the query "?token=X"; empty when absent.

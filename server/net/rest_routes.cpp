@@ -151,10 +151,17 @@ void render_still(AppContext& app, const Request& req, std::function<void(Respon
     count(app, "render", http::status::bad_request);
     return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
   }
-  if (auto vol = app.volumes.find(scene.volume))
+  const bool png = scene.render.ray_texture && !scene.render.ray_texture->png.empty();
+  if (auto vol = app.volumes.find(scene.volume); vol && !png)
     return submit_still(app, req, scene, std::move(vol), std::move(send), std::move(cancelled));
-  // Not loaded yet: load on the loader pool, never on this io thread.
-  asio::post(app.loader, [&app, req, scene, send = std::move(send), cancelled] {
+  // A volume not loaded yet, or a ray-texture PNG: read on the loader pool, never on this io thread.
+  asio::post(app.loader, [&app, req, scene, send = std::move(send), cancelled]() mutable {
+    try {
+      scene.render.ray_texture = load_ray_texture_png(scene.render.ray_texture, app.png_locator());
+    } catch (const SceneError& e) {
+      count(app, "render", http::status::bad_request);
+      return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
+    }
     std::shared_ptr<VolumeEntry> vol;
     try {
       vol = app.volumes.get(scene.volume);

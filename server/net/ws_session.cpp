@@ -188,6 +188,7 @@ void WsSession::handle(const std::string& text) {
         if constexpr (std::is_same_v<T, QualityMsg>) session_->set_quality(m);
         if constexpr (std::is_same_v<T, ViewportMsg>) session_->set_viewport(m.viewport);
         if constexpr (std::is_same_v<T, AckMsg>) session_->ack(m.frame);
+        if constexpr (std::is_same_v<T, StrokeMsg>) queue_text(stroke_ack_message(m.seq, session_->add_stroke(m.stroke)));
         if constexpr (std::is_same_v<T, VolumeMsg>) {
           with_volume(m.volume, [this](std::shared_ptr<VolumeEntry> entry) {
             session_->set_volume(entry);
@@ -201,7 +202,8 @@ void WsSession::handle(const std::string& text) {
 }
 
 void WsSession::start_session(const protocol::Hello& hello, std::shared_ptr<VolumeEntry> volume) {
-  auto session = std::make_shared<Session>("s" + std::to_string(app_.next_session++), weak_from_this());
+  auto session = std::make_shared<Session>("s" + std::to_string(app_.next_session++), weak_from_this(),
+                                           app_.png_locator());
   session->start(volume, hello.viewport, hello.state);
   session_ = session;
   nlohmann::json vols = nlohmann::json::array();

@@ -13,9 +13,6 @@
 namespace peakcast::render {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
-
 RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const MacrocellGrid& cells,
                           const RayTables& t, const PixelRect& rect, int sample_cap) {
   const SamplingPlan plan = plan_sampling(s);
@@ -170,7 +167,7 @@ VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPa
     glBindTextureUnit(kUnitOccupancy, tex.id());
   }
   if (key.adaptive) bind_multipliers(gv, cells);
-  if (key.ray_texture) bind_ray_texture(s);
+  if (key.ray_texture) bind_ray_texture(s, stats);
   if (stats) {
     stats->empty_cells = occ->empty_cells;
     stats->peaks = peaks.size();

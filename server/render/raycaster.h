@@ -10,6 +10,7 @@
 #include "core/occupancy.h"
 #include "core/peaks.h"
 #include "core/sampling.h"
+#include "core/ray_texture.h"
 #include "core/scene.h"
 #include "gpu/gl_objects.h"
 #include "gpu/shader_cache.h"
@@ -102,12 +103,19 @@ class Raycaster {
     gpu::Texture texture;
   };
   std::vector<StrideEntry> stride_cache_;
-  struct RayTextureEntry {  // a scene's ray texture (its JSON and the scene's termination)
-    std::string key;
+  // A ray texture of one lineage at one termination: the texels of its first `strokes`
+  // strokes, on the host (strokes read them: add, multiply) and in the texture.
+  struct RayTextureEntry {
+    std::string key;  // lineage, termination
+    size_t strokes = 0;
+    RayTexture texels;
     gpu::Texture texture;
   };
+  static constexpr size_t kRayTextureEntries = 8;  // sessions painting at once, before rebuilds
   std::vector<RayTextureEntry> ray_texture_cache_;
-  void bind_ray_texture(const ResolvedScene& scene);
+  // Binds the scene's ray texture: a new lineage is built and uploaded whole; new strokes of
+  // a held one are applied and only the texels they touched are uploaded (Raspe §3.2).
+  void bind_ray_texture(const ResolvedScene& scene, RenderStats* stats);
   RayTables tables_;  // what the current frame's tables hold (for the uniforms and stats)
   size_t table_builds_ = 0;
   double vs_widening_ = kCatmullRomOvershoot;

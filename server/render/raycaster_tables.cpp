@@ -32,24 +32,47 @@ gpu::Texture make_cell_texture(const MacrocellGrid& cells, const std::vector<uin
 }
 
 // The ray texture as an RGB32F texture read with linear filtering between texel centres,
-// clamped at the edges (what sample_ray_texture does on the CPU); uploaded once per content.
-void Raycaster::bind_ray_texture(const ResolvedScene& s) {
-  const std::string key = s.scene.render.ray_texture.dump() + " termination " +
-                          std::to_string(s.scene.render.early_termination);
+// clamped at the edges (what sample_ray_texture does on the CPU).
+void Raycaster::bind_ray_texture(const ResolvedScene& s, RenderStats* stats) {
+  const auto t0 = Clock::now();
+  const RayTextureSpec& spec = *s.ray_texture;
+  const std::string key = std::to_string(spec.lineage) + " termination " + std::to_string(s.scene.render.early_termination);
   RayTextureEntry* e = cache_find(ray_texture_cache_, key);
+  if (e && e->strokes > spec.strokes.size()) e = nullptr;  // not a continuation: rebuild (never with one lineage)
+  TexelRect dirty;
+  size_t applied = 0;
   if (!e) {
-    const RayTexture rt = build_ray_texture(*s.ray_texture, s.scene.render.early_termination);
+    RayTexture rt = build_ray_texture(spec, s.scene.render.early_termination);
     gpu::Texture tex = gpu::make_texture(GL_TEXTURE_2D);
     glTextureStorage2D(tex.id(), 1, GL_RGB32F, rt.width(), rt.height());
     glTextureParameteri(tex.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     glTextureParameteri(tex.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     glTextureParameteri(tex.id(), GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     glTextureParameteri(tex.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    dirty = {0, 0, rt.width(), rt.height()};
+    applied = spec.strokes.size();
+    e = &cache_insert(ray_texture_cache_, RayTextureEntry{key, spec.strokes.size(), std::move(rt), std::move(tex)},
+                      kRayTextureEntries);
+  } else {
+    for (size_t i = e->strokes; i < spec.strokes.size(); ++i) dirty.merge(e->texels.apply(spec.strokes[i]));
+    applied = spec.strokes.size() - e->strokes;
+    e->strokes = spec.strokes.size();
+  }
+  if (!dirty.empty()) {  // only the touched rectangle of rows goes up
+    const int w = e->texels.width();
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-    glTextureSubImage2D(tex.id(), 0, 0, 0, rt.width(), rt.height(), GL_RGB, GL_FLOAT, rt.texels().data());
-    e = &cache_insert(ray_texture_cache_, RayTextureEntry{key, std::move(tex)}, kCacheEntries);
+    glPixelStorei(GL_UNPACK_ROW_LENGTH, w);
+    const float* first = e->texels.texels().data() + (size_t(dirty.y0) * size_t(w) + size_t(dirty.x0)) * 3;
+    glTextureSubImage2D(e->texture.id(), 0, dirty.x0, dirty.y0, dirty.x1 - dirty.x0, dirty.y1 - dirty.y0, GL_RGB,
+                        GL_FLOAT, first);
+    glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
   }
   glBindTextureUnit(kUnitRayTexture, e->texture.id());
+  if (stats) {
+    stats->ray_texture_ms = ms_since(t0);
+    stats->ray_texture_strokes = int64_t(applied);
+    stats->ray_texture_texels = dirty.empty() ? 0 : int64_t(dirty.x1 - dirty.x0) * (dirty.y1 - dirty.y0);
+  }
 }
 
 // The adaptive multipliers of a volume's grid: data only (no TF), so built once per grid.

@@ -9,6 +9,11 @@ nlohmann::json RenderStats::to_json() const {
   nlohmann::json j = {{"render_ms", render_ms}, {"readback_ms", readback_ms}, {"table_ms", table_ms},
                       {"variant", variant},     {"peaks", peaks},             {"empty_macrocells", empty_cells},
                       {"tiles", tiles}};
+  if (variant.find("+raytex") != std::string::npos) {
+    j["ray_texture_ms"] = ray_texture_ms;
+    j["ray_texture_strokes"] = ray_texture_strokes;
+    j["ray_texture_texels"] = ray_texture_texels;
+  }
   if (has_samples) {
     j["samples_per_ray"] = samples_mean;
     j["samples_per_ray_max"] = samples_max;
@@ -25,7 +30,8 @@ std::string RenderStats::to_string() const {
   s << "RenderStats{";
   bool first = true;
   for (const char* key : {"variant", "render_ms", "readback_ms", "table_ms", "samples_per_ray", "samples_per_ray_max",
-                          "rays_hit", "rays_at_sample_cap", "sample_cap", "peaks", "empty_macrocells", "tiles"}) {
+                          "rays_hit", "rays_at_sample_cap", "sample_cap", "peaks", "empty_macrocells", "tiles",
+                          "ray_texture_ms", "ray_texture_strokes", "ray_texture_texels"}) {
     if (!j.contains(key)) continue;
     s << (first ? "" : " ") << key << "=" << (j[key].is_string() ? j[key].get<std::string>() : j[key].dump());
     first = false;
@@ -46,6 +52,9 @@ void RenderStats::merge(const RenderStats& t) {
   sample_cap = std::max(sample_cap, t.sample_cap);
   samples_mean = rays_hit ? samples_total / double(rays_hit) : 0.0;
   tiles += t.tiles;
+  ray_texture_ms += t.ray_texture_ms;
+  ray_texture_strokes += t.ray_texture_strokes;
+  ray_texture_texels += t.ray_texture_texels;
   if (!has_samples) samples_total = samples_mean = samples_max = 0.0, rays_hit = rays_at_cap = 0;
 }
 

@@ -27,9 +27,14 @@ struct RenderStats {
   int64_t empty_cells = 0;
   size_t peaks = 0;
   int tiles = 1;  // draws that made the image (merge() counts them)
+  // With a ray texture (a +raytex variant): host time spent applying new strokes and uploading
+  // the texels they touched, the strokes applied, and the texels uploaded (0 when unchanged).
+  double ray_texture_ms = 0.0;
+  int64_t ray_texture_strokes = 0, ray_texture_texels = 0;
   std::string variant;
 
-  // Keys: render_ms, readback_ms, table_ms, variant, peaks, empty_macrocells, tiles and, with
+  // Keys: render_ms, readback_ms, table_ms, variant, peaks, empty_macrocells, tiles, with a ray
+  // texture ray_texture_ms, ray_texture_strokes, ray_texture_texels, and, with
   // sample counts, samples_per_ray, samples_per_ray_max, rays_hit, rays_at_sample_cap. The stream adds its frame
   // keys (type, frame, final, width, height, encode_ms, bytes) to this object.
   nlohmann::json to_json() const;

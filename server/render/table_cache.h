@@ -4,6 +4,7 @@
 #pragma once
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -13,6 +14,11 @@
 #include "gpu/gl_objects.h"
 
 namespace peakcast::render {
+
+using Clock = std::chrono::steady_clock;
+inline double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
 
 std::string tf_signature(const TransferFunction& tf, double lo, double hi);
 // One byte per macrocell (occupancy, adaptive multiplier) as an R8UI 3D texture in grid order.

@@ -77,7 +77,13 @@ nlohmann::json capabilities() {
           {"shading", true},
           {"space_skipping", true},
           {"adaptive", true},
-          {"ray_texture", false},
+          {"ray_texture",
+           {{"mappings", {"view", "volume"}},
+            {"channels", {{"step", {kMinStepMultiplier, kMaxStepMultiplier}}, {"termination", {0, 1}}, {"blend", {-1, 1}}}},
+            {"modes", {"set", "add", "multiply"}},
+            {"max_size", kMaxRayTextureSide},
+            {"max_level", kMaxStrokeLevel},
+            {"max_strokes", kMaxRayTextureStrokes}}},
           {"still_formats", {"jpeg", "png"}}};
 }
 

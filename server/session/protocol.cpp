@@ -128,6 +128,20 @@ ClientMessage parse_client_message(const std::string& text) {
     }
     return m;
   }
+  if (type == "stroke") {
+    only_keys(j, "stroke", {"seq", "stroke"});
+    if (!j.contains("seq") || !j["seq"].is_number_unsigned() || j["seq"].get<uint64_t>() > 0xffffffffull)
+      bad("stroke.seq: required, an unsigned 32-bit integer");
+    if (!j.contains("stroke")) bad("stroke.stroke: required");
+    StrokeMsg m;
+    m.seq = j["seq"].get<uint32_t>();
+    try {
+      m.stroke = parse_stroke(j["stroke"], "stroke.stroke");
+    } catch (const SceneError& e) {
+      bad(e.what());
+    }
+    return m;
+  }
   if (type == "render") {
     only_keys(j, "render", {"render"});
     if (!j.contains("render")) bad("render.render: required");
@@ -181,6 +195,10 @@ std::string error_message(const std::string& code, const std::string& message) {
 }
 
 std::string pong_message(const std::string& id) { return json{{"type", "pong"}, {"id", id}}.dump(); }
+
+std::string stroke_ack_message(uint32_t seq, size_t strokes) {
+  return json{{"type", "stroke_ack"}, {"seq", seq}, {"strokes", strokes}}.dump();
+}
 
 std::string volume_message(const json& volume_info, const json& state) {
   return json{{"type", "volume"}, {"volume", volume_info}, {"state", state}}.dump();

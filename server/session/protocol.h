@@ -72,8 +72,15 @@ struct AckMsg {
 struct PingMsg {
   std::string id;
 };
+// One ray-texture stroke as it is painted; `seq` is the client's number for it, echoed in the
+// stroke_ack that says the stroke is in the session's texture.
+struct StrokeMsg {
+  uint32_t seq = 0;
+  Stroke stroke;
+};
 
-using ClientMessage = std::variant<Hello, CameraMsg, TfMsg, RenderMsg, QualityMsg, ViewportMsg, VolumeMsg, AckMsg, PingMsg>;
+using ClientMessage =
+    std::variant<Hello, CameraMsg, TfMsg, RenderMsg, QualityMsg, ViewportMsg, VolumeMsg, AckMsg, PingMsg, StrokeMsg>;
 
 // Throws ProtocolError (bad_json, too_large, bad_message, unknown_type).
 ClientMessage parse_client_message(const std::string& text);
@@ -81,6 +88,8 @@ ClientMessage parse_client_message(const std::string& text);
 // Server -> client text messages (proto/server_messages.schema.json), built here only.
 std::string error_message(const std::string& code, const std::string& message);
 std::string pong_message(const std::string& id);
+// A stroke is in the session's ray texture, which now holds `strokes` strokes.
+std::string stroke_ack_message(uint32_t seq, size_t strokes);
 // A volume switch: the new volume's info (with histogram) and the session's reset state.
 std::string volume_message(const nlohmann::json& volume_info, const nlohmann::json& state);
 struct Welcome {

@@ -7,7 +7,20 @@
 
 namespace peakcast {
 
-Session::Session(std::string id, std::weak_ptr<FrameSink> sink) : id_(std::move(id)), sink_(std::move(sink)) {}
+Session::Session(std::string id, std::weak_ptr<FrameSink> sink, PngLocator locate_png)
+    : id_(std::move(id)), sink_(std::move(sink)), locate_png_(std::move(locate_png)) {}
+
+std::optional<std::shared_ptr<const RayTextureSpec>> Session::take_ray_texture(nlohmann::json& patch) const {
+  if (!patch.is_object() || !patch.contains("ray_texture")) return std::nullopt;
+  const nlohmann::json j = patch["ray_texture"];
+  patch.erase("ray_texture");
+  if (j.is_null()) return std::shared_ptr<const RayTextureSpec>();
+  try {
+    return load_ray_texture_png(std::make_shared<const RayTextureSpec>(parse_ray_texture(j)), locate_png_);
+  } catch (const SceneError& e) {
+    throw protocol::ProtocolError("bad_message", e.what());
+  }
+}
 
 void Session::touch() {
   dirty_ = true;
@@ -18,6 +31,7 @@ void Session::touch() {
 ResolvedScene Session::resolve() const {
   Scene s = scene_;
   s.render = parse_scene({{"volume", "x"}, {"render", render_json_}}).render;
+  s.render.ray_texture = ray_texture_;
   s.width = viewport_.pixel_width();
   s.height = viewport_.pixel_height();
   return resolve_scene(s, *volume_->volume);
@@ -30,7 +44,10 @@ void Session::start(std::shared_ptr<VolumeEntry> volume, const protocol::Viewpor
   viewport_ = vp;
   scene_ = Scene{};
   scene_.volume = volume_->id;
-  if (state.render) render_json_ = *state.render;
+  if (state.render) {
+    render_json_ = *state.render;
+    if (auto rt = take_ray_texture(render_json_)) ray_texture_ = *rt;
+  }
   if (state.background) scene_.background = *state.background;
   // Defaults resolved now, so the client knows the camera and TF it starts from.
   ResolvedScene r = resolve_scene(scene_, *volume_->volume);
@@ -77,19 +94,39 @@ void Session::set_tf(const TransferFunction& tf, double opacity_unit, uint32_t v
 }
 
 void Session::merge_render(const nlohmann::json& patch) {
+  nlohmann::json rest = patch;
+  const auto texture = take_ray_texture(rest);  // a PNG is read before the lock is taken
   std::lock_guard lock(m_);
   nlohmann::json merged = render_json_;
-  merged.merge_patch(patch);
+  merged.merge_patch(rest);
   const nlohmann::json before = render_json_;
+  const auto texture_before = ray_texture_;
   render_json_ = merged;
+  if (texture) ray_texture_ = *texture;
   try {
     if (volume_) resolve();  // e.g. a step below the volume's floor
   } catch (const SceneError& e) {
     render_json_ = before;
+    ray_texture_ = texture_before;
     throw protocol::ProtocolError("bad_message", e.what());
   }
   render_version_++;
   touch();
+}
+
+size_t Session::add_stroke(const Stroke& stroke) {
+  std::lock_guard lock(m_);
+  if (!ray_texture_)
+    throw protocol::ProtocolError("bad_message",
+                                  "stroke: the session has no ray texture; send render.ray_texture {mapping, size} first");
+  try {
+    ray_texture_ = with_stroke(*ray_texture_, stroke);
+  } catch (const SceneError& e) {
+    throw protocol::ProtocolError("bad_message", e.what());
+  }
+  render_version_++;
+  touch();
+  return ray_texture_->strokes.size();
 }
 
 void Session::set_quality(const protocol::QualityMsg& q) {
@@ -123,6 +160,7 @@ nlohmann::json Session::state_json() const {
   std::lock_guard lock(m_);
   Scene full = scene_;  // every render setting, defaults included: what the client shows and restores
   full.render = parse_scene({{"volume", "x"}, {"render", render_json_}}).render;
+  full.render.ray_texture = ray_texture_;
   nlohmann::json s = scene_to_json(full);
   s["image"] = {{"width", viewport_.pixel_width()}, {"height", viewport_.pixel_height()}};
   // The versions frames will echo: a client counts on from these to match frames to its input.

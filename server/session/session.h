@@ -14,6 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/ray_texture_png.h"
 #include "core/scene.h"
 #include "session/protocol.h"
 #include "session/volume_store.h"
@@ -51,7 +52,9 @@ struct FrameJob {
 
 class Session {
  public:
-  Session(std::string id, std::weak_ptr<FrameSink> sink);
+  // `locate_png` finds render.ray_texture.png files (the server's data directories); without
+  // one, PNG ray textures are refused.
+  Session(std::string id, std::weak_ptr<FrameSink> sink, PngLocator locate_png = {});
   const std::string& id() const { return id_; }
   std::shared_ptr<FrameSink> sink() const { return sink_.lock(); }
 
@@ -60,7 +63,11 @@ class Session {
   void set_volume(std::shared_ptr<VolumeEntry> volume);  // resets camera and TF to the volume's defaults
   void set_camera(const Camera& c);
   void set_tf(const TransferFunction& tf, double opacity_unit, uint32_t version);
-  void merge_render(const nlohmann::json& patch);
+  void merge_render(const nlohmann::json& patch);  // ray_texture in it replaces the texture (null: none)
+  // One painted stroke appended to the ray texture (a new spec of the same lineage, so the
+  // renderer applies just this stroke). Returns the texture's stroke count. Throws
+  // ProtocolError when the session has no ray texture or it is full.
+  size_t add_stroke(const Stroke& stroke);
   void set_quality(const protocol::QualityMsg& q);
   void set_viewport(const protocol::Viewport& vp);
   void ack(uint32_t frame_id);
@@ -75,13 +82,18 @@ class Session {
 
  private:
   void touch();  // a state change arrived (lock held)
+  // Takes render.ray_texture out of a render patch: the new texture (its PNG read), or null
+  // for none; nullopt when the patch does not name it. Throws ProtocolError.
+  std::optional<std::shared_ptr<const RayTextureSpec>> take_ray_texture(nlohmann::json& patch) const;
   ResolvedScene resolve() const;  // lock held
   std::string id_;
   std::weak_ptr<FrameSink> sink_;
   mutable std::mutex m_;
   std::shared_ptr<VolumeEntry> volume_;
   Scene scene_;
-  nlohmann::json render_json_ = nlohmann::json::object();
+  nlohmann::json render_json_ = nlohmann::json::object();  // render settings but the ray texture
+  std::shared_ptr<const RayTextureSpec> ray_texture_;      // null: none
+  PngLocator locate_png_;
   protocol::Viewport viewport_;
   Quality quality_;
   uint32_t camera_version_ = 0, tf_version_ = 0, render_version_ = 0;
