@@ -33,7 +33,10 @@ std::vector<float> channels_of(const std::vector<T>& px, size_t n, int stride, d
 }  // namespace
 
 std::shared_ptr<const RayTextureImage> read_ray_texture_png(const std::filesystem::path& path, const std::string& key) {
-  auto in = ImageInput::open(path.string());
+  // Alpha is ignored, so it must not be multiplied into R, G, B (OIIO's default for PNG).
+  ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  auto in = ImageInput::open(path.string(), &config);
   if (!in) refuse(key, path, "cannot read as an image: " + OIIO::geterror());
   const ImageSpec& spec = in->spec();
   if (std::string(in->format_name()) != "png") refuse(key, path, std::string("is ") + in->format_name() + ", not PNG");

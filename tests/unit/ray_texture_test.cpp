@@ -145,8 +145,9 @@ TEST(ray_texture, BadSpecsAndStrokesAreRefusedNamingTheKey) {
   expect_refused(many, "render.ray_texture.strokes");
 }
 
-// PNG input is not built yet: a scene naming one is refused when resolved, naming the key.
-TEST(ray_texture, PngInputIsRefusedUntilItExists) {
+// A scene naming a PNG that no loader read (a path that skipped load_ray_texture_png) is
+// refused when resolved, naming the key, never rendered with made-up texels.
+TEST(ray_texture, AnUnreadPngIsRefusedWhenResolved) {
   GeneratorSpec g;
   g.kind = GeneratorKind::Ramp;
   g.dims = {4, 4, 4};
@@ -154,9 +155,29 @@ TEST(ray_texture, PngInputIsRefusedUntilItExists) {
   const Scene s = parse_scene({{"volume", "v"}, {"render", {{"ray_texture", {{"mapping", "view"}, {"png", "paint.png"}}}}}});
   try {
     resolve_scene(s, v);
-    ADD_FAILURE() << "a png ray texture was accepted";
+    ADD_FAILURE() << "a png ray texture was accepted unread";
   } catch (const SceneError& e) {
     EXPECT_NE(std::string(e.what()).find("render.ray_texture.png"), std::string::npos) << e.what();
+  }
+}
+
+// Painted strokes keep the lineage (the renderer applies only the new ones); a parse starts a
+// new one; the stroke cap holds for painted strokes too.
+TEST(ray_texture, PaintedStrokesKeepTheLineage) {
+  const RayTextureSpec a = parse_ray_texture({{"mapping", "view"}, {"size", {8, 8}}});
+  const RayTextureSpec b = parse_ray_texture({{"mapping", "view"}, {"size", {8, 8}}});
+  EXPECT_NE(a.lineage, b.lineage);
+  const auto a1 = with_stroke(a, parse_stroke(stroke("step", 0.5, 0.5, 0.2, 2.0), "s"));
+  EXPECT_EQ(a1->lineage, a.lineage);
+  EXPECT_EQ(a1->strokes.size(), 1u);
+  EXPECT_EQ(a.strokes.size(), 0u);  // the old spec is unchanged (frames in flight still read it)
+  RayTextureSpec full = a;
+  full.strokes.assign(kMaxRayTextureStrokes, a1->strokes[0]);
+  try {
+    with_stroke(full, a1->strokes[0]);
+    ADD_FAILURE() << "a stroke beyond the cap was taken";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("strokes already"), std::string::npos) << e.what();
   }
 }
 
