@@ -1,0 +1,17 @@
+// The volume and scene several benchmarks share (bench raycast's): blobs 256^3 (or any volume
+// file, or a generator kind), four TF points over the range, a three-quarter view.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "core/scene.h"
+#include "core/volume.h"
+
+namespace peakcast::app {
+
+// A file, or a generator kind made in memory at a modest size (ML 128^3, the others 256^3).
+std::shared_ptr<Volume> bench_volume(const std::string& what);
+ResolvedScene bench_scene(const Volume& vol, int size, const std::string& filter);
+
+}  // namespace peakcast::app
