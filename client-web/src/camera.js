@@ -9,6 +9,7 @@ export class CameraController extends EventTarget {
   #raf = 0;
   #drag = null;
   #touches = new Map();
+  ignore = () => false;  // (pointerdown) => true: another tool takes that drag (the brush in paint mode)
 
   constructor(element, disposer) {
     super();
@@ -85,7 +86,7 @@ export class CameraController extends EventTarget {
   }
 
   #down(e) {
-    if (!this.camera) return;
+    if (!this.camera || this.ignore(e)) return;
     this.el.setPointerCapture(e.pointerId);
     if (e.pointerType === 'touch') { this.#touches.set(e.pointerId, { x: e.clientX, y: e.clientY }); return; }
     this.#drag = { x: e.clientX, y: e.clientY, pan: e.button === 2 || e.button === 1 || e.shiftKey };

@@ -1,5 +1,7 @@
 // peakcast browser client: wires the stream, the viewport, the camera, the TF editor, the render
-// controls, the stats overlay, the volume picker, screenshots and the shareable URL.
+// controls, the ray-texture brush, the stats overlay, the volume picker, screenshots and the
+// shareable URL.
+import { Brush } from './brush.js';
 import { CameraController } from './camera.js';
 import { RenderControls } from './controls.js';
 import { Disposer } from './disposer.js';
@@ -18,7 +20,8 @@ const ctx2d = canvas.getContext('2d');
 let token = takeTokenFromUrl() || sessionStorage.getItem('peakcast-token') || '';
 
 // What the client knows of its session; sent again in hello after a reconnect.
-const app = { volume: null, camera: null, tf: null, render: {}, cameraVersion: 1, welcomed: false };
+// The ray texture is the brush's (its strokes do not fit a URL): never in app.render.
+const app = { volume: null, volumeInfo: null, camera: null, tf: null, render: {}, cameraVersion: 1, welcomed: false };
 const restored = readState();
 if (restored) Object.assign(app, { volume: restored.volume, camera: restored.camera, tf: restored.tf, render: restored.render || {} });
 
@@ -43,21 +46,28 @@ function helloFor() {
   if (app.camera) state.camera = app.camera;
   if (app.tf) state.tf = { points: app.tf };
   if (Object.keys(app.render).length) state.render = app.render;
+  const rayTexture = brush.helloSpec();  // the first strokes; the rest follow as stroke messages
+  if (rayTexture) state.render = { ...app.render, ray_texture: rayTexture };
   if (Object.keys(state).length) hello.state = state;
   return hello;
 }
 
 const stream = new Stream({ url: `${location.protocol === 'https:' ? 'wss' : 'ws'}://${location.host}/ws`, helloFor });
 disposer.add(() => stream.dispose());
+const brush = new Brush({ section: $('ray-texture'), controls: $('rt-controls'), canvas, view: $('view'), outline: $('brush-outline'),
+  previewBox: $('rt-preview-box'), preview: $('rt-preview'), legend: $('rt-legend'), status: $('rt-status'), undo: $('rt-undo'),
+  clear: $('rt-clear') }, { stream, camera, scene: () => ({ camera: app.camera, volume: app.volumeInfo }) }, disposer);
 
 function share() { return { volume: app.volume, camera: app.camera, tf: app.tf, render: app.render }; }
 
 function applyState(state, volumeInfo, volumes) {
   app.volume = volumeInfo.id;
+  app.volumeInfo = volumeInfo;
   app.cameraVersion = state.versions?.camera ?? app.cameraVersion;
   app.camera = state.camera;
   app.tf = state.tf.points;
-  app.render = state.render || {};
+  const { ray_texture: _, ...render } = state.render || {};
+  app.render = render;
   camera.set(state.camera, { home: !app.welcomed || !restored, silent: true });
   tfEditor.setVolume(volumeInfo);
   tfEditor.set(state.tf.points);
@@ -70,19 +80,24 @@ disposer.listen(stream, 'welcome', (e) => {
   applyState(w.state, w.volume, w.volumes);
   app.volumes = w.volumes;
   controls.build(w.capabilities, w.state.render);
+  brush.welcome(w.capabilities, w.state);
   app.welcomed = true;
   document.title = `peakcast — ${w.volume.id}`;
 });
 disposer.listen(stream, 'volume', (e) => {
   applyState(e.detail.state, e.detail.volume, app.volumes.some((v) => v.id === e.detail.volume.id) ? app.volumes : [...app.volumes, e.detail.volume]);
   camera.set(e.detail.state.camera, { home: true, silent: true });
+  brush.volumeChanged(e.detail.state);
 });
+disposer.listen(stream, 'stroke_ack', (e) => brush.sync.onAck(e.detail));
+disposer.listen(stream, 'pong', (e) => brush.sync.onPong(e.detail));
 disposer.listen(stream, 'stats', (e) => { stats.stats(e.detail); $('variant').textContent = e.detail.variant; });
 const errorEl = $('error');
 let errorTimer = 0;
 disposer.add(() => clearTimeout(errorTimer));
 disposer.listen(stream, 'error', (e) => {
   console.warn('peakcast:', e.detail.code, e.detail.message);
+  brush.sync.onError(e.detail);  // a refused stroke or texture: the brush resends its list
   if (e.detail.code === 'volume_error') return picker.failed(e.detail.message);
   if (e.detail.code === 'unauthorized') return;  // the status banner and token form say it
   errorEl.textContent = `${e.detail.code}: ${e.detail.message}`;  // what the server refused, and why
@@ -106,6 +121,8 @@ disposer.listen(stream, 'frame', (e) => {
   canvas.dataset.frames = String((+canvas.dataset.frames || 0) + 1);
   canvas.dataset.final = String(frame.final);
   canvas.dataset.cameraVersion = String(frame.cameraVersion);
+  canvas.dataset.renderVersion = String(frame.renderVersion);
+  canvas.dataset.png = String(frame.png);
   stats.frameShown(frame);
 });
 
@@ -115,6 +132,7 @@ disposer.listen(stream, 'status', async (e) => {
   statusEl.hidden = s.state === 'live';
   statusEl.className = 'banner' + (s.state === 'connecting' ? ' info' : '');
   document.body.dataset.status = s.state;
+  if (s.state !== 'live') brush.sync.disconnected();
   if (s.state === 'connecting') statusEl.textContent = 'connecting…';
   if (s.state === 'disconnected') {
     let reason = s.reason;
@@ -167,7 +185,7 @@ disposer.listen(window, 'resize', () => {
 
 disposer.listen($('shot'), 'click', async () => {
   const width = +$('shot-w').value, height = +$('shot-h').value;
-  const scene = { volume: app.volume, camera: app.camera, tf: { points: app.tf }, render: app.render, image: { width, height } };
+  const scene = { volume: app.volume, camera: app.camera, tf: { points: app.tf }, render: { ...app.render, ...brush.sceneRender() }, image: { width, height } };
   const headers = { 'Content-Type': 'application/json' };
   if (token) headers.Authorization = `Bearer ${token}`;
   const res = await fetch('/api/render?format=png', { method: 'POST', headers, body: JSON.stringify(scene) });
@@ -183,5 +201,5 @@ disposer.listen($('share'), 'click', async () => {
 });
 
 disposer.listen(window, 'pagehide', () => disposer.dispose());
-window.peakcast = { app, stats, stream, camera, tfEditor, controls, disposer };  // for tests and the console
+window.peakcast = { app, stats, stream, camera, tfEditor, controls, brush, disposer };  // for tests and the console
 stream.connect();
