@@ -207,7 +207,10 @@ ResolvedScene resolve_scene(const Scene& s, const Volume& v) {
   ResolvedScene r;
   r.scene = s;
   for (int a = 0; a < 3; ++a)
-    if (v.dims()[a] < 2) throw SceneError("volume: every dimension must be >= 2 to render (got a single slice)");
+    if (v.dims()[a] < 2)
+      throw SceneError("volume: every dimension must be >= 2 to render (got " + std::to_string(v.dims()[0]) + "x" +
+                       std::to_string(v.dims()[1]) + "x" + std::to_string(v.dims()[2]) +
+                       ": a single voxel, line or slice has no box to ray cast)");
   r.box_min = v.origin;
   r.box_max = v.origin + v.extent();
   r.camera = s.camera ? *s.camera : default_camera(r.box_min, r.box_max);

@@ -62,8 +62,10 @@ RaySplit split_ray(const Volume& vol, Filter filter, const Ray& r, const glm::dv
     Cubic p{};
     // Trilinear: along the ray inside one cell the field is exactly a cubic polynomial in t.
     const bool field_is_cubic_in_t = filter == Filter::Trilinear;
+    double end_value = 0.0;  // the field at tb, as sampled: the next cell starts from the same value
     if (field_is_cubic_in_t) {
-      p = fit(field(ta), field(ta + (tb - ta) / 3), field(ta + 2 * (tb - ta) / 3), field(tb));
+      end_value = field(tb);
+      p = fit(field(ta), field(ta + (tb - ta) / 3), field(ta + 2 * (tb - ta) / 3), end_value);
       // Roots of p'(u) = c1 + 2 c2 u + 3 c3 u^2 inside (0, 1).
       const double A = 3 * p.c[3], B = 2 * p.c[2], C = p.c[1];
       std::vector<double> us;
@@ -86,7 +88,12 @@ RaySplit split_ray(const Volume& vol, Filter filter, const Ray& r, const glm::dv
       for (int k = 1; k < 8; ++k) knots.push_back(ta + (tb - ta) * k / 8.0);
     }
     knots.push_back(tb);
-    auto f = [&](double t) { return field_is_cubic_in_t ? p((t - ta) / (tb - ta)) : field(t); };
+    // At the cell's end the sample itself, not the cubic's rounding of it: a crossing exactly at
+    // a cell face (the data equal to a peak value there) would otherwise fall between two cells.
+    auto f = [&](double t) {
+      if (!field_is_cubic_in_t) return field(t);
+      return t == tb ? end_value : p((t - ta) / (tb - ta));
+    };
     for (size_t k = 0; k + 1 < knots.size(); ++k) {
       const double a = knots[k], b = knots[k + 1];
       const double fa = f(a), fb = f(b);

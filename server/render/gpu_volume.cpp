@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <stdexcept>
+#include <vector>
 
 namespace peakcast::render {
 
@@ -42,12 +43,28 @@ GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cell
   texture_ = gpu::make_texture(GL_TEXTURE_3D);
   glTextureStorage3D(texture_.id(), 1, internal, GLsizei(d[0]), GLsizei(d[1]), GLsizei(d[2]));
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  // Upload in slabs of 64 slices so the driver's staging copy stays small.
+  const ValueRange range = table_range(v.min_value, v.max_value);
+  lo_ = range.lo;
+  hi_ = range.hi;
+  // Integer voxels go up as they are and are mapped to TF coordinates in the shader. Float
+  // voxels go up already in TF coordinates, computed in double: raw, a volume of denormal values
+  // (1e-40) would be flushed to zero by the GPU and 1 / (hi - lo) would overflow a float, so the
+  // picture would depend on the data's scale (DESIGN §6).
+  const bool normalise = v.type() == VoxelType::F32;
   const size_t slice = size_t(d[0] * d[1]) * voxel_bytes(v.type());
-  for (int64_t z = 0; z < d[2]; z += 64) {
-    const int64_t n = std::min<int64_t>(64, d[2] - z);
-    glTextureSubImage3D(texture_.id(), 0, 0, 0, GLint(z), GLsizei(d[0]), GLsizei(d[1]), GLsizei(n), GL_RED, type,
-                        v.data() + size_t(z) * slice);
+  const int64_t slab = normalise ? 8 : 64;  // slices per upload: the driver's (and our) staging stays small
+  std::vector<float> unit;
+  for (int64_t z = 0; z < d[2]; z += slab) {
+    const int64_t n = std::min<int64_t>(slab, d[2] - z);
+    const uint8_t* src = v.data() + size_t(z) * slice;
+    if (normalise) {
+      const size_t count = size_t(d[0] * d[1]) * size_t(n);
+      unit.resize(count);
+      const float* f = reinterpret_cast<const float*>(src);
+      for (size_t i = 0; i < count; ++i) unit[i] = float(range.to_unit(double(f[i]) + v.value_offset));
+      src = reinterpret_cast<const uint8_t*>(unit.data());
+    }
+    glTextureSubImage3D(texture_.id(), 0, 0, 0, GLint(z), GLsizei(d[0]), GLsizei(d[1]), GLsizei(n), GL_RED, type, src);
   }
   if (glGetError() == GL_OUT_OF_MEMORY) throw std::runtime_error("GPU out of memory uploading the volume");
   glTextureParameteri(texture_.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
@@ -57,11 +74,8 @@ GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cell
   gpu::check_gl("volume upload");
   upload_ms_ = ms_since(t0);
 
-  const ValueRange range = table_range(v.min_value, v.max_value);
-  lo_ = range.lo;
-  hi_ = range.hi;
-  scale_ = float(texel_to_stored / (hi_ - lo_));
-  bias_ = float((v.value_offset - lo_) / (hi_ - lo_));
+  scale_ = normalise ? 1.0f : float(texel_to_stored / (hi_ - lo_));
+  bias_ = normalise ? 0.0f : float((v.value_offset - lo_) / (hi_ - lo_));
   if (!cells_trilinear_) {
     const auto t1 = std::chrono::steady_clock::now();
     cells_trilinear_ = std::make_shared<const MacrocellGrid>(build_macrocells(v, 0, FilterSupport::Trilinear));
