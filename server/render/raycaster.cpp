@@ -158,7 +158,11 @@ VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPa
     }
     occ = &occ_entry->occupancy;
   }
-  const VariantKey key = choose_variant(s, occ->empty_cells, path, peaks.size());
+  VariantKey key = choose_variant(s, occ->empty_cells, path, peaks.size());
+  if (force_variant_) {
+    force_variant_(key);
+    key.space_skipping = key.space_skipping && occ_entry;  // forced only where occupancy was built
+  }
   upload_tables(gv, s, key.peaks ? peaks : std::vector<Peak>{});
   const double table_ms = ms_since(t_tables);
   if (key.space_skipping) {

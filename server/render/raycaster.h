@@ -3,6 +3,7 @@
 // float (an Image) or 8-bit RGB quantised on the GPU (render/frame.h).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -49,6 +50,11 @@ class Raycaster {
   // range: Lee's 1/8 (kCatmullRomOvershoot). Tests set 0 to show the skipped-cell streaks it
   // prevents (Lee Fig. 14).
   void set_virtual_sample_widening(double fraction) { vs_widening_ = fraction; }
+  // Changes the variant chosen for every later frame (nullptr: none): how tests and the quality
+  // bench put back code the scene's variant leaves out, to show the omission changes no pixel
+  // and to time what it saves. Only features whose tables the frame builds anyway may be forced
+  // on (peaks, space skipping, the differential lattice).
+  void force_variant(std::function<void(VariantKey&)> change) { force_variant_ = std::move(change); }
   // The most samples a ray of this variant takes (kMaxSamplesPerRay, or less where the driver
   // bounds a shader's loops: llvmpipe); rays that reach it are counted in the stats.
   int sample_cap(const VariantKey& key) const;
@@ -119,6 +125,7 @@ class Raycaster {
   RayTables tables_;  // what the current frame's tables hold (for the uniforms and stats)
   size_t table_builds_ = 0;
   double vs_widening_ = kCatmullRomOvershoot;
+  std::function<void(VariantKey&)> force_variant_;
   bool llvmpipe_ = false;
   std::vector<Targets> targets_;  // most recently used first
 };
