@@ -18,6 +18,7 @@ void add_bench_soak_command(CLI::App& bench, Runner& run);   // bench soak
 void add_bench_sampling_command(CLI::App& bench, Runner& run);  // bench sampling
 void add_bench_frame_commands(CLI::App& bench, Runner& run);  // bench readback, bench volume-switch
 void add_bench_raytex_command(CLI::App& bench, Runner& run);  // bench raytex
+void add_bench_quality_command(CLI::App& bench, Runner& run);  // bench quality
 
 // Exit codes: 0 ok, 1 failure of the job (GL, EGL, shader, I/O while writing), 2 bad input
 // (file, scene, arguments).
