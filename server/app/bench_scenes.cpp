@@ -1,5 +1,6 @@
 #include "app/bench_scenes.h"
 
+#include <cstdio>
 #include <filesystem>
 
 #include "core/generators.h"
@@ -26,6 +27,15 @@ ResolvedScene bench_scene(const Volume& vol, int size, const std::string& filter
   const glm::dvec3 c = s.camera.center;
   s.camera.eye = c + (s.camera.eye - c).z * glm::dvec3(0.55, 0.45, 0.7);
   return s;
+}
+
+BenchRenderer make_bench_renderer() {
+  BenchRenderer r;
+  r.context = gpu::EglContext::create();
+  std::printf("GL: %s\n", r.context->info().to_string().c_str());
+  r.shaders = std::make_unique<gpu::ShaderCache>(gpu::default_shader_dir());
+  r.caster = std::make_unique<render::Raycaster>(*r.shaders);
+  return r;
 }
 
 }  // namespace peakcast::app

@@ -46,10 +46,8 @@ struct Case {
 };
 
 void run_readback(const ReadbackArgs& a) {
-  auto ctx = gpu::EglContext::create();
-  std::printf("GL: %s\n", ctx->info().to_string().c_str());
-  gpu::ShaderCache shaders(gpu::default_shader_dir());
-  render::Raycaster caster(shaders);
+  BenchRenderer gl = make_bench_renderer();
+  render::Raycaster& caster = *gl.caster;
   auto vol = bench_volume(a.volume);
   render::GpuVolume gv(vol);
   std::printf("volume: %s\n", vol->to_string().c_str());
@@ -112,10 +110,8 @@ void run_readback(const ReadbackArgs& a) {
 }
 
 void run_switch(const SwitchArgs& a) {
-  auto ctx = gpu::EglContext::create();
-  std::printf("GL: %s\n", ctx->info().to_string().c_str());
-  gpu::ShaderCache shaders(gpu::default_shader_dir());
-  render::Raycaster caster(shaders);
+  BenchRenderer gl = make_bench_renderer();
+  render::Raycaster& caster = *gl.caster;
   const auto t_load = Clock::now();
   auto vol = std::make_shared<Volume>(load_volume(a.volume));
   std::printf("volume: %s, loaded in %.0f ms\n", vol->to_string().c_str(), ms_since(t_load));

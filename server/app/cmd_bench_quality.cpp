@@ -18,6 +18,7 @@
 #include <thread>
 #include <tuple>
 
+#include "app/bench_scenes.h"
 #include "app/bench_util.h"
 #include "app/commands.h"
 #include "app/quality_report.h"
@@ -121,10 +122,8 @@ std::string machine_line(const gpu::GlInfo& gl) {
 }
 
 int run_quality(const QualityArgs& a) {
-  auto ctx = gpu::EglContext::create();
-  std::printf("GL: %s\n", ctx->info().to_string().c_str());
-  gpu::ShaderCache shaders(gpu::default_shader_dir());
-  render::Raycaster caster(shaders);
+  BenchRenderer gl = make_bench_renderer();
+  render::Raycaster& caster = *gl.caster;
   const fs::path out = a.out;
   fs::create_directories(out);
   std::vector<fs::path> files;
@@ -240,7 +239,7 @@ int run_quality(const QualityArgs& a) {
     write_svg(out / (scene_name + ".svg"), scene_name, rows, refs);
   }
   write_csv(out / "report.csv", rows);
-  write_markdown(out / "report.md", rows, refs, omissions, machine_line(ctx->info()));
+  write_markdown(out / "report.md", rows, refs, omissions, machine_line(gl.context->info()));
   std::printf("wrote %s/report.csv, report.md and %zu SVG plots\n", out.string().c_str(), files.size());
   return 0;
 }

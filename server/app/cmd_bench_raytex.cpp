@@ -60,10 +60,8 @@ std::shared_ptr<const RayTextureSpec> empty_texture(int size) {
 }
 
 void run_raytex(const RaytexArgs& a) {
-  auto ctx = gpu::EglContext::create();
-  std::printf("GL: %s\n", ctx->info().to_string().c_str());
-  gpu::ShaderCache shaders(gpu::default_shader_dir());
-  render::Raycaster caster(shaders);
+  BenchRenderer gl = make_bench_renderer();
+  render::Raycaster& caster = *gl.caster;
   auto vol = bench_volume(a.volume);
   render::GpuVolume gv(vol);
   std::printf("volume: %s, image %dx%d, ray texture %dx%d (view), stroke radius %.3f, %d frames over %.0f deg each\n",

@@ -2,7 +2,7 @@
 // blend, view- and volume-aligned, against no texture, the CPU twin and the converged image.
 #include <cmath>
 
-#include "gpu/gpu_fixture.h"
+#include "gpu/ray_texture_scenes.h"
 #include "reference/cpu_raycaster.h"
 
 namespace peakcast {
@@ -10,11 +10,9 @@ namespace {
 
 using json = nlohmann::json;
 
-std::shared_ptr<Volume> ml() { return test::make_volume(GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32); }
+std::shared_ptr<Volume> ml() { return test::ray_texture_volume(); }
 
-// A smooth band over Marschner-Lobb's [0, 1] and a near-Dirac peak at 0.7 (for the blend).
-const json kTf = {{"points", {{0.0, 0.1, 0.2, 0.8, 0.0}, {0.45, 0.3, 0.6, 0.9, 0.05}, {0.6, 0.9, 0.6, 0.3, 0.35},
-                              {1.0, 1.0, 1.0, 1.0, 0.0}}}};
+const json& kTf = test::kRayTextureTf;
 
 json camera(double azimuth_deg) {
   const double a = azimuth_deg * 3.14159265358979 / 180.0;

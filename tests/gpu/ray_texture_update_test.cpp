@@ -5,17 +5,16 @@
 #include <filesystem>
 
 #include "core/ray_texture_png.h"
-#include "gpu/gpu_fixture.h"
+#include "gpu/ray_texture_scenes.h"
 
 namespace peakcast {
 namespace {
 
 using json = nlohmann::json;
 
-std::shared_ptr<Volume> ml() { return test::make_volume(GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32); }
+std::shared_ptr<Volume> ml() { return test::ray_texture_volume(); }
 
-const json kTf = {{"points", {{0.0, 0.1, 0.2, 0.8, 0.0}, {0.45, 0.3, 0.6, 0.9, 0.05}, {0.6, 0.9, 0.6, 0.3, 0.35},
-                              {1.0, 1.0, 1.0, 1.0, 0.0}}}};
+const json& kTf = test::kRayTextureTf;
 
 ResolvedScene scene_of(const Volume& v, std::shared_ptr<const RayTextureSpec> spec) {
   ResolvedScene s = test::make_scene(

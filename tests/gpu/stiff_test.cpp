@@ -275,7 +275,9 @@ TEST_P(Stiff, BoundedFiniteAndRightOrRefused) {
   // The bounds were measured on llvmpipe, which filters in float. A GPU's hardware trilinear
   // filter uses 8-bit weights, which caps any twin comparison near 50 dB (raycast_vs_cpu_test).
   const double bound = test::gpu().context->info().software ? c.min_psnr : std::min(c.min_psnr, 45.0);
-  if (c.check == Check::Twin || c.check == Check::Unscaled) EXPECT_GE(psnr, bound) << c.name;
+  if (c.check == Check::Twin || c.check == Check::Unscaled) {
+    EXPECT_GE(psnr, bound) << c.name;
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Cases, Stiff, ::testing::ValuesIn(kCases),
