@@ -1,9 +1,12 @@
 #include "core/ray_texture_png.h"
 
 #include <OpenImageIO/imageio.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <fstream>
 #include <vector>
 
 #include "core/scene_error.h"
@@ -15,6 +18,46 @@ namespace {
 
 [[noreturn]] void refuse(const std::string& key, const std::filesystem::path& path, const std::string& what) {
   throw SceneError(key + ": " + path.string() + ": " + what);
+}
+
+uint32_t be32(const unsigned char* p) { return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3]; }
+
+constexpr std::uintmax_t kMaxPngBytes = 64ull << 20;  // a 2048^2 16-bit RGBA PNG is at most ~32 MiB
+
+// The file's chunk structure, checked before a decoder sees it: the signature, IHDR first and
+// within the size limit, every chunk inside the file with its CRC right, IEND at the end.
+// libpng reports a truncated or corrupt file by longjmp out of OpenImageIO's reader, which
+// leaks what that reader held; refused here, such files never reach it.
+void check_png_structure(const std::string& key, const std::filesystem::path& path) {
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec) refuse(key, path, "cannot read: " + ec.message());
+  if (size > kMaxPngBytes) refuse(key, path, "is " + std::to_string(size) + " bytes; a ray-texture PNG is at most 64 MiB");
+  std::vector<unsigned char> b(size);
+  std::ifstream in(path, std::ios::binary);
+  if (!in.read(reinterpret_cast<char*>(b.data()), std::streamsize(size))) refuse(key, path, "cannot read");
+  static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (size < 8 || std::memcmp(b.data(), sig, 8) != 0) refuse(key, path, "is not PNG (no PNG signature)");
+  size_t at = 8;
+  bool first = true;
+  while (true) {
+    if (size - at < 12) refuse(key, path, "is truncated (a chunk header runs past the end of the file)");
+    const uint32_t len = be32(&b[at]);
+    const std::string type(reinterpret_cast<const char*>(&b[at + 4]), 4);
+    if (len > size - at - 12) refuse(key, path, "is truncated (chunk " + type + " runs past the end of the file)");
+    const uint32_t crc = uint32_t(crc32(crc32(0L, Z_NULL, 0), &b[at + 4], uInt(len + 4)));
+    if (crc != be32(&b[at + 8 + len])) refuse(key, path, "is corrupt (chunk " + type + " fails its CRC)");
+    if (first) {
+      if (type != "IHDR" || len != 13) refuse(key, path, "is corrupt (it does not start with an IHDR chunk)");
+      const uint32_t w = be32(&b[at + 8]), h = be32(&b[at + 12]);
+      if (w < 1 || h < 1 || w > uint32_t(kMaxRayTextureSide) || h > uint32_t(kMaxRayTextureSide))
+        refuse(key, path, std::to_string(w) + "x" + std::to_string(h) + " is the wrong size: each side must be 1.." +
+                              std::to_string(kMaxRayTextureSide));
+      first = false;
+    }
+    at += 12 + size_t(len);
+    if (type == "IEND") return;
+  }
 }
 
 template <class T>
@@ -33,6 +76,7 @@ std::vector<float> channels_of(const std::vector<T>& px, size_t n, int stride, d
 }  // namespace
 
 std::shared_ptr<const RayTextureImage> read_ray_texture_png(const std::filesystem::path& path, const std::string& key) {
+  check_png_structure(key, path);
   // Alpha is ignored, so it must not be multiplied into R, G, B (OIIO's default for PNG).
   ImageSpec config;
   config.attribute("oiio:UnassociatedAlpha", 1);

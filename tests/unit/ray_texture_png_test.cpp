@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include "core/ray_texture_png.h"
 #include "core/scene_error.h"
@@ -120,8 +121,20 @@ TEST(ray_texture_png, FilesThatAreNotAThreeChannelPngOfAllowedSizeAreRefused) {
   expect_refused(d.path / "wide.png", "wrong size");
   expect_refused(d.path / "grey.png", "1 channel");
   expect_refused(d.path / "photo.jpg", "not PNG");
-  expect_refused(d.path / "text.png", "cannot read");
-  expect_refused(d.path / "cut.png", "cut.png");
+  expect_refused(d.path / "text.png", "not PNG");
+  expect_refused(d.path / "cut.png", "truncated");
+  // A byte of the image data changed: the chunk's CRC catches it before any decoder runs.
+  write_image<uint8_t>(d.path / "ok.png", 16, 16, 3, OIIO::TypeDesc::UINT8, std::vector<uint8_t>(768, 77));
+  std::ifstream in(d.path / "ok.png", std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t idat = bytes.find("IDAT");
+  ASSERT_NE(idat, std::string::npos);
+  bytes[idat + 6] ^= 0x5a;
+  std::ofstream(d.path / "flipped.png", std::ios::binary) << bytes;
+  expect_refused(d.path / "flipped.png", "CRC");
+  // Cut inside the image data (the case that made OpenImageIO's reader leak under libpng's longjmp).
+  std::ofstream(d.path / "half.png", std::ios::binary) << bytes.substr(0, idat + 10);
+  expect_refused(d.path / "half.png", "truncated");
   expect_refused(d.path / "missing.png", "missing.png");
 }
 
