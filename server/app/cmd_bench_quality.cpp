@@ -24,6 +24,7 @@
 #include "app/quality_report.h"
 #include "core/generators.h"
 #include "core/peaks.h"
+#include "core/sampling.h"
 #include "core/volume_io.h"
 #include "encode/png.h"
 #include "gpu/egl_context.h"
@@ -168,8 +169,20 @@ int run_quality(const QualityArgs& a) {
       return conv.emplace(key, c.image).first->second;
     };
     const bool tf_has_peaks = !find_peaks(base.tf).empty();
+    // s_k counts pixel footprints at the focal distance: its sweep is the one that puts the
+    // step there at the uniform sweep's 2, 1, 1/2, 1/4 voxels, so both cover the same range
+    // whatever the image size and distance.
+    double sk_one_voxel = 1.0;
+    if (!base.camera.orthographic) {
+      json j = base_json;
+      j["render"]["sampling"] = "differential";
+      j["render"]["s_k"] = 1.0;
+      sk_one_voxel = base.min_spacing / plan_sampling(resolve_scene(parse_scene(j), *vol)).k;
+    }
     for (const Method& m : methods_for(base)) {
-      const std::vector<double> knobs = m.knob == "s_k" ? std::vector<double>{8, 4, 2, 1} : std::vector<double>{2, 1, 0.5, 0.25};
+      std::vector<double> knobs = {2, 1, 0.5, 0.25};
+      if (m.knob == "s_k")
+        for (double& k : knobs) k *= sk_one_voxel;
       const bool peaks_model = m.name.rfind("peaks/", 0) == 0;
       const std::string filter = m.render.value("filter", "trilinear");
       for (double k : knobs) {
