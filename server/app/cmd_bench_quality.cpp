@@ -87,9 +87,11 @@ std::vector<fs::path> standard_scenes() {
 // the scenes after.
 std::shared_ptr<Volume> scene_volume(const std::string& name, const fs::path& scene_file,
                                      std::map<std::string, std::shared_ptr<Volume>>& cache) {
-  if (auto it = cache.find(name); it != cache.end()) return it->second;
+  const bool generated = name.rfind("generate:", 0) == 0;
+  const std::string key = generated ? name : fs::weakly_canonical(scene_file.parent_path() / name).string();
+  if (auto it = cache.find(key); it != cache.end()) return it->second;
   std::shared_ptr<Volume> v;
-  if (name.rfind("generate:", 0) == 0) {
+  if (generated) {
     const auto colon = name.find(':', 9);
     GeneratorSpec g;
     g.kind = parse_generator_kind(name.substr(9, colon - 9));
@@ -107,7 +109,7 @@ std::shared_ptr<Volume> scene_volume(const std::string& name, const fs::path& sc
     fs::path p = name;
     v = std::make_shared<Volume>(load_volume(p.is_relative() ? scene_file.parent_path() / p : p));
   }
-  cache[name] = v;
+  cache[key] = v;
   return v;
 }
 
@@ -187,6 +189,8 @@ int run_quality(const QualityArgs& a) {
       const std::string filter = m.render.value("filter", "trilinear");
       for (double k : knobs) {
         json j = base_json;
+        // Every method key set, so a scene file's own sampling or filter never relabels a row.
+        j["render"].update({{"sampling", "uniform"}, {"filter", "trilinear"}, {"virtual_samples", 0}, {"adaptive", false}});
         j["render"].update(m.render);
         if (m.knob == "s_k") j["render"]["s_k"] = k;
         else j["render"]["step"] = k * base.min_spacing;

@@ -132,6 +132,7 @@ RayTextureSpec parse_ray_texture(const json& j, const std::string& where) {
     for (size_t i = 0; i < strokes.size(); ++i)
       spec.strokes.push_back(parse_stroke(strokes[i], where + ".strokes[" + std::to_string(i) + "]"));
   }
+  count_work(spec, where + ".strokes");
   return spec;
 }
 
@@ -153,12 +154,35 @@ json to_json(const RayTextureSpec& s) {
   return j;
 }
 
+uint64_t stroke_texels(const Stroke& s, int width, int height) {
+  const double block = double(1 << std::clamp(s.level, 0, kMaxStrokeLevel));
+  const double d = 2.0 * s.radius * std::max(width, height) + 2.0 * block;  // the box, rounded out to blocks
+  return uint64_t(std::min(d, double(width))) * uint64_t(std::min(d, double(height)));
+}
+
+void count_work(RayTextureSpec& spec, const std::string& where) {
+  uint64_t work = 0;
+  for (const auto& s : spec.strokes) work += stroke_texels(s, spec.width, spec.height);
+  if (work > kMaxRayTextureWork)
+    throw SceneError(where + ": the strokes touch " + std::to_string(work) + " texels in all (their bounding boxes), " +
+                     "more than " + std::to_string(kMaxRayTextureWork) +
+                     ": use a smaller texture, smaller or fewer strokes, or clear the texture");
+  spec.work = work;
+}
+
 std::shared_ptr<const RayTextureSpec> with_stroke(const RayTextureSpec& spec, const Stroke& s) {
   if (spec.strokes.size() >= kMaxRayTextureStrokes)
     throw SceneError("stroke: the ray texture holds " + std::to_string(spec.strokes.size()) +
                      " strokes already, the most it takes (clear it or send it anew without strokes)");
+  const uint64_t work = spec.work + stroke_texels(s, spec.width, spec.height);
+  if (work > kMaxRayTextureWork)
+    throw SceneError("stroke: the ray texture's strokes would touch " + std::to_string(work) +
+                     " texels in all, more than " + std::to_string(kMaxRayTextureWork) + " (clear it, or paint smaller)");
+  // The strokes are copied (specs are immutable: frames in flight read the older one); at the
+  // stroke cap that is 5.6 MB per stroke, under the message rate limit.
   auto next = std::make_shared<RayTextureSpec>(spec);
   next->strokes.push_back(s);
+  next->work = work;
   return next;
 }
 

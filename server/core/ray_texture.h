@@ -41,6 +41,9 @@ constexpr int kMaxRayTextureSide = 2048;
 constexpr size_t kMaxRayTextureStrokes = 100000;
 constexpr int kMaxStrokeLevel = 8;
 constexpr double kMinStepMultiplier = 1.0 / 8.0, kMaxStepMultiplier = 8.0;
+// Texel updates all of a texture's strokes may make (the sum of their bounding boxes): what one
+// build of it costs the render thread, bounded (2^28: about half a second on one core).
+constexpr uint64_t kMaxRayTextureWork = uint64_t(1) << 28;
 
 // Level-0 texels read from an image (core/ray_texture_png.h): interleaved step, termination,
 // blend, row 0 = v 0.
@@ -59,7 +62,14 @@ struct RayTextureSpec {
   std::shared_ptr<const RayTextureImage> image;
   // One edit history: every parse starts a new lineage; with_stroke keeps it.
   uint64_t lineage = 0;
+  uint64_t work = 0;  // texel updates of the strokes (stroke_texels), at most kMaxRayTextureWork
 };
+
+// Texels a stroke's bounding box covers on a width x height texture (whole blocks at its level).
+uint64_t stroke_texels(const Stroke& s, int width, int height);
+// The spec's work recounted for its size (a PNG's size is known once read). Throws SceneError
+// past kMaxRayTextureWork.
+void count_work(RayTextureSpec& spec, const std::string& where = "render.ray_texture.strokes");
 
 // Throws SceneError naming the key (`where`, e.g. "render.ray_texture.strokes[3].radius").
 RayTextureSpec parse_ray_texture(const nlohmann::json& j, const std::string& where = "render.ray_texture");

@@ -1,5 +1,6 @@
 #include "core/ray_texture_png.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 #include <zlib.h>
 
@@ -24,11 +25,39 @@ uint32_t be32(const unsigned char* p) { return uint32_t(p[0]) << 24 | uint32_t(p
 
 constexpr std::uintmax_t kMaxPngBytes = 64ull << 20;  // a 2048^2 16-bit RGBA PNG is at most ~32 MiB
 
-// The file's chunk structure, checked before a decoder sees it: the signature, IHDR first and
-// within the size limit, every chunk inside the file with its CRC right, IEND at the end.
-// libpng reports a truncated or corrupt file by longjmp out of OpenImageIO's reader, which
-// leaks what that reader held; refused here, such files never reach it.
-void check_png_structure(const std::string& key, const std::filesystem::path& path) {
+// Bytes of a PNG's filtered image data: one filter byte then the packed samples per row, per
+// Adam7 pass when interlaced.
+struct PngRows {
+  std::vector<size_t> row_bytes;  // every row's length in order, filter byte included
+  size_t total = 0;
+};
+PngRows png_rows(uint32_t w, uint32_t h, int bits_per_pixel, bool interlaced) {
+  PngRows r;
+  auto add = [&](uint64_t cols, uint64_t rows) {
+    if (cols == 0) return;
+    const size_t bytes = 1 + size_t((cols * uint64_t(bits_per_pixel) + 7) / 8);
+    for (uint64_t y = 0; y < rows; ++y) r.row_bytes.push_back(bytes), r.total += bytes;
+  };
+  if (!interlaced) {
+    add(w, h);
+    return r;
+  }
+  static const int pass[7][4] = {{0, 0, 8, 8}, {4, 0, 8, 8}, {0, 4, 4, 8}, {2, 0, 4, 4}, {0, 2, 2, 4}, {1, 0, 2, 2}, {0, 1, 1, 2}};
+  for (const auto& p : pass) {
+    const uint64_t cols = w > uint32_t(p[0]) ? (w - p[0] + p[2] - 1) / p[2] : 0;
+    const uint64_t rows = h > uint32_t(p[1]) ? (h - p[1] + p[3] - 1) / p[3] : 0;
+    if (rows) add(cols, rows);
+  }
+  return r;
+}
+
+// The whole file, checked before a decoder sees it: the signature; IHDR first, within the size
+// limit and of a known kind; every chunk inside the file with its CRC right; IEND at the end; and
+// the image data inflating to exactly the rows IHDR promises, each with a valid filter byte.
+// libpng reports a truncated or corrupt file by longjmp out of OpenImageIO's reader, which leaks
+// what that reader held; refused here, such files never reach it. The decoder then reads these
+// bytes, not the path again.
+std::vector<unsigned char> checked_png_bytes(const std::string& key, const std::filesystem::path& path) {
   std::error_code ec;
   const auto size = std::filesystem::file_size(path, ec);
   if (ec) refuse(key, path, "cannot read: " + ec.message());
@@ -39,7 +68,8 @@ void check_png_structure(const std::string& key, const std::filesystem::path& pa
   static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   if (size < 8 || std::memcmp(b.data(), sig, 8) != 0) refuse(key, path, "is not PNG (no PNG signature)");
   size_t at = 8;
-  bool first = true;
+  PngRows rows;
+  std::vector<unsigned char> idat;
   while (true) {
     if (size - at < 12) refuse(key, path, "is truncated (a chunk header runs past the end of the file)");
     const uint32_t len = be32(&b[at]);
@@ -47,17 +77,46 @@ void check_png_structure(const std::string& key, const std::filesystem::path& pa
     if (len > size - at - 12) refuse(key, path, "is truncated (chunk " + type + " runs past the end of the file)");
     const uint32_t crc = uint32_t(crc32(crc32(0L, Z_NULL, 0), &b[at + 4], uInt(len + 4)));
     if (crc != be32(&b[at + 8 + len])) refuse(key, path, "is corrupt (chunk " + type + " fails its CRC)");
-    if (first) {
+    const unsigned char* data = &b[at + 8];
+    if (at == 8) {
       if (type != "IHDR" || len != 13) refuse(key, path, "is corrupt (it does not start with an IHDR chunk)");
-      const uint32_t w = be32(&b[at + 8]), h = be32(&b[at + 12]);
+      const uint32_t w = be32(data), h = be32(data + 4);
       if (w < 1 || h < 1 || w > uint32_t(kMaxRayTextureSide) || h > uint32_t(kMaxRayTextureSide))
         refuse(key, path, std::to_string(w) + "x" + std::to_string(h) + " is the wrong size: each side must be 1.." +
                               std::to_string(kMaxRayTextureSide));
-      first = false;
+      const int depth = data[8], colour = data[9];
+      const int samples = colour == 0 ? 1 : colour == 2 ? 3 : colour == 3 ? 1 : colour == 4 ? 2 : colour == 6 ? 4 : 0;
+      const bool depth_ok = depth == 1 || depth == 2 || depth == 4 || depth == 8 || depth == 16;
+      if (!samples || !depth_ok || data[10] != 0 || data[11] != 0 || data[12] > 1)
+        refuse(key, path, "is corrupt (IHDR names no PNG image kind)");
+      rows = png_rows(w, h, depth * samples, data[12] == 1);
+    } else if (type == "IDAT") {
+      idat.insert(idat.end(), data, data + len);
+    } else if (type == "IEND") {
+      break;
     }
     at += 12 + size_t(len);
-    if (type == "IEND") return;
   }
+  // Inflate the image data: exactly the promised rows, no more, each starting with filter 0..4.
+  std::vector<unsigned char> raw(rows.total + 1);
+  z_stream z{};
+  if (inflateInit(&z) != Z_OK) refuse(key, path, "cannot inflate");
+  z.next_in = idat.data();
+  z.avail_in = uInt(idat.size());
+  z.next_out = raw.data();
+  z.avail_out = uInt(raw.size());
+  const int rc = inflate(&z, Z_FINISH);
+  const size_t got = raw.size() - z.avail_out;
+  inflateEnd(&z);
+  if (rc != Z_STREAM_END || got != rows.total)
+    refuse(key, path, "is corrupt (its image data does not inflate to the " + std::to_string(rows.total) +
+                          " bytes its header promises)");
+  size_t row = 0;
+  for (size_t len : rows.row_bytes) {
+    if (raw[row] > 4) refuse(key, path, "is corrupt (a row has filter type " + std::to_string(raw[row]) + ")");
+    row += len;
+  }
+  return b;
 }
 
 template <class T>
@@ -76,11 +135,16 @@ std::vector<float> channels_of(const std::vector<T>& px, size_t n, int stride, d
 }  // namespace
 
 std::shared_ptr<const RayTextureImage> read_ray_texture_png(const std::filesystem::path& path, const std::string& key) {
-  check_png_structure(key, path);
+  const std::vector<unsigned char> bytes = checked_png_bytes(key, path);
   // Alpha is ignored, so it must not be multiplied into R, G, B (OIIO's default for PNG).
   ImageSpec config;
   config.attribute("oiio:UnassociatedAlpha", 1);
-  auto in = ImageInput::open(path.string(), &config);
+  // The checked bytes, as PNG. OIIO 2.4's PNG reader takes an IOProxy only through this
+  // attribute (the open() argument gives "could not open file").
+  Filesystem::IOMemReader memory(bytes.data(), bytes.size());
+  void* proxy = &memory;
+  config.attribute("oiio:ioproxy", TypeDesc::PTR, &proxy);
+  auto in = ImageInput::open("ray_texture.png", &config);
   if (!in) refuse(key, path, "cannot read as an image: " + OIIO::geterror());
   const ImageSpec& spec = in->spec();
   if (std::string(in->format_name()) != "png") refuse(key, path, std::string("is ") + in->format_name() + ", not PNG");
@@ -141,6 +205,7 @@ std::shared_ptr<const RayTextureSpec> load_ray_texture_png(const std::shared_ptr
   loaded->image = read_ray_texture_png(path);
   loaded->width = loaded->image->width;
   loaded->height = loaded->image->height;
+  count_work(*loaded);  // the strokes' cost at the PNG's size
   return loaded;
 }
 

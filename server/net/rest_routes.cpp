@@ -161,6 +161,9 @@ void render_still(AppContext& app, const Request& req, std::function<void(Respon
     } catch (const SceneError& e) {
       count(app, "render", http::status::bad_request);
       return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
+    } catch (const std::exception& e) {  // nothing escapes a loader-pool handler
+      count(app, "render", http::status::internal_server_error);
+      return send(error_response(req, http::status::internal_server_error, "internal", e.what()));
     }
     std::shared_ptr<VolumeEntry> vol;
     try {
@@ -168,6 +171,9 @@ void render_still(AppContext& app, const Request& req, std::function<void(Respon
     } catch (const VolumeError& e) {
       count(app, "render", http::status::not_found);
       return send(error_response(req, http::status::not_found, "volume_error", e.what()));
+    } catch (const std::exception& e) {  // e.g. out of memory: an answer, never std::terminate
+      count(app, "render", http::status::internal_server_error);
+      return send(error_response(req, http::status::internal_server_error, "internal", e.what()));
     }
     submit_still(app, req, scene, std::move(vol), send, cancelled);
   });

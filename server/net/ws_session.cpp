@@ -1,5 +1,7 @@
 #include "net/ws_session.h"
 
+#include "core/ray_texture_png.h"
+
 #include "net/connection_slot.h"
 #include "render/variant.h"
 #include "session/protocol.h"
@@ -84,7 +86,7 @@ void WsSession::on_message() {
     buffer_.consume(buffer_.size());
     guarded([&] { handle(text); });
   }
-  if (!closing_) read_when_allowed();
+  if (!closing_ && !paused_) read_when_allowed();
 }
 
 // A token bucket: kMessageBurst messages at once, kMaxMessagesPerSecond sustained. Past it the
@@ -172,9 +174,12 @@ void WsSession::handle(const std::string& text) {
     if (vid.empty()) throw ProtocolError("volume_error", "no volume given and the server has none loaded");
     if (starting_) throw ProtocolError("bad_message", "hello: already starting");
     starting_ = true;
-    with_volume(vid, [this, hello = *hello](std::shared_ptr<VolumeEntry> volume) {
-      starting_ = false;
-      start_session(hello, std::move(volume));
+    const nlohmann::json render = hello->state.render ? *hello->state.render : nlohmann::json();
+    with_png(render, [this, hello = *hello, vid](std::optional<std::shared_ptr<const RayTextureSpec>> texture) {
+      with_volume(vid, [this, hello, texture](std::shared_ptr<VolumeEntry> volume) {
+        starting_ = false;
+        start_session(hello, std::move(volume), texture);
+      });
     });
     return;
   }
@@ -184,7 +189,12 @@ void WsSession::handle(const std::string& text) {
         using T = std::decay_t<decltype(m)>;
         if constexpr (std::is_same_v<T, CameraMsg>) session_->set_camera(m.camera);
         if constexpr (std::is_same_v<T, TfMsg>) session_->set_tf(m.tf, m.opacity_unit, m.version);
-        if constexpr (std::is_same_v<T, RenderMsg>) session_->merge_render(m.render);
+        if constexpr (std::is_same_v<T, RenderMsg>) {
+          with_png(m.render, [this, render = m.render](std::optional<std::shared_ptr<const RayTextureSpec>> texture) {
+            session_->merge_render(render, texture);
+            app_.render.notify();
+          });
+        }
         if constexpr (std::is_same_v<T, QualityMsg>) session_->set_quality(m);
         if constexpr (std::is_same_v<T, ViewportMsg>) session_->set_viewport(m.viewport);
         if constexpr (std::is_same_v<T, AckMsg>) session_->ack(m.frame);
@@ -201,10 +211,39 @@ void WsSession::handle(const std::string& text) {
   app_.render.notify();
 }
 
-void WsSession::start_session(const protocol::Hello& hello, std::shared_ptr<VolumeEntry> volume) {
+void WsSession::with_png(const nlohmann::json& render, TextureThen then) {
+  const bool png = render.is_object() && render.contains("ray_texture") && render["ray_texture"].is_object() &&
+                   render["ray_texture"].contains("png");
+  if (!png) return then(std::nullopt);
+  paused_ = true;
+  asio::post(app_.loader, [self = shared_from_this(), j = render["ray_texture"], then = std::move(then)] {
+    std::shared_ptr<const RayTextureSpec> texture;
+    std::string error;
+    try {
+      texture = load_ray_texture_png(std::make_shared<const RayTextureSpec>(parse_ray_texture(j)),
+                                     self->app_.png_locator());
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    asio::post(self->ws_.get_executor(), [self, texture, error, then] {
+      self->paused_ = false;
+      if (self->closing_) return;
+      if (!error.empty()) {
+        self->starting_ = false;  // a hello whose PNG failed may be sent again
+        self->send_error("bad_message", error);
+      } else {
+        self->guarded([&] { then(texture); });
+      }
+      if (!self->closing_) self->read_when_allowed();
+    });
+  });
+}
+
+void WsSession::start_session(const protocol::Hello& hello, std::shared_ptr<VolumeEntry> volume,
+                              std::optional<std::shared_ptr<const RayTextureSpec>> texture) {
   auto session = std::make_shared<Session>("s" + std::to_string(app_.next_session++), weak_from_this(),
                                            app_.png_locator());
-  session->start(volume, hello.viewport, hello.state);
+  session->start(volume, hello.viewport, hello.state, texture);
   session_ = session;
   nlohmann::json vols = nlohmann::json::array();
   for (const auto& v : app_.volumes.list()) vols.push_back(v->info(false));

@@ -43,7 +43,13 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   void guarded(const std::function<void()>& fn);
   // Calls then(entry) on the strand once the volume is loaded (on the loader pool when needed).
   void with_volume(const std::string& id, std::function<void(std::shared_ptr<VolumeEntry>)> then);
-  void start_session(const protocol::Hello& hello, std::shared_ptr<VolumeEntry> volume);
+  // A render patch's ray-texture PNG is read on the loader pool, never on an io thread; no
+  // further message is read until then(texture) has run, so a stroke sent after it applies to
+  // it. then(nullopt) at once when the patch names no PNG (the session parses it inline).
+  using TextureThen = std::function<void(std::optional<std::shared_ptr<const RayTextureSpec>>)>;
+  void with_png(const nlohmann::json& render, TextureThen then);
+  void start_session(const protocol::Hello& hello, std::shared_ptr<VolumeEntry> volume,
+                     std::optional<std::shared_ptr<const RayTextureSpec>> texture);
   void handle(const std::string& text);
   void send_error(const std::string& code, const std::string& message);
   void queue_text(std::string text);  // on the strand: in order with what this handler does next
@@ -64,6 +70,7 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   std::string close_reason_;
   std::shared_ptr<Session> session_;
   bool starting_ = false;  // hello accepted, volume loading
+  bool paused_ = false;    // a PNG is being read: the next message waits
   std::deque<Outgoing> queue_;
   asio::steady_timer idle_, pace_, write_timer_;
   std::shared_ptr<ConnectionSlot> slot_;

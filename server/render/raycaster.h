@@ -118,6 +118,7 @@ class Raycaster {
     gpu::Texture texture;
   };
   static constexpr size_t kRayTextureEntries = 8;  // sessions painting at once, before rebuilds
+  static constexpr size_t kRayTextureCacheBytes = size_t(192) << 20;  // host texels held (as much again on the GPU)
   std::vector<RayTextureEntry> ray_texture_cache_;
   // Binds the scene's ray texture: a new lineage is built and uploaded whole; new strokes of
   // a held one are applied and only the texels they touched are uploaded (Raspe §3.2).

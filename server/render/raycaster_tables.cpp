@@ -38,7 +38,10 @@ void Raycaster::bind_ray_texture(const ResolvedScene& s, RenderStats* stats) {
   const RayTextureSpec& spec = *s.ray_texture;
   const std::string key = std::to_string(spec.lineage) + " termination " + std::to_string(s.scene.render.early_termination);
   RayTextureEntry* e = cache_find(ray_texture_cache_, key);
-  if (e && e->strokes > spec.strokes.size()) e = nullptr;  // not a continuation: rebuild (never with one lineage)
+  if (e && e->strokes > spec.strokes.size()) {  // an older spec of the lineage: rebuilt, the newer one dropped
+    ray_texture_cache_.erase(ray_texture_cache_.begin());
+    e = nullptr;
+  }
   TexelRect dirty;
   size_t applied = 0;
   if (!e) {
@@ -53,6 +56,14 @@ void Raycaster::bind_ray_texture(const ResolvedScene& s, RenderStats* stats) {
     applied = spec.strokes.size();
     e = &cache_insert(ray_texture_cache_, RayTextureEntry{key, spec.strokes.size(), std::move(rt), std::move(tex)},
                       kRayTextureEntries);
+    // Each entry holds its texels twice (host and GPU, 12 bytes a texel): a few 2048^2
+    // textures, not eight, before the least recently used go.
+    size_t bytes = 0;
+    for (const auto& c : ray_texture_cache_) bytes += c.texels.texels().size() * sizeof(float);
+    while (bytes > kRayTextureCacheBytes && ray_texture_cache_.size() > 1) {
+      bytes -= ray_texture_cache_.back().texels.texels().size() * sizeof(float);
+      ray_texture_cache_.pop_back();
+    }
   } else {
     for (size_t i = e->strokes; i < spec.strokes.size(); ++i) dirty.merge(e->texels.apply(spec.strokes[i]));
     applied = spec.strokes.size() - e->strokes;

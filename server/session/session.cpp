@@ -10,11 +10,13 @@ namespace peakcast {
 Session::Session(std::string id, std::weak_ptr<FrameSink> sink, PngLocator locate_png)
     : id_(std::move(id)), sink_(std::move(sink)), locate_png_(std::move(locate_png)) {}
 
-std::optional<std::shared_ptr<const RayTextureSpec>> Session::take_ray_texture(nlohmann::json& patch) const {
+std::optional<std::shared_ptr<const RayTextureSpec>> Session::take_ray_texture(
+    nlohmann::json& patch, const std::optional<std::shared_ptr<const RayTextureSpec>>& loaded) const {
   if (!patch.is_object() || !patch.contains("ray_texture")) return std::nullopt;
   const nlohmann::json j = patch["ray_texture"];
   patch.erase("ray_texture");
   if (j.is_null()) return std::shared_ptr<const RayTextureSpec>();
+  if (loaded) return loaded;
   try {
     return load_ray_texture_png(std::make_shared<const RayTextureSpec>(parse_ray_texture(j)), locate_png_);
   } catch (const SceneError& e) {
@@ -38,7 +40,7 @@ ResolvedScene Session::resolve() const {
 }
 
 void Session::start(std::shared_ptr<VolumeEntry> volume, const protocol::Viewport& vp,
-                    const protocol::StatePatch& state) {
+                    const protocol::StatePatch& state, std::optional<std::shared_ptr<const RayTextureSpec>> texture) {
   std::lock_guard lock(m_);
   volume_ = std::move(volume);
   viewport_ = vp;
@@ -46,7 +48,7 @@ void Session::start(std::shared_ptr<VolumeEntry> volume, const protocol::Viewpor
   scene_.volume = volume_->id;
   if (state.render) {
     render_json_ = *state.render;
-    if (auto rt = take_ray_texture(render_json_)) ray_texture_ = *rt;
+    if (auto rt = take_ray_texture(render_json_, texture)) ray_texture_ = *rt;
   }
   if (state.background) scene_.background = *state.background;
   // Defaults resolved now, so the client knows the camera and TF it starts from.
@@ -93,9 +95,9 @@ void Session::set_tf(const TransferFunction& tf, double opacity_unit, uint32_t v
   touch();
 }
 
-void Session::merge_render(const nlohmann::json& patch) {
+void Session::merge_render(const nlohmann::json& patch, std::optional<std::shared_ptr<const RayTextureSpec>> loaded) {
   nlohmann::json rest = patch;
-  const auto texture = take_ray_texture(rest);  // a PNG is read before the lock is taken
+  const auto texture = take_ray_texture(rest, loaded);  // parsed (a PNG read) before the lock is taken
   std::lock_guard lock(m_);
   nlohmann::json merged = render_json_;
   merged.merge_patch(rest);

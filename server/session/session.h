@@ -59,11 +59,17 @@ class Session {
   std::shared_ptr<FrameSink> sink() const { return sink_.lock(); }
 
   // Connection side. Each throws protocol::ProtocolError for a state the volume refuses.
-  void start(std::shared_ptr<VolumeEntry> volume, const protocol::Viewport& vp, const protocol::StatePatch& state);
+  // `texture`: the state's render.ray_texture already parsed with its PNG read (the connection
+  // reads PNGs on the loader pool); without it the session parses the state's own.
+  void start(std::shared_ptr<VolumeEntry> volume, const protocol::Viewport& vp, const protocol::StatePatch& state,
+             std::optional<std::shared_ptr<const RayTextureSpec>> texture = std::nullopt);
   void set_volume(std::shared_ptr<VolumeEntry> volume);  // resets camera and TF to the volume's defaults
   void set_camera(const Camera& c);
   void set_tf(const TransferFunction& tf, double opacity_unit, uint32_t version);
-  void merge_render(const nlohmann::json& patch);  // ray_texture in it replaces the texture (null: none)
+  // ray_texture in the patch replaces the texture (null: none); `texture`, when given, is that
+  // texture already parsed with its PNG read.
+  void merge_render(const nlohmann::json& patch,
+                    std::optional<std::shared_ptr<const RayTextureSpec>> texture = std::nullopt);
   // One painted stroke appended to the ray texture (a new spec of the same lineage, so the
   // renderer applies just this stroke). Returns the texture's stroke count. Throws
   // ProtocolError when the session has no ray texture or it is full.
@@ -84,7 +90,8 @@ class Session {
   void touch();  // a state change arrived (lock held)
   // Takes render.ray_texture out of a render patch: the new texture (its PNG read), or null
   // for none; nullopt when the patch does not name it. Throws ProtocolError.
-  std::optional<std::shared_ptr<const RayTextureSpec>> take_ray_texture(nlohmann::json& patch) const;
+  std::optional<std::shared_ptr<const RayTextureSpec>> take_ray_texture(
+      nlohmann::json& patch, const std::optional<std::shared_ptr<const RayTextureSpec>>& loaded) const;
   ResolvedScene resolve() const;  // lock held
   std::string id_;
   std::weak_ptr<FrameSink> sink_;

@@ -66,6 +66,9 @@ async def test_a_stroke_is_acknowledged_and_changes_only_its_disk():
     print(f"  pixels changed: {inside} inside the disk, {outside} outside it")
     assert inside > 300 and outside == 0, (inside, outside)
     # The frame's stats: one stroke applied, only its dirty rectangle uploaded (not the 64x64 texture).
+    # A frame's stats follow the frame: wait for those of the final one.
+    while not any(t["type"] == "stats" and t["frame"] == after["id"] for t in c.texts):
+        await c.recv()
     stats = [t for t in c.texts if t["type"] == "stats" and "+raytex:view" in t["variant"]]
     applied = [s for s in stats if s["ray_texture_strokes"] == 1]
     assert applied, stats[-3:]
@@ -173,8 +176,8 @@ def test_png_ray_textures_are_refused_outside_the_data_directories_or_malformed(
         write_png(pathlib.Path(outside) / "ok.png", (8, 8), (128, 254, 128))
         os.symlink(pathlib.Path(outside) / "ok.png", PNG_DIR / "link.png")
         try:
-            cases = [(f"{outside}/ok.png", "outside"), ("../../etc/passwd", "render.ray_texture.png"),
-                     ("link.png", "render.ray_texture.png"), ("missing.png", "render.ray_texture.png"),
+            cases = [(f"{outside}/ok.png", "outside"), ("../../etc/passwd", "outside"),
+                     ("link.png", "data directories"), ("missing.png", "no such file"),
                      ("wide.png", "wrong size"), ("grey.png", "channel"), ("text.png", "not PNG"),
                      ("photo.jpg", "not PNG")]
             for png, words in cases:

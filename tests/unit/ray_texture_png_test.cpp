@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <OpenImageIO/imageio.h>
+#include <zlib.h>
 
 #include <cmath>
 #include <filesystem>
@@ -132,6 +133,22 @@ TEST(ray_texture_png, FilesThatAreNotAThreeChannelPngOfAllowedSizeAreRefused) {
   bytes[idat + 6] ^= 0x5a;
   std::ofstream(d.path / "flipped.png", std::ios::binary) << bytes;
   expect_refused(d.path / "flipped.png", "CRC");
+  // Image data that inflates to the wrong length, with every CRC right: refused before decoding.
+  {
+    std::string wrong = bytes;
+    const uint32_t len = uint32_t((unsigned char)wrong[idat - 4]) << 24 | uint32_t((unsigned char)wrong[idat - 3]) << 16 |
+                         uint32_t((unsigned char)wrong[idat - 2]) << 8 | (unsigned char)wrong[idat - 1];
+    const std::string other("\x78\x9c\x63\x00\x00\x00\x01\x00\x01", 9);  // zlib of one zero byte
+    std::string chunk = "IDAT" + other;
+    const uint32_t crc = uint32_t(crc32(0, reinterpret_cast<const Bytef*>(chunk.data()), uInt(chunk.size())));
+    std::string rebuilt = wrong.substr(0, idat - 4);
+    for (int k = 3; k >= 0; --k) rebuilt += char((other.size() >> (8 * k)) & 0xff);
+    rebuilt += chunk;
+    for (int k = 3; k >= 0; --k) rebuilt += char((crc >> (8 * k)) & 0xff);
+    rebuilt += wrong.substr(idat + 4 + len + 4);
+    std::ofstream(d.path / "short.png", std::ios::binary) << rebuilt;
+    expect_refused(d.path / "short.png", "does not inflate");
+  }
   // Cut inside the image data (the case that made OpenImageIO's reader leak under libpng's longjmp).
   std::ofstream(d.path / "half.png", std::ios::binary) << bytes.substr(0, idat + 10);
   expect_refused(d.path / "half.png", "truncated");
@@ -148,8 +165,17 @@ TEST(ray_texture_png, TheLocatorRefusesPathsOutsideTheRoots) {
   const PngLocator in_roots = [&](const std::string& p) { return resolve_in_roots(p, roots); };
   for (const std::string& p : {std::string("../outside.png"), (d.path / "outside.png").string(), std::string("link.png")}) {
     auto spec = std::make_shared<const RayTextureSpec>(parse_ray_texture({{"mapping", "view"}, {"png", p}}));
-    EXPECT_ANY_THROW(load_ray_texture_png(spec, in_roots)) << p;
+    try {
+      load_ray_texture_png(spec, in_roots);
+      ADD_FAILURE() << "read " << p << " from outside the data directory";
+    } catch (const SceneError& e) {
+      EXPECT_NE(std::string(e.what()).find("outside"), std::string::npos) << e.what();
+    }
   }
+  // The same file inside the root is read.
+  fs::copy_file(d.path / "outside.png", d.path / "data" / "inside.png");
+  auto inside = std::make_shared<const RayTextureSpec>(parse_ray_texture({{"mapping", "view"}, {"png", "inside.png"}}));
+  EXPECT_EQ(load_ray_texture_png(inside, in_roots)->width, 2);
   auto spec = std::make_shared<const RayTextureSpec>(parse_ray_texture({{"mapping", "view"}, {"png", "x.png"}}));
   try {
     load_ray_texture_png(spec, {});

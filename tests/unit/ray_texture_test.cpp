@@ -181,5 +181,24 @@ TEST(ray_texture, PaintedStrokesKeepTheLineage) {
   }
 }
 
+// What the strokes may cost the render thread is bounded: the sum of their bounding boxes.
+TEST(ray_texture, StrokeWorkIsBounded) {
+  const json big = stroke("step", 0.5, 0.5, 1.0, 2.0);  // covers a 2048^2 texture: 4.2M texels
+  json spec = {{"mapping", "view"}, {"size", {2048, 2048}}, {"strokes", json::array()}};
+  for (int i = 0; i < 64; ++i) spec["strokes"].push_back(big);
+  const RayTextureSpec ok = parse_ray_texture(spec);  // 64 x 4.2M = 2^28: the limit itself
+  EXPECT_EQ(ok.work, kMaxRayTextureWork);
+  try {
+    with_stroke(ok, parse_stroke(stroke("step", 0.5, 0.5, 0.01, 2.0), "s"));
+    ADD_FAILURE() << "a stroke past the work limit was taken";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("texels in all"), std::string::npos) << e.what();
+  }
+  spec["strokes"].push_back(big);
+  expect_refused(spec, "render.ray_texture.strokes");
+  // A small stroke on a small texture costs its disk's box only.
+  EXPECT_LE(stroke_texels(parse_stroke(stroke("step", 0.5, 0.5, 0.05, 2.0), "s"), 256, 256), 28u * 28u);
+}
+
 }  // namespace
 }  // namespace peakcast
