@@ -204,7 +204,21 @@ def test_png_ray_textures_are_refused_outside_the_data_directories_or_malformed(
                 assert f["render_version"] >= 3
                 await c.close()
 
+            async def in_hello():
+                # A hello whose state names a PNG outside the data directories: refused, and the
+                # connection may say hello again.
+                c = await Client.connect(SERVER)
+                bad = {"ray_texture": {"mapping": "view", "png": f"{outside}/ok.png"}}
+                await c.send({"type": "hello", "viewport": {"width": SIZE, "height": SIZE}, "state": {"render": bad}})
+                e = await c.next_text("error")
+                assert e["code"] == "bad_message" and "outside" in e["message"], e
+                w = await c.hello(SIZE, SIZE, state={"render": {"ray_texture": {"mapping": "view", "png": "mid.png"}}})
+                assert w["state"]["render"]["ray_texture"]["png"] == "mid.png", w["state"]["render"]
+                await c.next_frame(final=True)
+                await c.close()
+
             asyncio.run(over_ws())
+            asyncio.run(in_hello())
         finally:
             (PNG_DIR / "link.png").unlink()
 

@@ -153,6 +153,10 @@ TEST(ray_texture_png, FilesThatAreNotAThreeChannelPngOfAllowedSizeAreRefused) {
   std::ofstream(d.path / "half.png", std::ios::binary) << bytes.substr(0, idat + 10);
   expect_refused(d.path / "half.png", "truncated");
   expect_refused(d.path / "missing.png", "missing.png");
+  // Over 64 MiB: refused from its size, before a byte is read (a sparse file costs no disk).
+  std::ofstream(d.path / "huge.png", std::ios::binary) << std::string("\x89PNG\r\n\x1a\n", 8);
+  fs::resize_file(d.path / "huge.png", (64ull << 20) + 1);
+  expect_refused(d.path / "huge.png", "at most 64 MiB");
 }
 
 // The server's locator: only inside the data directories, as for volumes.
