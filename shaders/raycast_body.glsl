@@ -9,7 +9,8 @@
 #include "sampling.glsl"
 
 #ifdef SPACE_SKIPPING
-layout(binding = UNIT_OCCUPANCY) uniform usampler3D u_occupancy;  // 1 = some voxel of the cell is visible
+// Per macrocell, the Chebyshev distance in cells to the nearest occupied one (0: occupied).
+layout(binding = UNIT_OCCUPANCY) uniform usampler3D u_occupancy;
 #endif
 
 struct RayResult {
@@ -271,31 +272,44 @@ RayResult cast_ray(vec2 pixel) {
   ivec3 grid = ivec3(u_cells.xyz);
   ivec3 cell = clamp(ivec3(floor(x0 / edge)), ivec3(0), grid - 1);
   ivec3 stp = ivec3(sign(dv));
-  vec3 t_max, t_delta;
-  for (int a = 0; a < 3; ++a) {
-    if (abs(dv[a]) < 1e-20) {  // axis-parallel: never crosses a face on this axis
-      t_max[a] = 3.0e38;
-      t_delta[a] = 3.0e38;
-    } else {
-      float face = (float(cell[a]) + (dv[a] > 0.0 ? 1.0 : 0.0)) * edge;
-      t_max[a] = span.x + (face - x0[a]) / dv[a];
-      t_delta[a] = edge / abs(dv[a]);
-    }
-  }
+  // Per axis: 1 / dv (0 where the ray is parallel to the axis: it never crosses a face there),
+  // and the offset of the face a ray leaving a cell crosses (1 going up, 0 going down).
+  bvec3 moves = greaterThanEqual(abs(dv), vec3(1e-20));
+  vec3 inv_dv = mix(vec3(0.0), 1.0 / mix(vec3(1.0), dv, moves), moves);
+  vec3 ahead = vec3(greaterThan(dv, vec3(0.0)));
+  vec3 t_delta = mix(vec3(3.0e38), edge * abs(inv_dv), moves);
+  vec3 t_max = mix(vec3(3.0e38), span.x + ((vec3(cell) + ahead) * edge - x0) * inv_dv, moves);
   float t_in = span.x;
   int next = 0;  // first lattice index not yet visited
   for (int guard = 0; guard < 4 * (grid.x + grid.y + grid.z) + 4; ++guard) {
+    ivec3 c = clamp(cell, ivec3(0), grid - 1);
+#ifdef SPACE_SKIPPING
+    uint empty_distance = texelFetch(u_occupancy, c, 0).r;
+    if (empty_distance > 1u && cell == c) {
+      // Every cell within empty_distance - 1 of this one is empty: leap to where the ray leaves
+      // that cube (no lattice point inside it is visited) and go on from the cell beyond.
+      int reach = int(empty_distance) - 1;
+      vec3 t_face = mix(vec3(3.0e38), span.x + ((vec3(cell + stp * reach) + ahead) * edge - x0) * inv_dv, moves);
+      float t_leave = min(min(t_face.x, t_face.y), t_face.z);
+      if (t_leave >= span.y) break;
+      vec3 x = x0 + (t_leave - span.x) * dv;
+      ivec3 beyond = clamp(ivec3(floor(x / edge)), cell - reach, cell + reach);
+      bvec3 crossed = lessThanEqual(t_face, vec3(t_leave));
+      cell = ivec3(mix(vec3(beyond), vec3(cell + stp * (reach + 1)), crossed));
+      if (any(lessThan(cell, ivec3(0))) || any(greaterThanEqual(cell, grid))) break;
+      t_max = mix(vec3(3.0e38), span.x + ((vec3(cell) + ahead) * edge - x0) * inv_dv, moves);
+      t_in = t_leave;
+      continue;
+    }
+    bool occupied = empty_distance == 0u;
+#else
+    bool occupied = true;
+#endif
     float t_out = min(min(t_max.x, t_max.y), t_max.z);
     bool final_cell = t_out >= span.y || any(lessThan(cell, ivec3(0))) || any(greaterThanEqual(cell, grid));
     // Lattice points with t in [t_in, t_out); all remaining ones in the last cell.
     int first = int(ceil(lattice_index(L, t_in)));
     int end = final_cell ? last : min(last, int(ceil(lattice_index(L, t_out))) - 1);
-    ivec3 c = clamp(cell, ivec3(0), grid - 1);
-#ifdef SPACE_SKIPPING
-    bool occupied = texelFetch(u_occupancy, c, 0).r != 0u;
-#else
-    bool occupied = true;
-#endif
 #ifdef ADAPTIVE
     int m = int(texelFetch(u_stride, c, 0).r);
 #else

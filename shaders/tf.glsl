@@ -1,5 +1,6 @@
 // Transfer-function lookup (8192-entry table over the volume's value range, sampled at texel
-// centres) and the opacity correction for the step actually taken (DESIGN §4a).
+// centres, opacities baked for the scene's uniform step by the host) and the opacity correction
+// for the step actually taken (DESIGN §4a).
 layout(binding = UNIT_TF) uniform sampler1D u_tf;
 
 vec4 tf_lookup(float s) {
@@ -7,12 +8,15 @@ vec4 tf_lookup(float s) {
   return texture(u_tf, (0.5 + clamp(s, 0.0, 1.0) * (size - 1.0)) / size);
 }
 
+// `a` from the table is the opacity of the uniform step (u_box_half.w): a sample standing for
+// that step uses it as is (no pow), any other step (differential, adaptive, virtual samples,
+// ray textures) corrects from it: 1 - (1 - a)^(dt / step).
 float correct_opacity(float a, float dt) {
-  return 1.0 - pow(max(1.0 - a, 0.0), dt / u_spacing.w);
+  return dt == u_box_half.w ? a : 1.0 - pow(max(1.0 - a, 0.0), dt / u_box_half.w);
 }
 
-// The same correction from a reference length other than the opacity unit (preintegrated
-// segments of the table's step, used for a segment of length dt).
+// The correction from a reference length other than the table's step (preintegrated segments
+// of the table's step, used for a segment of length dt).
 float correct_opacity_for(float a, float dt, float reference) {
   return 1.0 - pow(max(1.0 - a, 0.0), dt / reference);
 }

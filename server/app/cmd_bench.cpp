@@ -136,6 +136,7 @@ void add_bench_commands(CLI::App& app, Runner& run) {
   add_bench_frame_commands(*bench, run);
   add_bench_raytex_command(*bench, run);
   add_bench_quality_command(*bench, run);
+  add_bench_scene_command(*bench, run);
 
   auto pa = std::make_shared<PeaksArgs>();
   auto* pk = bench->add_subcommand("peaks", "Knoll Table 1 / Fig. 3: peak finding vs postclassification vs preintegration");

@@ -19,6 +19,7 @@ void add_bench_sampling_command(CLI::App& bench, Runner& run);  // bench samplin
 void add_bench_frame_commands(CLI::App& bench, Runner& run);  // bench readback, bench volume-switch
 void add_bench_raytex_command(CLI::App& bench, Runner& run);  // bench raytex
 void add_bench_quality_command(CLI::App& bench, Runner& run);  // bench quality
+void add_bench_scene_command(CLI::App& bench, Runner& run);  // bench scene
 
 // Exit codes: 0 ok, 1 failure of the job (GL, EGL, shader, I/O while writing), 2 bad input
 // (file, scene, arguments).

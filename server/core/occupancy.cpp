@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
+#include <stdexcept>
 
 namespace peakcast {
 
@@ -37,8 +39,48 @@ Occupancy classify_cells(const MacrocellGrid& grid, const TransferFunction& tf, 
     out.occupied[c] = visible ? 1 : 0;
     out.empty_cells += out.occupied[c] ? 0 : 1;
   }
+  out.distance = empty_space_distance(grid.grid, out.occupied);
   out.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return out;
+}
+
+std::vector<uint8_t> empty_space_distance(const Dims& grid, const std::vector<uint8_t>& occupied) {
+  // d(x) = min over occupied y of max_a |x_a - y_a|, computed one axis at a time: after the pass
+  // along axis a, g(x) = min over y with the same later coordinates of max(|x_0 - y_0|, ...,
+  // |x_a - y_a|). A pass combines with max(|offset|, previous), exact for L-infinity.
+  const int64_t nx = grid[0], ny = grid[1], nz = grid[2];
+  const size_t count = size_t(nx * ny * nz);
+  if (occupied.size() != count) throw std::invalid_argument("empty_space_distance: grid and cells differ");
+  constexpr int kFar = 1 << 20;
+  std::vector<int> d(count);
+  for (size_t i = 0; i < count; ++i) d[i] = occupied[i] ? 0 : kFar;
+  const int64_t stride[3] = {1, nx, nx * ny};
+  const int64_t n[3] = {nx, ny, nz};
+  std::vector<int> line, out;
+  for (int axis = 0; axis < 3; ++axis) {
+    const int64_t len = n[axis], st = stride[axis];
+    line.resize(size_t(len));
+    out.resize(size_t(len));
+    for (size_t start = 0; start < count; ++start) {
+      // Visit each line once, from its first cell (coordinate 0 on this axis).
+      if ((int64_t(start) / st) % len != 0) continue;
+      for (int64_t k = 0; k < len; ++k) line[size_t(k)] = d[start + size_t(k * st)];
+      if (*std::min_element(line.begin(), line.end()) == kFar) continue;  // nothing near: stays far
+      for (int64_t k = 0; k < len; ++k) {
+        // Outward from k: a cell r away gives at least r, so the search ends once r >= best.
+        int best = line[size_t(k)];
+        for (int64_t r = 1; r < best && (k - r >= 0 || k + r < len); ++r) {
+          if (k - r >= 0) best = std::min(best, std::max(int(r), line[size_t(k - r)]));
+          if (k + r < len) best = std::min(best, std::max(int(r), line[size_t(k + r)]));
+        }
+        out[size_t(k)] = best;
+      }
+      for (int64_t k = 0; k < len; ++k) d[start + size_t(k * st)] = out[size_t(k)];
+    }
+  }
+  std::vector<uint8_t> bytes(count);
+  for (size_t i = 0; i < count; ++i) bytes[i] = uint8_t(std::min(d[i], kMaxEmptyDistance));
+  return bytes;
 }
 
 }  // namespace peakcast

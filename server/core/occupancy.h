@@ -13,9 +13,15 @@ namespace peakcast {
 
 struct Occupancy {
   std::vector<uint8_t> occupied;  // per cell, MacrocellGrid order
+  // Per cell, the Chebyshev distance in cells to the nearest occupied cell (0: occupied; cells
+  // beyond the grid count as empty), at most kMaxEmptyDistance. What the GL traversal reads: a
+  // ray in a cell at distance d leaps out of the cube of 2d - 1 cells around it, all empty.
+  std::vector<uint8_t> distance;
   int64_t empty_cells = 0;
   double build_ms = 0.0;
 };
+
+constexpr int kMaxEmptyDistance = 255;
 
 // `lo`, `hi`: the TF table's domain (the volume's value range). The table is sampled with
 // linear filtering, so each cell's range is widened by one table entry on each side.
@@ -27,5 +33,8 @@ constexpr double kCatmullRomOvershoot = 1.0 / 8.0;
 Occupancy classify_cells(const MacrocellGrid& grid, const TransferFunction& tf, double lo, double hi,
                          const std::vector<double>& peak_values = {},
                          int table_size = TransferFunction::kTableSize, double overshoot = 0.0);
+
+// The `distance` field of `occupied` on `grid` (separable: exact Chebyshev distance per axis).
+std::vector<uint8_t> empty_space_distance(const Dims& grid, const std::vector<uint8_t>& occupied);
 
 }  // namespace peakcast

@@ -50,6 +50,9 @@ class Raycaster {
   // range: Lee's 1/8 (kCatmullRomOvershoot). Tests set 0 to show the skipped-cell streaks it
   // prevents (Lee Fig. 14).
   void set_virtual_sample_widening(double fraction) { vs_widening_ = fraction; }
+  // Off: the traversal steps through every empty macrocell one at a time instead of leaping
+  // by the empty-space distance (tests show the leaps skip exactly what the steps skip).
+  void set_empty_space_leaps(bool on) { leaps_ = on; }
   // Changes the variant chosen for every later frame (nullptr: none): how tests and the quality
   // bench put back code the scene's variant leaves out, to show the omission changes no pixel
   // and to time what it saves. Only features whose tables the frame builds anyway may be forced
@@ -75,6 +78,7 @@ class Raycaster {
   VariantKey prepare(const GpuVolume& volume, const ResolvedScene& scene, GpuPath path, RenderStats* stats);
   // Builds and binds the peak table + TF points or the preintegration table the scene needs.
   void upload_tables(const GpuVolume& volume, const ResolvedScene& scene, const std::vector<Peak>& peaks);
+  void bind_tf_table(const GpuVolume& volume, const ResolvedScene& scene, const std::string& tf_sig);
   void bind_multipliers(const GpuVolume& volume, const MacrocellGrid& cells);
   RenderResult draw(const GpuVolume& volume, const ResolvedScene& scene, const VariantKey& key, const PixelRect& rect,
                     bool read_samples, RenderStats* stats);
@@ -125,6 +129,7 @@ class Raycaster {
   void bind_ray_texture(const ResolvedScene& scene, RenderStats* stats);
   RayTables tables_;  // what the current frame's tables hold (for the uniforms and stats)
   size_t table_builds_ = 0;
+  bool leaps_ = true;
   double vs_widening_ = kCatmullRomOvershoot;
   std::function<void(VariantKey&)> force_variant_;
   bool llvmpipe_ = false;

@@ -193,3 +193,36 @@ TEST(Macrocells, DilateRangesJoinsTheNeighbourhood) {
 }
 
 }  // namespace
+
+namespace peakcast {
+namespace {
+
+// The empty-space distance (what the GL traversal leaps by) against its definition: the
+// Chebyshev distance in cells to the nearest occupied cell, on random grids of several shapes
+// and densities, capped at kMaxEmptyDistance; a grid with nothing occupied is far everywhere.
+TEST(Occupancy, EmptySpaceDistanceIsTheChebyshevDistanceToTheNearestOccupiedCell) {
+  std::mt19937 rng(7);
+  for (const Dims& n : {Dims{1, 1, 1}, Dims{7, 5, 3}, Dims{16, 9, 12}, Dims{33, 2, 17}})
+    for (double density : {0.0, 0.002, 0.03, 0.5}) {
+      std::vector<uint8_t> occ(size_t(n[0] * n[1] * n[2]));
+      std::bernoulli_distribution pick(density);
+      for (auto& o : occ) o = pick(rng) ? 1 : 0;
+      const std::vector<uint8_t> d = empty_space_distance(n, occ);
+      ASSERT_EQ(d.size(), occ.size());
+      for (int64_t z = 0; z < n[2]; ++z)
+        for (int64_t y = 0; y < n[1]; ++y)
+          for (int64_t x = 0; x < n[0]; ++x) {
+            int64_t want = kMaxEmptyDistance;
+            for (int64_t c = 0; c < n[2]; ++c)
+              for (int64_t b = 0; b < n[1]; ++b)
+                for (int64_t a = 0; a < n[0]; ++a)
+                  if (occ[size_t(a + n[0] * (b + n[1] * c))])
+                    want = std::min(want, std::max({std::abs(a - x), std::abs(b - y), std::abs(c - z)}));
+            ASSERT_EQ(d[size_t(x + n[0] * (y + n[1] * z))], want) << x << " " << y << " " << z << " density " << density;
+          }
+    }
+  EXPECT_THROW(empty_space_distance({2, 2, 2}, std::vector<uint8_t>(7)), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace peakcast

@@ -1,0 +1,106 @@
+// `bench scene SCENE.json`: frame time of any user scene over an orbit, after warm-up, as a
+// viewer pays it (8-bit frame read back, what the stream encodes), with samples per ray and
+// the variant. --json prints one object for scripts (scripts/bench_peers.py reads it).
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <nlohmann/json.hpp>
+
+#include "app/bench_util.h"
+#include "app/commands.h"
+#include "app/scene_file.h"
+#include "gpu/egl_context.h"
+#include "gpu/shader_cache.h"
+#include "render/raycaster.h"
+
+namespace peakcast::app {
+namespace {
+
+struct SceneBenchArgs {
+  std::string scene, path = "fragment";
+  int frames = 12, warmup = 2;
+  double orbit = 30.0;
+  bool json = false;
+};
+
+// The scene's camera turned by `deg` about its up axis through the centre (an orbit).
+Camera orbit_camera(const Camera& c, double deg) {
+  const glm::dmat4 rot = glm::rotate(glm::dmat4(1.0), glm::radians(deg), glm::normalize(c.up));
+  Camera o = c;
+  o.eye = c.center + glm::dvec3(rot * glm::dvec4(c.eye - c.center, 0.0));
+  return o;
+}
+
+int run_scene_bench(const SceneBenchArgs& a) {
+  const auto t_load = std::chrono::steady_clock::now();
+  LoadedScene ls = load_scene_file(a.scene);
+  const double load_ms = ms_between(t_load, std::chrono::steady_clock::now());
+  auto ctx = gpu::EglContext::create();
+  gpu::ShaderCache shaders(gpu::default_shader_dir());
+  render::GpuVolume gv(ls.volume);
+  render::Raycaster caster(shaders);
+  render::RenderRequest req;
+  req.path = a.path == "compute" ? render::GpuPath::Compute : render::GpuPath::Fragment;
+  req.output = render::RenderOutput::Rgb8;
+  req.sample_stats = true;
+  std::vector<double> frame_ms, render_ms, spr;
+  render::RenderStats st;
+  const int n = std::max(1, a.frames);
+  for (int f = -a.warmup; f < n; ++f) {
+    ResolvedScene s = ls.scene;
+    // Frames spread evenly over the orbit; warm-up frames at the start pose.
+    s.camera = orbit_camera(ls.scene.camera, f < 0 || n == 1 ? 0.0 : a.orbit * f / (n - 1));
+    const auto t0 = std::chrono::steady_clock::now();
+    caster.render(gv, s, req, &st);
+    const double ms = ms_between(t0, std::chrono::steady_clock::now());
+    if (f < 0) continue;
+    frame_ms.push_back(ms);
+    render_ms.push_back(st.render_ms);
+    spr.push_back(st.samples_mean);
+  }
+  const auto [mn, mx] = std::minmax_element(frame_ms.begin(), frame_ms.end());
+  nlohmann::json j = {{"scene", a.scene},
+                      {"width", ls.scene.scene.width},
+                      {"height", ls.scene.scene.height},
+                      {"step", ls.scene.step},
+                      {"frames", n},
+                      {"orbit_deg", a.orbit},
+                      {"frame_ms_median", median(frame_ms)},
+                      {"frame_ms_min", *mn},
+                      {"frame_ms_max", *mx},
+                      {"render_ms_median", median(render_ms)},
+                      {"samples_per_ray", median(spr)},
+                      {"variant", st.variant},
+                      {"load_ms", load_ms},
+                      {"gl_renderer", ctx->info().renderer}};
+  if (a.json) {
+    std::printf("%s\n", j.dump().c_str());
+    return 0;
+  }
+  std::printf("GL: %s\nscene: %s (%dx%d, step %.4g, variant %s)\n", ctx->info().to_string().c_str(), a.scene.c_str(),
+              ls.scene.scene.width, ls.scene.scene.height, ls.scene.step, st.variant.c_str());
+  std::printf("%d frames over a %.0f-degree orbit after %d warm-up: frame ms median %.1f min %.1f max %.1f; "
+              "render ms median %.1f; samples per ray %.1f\n",
+              n, a.orbit, a.warmup, median(frame_ms), *mn, *mx, median(render_ms), median(spr));
+  return 0;
+}
+
+}  // namespace
+
+void add_bench_scene_command(CLI::App& bench, Runner& run) {
+  auto a = std::make_shared<SceneBenchArgs>();
+  auto* c = bench.add_subcommand("scene", "Frame ms (median/min/max) of a scene file over an orbit");
+  c->add_option("scene", a->scene, "scene JSON")->required()->check(CLI::ExistingFile);
+  c->add_option("--frames", a->frames, "timed frames")->check(CLI::Range(1, 100000));
+  c->add_option("--warmup", a->warmup, "untimed frames first (shader compile, uploads)")->check(CLI::Range(0, 1000));
+  c->add_option("--orbit", a->orbit, "degrees turned about the camera's up axis over the timed frames")
+      ->check(CLI::Range(-3600.0, 3600.0));
+  c->add_option("--path", a->path, "fragment | compute")->check(CLI::IsMember({"fragment", "compute"}));
+  c->add_flag("--json", a->json, "print one JSON object");
+  c->callback([a, &run] { run = [a] { return run_scene_bench(*a); }; });
+}
+
+}  // namespace peakcast::app

@@ -1,0 +1,91 @@
+// Empty-space leaps (issue 13): the GL traversal leaps across the cube of empty macrocells the
+// empty-space distance promises instead of stepping through them one by one. A leap must skip
+// exactly the lattice points the steps skip: the same pixels and the same samples per ray, over
+// sparse volumes, oblique, axis-parallel, inside-the-box and orthographic views, and the
+// methods that join samples into segments (peak finding, preintegration).
+#include <cmath>
+
+#include "core/occupancy.h"
+#include "gpu/gpu_fixture.h"
+
+namespace peakcast {
+namespace {
+
+using json = nlohmann::json;
+
+struct LeapCase {
+  const char* name;
+  GeneratorKind kind;
+  Dims dims;
+  json tf;      // over [0, 1] of the value range
+  json camera;  // eye, center, up (+ projection)
+  json render;
+};
+
+void PrintTo(const LeapCase& c, std::ostream* os) { *os << c.name; }
+
+json tf_points(const Volume& v, const json& pts) {
+  json out = json::array();
+  for (const auto& p : pts)
+    out.push_back({v.min_value + p[0].get<double>() * (v.max_value - v.min_value), p[1], p[2], p[3], p[4]});
+  return {{"points", out}};
+}
+
+const json kCore = {{0.0, 0, 0, 0, 0}, {0.72, 0, 0, 0, 0}, {0.8, 1.0, 0.6, 0.2, 0.6}, {1.0, 1, 1, 1, 0.9}};
+const json kPeak = {{0.0, 0, 0, 0, 0}, {0.7 - 1e-4, 0, 0, 0, 0}, {0.7, 1, 0.3, 0.1, 0.9}, {0.7 + 1e-4, 0, 0, 0, 0},
+                    {1.0, 0, 0, 0, 0}};
+
+const LeapCase kCases[] = {
+    {"blobs_oblique", GeneratorKind::Blobs, {128, 128, 128}, kCore,
+     {{"eye", {300, 240, 380}}, {"center", {64, 64, 64}}, {"up", {0, 1, 0}}}, {}},
+    {"blobs_axis_parallel", GeneratorKind::Blobs, {128, 128, 128}, kCore,
+     {{"eye", {63.5, 63.5, 500}}, {"center", {63.5, 63.5, 63.5}}, {"up", {0, 1, 0}}}, {}},
+    {"blobs_eye_inside", GeneratorKind::Blobs, {128, 128, 128}, kCore,
+     {{"eye", {20, 30, 100}}, {"center", {70, 64, 40}}, {"up", {0, 1, 0}}, {"fov_y", 60}}, {}},
+    {"sphere_ortho", GeneratorKind::Sphere, {96, 80, 112}, kCore,
+     {{"eye", {200, 150, 250}}, {"center", {48, 40, 56}}, {"up", {0, 1, 0}}, {"projection", "orthographic"},
+      {"height", 150}}, {}},
+    {"vessels_tricubic", GeneratorKind::Vessels, {96, 96, 96}, kCore,
+     {{"eye", {-150, 200, 260}}, {"center", {48, 48, 48}}, {"up", {0, 1, 0}}}, {{"filter", "tricubic"}}},
+    {"blobs_peaks", GeneratorKind::Blobs, {128, 128, 128}, kPeak,
+     {{"eye", {300, -200, 380}}, {"center", {64, 64, 64}}, {"up", {0, 1, 0}}}, {{"classification", "peaks"}}},
+    {"blobs_preint", GeneratorKind::Blobs, {128, 128, 128}, kCore,
+     {{"eye", {-260, 240, -300}}, {"center", {64, 64, 64}}, {"up", {0, 1, 0}}}, {{"classification", "preint"}}},
+};
+
+class Leaps : public ::testing::TestWithParam<LeapCase> {};
+
+TEST_P(Leaps, SkipExactlyWhatSteppingThroughEmptyCellsSkips) {
+  const LeapCase& c = GetParam();
+  auto v = test::make_volume(c.kind, c.dims, default_type(c.kind));
+  render::GpuVolume gv(v);
+  json j = {{"image", {{"width", 96}, {"height", 96}}}, {"tf", tf_points(*v, c.tf)}, {"camera", c.camera},
+            {"render", c.render}};
+  const ResolvedScene s = test::make_scene(*v, j);
+  // The scene must leave room to leap: some cell at least two cells from anything visible.
+  const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
+  const Occupancy occ = classify_cells(cells, s.tf, gv.tf_lo(), gv.tf_hi());
+  ASSERT_GT(*std::max_element(occ.distance.begin(), occ.distance.end()), 2) << "nothing to leap over";
+  auto& caster = *test::gpu().caster;
+  render::RenderStats st_leap, st_step;
+  const Image leap = test::render_gpu(gv, s, render::GpuPath::Fragment, &st_leap);
+  caster.set_empty_space_leaps(false);
+  const Image step = test::render_gpu(gv, s, render::GpuPath::Fragment, &st_step);
+  caster.set_empty_space_leaps(true);
+  ASSERT_NE(st_leap.variant.find("+skip"), std::string::npos) << st_leap.variant;
+  const auto e = reference::compare(leap, step);
+  std::printf("%-22s %-34s max diff %.2e, samples/ray %.3f (leaps) %.3f (steps), samples differ on %zu rays\n", c.name,
+              st_leap.variant.c_str(), e.max_abs, st_leap.samples_mean, st_step.samples_mean,
+              size_t(std::count_if(leap.samples.begin(), leap.samples.end(),
+                                   [&, i = size_t(0)](float x) mutable { return x != step.samples[i++]; })));
+  EXPECT_GT(st_step.samples_mean, 0.0) << "nothing visible: the test would prove nothing";
+  EXPECT_LE(e.max_abs, 1.0 / 255.0);
+  EXPECT_NEAR(st_leap.samples_mean, st_step.samples_mean, 1e-3 * st_step.samples_mean);
+  if (e.max_abs > 1.0 / 255.0) test::save_artifacts(leap, step, c.name);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, Leaps, ::testing::ValuesIn(kCases),
+                         [](const ::testing::TestParamInfo<LeapCase>& i) { return std::string(i.param.name); });
+
+}  // namespace
+}  // namespace peakcast
