@@ -10,7 +10,7 @@
 
 #ifdef SPACE_SKIPPING
 // Per macrocell, the Chebyshev distance in cells to the nearest occupied one (0: occupied).
-layout(binding = UNIT_OCCUPANCY) uniform usampler3D u_occupancy;
+layout(std430, binding = SSBO_CELL_DISTANCE) readonly buffer CellDistance { uint u_cell_distance[]; };
 #endif
 
 struct RayResult {
@@ -18,7 +18,7 @@ struct RayResult {
   float samples;  // filter evaluations (root-solving steps included); -1: missed the box
 };
 
-vec3 voxel_coords(vec3 p) { return (p + u_box_half.xyz) / u_spacing.xyz; }
+vec3 voxel_coords(vec3 p) { return (p + u_box_half.xyz) * (1.0 / u_spacing.xyz); }
 
 #if defined(PEAKS) || defined(PREINTEGRATION) || defined(VIRTUAL_SAMPLES)
 #define SEGMENTS  // methods that look at the segment between consecutive samples
@@ -29,7 +29,10 @@ vec3 voxel_coords(vec3 p) { return (p + u_box_half.xyz) / u_spacing.xyz; }
 #define VARYING_STEPS  // segments differ from the preintegration table's step
 #endif
 #if defined(SPACE_SKIPPING) || defined(ADAPTIVE)
-#define CELL_TRAVERSAL  // the 3D-DDA over macrocells
+#define CELL_TRAVERSAL  // macrocells decide what is visited
+#if !defined(ADAPTIVE) && !defined(CELL_DDA)
+#define SAMPLE_LEAPS  // driven by the lattice with empty-space leaps; otherwise the 3D-DDA
+#endif
 #endif
 
 #include "ray_texture.glsl"
@@ -251,7 +254,7 @@ RayResult cast_ray(vec2 pixel) {
   L.B *= step_mult;
 #endif
   int last = int(min(floor(lattice_index(L, span.y)), u_value_map.w - 1.0));
-#ifndef CELL_TRAVERSAL
+#if !defined(CELL_TRAVERSAL)
   // Nested: llvmpipe stops any single loop after 65535 iterations (LP_MAX_TGSI_LOOP_ITERATIONS),
   // far below the per-ray cap; chunks of CHUNK keep every loop under it.
   bool stop = false;
@@ -261,6 +264,62 @@ RayResult cast_ray(vec2 pixel) {
         stop = true;
         break;
       }
+#elif defined(SAMPLE_LEAPS)
+  // Space skipping without adaptive multipliers, driven by the lattice: each iteration looks up
+  // the macrocell of lattice point i; in an occupied cell (distance 0) it visits i, in an empty
+  // one it leaps out of the cube of empty cells the distance promises to the first lattice point
+  // beyond. The points visited are the 3D-DDA's (those inside occupied cells), but a frame costs
+  // an iteration per sample or leap instead of one per cell crossed plus one per sample: on
+  // llvmpipe the cell loop cost more than the samples (issue 13). Segment methods add the point
+  // before a run of occupied cells and the one after it (EXTENSION 1), as the cell loop does.
+  float edge = u_cells.w;
+  vec3 xo = voxel_coords(r.o);  // the ray in voxel coordinates: xo + t * dv
+  vec3 dv = r.d / u_spacing.xyz;
+  ivec3 grid = ivec3(u_cells.xyz);
+  ivec3 stp = ivec3(sign(dv));
+  bvec3 moves = greaterThanEqual(abs(dv), vec3(1e-20));
+  vec3 inv_dv = mix(vec3(0.0), 1.0 / mix(vec3(1.0), dv, moves), moves);
+  vec3 ahead = vec3(greaterThan(dv, vec3(0.0)));
+  int i = 0;
+  int visited = -2;  // the last lattice index visited
+  bool stop = false;
+  int rounds = (last + 2 + 8 * (grid.x + grid.y + grid.z)) / CHUNK + 1;
+  for (int round = 0; round < rounds && !stop && i <= last; ++round)
+    for (int k = 0; k < CHUNK && i <= last; ++k) {
+      vec3 x = xo + lattice_t(L, float(i)) * dv;
+      // (a point within rounding of a face may get either cell: both ranges hold what it reads)
+      ivec3 c = clamp(ivec3(floor(x * (1.0 / edge))), ivec3(0), grid - 1);
+      uint empty_distance = cell_byte(u_cell_distance, c);
+      if (empty_distance == 0u) {
+#ifdef SEGMENTS
+        if (i >= 1 && visited != i - 1 && visit(r, L, i - 1, 1, res)) {  // the segment into the run
+          stop = true;
+          break;
+        }
+#endif
+        if (visit(r, L, i, 1, res)) {
+          stop = true;
+          break;
+        }
+        visited = i;
+        ++i;
+      } else {
+#ifdef SEGMENTS
+        if (visited == i - 1) {  // the segment out of the run
+          if (visit(r, L, i, 1, res)) {
+            stop = true;
+            break;
+          }
+          visited = i;
+        }
+#endif
+        int reach = int(empty_distance) - 1;
+        vec3 t_face = mix(vec3(3.0e38), ((vec3(c + stp * reach) + ahead) * edge - xo) * inv_dv, moves);
+        float t_leave = min(min(t_face.x, t_face.y), t_face.z);
+        i = max(i + 1, int(ceil(lattice_index(L, min(t_leave, span.y + u_box_half.w)))));
+      }
+    }
+  if (stop) return res;
 #else
   // 3D-DDA over the macrocell grid (Amanatides & Woo) in voxel coordinates. Each occupied cell
   // visits the lattice indices inside it (the multiples of its multiplier M with ADAPTIVE);
@@ -284,7 +343,7 @@ RayResult cast_ray(vec2 pixel) {
   for (int guard = 0; guard < 4 * (grid.x + grid.y + grid.z) + 4; ++guard) {
     ivec3 c = clamp(cell, ivec3(0), grid - 1);
 #ifdef SPACE_SKIPPING
-    uint empty_distance = texelFetch(u_occupancy, c, 0).r;
+    uint empty_distance = cell_byte(u_cell_distance, c);
     if (empty_distance > 1u && cell == c) {
       // Every cell within empty_distance - 1 of this one is empty: leap to where the ray leaves
       // that cube (no lattice point inside it is visited) and go on from the cell beyond.
@@ -311,7 +370,9 @@ RayResult cast_ray(vec2 pixel) {
     int first = int(ceil(lattice_index(L, t_in)));
     int end = final_cell ? last : min(last, int(ceil(lattice_index(L, t_out))) - 1);
 #ifdef ADAPTIVE
-    int m = int(texelFetch(u_stride, c, 0).r);
+    // 1..8. The clamp also matters to llvmpipe: with the raw byte as the loop increment it
+    // rendered adaptive frames wrong (a constant volume at 31.9 dB; the bytes were right).
+    int m = clamp(int(cell_byte(u_cell_stride, c)), 1, 8);
 #else
     const int m = 1;
 #endif

@@ -4,6 +4,11 @@
 // per sample from B = max(k + A * x_enter, min step), x_enter the eye-based index of the entry.
 // ADAPTIVE (Knoll §6.2): a macrocell with multiplier M visits the multiples of M only.
 
+// Byte c of a per-macrocell table (grid order, four bytes to a uint, low byte first).
+#define cell_byte(table, c) \
+  ((table[cell_index(c) >> 2] >> (8 * (cell_index(c) & 3))) & 0xFFu)
+int cell_index(ivec3 c) { return c.x + int(u_cells.x) * (c.y + int(u_cells.y) * c.z); }
+
 struct Lattice {
   float t0, A, B;
 };
@@ -39,5 +44,6 @@ Lattice ray_lattice(Ray r, float t_enter) {
 }
 
 #ifdef ADAPTIVE
-layout(binding = UNIT_STRIDE) uniform usampler3D u_stride;  // per macrocell: multiplier M, 1..8
+// Per macrocell: multiplier M, 1..8.
+layout(std430, binding = SSBO_CELL_STRIDE) readonly buffer CellStride { uint u_cell_stride[]; };
 #endif

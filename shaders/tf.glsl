@@ -5,7 +5,7 @@ layout(binding = UNIT_TF) uniform sampler1D u_tf;
 
 vec4 tf_lookup(float s) {
   float size = u_value_map.z;
-  return texture(u_tf, (0.5 + clamp(s, 0.0, 1.0) * (size - 1.0)) / size);
+  return texture(u_tf, clamp(s, 0.0, 1.0) * ((size - 1.0) / size) + 0.5 / size);
 }
 
 // `a` from the table is the opacity of the uniform step (u_box_half.w): a sample standing for

@@ -23,7 +23,7 @@ struct SceneBenchArgs {
   std::string scene, path = "fragment";
   int frames = 12, warmup = 2;
   double orbit = 30.0;
-  bool json = false;
+  bool json = false, bare = false;
 };
 
 // The scene's camera turned by `deg` about its up axis through the centre (an orbit).
@@ -40,7 +40,10 @@ int run_scene_bench(const SceneBenchArgs& a) {
   const double load_ms = ms_between(t_load, std::chrono::steady_clock::now());
   auto ctx = gpu::EglContext::create();
   gpu::ShaderCache shaders(gpu::default_shader_dir());
-  render::GpuVolume gv(ls.volume);
+  const auto t_upload = std::chrono::steady_clock::now();
+  render::GpuVolume gv(ls.volume);  // upload + the trilinear macrocell grid
+  const double upload_total_ms = ms_between(t_upload, std::chrono::steady_clock::now());
+  double first_frame_ms = 0;
   render::Raycaster caster(shaders);
   render::RenderRequest req;
   req.path = a.path == "compute" ? render::GpuPath::Compute : render::GpuPath::Fragment;
@@ -56,10 +59,24 @@ int run_scene_bench(const SceneBenchArgs& a) {
     const auto t0 = std::chrono::steady_clock::now();
     caster.render(gv, s, req, &st);
     const double ms = ms_between(t0, std::chrono::steady_clock::now());
+    if (f == -a.warmup) first_frame_ms = ms;
     if (f < 0) continue;
     frame_ms.push_back(ms);
     render_ms.push_back(st.render_ms);
     spr.push_back(st.samples_mean);
+  }
+  // The ceiling: the bare sampling loop (same rays, same per-ray sample counts, reconstruction
+  // only) at the start pose, against the full ray caster's render_ms there.
+  std::vector<double> bare_ms, full_ms;
+  if (a.bare) {
+    ResolvedScene s = ls.scene;
+    render::RenderStats fs, bs;
+    for (int k = 0; k < 3; ++k) {
+      const Image full = caster.render(gv, s, req.path, &fs);
+      caster.render_bare(gv, s, req.path, full, &bs);
+      full_ms.push_back(fs.render_ms);
+      bare_ms.push_back(bs.render_ms);
+    }
   }
   const auto [mn, mx] = std::minmax_element(frame_ms.begin(), frame_ms.end());
   nlohmann::json j = {{"scene", a.scene},
@@ -75,16 +92,32 @@ int run_scene_bench(const SceneBenchArgs& a) {
                       {"samples_per_ray", median(spr)},
                       {"variant", st.variant},
                       {"load_ms", load_ms},
+                      {"upload_ms", gv.upload_ms()},
+                      {"macrocells_ms", gv.macrocell_ms()},
+                      {"gpu_volume_ms", upload_total_ms},
+                      {"first_frame_ms", first_frame_ms},
+                      {"load_to_first_frame_ms", load_ms + upload_total_ms + first_frame_ms},
                       {"gl_renderer", ctx->info().renderer}};
+  if (a.bare) {
+    j["bare_ms"] = median(bare_ms);
+    j["full_render_ms_float"] = median(full_ms);
+  }
   if (a.json) {
     std::printf("%s\n", j.dump().c_str());
     return 0;
   }
   std::printf("GL: %s\nscene: %s (%dx%d, step %.4g, variant %s)\n", ctx->info().to_string().c_str(), a.scene.c_str(),
               ls.scene.scene.width, ls.scene.scene.height, ls.scene.step, st.variant.c_str());
+  std::printf("load %.0f ms (file, range, histogram), upload %.0f ms, macrocells %.0f ms, first frame %.0f ms "
+              "(shader compile included): load to first frame %.0f ms\n",
+              load_ms, gv.upload_ms(), gv.macrocell_ms(), first_frame_ms, load_ms + upload_total_ms + first_frame_ms);
   std::printf("%d frames over a %.0f-degree orbit after %d warm-up: frame ms median %.1f min %.1f max %.1f; "
               "render ms median %.1f; samples per ray %.1f\n",
               n, a.orbit, a.warmup, median(frame_ms), *mn, *mx, median(render_ms), median(spr));
+  if (a.bare)
+    std::printf("bare sampling loop (same rays and samples, no TF, no compositing, no traversal): %.1f ms against "
+                "%.1f ms for the full ray caster (float output): ratio %.2f\n",
+                median(bare_ms), median(full_ms), median(full_ms) / median(bare_ms));
   return 0;
 }
 
@@ -100,6 +133,7 @@ void add_bench_scene_command(CLI::App& bench, Runner& run) {
       ->check(CLI::Range(-3600.0, 3600.0));
   c->add_option("--path", a->path, "fragment | compute")->check(CLI::IsMember({"fragment", "compute"}));
   c->add_flag("--json", a->json, "print one JSON object");
+  c->add_flag("--bare", a->bare, "also time the bare sampling loop on the same rays (the ceiling)");
   c->callback([a, &run] { run = [a] { return run_scene_bench(*a); }; });
 }
 

@@ -51,6 +51,13 @@ class Volume {
   size_t byte_size() const { return size_t(voxel_count()) * voxel_bytes(type_); }
   uint8_t* data() { return data_.get(); }
   const uint8_t* data() const { return data_.get(); }
+  // The voxels, freed once a GPU copy holds them (GpuResidency, the server): the volume's host
+  // memory is then its texture alone (issue 13: at most 1.1x the voxel bytes). Everything but
+  // the voxels stays (dims, spacing, range, histogram). The one mutation of a shared volume:
+  // callers guarantee no other thread reads voxels any more (the server reads them only on the
+  // loader pool before the volume is published, and on the render thread for the upload).
+  void drop_voxels() const { data_.reset(); }
+  bool has_voxels() const { return data_ != nullptr || voxel_count() == 0; }
 
   glm::dvec3 spacing{1.0, 1.0, 1.0};
   glm::dvec3 origin{0.0, 0.0, 0.0};
@@ -89,7 +96,7 @@ class Volume {
   Dims dims_{0, 0, 0};
   VoxelType type_ = VoxelType::U8;
   SourceType source_ = SourceType::U8;
-  std::unique_ptr<uint8_t[]> data_;
+  mutable std::unique_ptr<uint8_t[]> data_;
 };
 
 }  // namespace peakcast

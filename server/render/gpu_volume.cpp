@@ -18,6 +18,7 @@ GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cell
     : volume_(std::move(volume)), cells_trilinear_(std::move(cells.trilinear)), cells_tricubic_(std::move(cells.tricubic)) {
   if (cells_trilinear_) check_macrocells(*cells_trilinear_, *volume_, FilterSupport::Trilinear);
   if (cells_tricubic_) check_macrocells(*cells_tricubic_, *volume_, FilterSupport::Tricubic);
+  if (!volume_->has_voxels()) throw std::invalid_argument("GpuVolume: the volume's voxels were dropped");
   const auto t0 = std::chrono::steady_clock::now();
   static std::atomic<uint64_t> next_serial{1};
   serial_ = next_serial++;
@@ -86,11 +87,18 @@ GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cell
 const MacrocellGrid& GpuVolume::macrocells(Filter filter) const {
   if (filter != Filter::Tricubic) return *cells_trilinear_;
   if (!cells_tricubic_) {  // most views never ask for the wider filter support
+    if (!volume_->has_voxels()) throw std::logic_error("GpuVolume: no tricubic grid and no voxels to build it");
     const auto t1 = std::chrono::steady_clock::now();
     cells_tricubic_ = std::make_shared<const MacrocellGrid>(build_macrocells(*volume_, 0, FilterSupport::Tricubic));
     macrocell_ms_ += ms_since(t1);
   }
   return *cells_tricubic_;
+}
+
+bool GpuVolume::drop_host_voxels() {
+  if (!cells_trilinear_ || !cells_tricubic_) return false;  // a grid may still need the voxels
+  volume_->drop_voxels();
+  return true;
 }
 
 void GpuVolume::bind(unsigned unit) const { glBindTextureUnit(unit, texture_.id()); }

@@ -32,6 +32,9 @@ class GpuVolume {
   double tf_lo() const { return lo_; }
   double tf_hi() const { return hi_; }
   void bind(unsigned unit) const;
+  // Frees the host copy of the voxels (Volume::drop_voxels) once both macrocell grids exist:
+  // the texture is then the only copy. False (nothing freed) without both grids.
+  bool drop_host_voxels();
   uint64_t serial() const { return serial_; }  // unique per upload: caches key on it, not on addresses
 
  private:

@@ -182,14 +182,14 @@ VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPa
   upload_tables(gv, s, key.peaks ? peaks : std::vector<Peak>{});
   const double table_ms = ms_since(t_tables);
   if (key.space_skipping) {
-    gpu::Texture& tex = occ_entry->texture;
-    if (!tex) {
+    gpu::Buffer& buf = occ_entry->buffer;
+    if (!buf) {
       std::vector<uint8_t> distance = occ->distance;
       if (!leaps_)
         for (auto& d : distance) d = std::min<uint8_t>(d, 1);
-      tex = make_cell_texture(cells, distance);
+      buf = make_cell_buffer(cells, distance);
     }
-    glBindTextureUnit(kUnitOccupancy, tex.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboCellDistance, buf.id());
   }
   if (key.adaptive) bind_multipliers(gv, cells);
   if (key.ray_texture) bind_ray_texture(s, stats);

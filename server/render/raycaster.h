@@ -102,7 +102,7 @@ class Raycaster {
   struct OccupancyEntry {  // macrocell classification of one volume's grid under one TF
     std::string key;
     Occupancy occupancy;
-    gpu::Texture texture;
+    gpu::Buffer buffer;  // the empty-space distance per cell
   };
   static constexpr size_t kCacheEntries = 4;
   std::vector<TfTable> tf_tables_;
@@ -110,7 +110,7 @@ class Raycaster {
   std::vector<OccupancyEntry> occupancy_cache_;
   struct StrideEntry {  // adaptive multipliers of one volume's grid
     std::string key;
-    gpu::Texture texture;
+    gpu::Buffer buffer;
   };
   std::vector<StrideEntry> stride_cache_;
   // A ray texture of one lineage at one termination: the texels of its first `strokes`

@@ -19,16 +19,13 @@ std::string tf_signature(const TransferFunction& tf, double lo, double hi) {
   return s.str();
 }
 
-gpu::Texture make_cell_texture(const MacrocellGrid& cells, const std::vector<uint8_t>& bytes) {
-  gpu::Texture tex = gpu::make_texture(GL_TEXTURE_3D);
-  glTextureStorage3D(tex.id(), 1, GL_R8UI, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]), GLsizei(cells.grid[2]));
-  // Integer textures are complete only with NEAREST filtering.
-  glTextureParameteri(tex.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-  glTextureParameteri(tex.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-  glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  glTextureSubImage3D(tex.id(), 0, 0, 0, 0, GLsizei(cells.grid[0]), GLsizei(cells.grid[1]), GLsizei(cells.grid[2]),
-                      GL_RED_INTEGER, GL_UNSIGNED_BYTE, bytes.data());
-  return tex;
+gpu::Buffer make_cell_buffer(const MacrocellGrid& cells, const std::vector<uint8_t>& bytes) {
+  if (bytes.size() != cells.size()) throw std::invalid_argument("make_cell_buffer: one byte per cell");
+  std::vector<uint32_t> words((bytes.size() + 3) / 4, 0u);
+  for (size_t i = 0; i < bytes.size(); ++i) words[i / 4] |= uint32_t(bytes[i]) << (8 * (i % 4));
+  gpu::Buffer buf = gpu::make_buffer();
+  glNamedBufferStorage(buf.id(), GLsizeiptr(std::max<size_t>(1, words.size()) * sizeof(uint32_t)), words.data(), 0);
+  return buf;
 }
 
 // The ray texture as an RGB32F texture read with linear filtering between texel centres,
@@ -91,11 +88,11 @@ void Raycaster::bind_multipliers(const GpuVolume& gv, const MacrocellGrid& cells
   const std::string key = std::to_string(gv.serial()) + " " + cells.to_string();
   StrideEntry* e = cache_find(stride_cache_, key);
   if (!e) {
-    StrideEntry n{key, make_cell_texture(cells, adaptive_multipliers(cells, volume_stddev(gv.volume())))};
+    StrideEntry n{key, make_cell_buffer(cells, adaptive_multipliers(cells, volume_stddev(gv.volume())))};
     e = &cache_insert(stride_cache_, std::move(n), kCacheEntries);
     ++table_builds_;
   }
-  glBindTextureUnit(kUnitStride, e->texture.id());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboCellStride, e->buffer.id());
 }
 
 void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const std::vector<Peak>& peaks) {

@@ -21,8 +21,9 @@ inline double ms_since(Clock::time_point t0) {
 }
 
 std::string tf_signature(const TransferFunction& tf, double lo, double hi);
-// One byte per macrocell (occupancy, adaptive multiplier) as an R8UI 3D texture in grid order.
-gpu::Texture make_cell_texture(const MacrocellGrid& cells, const std::vector<uint8_t>& bytes);
+// One byte per macrocell (empty-space distance, adaptive multiplier) in grid order, packed four
+// to a uint (little end first) into a shader storage buffer (cell_byte in sampling.glsl).
+gpu::Buffer make_cell_buffer(const MacrocellGrid& cells, const std::vector<uint8_t>& bytes);
 
 // Moves the entry named `key` to the front of a most-recent-first cache; nullptr when absent.
 template <class T>

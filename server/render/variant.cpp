@@ -12,16 +12,16 @@ std::vector<std::string> interface_defines() {
   no_peak << std::showpoint << kNoPeakTexel;
   return {"UNIT_VOLUME " + std::to_string(kUnitVolume),
           "UNIT_TF " + std::to_string(kUnitTf),
-          "UNIT_OCCUPANCY " + std::to_string(kUnitOccupancy),
           "UNIT_BUDGET " + std::to_string(kUnitBudget),
           "UNIT_PEAK_TABLE " + std::to_string(kUnitPeakTable),
           "UNIT_PREINT " + std::to_string(kUnitPreint),
-          "UNIT_STRIDE " + std::to_string(kUnitStride),
           "UNIT_RAY_TEXTURE " + std::to_string(kUnitRayTexture),
           "IMAGE_COLOR " + std::to_string(kImageColor),
           "IMAGE_SAMPLES " + std::to_string(kImageSamples),
           "UBO_RAY " + std::to_string(kUboRay),
           "SSBO_TF_POINTS " + std::to_string(kSsboTfPoints),
+          "SSBO_CELL_DISTANCE " + std::to_string(kSsboCellDistance),
+          "SSBO_CELL_STRIDE " + std::to_string(kSsboCellStride),
           "NO_PEAK_TEXEL " + no_peak.str()};
 }
 
@@ -45,6 +45,7 @@ std::vector<std::string> VariantKey::defines() const {
   if (preintegration) d.push_back("PREINTEGRATION");
   if (rgb8) d.push_back("RGB8_OUTPUT");
   if (ray_texture) d.push_back("RAY_TEXTURE");
+  if (cell_dda) d.push_back("CELL_DDA");
   if (ray_texture_volume) d.push_back("RAY_TEXTURE_VOLUME");
   for (auto& i : interface_defines()) d.push_back(std::move(i));
   return d;
@@ -63,6 +64,7 @@ std::string VariantKey::name() const {
   if (virtual_samples) n += "+vs" + std::to_string(virtual_samples);
   if (bare_sampling) n += "+bare";
   if (rgb8) n += "+rgb8";
+  if (cell_dda) n += "+dda";
   if (ray_texture) n += ray_texture_volume ? "+raytex:volume" : "+raytex:view";
   return n;
 }

@@ -29,6 +29,9 @@ struct VariantKey {
   bool rgb8 = false;  // output quantised to 8-bit RGB on the GPU (RenderOutput::Rgb8)
   bool ray_texture = false;         // Raspe 2008 per-ray controls (any render.ray_texture)
   bool ray_texture_volume = false;  // ... indexed by the entry point (else by the pixel)
+  // Tests only: space skipping by the 3D-DDA over macrocells instead of lattice-driven leaps
+  // (the two must visit the same points; adaptive sampling always uses the DDA).
+  bool cell_dda = false;
 
   std::vector<std::string> defines() const;
   std::string name() const;  // e.g. "frag+tricubic+skip"

@@ -59,6 +59,9 @@ render::GpuVolume& GpuResidency::acquire(const std::shared_ptr<VolumeEntry>& e) 
   if (!c.gpu) {
     c.entry = e;
     c.gpu = std::make_unique<render::GpuVolume>(e->volume, e->macrocells);  // grids built by the loader
+    // The texture is now the volume's one copy (on llvmpipe it lives in host memory too): the
+    // host voxels go. The copy lives as long as the entry, so they are never needed again.
+    c.gpu->drop_host_voxels();
   }
   return *c.gpu;
 }

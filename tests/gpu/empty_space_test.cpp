@@ -1,9 +1,11 @@
 // Empty-space leaps (issue 13): the GL traversal leaps across the cube of empty macrocells the
-// empty-space distance promises instead of stepping through them one by one. A leap must skip
+// empty-space distance promises instead of stepping through them one by one, and is driven by
+// the lattice (an iteration per sample or leap) rather than by the cells crossed. A leap must skip
 // exactly the lattice points the steps skip: the same pixels and the same samples per ray, over
 // sparse volumes, oblique, axis-parallel, inside-the-box and orthographic views, and the
 // methods that join samples into segments (peak finding, preintegration).
 #include <cmath>
+#include <tuple>
 
 #include "core/occupancy.h"
 #include "gpu/gpu_fixture.h"
@@ -55,6 +57,9 @@ const LeapCase kCases[] = {
 
 class Leaps : public ::testing::TestWithParam<LeapCase> {};
 
+// Three traversals of the same scene: the lattice-driven loop with empty-space leaps (what
+// space skipping renders with), the 3D-DDA leaping likewise, and the 3D-DDA stepping through
+// every empty cell (leaps off). All must visit the same lattice points.
 TEST_P(Leaps, SkipExactlyWhatSteppingThroughEmptyCellsSkips) {
   const LeapCase& c = GetParam();
   auto v = test::make_volume(c.kind, c.dims, default_type(c.kind));
@@ -67,21 +72,38 @@ TEST_P(Leaps, SkipExactlyWhatSteppingThroughEmptyCellsSkips) {
   const Occupancy occ = classify_cells(cells, s.tf, gv.tf_lo(), gv.tf_hi());
   ASSERT_GT(*std::max_element(occ.distance.begin(), occ.distance.end()), 2) << "nothing to leap over";
   auto& caster = *test::gpu().caster;
-  render::RenderStats st_leap, st_step;
+  render::RenderStats st_lattice, st_leap, st_step;
+  const Image lattice = test::render_gpu(gv, s, render::GpuPath::Fragment, &st_lattice);
+  caster.force_variant([](render::VariantKey& k) { k.cell_dda = true; });
   const Image leap = test::render_gpu(gv, s, render::GpuPath::Fragment, &st_leap);
   caster.set_empty_space_leaps(false);
   const Image step = test::render_gpu(gv, s, render::GpuPath::Fragment, &st_step);
   caster.set_empty_space_leaps(true);
-  ASSERT_NE(st_leap.variant.find("+skip"), std::string::npos) << st_leap.variant;
-  const auto e = reference::compare(leap, step);
-  std::printf("%-22s %-34s max diff %.2e, samples/ray %.3f (leaps) %.3f (steps), samples differ on %zu rays\n", c.name,
-              st_leap.variant.c_str(), e.max_abs, st_leap.samples_mean, st_step.samples_mean,
-              size_t(std::count_if(leap.samples.begin(), leap.samples.end(),
-                                   [&, i = size_t(0)](float x) mutable { return x != step.samples[i++]; })));
+  caster.force_variant(nullptr);
+  ASSERT_NE(st_lattice.variant.find("+skip"), std::string::npos) << st_lattice.variant;
+  ASSERT_NE(st_leap.variant.find("+dda"), std::string::npos) << st_leap.variant;
   EXPECT_GT(st_step.samples_mean, 0.0) << "nothing visible: the test would prove nothing";
-  EXPECT_LE(e.max_abs, 1.0 / 255.0);
-  EXPECT_NEAR(st_leap.samples_mean, st_step.samples_mean, 1e-3 * st_step.samples_mean);
-  if (e.max_abs > 1.0 / 255.0) test::save_artifacts(leap, step, c.name);
+  const bool segments = st_lattice.variant.find("+peaks") != std::string::npos ||
+                        st_lattice.variant.find("+preint") != std::string::npos;
+  for (const auto& [name, img, st] : {std::tuple{"lattice leaps", &lattice, &st_lattice},
+                                      std::tuple{"dda leaps", &leap, &st_leap}}) {
+    const auto e = reference::compare(*img, step);
+    const size_t differ = size_t(std::count_if(img->samples.begin(), img->samples.end(),
+                                               [&, i = size_t(0)](float x) mutable { return x != step.samples[i++]; }));
+    std::printf("%-20s %-14s %-34s max diff %.2e, samples/ray %.3f (dda steps %.3f), samples differ on %zu rays\n",
+                c.name, name, st->variant.c_str(), e.max_abs, st->samples_mean, st_step.samples_mean, differ);
+    EXPECT_LE(e.max_abs, 1.0 / 255.0) << name;
+    if (st == &st_lattice && segments) {
+      // Segment methods: the lattice loop adds the point before and after each run of occupied
+      // cells where the DDA adds them around each cell, so a run entered or left on a face can
+      // take one point more (measured: +0.3% on blobs_peaks, +0.07% on blobs_preint); never fewer.
+      EXPECT_GE(st->samples_mean, st_step.samples_mean * (1 - 1e-6)) << name;
+      EXPECT_LE(st->samples_mean, st_step.samples_mean * 1.01) << name;
+    } else {
+      EXPECT_NEAR(st->samples_mean, st_step.samples_mean, 1e-3 * st_step.samples_mean) << name;
+    }
+    if (e.max_abs > 1.0 / 255.0) test::save_artifacts(*img, step, std::string(c.name) + "_" + name);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, Leaps, ::testing::ValuesIn(kCases),
