@@ -67,3 +67,41 @@ TEST(VolumeCells, GpuVolumeRefusesGridsOfAnotherVolume) {
     EXPECT_NE(std::string(e.what()).find("do not fit the 40x33x21 volume"), std::string::npos) << e.what();
   }
 }
+
+// Issue 13: the server keeps a volume once. GpuResidency drops the host voxels when it makes
+// the GPU copy (on llvmpipe the texture is itself host memory); the renders, the entry's
+// metadata and the copy for later frames stay, and a GpuVolume cannot be made again from a
+// volume without voxels (a clear error, no read of freed memory).
+TEST(VolumeCells, ResidencyKeepsTheVolumeOnceAfterTheUpload) {
+  const auto dir = std::filesystem::temp_directory_path() / ("peakcast_once_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  auto v = test::make_volume(GeneratorKind::Blobs, {40, 33, 21}, SourceType::U8);
+  write_volume(dir / "b.nrrd", *v);
+  GpuResidency residency(int64_t(1) << 30);
+  VolumeStore store({dir}, residency);
+  auto e = store.get("b.nrrd");
+  std::filesystem::remove_all(dir);
+  ASSERT_TRUE(e->volume->has_voxels());
+  const ResolvedScene s = scene(*e->volume, "tricubic");
+  render::GpuVolume fresh(v);  // the same voxels, kept
+  const Image want = test::render_gpu(fresh, s, render::GpuPath::Fragment);
+  render::GpuVolume& gv = residency.acquire(e);
+  EXPECT_FALSE(e->volume->has_voxels()) << "the host copy outlived the upload";
+  EXPECT_EQ(e->volume->data(), nullptr);
+  EXPECT_EQ(e->volume->byte_size(), v->byte_size()) << "metadata must stay";
+  EXPECT_EQ(e->volume->min_value, v->min_value);
+  EXPECT_EQ(e->volume->histogram, v->histogram);
+  for (const char* filter : {"trilinear", "tricubic"}) {
+    const Image got = test::render_gpu(gv, scene(*e->volume, filter), render::GpuPath::Fragment);
+    const Image ref = test::render_gpu(fresh, scene(*v, filter), render::GpuPath::Fragment);
+    EXPECT_EQ(got.rgba, ref.rgba) << filter;
+  }
+  EXPECT_EQ(&residency.acquire(e), &gv) << "a second frame must reuse the copy";
+  EXPECT_EQ(test::render_gpu(gv, s, render::GpuPath::Fragment).rgba, want.rgba);
+  try {
+    render::GpuVolume again(e->volume);
+    ADD_FAILURE() << "a GpuVolume was made from a volume without voxels";
+  } catch (const std::invalid_argument& err) {
+    EXPECT_NE(std::string(err.what()).find("voxels were dropped"), std::string::npos) << err.what();
+  }
+}
