@@ -101,12 +101,19 @@ void add_volume_commands(CLI::App& app, Runner& run) {
       std::printf("file: %s\ndims: %lld %lld %lld\ntype: %s (stored as %s, value offset %g)\n", ia->file.c_str(),
                   (long long)d[0], (long long)d[1], (long long)d[2], to_string(v.source_type()),
                   to_string(v.type()), v.value_offset);
-      std::printf("spacing: %g %g %g\norigin: %g %g %g\nrange: %.9g %.9g\nmemory: %.1f MiB\nload: %.1f ms\n",
+      std::printf("spacing: %g %g %g\norigin: %g %g %g\nrange: %.9g %.9g\nmemory: %.1f MiB\n"
+                  "load: %.1f ms (read %.1f ms, range and histogram %.1f ms)\n",
                   v.spacing.x, v.spacing.y, v.spacing.z, v.origin.x, v.origin.y, v.origin.z, v.min_value,
-                  v.max_value, double(v.byte_size()) / 1048576.0, v.load_ms);
+                  v.max_value, double(v.byte_size()) / 1048576.0, v.load_ms, v.load_ms - v.statistics_ms,
+                  v.statistics_ms);
       if (v.nonfinite_replaced > 0)
         std::printf("warning: %lld NaN/Inf voxels replaced by the finite range ends\n", (long long)v.nonfinite_replaced);
-      if (ia->macrocells) {
+      if (ia->macrocells && ia->cell == 0) {  // what the server builds: both grids in one pass
+        const VolumeMacrocells both = build_volume_macrocells(v);
+        std::printf("macrocells (trilinear and tricubic, one pass): %lldx%lldx%lld cells of %d voxels, build %.1f ms\n",
+                    (long long)both.trilinear->grid[0], (long long)both.trilinear->grid[1],
+                    (long long)both.trilinear->grid[2], both.trilinear->cell, both.build_ms);
+      } else if (ia->macrocells) {
         for (auto support : {FilterSupport::Trilinear, FilterSupport::Tricubic}) {
           MacrocellGrid g = build_macrocells(v, ia->cell, support);
           std::printf("macrocells (%s): %lldx%lldx%lld cells of %d voxels, build %.1f ms\n",

@@ -1,6 +1,7 @@
 #include "core/volume.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -76,8 +77,56 @@ Volume::Volume(const VolumeHeader& h)
       source_(h.source),
       data_(new uint8_t[size_t(h.voxel_count()) * voxel_bytes(storage_type(h.source))]) {}
 
+namespace {
+
+// Integer voxels: one pass counting every stored value (256 or 65536 bins per worker), from
+// which the range and the 1024-bin histogram follow exactly (the same bins as two passes over
+// the voxels would give). Returns false for float voxels.
+template <typename T>
+void integer_statistics(const T* data, size_t n, double& lo_out, double& hi_out, std::vector<uint64_t>& histogram,
+                        int bins) {
+  constexpr size_t kValues = size_t(1) << (8 * sizeof(T));
+  std::vector<std::vector<uint64_t>> counts{static_cast<size_t>(hardware_threads())};
+  parallel_chunks(n, [&](size_t begin, size_t end, int worker) {
+    auto& c = counts[size_t(worker)];
+    if (c.empty()) c.assign(kValues, 0);
+    for (size_t i = begin; i < end; ++i) ++c[data[i]];
+  });
+  std::vector<uint64_t> all(kValues, 0);
+  for (const auto& c : counts)
+    if (!c.empty())
+      for (size_t v = 0; v < kValues; ++v) all[v] += c[v];
+  size_t lo = 0, hi = kValues - 1;
+  while (lo < kValues && all[lo] == 0) ++lo;
+  while (hi > lo && all[hi] == 0) --hi;
+  if (lo == kValues) lo = hi = 0;  // no voxels
+  lo_out = double(lo);
+  hi_out = double(hi);
+  histogram.assign(size_t(bins), 0);
+  const double span = double(hi) - double(lo);
+  const double scale = span > 0 ? bins / span : 0.0;
+  for (size_t v = lo; v <= hi && lo < kValues; ++v)
+    if (all[v]) histogram[size_t(std::clamp(int((double(v) - double(lo)) * scale), 0, bins - 1))] += all[v];
+}
+
+}  // namespace
+
 void Volume::finalize_statistics() {
+  const auto t0 = std::chrono::steady_clock::now();
+  struct Timer {  // statistics_ms on every path out
+    Volume& v;
+    std::chrono::steady_clock::time_point t0;
+    ~Timer() { v.statistics_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count(); }
+  } timer{*this, t0};
   const size_t n = size_t(voxel_count());
+  if (type_ != VoxelType::F32) {
+    double lo = 0, hi = 0;
+    if (type_ == VoxelType::U8) integer_statistics(data_.get(), n, lo, hi, histogram, kHistogramBins);
+    else integer_statistics(reinterpret_cast<const uint16_t*>(data_.get()), n, lo, hi, histogram, kHistogramBins);
+    min_value = lo + value_offset;
+    max_value = hi + value_offset;
+    return;
+  }
   struct Partial {
     double lo = std::numeric_limits<double>::infinity();
     double hi = -std::numeric_limits<double>::infinity();

@@ -83,7 +83,8 @@ class Volume {
   double min_value = 0.0, max_value = 0.0;
   std::vector<uint64_t> histogram;  // kHistogramBins bins over [min_value, max_value]
   int64_t nonfinite_replaced = 0;
-  double load_ms = 0.0;
+  double load_ms = 0.0;        // the whole load_volume call
+  double statistics_ms = 0.0;  // of it: range and histogram (finalize_statistics)
   std::string name;
 
   static constexpr int kHistogramBins = 1024;

@@ -2,7 +2,10 @@
 
 #include <zlib.h>
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <chrono>
 #include <cmath>
@@ -12,6 +15,7 @@
 #include <limits>
 #include <memory>
 
+#include "core/parallel.h"
 #include "core/volume_io_detail.h"
 
 namespace fs = std::filesystem;
@@ -113,8 +117,28 @@ size_t read_raw(const fs::path& path, int64_t skip, uint8_t* dst, size_t want, b
   if (last && size - offset < int64_t(want))
     throw VolumeError(path, "truncated: header promises " + std::to_string(want) +
                                 " data bytes, file holds " + std::to_string(size - offset));
-  std::fseek(f.get(), long(offset), SEEK_SET);
-  return std::fread(dst, 1, want, f.get());
+  const size_t avail = size_t(std::max<int64_t>(0, size - offset));
+  const size_t n = std::min(want, avail);
+  if (n < (size_t(64) << 20)) {
+    std::fseek(f.get(), long(offset), SEEK_SET);
+    return std::fread(dst, 1, want, f.get());
+  }
+  // Large files: the workers read a share each with pread (issue 13, load phases): the copy
+  // from the page cache and the first touch of the fresh allocation run in parallel.
+  const int fd = fileno(f.get());
+  std::atomic<bool> failed{false};
+  parallel_chunks(n, [&](size_t begin, size_t end, int) {
+    while (begin < end && !failed) {
+      const ssize_t got = ::pread(fd, dst + begin, std::min<size_t>(end - begin, size_t(1) << 30), off_t(offset + int64_t(begin)));
+      if (got <= 0) {
+        failed = true;
+        return;
+      }
+      begin += size_t(got);
+    }
+  });
+  if (failed) throw VolumeError(path, "read failed (the file shrank or could not be read)");
+  return n;
 }
 
 // Inflates gzip or zlib streams (auto-detected) into dst, 1 MiB of input at a time.

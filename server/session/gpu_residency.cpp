@@ -62,6 +62,7 @@ render::GpuVolume& GpuResidency::acquire(const std::shared_ptr<VolumeEntry>& e) 
     // The texture is now the volume's one copy (on llvmpipe it lives in host memory too): the
     // host voxels go. The copy lives as long as the entry, so they are never needed again.
     c.gpu->drop_host_voxels();
+    e->upload_ms = c.gpu->upload_ms();
   }
   return *c.gpu;
 }

@@ -17,7 +17,14 @@ nlohmann::json VolumeEntry::info(bool with_histogram) const {
                       {"range", {v.min_value, v.max_value}},
                       {"bytes", v.byte_size()},
                       {"load_ms", v.load_ms},
+                      // Where loading went (issue 13): reading the file (and converting), range and
+                      // histogram, both macrocell grids (one pass), the GPU upload (once made).
+                      {"load_phases",
+                       {{"read_ms", v.load_ms - v.statistics_ms},
+                        {"statistics_ms", v.statistics_ms},
+                        {"macrocells_ms", macrocells.build_ms}}},
                       {"nonfinite_replaced", v.nonfinite_replaced}};
+  if (const double up = upload_ms.load(); up >= 0) j["load_phases"]["upload_ms"] = up;
   if (with_histogram) j["histogram"] = v.histogram;
   return j;
 }

@@ -3,6 +3,7 @@
 // GpuResidency: the store asks it before keeping a volume (DESIGN §2, §6).
 #pragma once
 
+#include <atomic>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -25,6 +26,9 @@ struct VolumeEntry {
   std::shared_ptr<const Volume> volume;
   // Built with the volume on the loader pool; the render thread passes them to GpuVolume.
   VolumeMacrocells macrocells;
+  // The GPU upload's time, once the render thread made the copy (-1 before): the last load
+  // phase, reported with the others in info().
+  std::atomic<double> upload_ms{-1.0};
   bool preloaded = false;
   nlohmann::json info(bool with_histogram) const;
 };

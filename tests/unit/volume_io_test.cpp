@@ -1,5 +1,7 @@
 // Every loader and voxel type round-trips against a generated volume.
 #include <gtest/gtest.h>
+#include <algorithm>
+#include <random>
 
 #include <OpenImageIO/imageio.h>
 
@@ -156,6 +158,43 @@ TEST(VolumeIo, HistogramCountsEveryVoxel) {
   for (auto c : v.histogram) total += c;
   EXPECT_EQ(total, uint64_t(v.voxel_count()));
   EXPECT_EQ(v.histogram.size(), size_t(Volume::kHistogramBins));
+}
+
+// Integer volumes get range and histogram from one counting pass (issue 13): the same range
+// and bins as the definition (bin = int((v - min) * bins / (max - min)), clamped), on random
+// uint8 and uint16 voxels with value offsets (int8, int16), a constant volume and one voxel.
+TEST(VolumeIo, IntegerStatisticsMatchTheirDefinition) {
+  std::mt19937 rng(3);
+  for (SourceType t : {SourceType::U8, SourceType::I8, SourceType::U16, SourceType::I16})
+    for (Dims d : {Dims{1, 1, 1}, Dims{17, 9, 5}, Dims{64, 33, 20}})
+      for (bool constant : {false, true}) {
+        VolumeHeader h;
+        h.dims = d;
+        h.source = t;
+        Volume v(h);
+        v.value_offset = storage_offset(t);
+        const bool wide = v.type() == VoxelType::U16;
+        std::uniform_int_distribution<int> pick(wide ? 1000 : 10, wide ? 60000 : 200);
+        const int fixed = pick(rng);
+        for (size_t i = 0; i < size_t(v.voxel_count()); ++i) {
+          const int x = constant ? fixed : pick(rng);
+          if (wide) reinterpret_cast<uint16_t*>(v.data())[i] = uint16_t(x);
+          else v.data()[i] = uint8_t(x);
+        }
+        v.finalize_statistics();
+        double lo = 1e300, hi = -1e300;
+        for (size_t i = 0; i < size_t(v.voxel_count()); ++i) {
+          lo = std::min(lo, v.stored(i));
+          hi = std::max(hi, v.stored(i));
+        }
+        EXPECT_EQ(v.min_value, lo + v.value_offset);
+        EXPECT_EQ(v.max_value, hi + v.value_offset);
+        std::vector<uint64_t> want(Volume::kHistogramBins, 0);
+        const double scale = hi > lo ? Volume::kHistogramBins / (hi - lo) : 0.0;
+        for (size_t i = 0; i < size_t(v.voxel_count()); ++i)
+          ++want[size_t(std::clamp(int((v.stored(i) - lo) * scale), 0, Volume::kHistogramBins - 1))];
+        EXPECT_EQ(v.histogram, want) << to_string(t) << " " << d[0] << "x" << d[1] << "x" << d[2];
+      }
 }
 
 TEST(VolumeIo, ResolveInRootsRefusesTraversal) {
