@@ -36,7 +36,7 @@ SCENES = {
                # the quality suite's em_band (tests/bench/quality/em_band.json): a band at 0.2 of the range
                tf=[(0.0, 0, 0, 0, 0), (0.18, 0.9, 0.8, 0.5, 0.0), (0.2, 0.9, 0.8, 0.5, 0.6), (0.22, 0.9, 0.8, 0.5, 0.0),
                    (1.0, 0, 0, 0, 0)],
-               view=(0.55, 0.45, 0.7), render={}, steps=[0.5, 0.75, 1, 1.5, 2]),
+               view=(0.55, 0.45, 0.7), render={}, steps=[0.5, 0.75, 1, 1.5, 2, 3, 4]),
 }
 
 
@@ -180,6 +180,8 @@ def main():
     ap.add_argument("--data-dir", default=str(ROOT / "bench-data/peers"))
     ap.add_argument("--converged-step", type=float, default=0.05, help="voxels, VTK GPU mapper")
     ap.add_argument("--keep", help="keep the images in this directory")
+    ap.add_argument("--preint", action="store_true", help="also preintegrated candidates (DVR of the same TF)")
+    ap.add_argument("--steps", help="candidate steps in voxels, e.g. 1,2,4 (default: each scene's list)")
     ap.add_argument("--vtk-scene")
     ap.add_argument("--vtk-mapper")
     ap.add_argument("--vtk-step", type=float)
@@ -210,13 +212,20 @@ def main():
             load_first = {}
             # peakcast at each candidate step
             pc = []
-            for step in spec["steps"]:
-                sp = work / f"{tag}_pc_{step}.json"
-                sp.write_text(json.dumps(scene_json(spec, volume, lo, hi, size, step)))
-                png = work / f"{tag}_pc_{step}.png"
-                j = peakcast_case(args.peakcast, sp, args.frames, args.orbit, png)
-                pc.append(dict(step=step, ms=j["frame_ms_median"], psnr=psnr(png, ref_png), spr=j["samples_per_ray"],
-                               variant=j["variant"], load_first_ms=j["load_to_first_frame_ms"]))
+            # Postclassified at each step, and preintegrated (--preint) at the same steps: both are
+            # DVR of the same TF, so both may be picked "at equal error".
+            for method in ["post"] + (["preint"] if args.preint else []):
+                for step in ([float(x) for x in args.steps.split(",")] if args.steps else spec["steps"]):
+                    sp = work / f"{tag}_{method}_{step}.json"
+                    j = scene_json(spec, volume, lo, hi, size, step)
+                    if method == "preint":
+                        j["render"]["classification"] = "preint"
+                    sp.write_text(json.dumps(j))
+                    png = work / f"{tag}_{method}_{step}.png"
+                    j = peakcast_case(args.peakcast, sp, args.frames, args.orbit, png)
+                    pc.append(dict(method=method, step=step, ms=j["frame_ms_median"], psnr=psnr(png, ref_png),
+                                   spr=j["samples_per_ray"], variant=j["variant"],
+                                   load_first_ms=j["load_to_first_frame_ms"]))
             peaks_cache = {}
 
             def peaks_at(step):
@@ -241,24 +250,25 @@ def main():
                 best = min(ok, key=lambda p: p["ms"]) if ok else max(pc, key=lambda p: p["psnr"])
                 # The same scene with peak finding at the chosen step: a different optical model
                 # (Knoll's peaks on top of DVR), so timed and scored but not used to pick the step.
-                pk = peaks_at(best["step"])
+                pk = peaks_at(best["step"])  # at the chosen step, whichever method won
                 row = dict(scene=name, size=size, mapper=mapper, vtk_ms=ms, vtk_psnr=q, pc=best, equal_error=bool(ok),
                            pc_all=pc, peaks=pk)
                 rows.append(row)
-                print(f"{name:<8} {size:>5} {mapper:<11} {1.0:>5} {ms:>8.1f} {q:>6.1f} | {best['step']:>7} "
+                print(f"{name:<8} {size:>5} {mapper:<11} {1.0:>5} {ms:>8.1f} {q:>6.1f} | {best['method'][:4]}@{best['step']:<4} "
                       f"{best['ms']:>8.1f} {best['psnr']:>7.1f} {best['spr']:>6.1f} {best['ms'] / ms:>6.2f} | "
                       f"{pk['ms']:>8.1f} {pk['ms'] / ms:>6.2f}"
                       f"{'' if ok else '  (no step reaches VTK: best PSNR shown)'}", flush=True)
-            pc1 = min(pc, key=lambda p: abs(p["step"] - 1.0))
+            pc1 = min((p for p in pc if p["method"] == "post"), key=lambda p: abs(p["step"] - 1.0))
             print(f"    load + first frame (step 1): VTK fixed-point {load_first['fixed-point']:.0f} ms, VTK GPU "
                   f"{load_first['gpu']:.0f} ms, peakcast {pc1['load_first_ms']:.0f} ms (volume file in the page cache)")
             rows.append(dict(scene=name, size=size, load_first_ms=dict(load_first, peakcast=pc1["load_first_ms"])))
             for p in pc:
-                print(f"    peakcast step {p['step']}: {p['ms']:.1f} ms, {p['psnr']:.1f} dB, {p['spr']:.1f} samples/ray,"
+                print(f"    peakcast {p['method']} step {p['step']}: {p['ms']:.1f} ms, {p['psnr']:.1f} dB, {p['spr']:.1f} samples/ray,"
                       f" {p['variant']}", flush=True)
     (work / "peers.json").write_text(json.dumps(rows, indent=1))
-    print("ratio: peakcast frame ms / VTK frame ms at equal error (peakcast postclassified, the fastest step whose "
-          "PSNR against the converged image is >= VTK's); peaks: peakcast with peak finding at that step")
+    print("ratio: peakcast frame ms / VTK frame ms at equal error (the fastest peakcast candidate, post@step or "
+          "prei(ntegrated)@step, whose PSNR against the converged image is >= VTK's); peaks: peakcast with peak "
+          "finding at that step")
     print(f"images and peers.json in {work}")
 
 

@@ -20,15 +20,25 @@ ResolvedScene scene(const Volume& v, const char* filter) {
 
 }  // namespace
 
+// A 40x33x21 blobs volume loaded through the server's store (from a NRRD in a scratch directory).
+struct Stored {
+  std::shared_ptr<Volume> v = test::make_volume(GeneratorKind::Blobs, {40, 33, 21}, SourceType::U8);
+  GpuResidency residency{int64_t(1) << 30};
+  std::unique_ptr<VolumeStore> store;
+  std::shared_ptr<VolumeEntry> e;
+  Stored() {
+    const auto dir = std::filesystem::temp_directory_path() / ("peakcast_cells_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    write_volume(dir / "b.nrrd", *v);
+    store = std::make_unique<VolumeStore>(std::vector<std::filesystem::path>{dir}, residency);
+    e = store->get("b.nrrd");
+    std::filesystem::remove_all(dir);
+  }
+};
+
 TEST(VolumeCells, StoreBuildsBothGridsWithTheVolume) {
-  const auto dir = std::filesystem::temp_directory_path() / ("peakcast_cells_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  auto v = test::make_volume(GeneratorKind::Blobs, {40, 33, 21}, SourceType::U8);
-  write_volume(dir / "b.nrrd", *v);
-  GpuResidency residency(int64_t(1) << 30);
-  VolumeStore store({dir}, residency);
-  auto e = store.get("b.nrrd");
-  std::filesystem::remove_all(dir);
+  Stored st;
+  auto& e = st.e;
   ASSERT_TRUE(e->macrocells.trilinear && e->macrocells.tricubic);
   const MacrocellGrid want_lin = build_macrocells(*e->volume, 0, FilterSupport::Trilinear);
   const MacrocellGrid want_cub = build_macrocells(*e->volume, 0, FilterSupport::Tricubic);
@@ -89,14 +99,10 @@ TEST(VolumeCells, GpuVolumeRefusesGridsOfAnotherVolume) {
 // metadata and the copy for later frames stay, and a GpuVolume cannot be made again from a
 // volume without voxels (a clear error, no read of freed memory).
 TEST(VolumeCells, ResidencyKeepsTheVolumeOnceAfterTheUpload) {
-  const auto dir = std::filesystem::temp_directory_path() / ("peakcast_once_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  auto v = test::make_volume(GeneratorKind::Blobs, {40, 33, 21}, SourceType::U8);
-  write_volume(dir / "b.nrrd", *v);
-  GpuResidency residency(int64_t(1) << 30);
-  VolumeStore store({dir}, residency);
-  auto e = store.get("b.nrrd");
-  std::filesystem::remove_all(dir);
+  Stored st;
+  auto& v = st.v;
+  auto& e = st.e;
+  GpuResidency& residency = st.residency;
   ASSERT_TRUE(e->volume->has_voxels());
   const ResolvedScene s = scene(*e->volume, "tricubic");
   render::GpuVolume fresh(v);  // the same voxels, kept
