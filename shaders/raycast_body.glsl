@@ -75,13 +75,16 @@ bool consume(Ray r, float t, float f, vec3 x, vec3 g, float dt, inout RayResult 
       c = vec4(c.rgb * (a / c.a), a);
     }
 #endif
-    if (c.a > 0.0) {
-      vec3 rgb = c.rgb / c.a;
 #ifdef SHADING
-      rgb = shade(rgb, SAMPLE_GRADIENT(x, g), r.d);  // at the segment's end, as preintegration does
-#endif
+    if (c.a > 0.0) {
+      vec3 rgb = shade(c.rgb / c.a, SAMPLE_GRADIENT(x, g), r.d);  // at the segment's end, as preintegration does
       composite(res.acc, rgb, c.a * DVR_WEIGHT);
     }
+#else
+    // The table's colour is opacity-weighted already: composite it as it is (no divide).
+    float w = (1.0 - res.acc.a) * DVR_WEIGHT;
+    res.acc += w * c;
+#endif
   }
 #elif !defined(PEAKS_ONLY)
 #ifdef PEAK_XOR
