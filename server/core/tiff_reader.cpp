@@ -58,6 +58,16 @@ void check_slice(const fs::path& file, const ImageSpec& spec, const VolumeHeader
     throw VolumeError(file, "TIFF slice is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
                                 ", the first was " + std::to_string(h.dims[0]) + "x" + std::to_string(h.dims[1]));
   if (source_from(file, spec.format) != h.source) throw VolumeError(file, "TIFF slices differ in sample type");
+  // OIIO 2.4 reads a strip-compressed TIFF a strip at a time into a buffer of RowsPerStrip
+  // scanlines, without clamping RowsPerStrip to the height: a damaged directory claiming
+  // 1229520900 rows made it allocate 4.9 GB for a 4x4 image (found by fuzz_tiff). RowsPerStrip
+  // may legally exceed the height (2^32-1 means "one strip"), so only a buffer past the image
+  // itself plus 1 MiB is refused.
+  const int64_t rps = int64_t(uint32_t(spec.get_int_attribute("tiff:RowsPerStrip", 0)));
+  if (rps > spec.height && rps != 0xFFFFFFFFLL &&
+      rps * int64_t(spec.scanline_bytes(true)) > int64_t(spec.image_bytes(true)) + (int64_t(1) << 20))
+    throw VolumeError(file, "TIFF RowsPerStrip " + std::to_string(rps) + " far exceeds the image height " +
+                                std::to_string(spec.height) + " (a damaged directory)");
 }
 
 void read_slice(const fs::path& file, ImageInput& in, int subimage, const VolumeHeader& h, uint8_t* dst) {

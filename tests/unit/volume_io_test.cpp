@@ -1,6 +1,8 @@
 // Every loader and voxel type round-trips against a generated volume.
 #include <gtest/gtest.h>
 #include <algorithm>
+#include <fstream>
+#include <iterator>
 #include <random>
 
 #include <OpenImageIO/imageio.h>
@@ -90,6 +92,36 @@ TEST(VolumeIo, BigEndianRawIsSwapped) {
 }
 
 // Multi-page TIFF and a directory of numbered slices (natural order: 2 before 10).
+// A damaged TIFF directory whose RowsPerStrip (1229520900) made OIIO allocate 4.9 GB for a 4x4
+// LZW-or-unknown-compressed image (fuzz_tiff found it): refused before any read, naming the
+// tag; a legal RowsPerStrip above the height (100 for 4 rows) still loads.
+TEST(VolumeIo, TiffWithAHugeRowsPerStripIsRefused) {
+  const fs::path seed = fs::path(PEAKCAST_SOURCE_DIR) / "tests/fuzz/seeds/fuzz_tiff/huge_rows_per_strip.tif";
+  std::ifstream in(seed, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_FALSE(bytes.empty()) << seed;
+  test::TempDir dir;
+  const size_t comp = bytes.find(std::string("\x03\x01\x03\x00\x01\x00\x00\x00\x8e", 9));
+  const size_t rps = bytes.find(std::string("\x16\x01\x04\x00\x01\x00\x00\x00", 8));
+  ASSERT_NE(comp, std::string::npos);
+  ASSERT_NE(rps, std::string::npos);
+  for (char compression : {char(0x8e), char(5), char(8)}) {
+    bytes[comp + 8] = compression;
+    test::write_file(dir / "damaged.tif", bytes);
+    try {
+      load_volume(dir / "damaged.tif");
+      ADD_FAILURE() << "loaded a TIFF claiming 1229520900 rows per strip, compression " << int(uint8_t(compression));
+    } catch (const VolumeError& e) {
+      EXPECT_NE(std::string(e.what()).find("RowsPerStrip 1229520900"), std::string::npos) << e.what();
+    }
+  }
+  std::string legal = bytes;
+  legal[comp + 8] = char(1);  // uncompressed, RowsPerStrip 100 > 4 rows
+  legal.replace(rps + 8, 4, std::string("\x64\x00\x00\x00", 4));
+  test::write_file(dir / "legal.tif", legal);
+  EXPECT_EQ(load_volume(dir / "legal.tif").dims(), (Dims{4, 4, 1}));
+}
+
 TEST(VolumeIo, TiffStacks) {
   using namespace OIIO;
   test::TempDir dir;
