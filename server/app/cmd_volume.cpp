@@ -108,9 +108,9 @@ void add_volume_commands(CLI::App& app, Runner& run) {
                   v.statistics_ms);
       if (v.nonfinite_replaced > 0)
         std::printf("warning: %lld NaN/Inf voxels replaced by the finite range ends\n", (long long)v.nonfinite_replaced);
-      if (ia->macrocells && ia->cell == 0) {  // what the server builds: both grids in one pass
+      if (ia->macrocells && ia->cell == 0) {  // what the server builds: both grids
         const VolumeMacrocells both = build_volume_macrocells(v);
-        std::printf("macrocells (trilinear and tricubic, one pass): %lldx%lldx%lld cells of %d voxels, build %.1f ms\n",
+        std::printf("macrocells (trilinear and tricubic): %lldx%lldx%lld cells of %d voxels, build %.1f ms\n",
                     (long long)both.trilinear->grid[0], (long long)both.trilinear->grid[1],
                     (long long)both.trilinear->grid[2], both.trilinear->cell, both.build_ms);
       } else if (ia->macrocells) {

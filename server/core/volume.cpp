@@ -81,7 +81,7 @@ namespace {
 
 // Integer voxels: one pass counting every stored value (256 or 65536 bins per worker), from
 // which the range and the 1024-bin histogram follow exactly (the same bins as two passes over
-// the voxels would give). Returns false for float voxels.
+// the voxels would give). Float voxels keep the two passes (no finite set of values).
 template <typename T>
 void integer_statistics(const T* data, size_t n, double& lo_out, double& hi_out, std::vector<uint64_t>& histogram,
                         int bins) {

@@ -18,7 +18,7 @@ nlohmann::json VolumeEntry::info(bool with_histogram) const {
                       {"bytes", v.byte_size()},
                       {"load_ms", v.load_ms},
                       // Where loading went (issue 13): reading the file (and converting), range and
-                      // histogram, both macrocell grids (one pass), the GPU upload (once made).
+                      // histogram, both macrocell grids, the GPU upload (once made).
                       {"load_phases",
                        {{"read_ms", v.load_ms - v.statistics_ms},
                         {"statistics_ms", v.statistics_ms},
