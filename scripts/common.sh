@@ -5,17 +5,26 @@ set -euo pipefail
 PEAKCAST_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 BUILD_DIR=${PEAKCAST_BUILD_DIR:-$PEAKCAST_ROOT/build}
 
-# Build and run-time packages (Debian 12 names).
-PEAKCAST_PACKAGES=(
-  build-essential cmake pkg-config git ccache
+# What compiling peakcast needs (Debian 12 names); the container's build stage installs just these.
+PEAKCAST_BUILD_PACKAGES=(
+  build-essential cmake pkg-config ccache
   libgtest-dev libgmock-dev
   libepoxy-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev
   libopenimageio-dev libturbojpeg0-dev libboost1.74-dev
   nlohmann-json3-dev libglm-dev libcli11-dev libspdlog-dev zlib1g-dev
-  python3 python3-jsonschema python3-websockets python3-pil
 )
-# Only the test command needs these (browser tests: Debian's chromium + playwright-core).
-PEAKCAST_TEST_PACKAGES=(chromium nodejs python3-vtk9 xvfb xauth clang libclang-rt-14-dev)
+# What the built server needs at run time and nothing more: the container's runtime stage
+# (docker/Dockerfile). The container test checks the binary finds every library in that image.
+PEAKCAST_RUNTIME_PACKAGES=(
+  libepoxy0 libegl1 libegl-mesa0 libgl1-mesa-dri libopenimageio2.4 libturbojpeg0
+  libspdlog1.10 libfmt9 zlib1g
+)
+# The README's commands: building plus the scripts' own tools.
+PEAKCAST_PACKAGES=("${PEAKCAST_BUILD_PACKAGES[@]}" git python3 python3-jsonschema python3-websockets python3-pil)
+# Only the test command needs these (browser tests: Debian's chromium + playwright-core; the
+# container label: buildah and debootstrap; manifests: python3-yaml).
+PEAKCAST_TEST_PACKAGES=(chromium nodejs python3-vtk9 xvfb xauth clang libclang-rt-14-dev
+  buildah debootstrap python3-yaml)
 
 install_packages() {
   local missing=()

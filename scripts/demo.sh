@@ -3,8 +3,7 @@
 # http://127.0.0.1:8080 with the heptane sample (a real simulation volume) loaded. Open that
 # address in a browser. Ctrl-C stops it. PEAKCAST_PORT / PEAKCAST_BIND change where it listens.
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
-install_packages "${PEAKCAST_PACKAGES[@]}"
-build_peakcast Release
+bash "$PEAKCAST_ROOT/scripts/build.sh"
 data="$PEAKCAST_ROOT/tests/data"
 exec "$BUILD_DIR/server/peakcast" serve --port "${PEAKCAST_PORT:-8080}" --bind "${PEAKCAST_BIND:-127.0.0.1}" \
   --data "$data" --volume "$data/heptane_151.nrrd" "$@"

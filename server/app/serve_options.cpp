@@ -1,0 +1,188 @@
+#include "app/serve_options.h"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cstdlib>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "gpu/shader_cache.h"
+
+namespace peakcast::app {
+namespace {
+
+// Options that are not settings: not layered, not printed.
+const std::set<std::string> kNotSettings = {"help", "config", "print-config"};
+// Repeatable options: a list in every form.
+const std::set<std::string> kLists = {"data", "volume", "allow-origin"};
+
+std::string key_of(const CLI::Option& opt) { return opt.get_single_name(); }
+
+std::vector<std::string> split_commas(const std::string& s) {
+  std::vector<std::string> out;
+  std::stringstream in(s);
+  for (std::string part; std::getline(in, part, ',');)
+    if (!part.empty()) out.push_back(part);
+  return out;
+}
+
+// Sets an option the command line left alone; a refused value names where it came from.
+void set_from(CLI::Option& opt, const std::vector<std::string>& values, const std::string& where) {
+  try {
+    for (const auto& v : values) opt.add_result(v);
+    opt.run_callback();
+  } catch (const CLI::Error& e) {
+    throw std::invalid_argument(where + ": " + e.what());
+  }
+}
+
+bool is_number(const std::string& s) {
+  double d;
+  auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), d);
+  return ec == std::errc() && end == s.data() + s.size() && !s.empty();
+}
+
+std::string toml_value(const std::string& s) {
+  if (is_number(s)) return s;
+  std::string q = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') q += '\\';
+    q += c;
+  }
+  return q + "\"";
+}
+
+}  // namespace
+
+std::string env_name(const std::string& key) {
+  std::string e = "PEAKCAST_";
+  for (char c : key) e += c == '-' ? '_' : char(std::toupper(static_cast<unsigned char>(c)));
+  return e;
+}
+
+net::ServerConfig ServeOptions::resolved() const {
+  net::ServerConfig c = server;
+  for (auto& d : data) c.data_dirs.emplace_back(d);
+  for (auto& v : volumes) c.volumes.emplace_back(v);
+  c.idle_timeout = std::chrono::seconds(idle_seconds);
+  c.gpu_budget_bytes = gpu_budget_mib << 20;
+  c.web_dir = web_dir;
+  c.shader_dir = shader_dir;
+  return c;
+}
+
+void add_serve_options(CLI::App& s, ServeOptions& o) {
+  net::ServerConfig& c = o.server;
+  o.idle_seconds = int(c.idle_timeout.count());
+  o.gpu_budget_mib = c.gpu_budget_bytes >> 20;
+  o.web_dir = PEAKCAST_WEB_DIR_DEFAULT;
+  o.shader_dir = gpu::default_shader_dir().string();
+  s.option_defaults()->always_capture_default();
+  s.add_option("--config", o.config_file, "read options from this TOML file (also PEAKCAST_CONFIG)");
+  s.add_flag("--print-config", o.print_config, "print the effective configuration, each value's source, and exit");
+  s.add_option("--bind", c.bind, "address to listen on (default loopback only)");
+  s.add_option("--port", c.port, "TCP port (0: any free port)");
+  s.add_option("--data", o.data, "directory volumes may be opened from (repeatable)");
+  s.add_option("--volume", o.volumes, "volume to preload (repeatable; the first is the default view)");
+  s.add_option("--token", c.token, "require this bearer token (HTTP header, ?token= or hello.token)");
+  s.add_option("--allow-origin", c.allow_origins, "WebSocket Origin to accept besides the server's own (repeatable)");
+  s.add_option("--max-sessions", c.max_sessions, "concurrent WebSocket sessions")->check(CLI::Range(1, 4096));
+  s.add_option("--idle-timeout", o.idle_seconds, "seconds without a client message before closing")
+      ->check(CLI::Range(1, 86400));
+  s.add_option("--max-fps", c.max_fps, "frames per second per session")->check(CLI::Range(1.0, 240.0));
+  s.add_option("--gpu-budget-mib", o.gpu_budget_mib, "MiB of volume textures on the GPU")
+      ->check(CLI::Range(int64_t(1), int64_t(1) << 24));
+  s.add_option("--max-queued-stills", c.max_queued_stills,
+               "REST stills waiting or rendering at once; beyond, 503 with Retry-After")
+      ->check(CLI::Range(size_t(1), size_t(1024)));
+  s.add_option("--max-still-samples", c.max_still_samples,
+               "cost cap of one REST still: pixels x estimated samples per ray; beyond, 422")
+      ->check(CLI::Range(1e3, 1e15));
+  s.add_option("--still-band-samples", c.still_band_samples,
+               "estimated samples per band of a still (bands alternate with viewers' frames)")
+      ->check(CLI::Range(1e3, 1e12));
+  s.add_option("--log-level", o.log_level, "debug | info | warn | error | off (stderr)")
+      ->check(CLI::IsMember({"debug", "info", "warn", "error", "off"}));
+  s.add_option("--log-format", o.log_format, "text | json (one JSON object per line)")
+      ->check(CLI::IsMember({"text", "json"}));
+  s.add_option("--io-threads", c.io_threads, "network threads")->check(CLI::Range(1, 64));
+  s.add_option("--encode-threads", c.encode_threads, "JPEG encode threads")->check(CLI::Range(1, 64));
+  s.add_option("--web-dir", o.web_dir, "the browser client's files");
+  s.add_option("--shader-dir", o.shader_dir, "the GLSL shaders");
+  s.footer(
+      "Every option is also a PEAKCAST_* environment variable (--max-fps: PEAKCAST_MAX_FPS; lists\n"
+      "comma-separated) and a key of the --config TOML file (max-fps = 30; lists as arrays).\n"
+      "Precedence: flag > environment > config file > default. --print-config shows the result.");
+}
+
+void apply_env_and_file(CLI::App& s, ServeOptions& o) {
+  o.source.clear();
+  const char* env_config = std::getenv("PEAKCAST_CONFIG");
+  if (s.get_option("--config")->count() == 0 && env_config && *env_config) o.config_file = env_config;
+
+  std::map<std::string, std::vector<std::string>> file;
+  if (!o.config_file.empty()) {
+    std::vector<CLI::ConfigItem> items;
+    try {
+      items = CLI::ConfigTOML().from_file(o.config_file);
+    } catch (const CLI::Error& e) {
+      throw std::invalid_argument("config file " + o.config_file + ": " + e.what());
+    }
+    for (const auto& item : items) {
+      if (item.name == "++" || item.name == "--") continue;  // CLI11's section markers
+      const bool top = item.parents.empty() || (item.parents.size() == 1 && item.parents[0] == "serve");
+      const CLI::Option* opt = top ? s.get_option_no_throw("--" + item.name) : nullptr;
+      if (!opt || kNotSettings.count(item.name))
+        throw std::invalid_argument("config file " + o.config_file + ": '" + item.fullname() +
+                                    "' is not a serve option (peakcast serve --help lists them)");
+      file[item.name] = item.inputs;
+    }
+  }
+
+  for (CLI::Option* opt : s.get_options()) {
+    const std::string key = key_of(*opt);
+    if (kNotSettings.count(key)) continue;
+    const std::string env = env_name(key);
+    const char* value = std::getenv(env.c_str());
+    if (opt->count() > 0) {
+      o.source[key] = "flag";
+    } else if (value && *value) {
+      set_from(*opt, kLists.count(key) ? split_commas(value) : std::vector<std::string>{value}, env);
+      o.source[key] = "env " + env;
+    } else if (auto it = file.find(key); it != file.end()) {
+      set_from(*opt, it->second, "config file " + o.config_file + ", key " + key);
+      o.source[key] = "file " + o.config_file;
+    } else {
+      o.source[key] = "default";
+    }
+  }
+}
+
+std::string print_config(const CLI::App& s, const ServeOptions& o) {
+  std::ostringstream out;
+  out << "# peakcast serve: the effective configuration (a --config file as it stands).\n"
+      << "# Precedence: flag > PEAKCAST_* environment > config file > default.\n";
+  for (const CLI::Option* opt : s.get_options()) {
+    const std::string key = key_of(*opt);
+    if (kNotSettings.count(key)) continue;
+    auto src = o.source.find(key);
+    const std::string from = src == o.source.end() ? "default" : src->second;
+    std::string line;
+    if (key == "token") {
+      line = std::string("# token = ") + (o.server.token.empty() ? "(none: no authentication)" : "(set, not printed)");
+    } else if (kLists.count(key)) {
+      line = key + " = [";
+      const auto& values = opt->count() > 0 ? opt->results() : std::vector<std::string>{};
+      for (size_t i = 0; i < values.size(); ++i) line += (i ? ", " : "") + toml_value(values[i]);
+      line += "]";
+    } else {
+      line = key + " = " + toml_value(opt->count() > 0 ? opt->results().back() : opt->get_default_str());
+    }
+    out << line << std::string(line.size() < 44 ? 44 - line.size() : 1, ' ') << "# " << from << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace peakcast::app
