@@ -17,7 +17,9 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version exit 0; a refused argument exits 2 like any other bad input.
+    const int code = app.exit(e);
+    return code == 0 ? 0 : peakcast::app::kExitBadInput;
   }
   auto fail = [](const std::exception& e, int code) {
     std::fprintf(stderr, "peakcast: error: %s\n", e.what());

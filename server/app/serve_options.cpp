@@ -152,7 +152,10 @@ void apply_env_and_file(CLI::App& s, ServeOptions& o) {
       set_from(*opt, kLists.count(key) ? split_commas(value) : std::vector<std::string>{value}, env);
       o.source[key] = "env " + env;
     } else if (auto it = file.find(key); it != file.end()) {
-      set_from(*opt, it->second, "config file " + o.config_file + ", key " + key);
+      std::vector<std::string> values = it->second;
+      if (kLists.count(key))  // an empty TOML array leaves the list empty
+        values.erase(std::remove(values.begin(), values.end(), std::string()), values.end());
+      if (!values.empty()) set_from(*opt, values, "config file " + o.config_file + ", key " + key);
       o.source[key] = "file " + o.config_file;
     } else {
       o.source[key] = "default";

@@ -1,0 +1,138 @@
+#!/usr/bin/env python3
+"""Issue 15: every serve option as flag, PEAKCAST_* variable and config-file key, one precedence
+(flag > environment > file > default), --print-config, and each refusal named by its source."""
+import os, pathlib, re, subprocess, sys, tempfile
+
+PEAKCAST = os.environ["PEAKCAST_BIN"]
+NOT_SETTINGS = {"help", "config", "print-config"}
+
+
+def serve(args=(), env=None, check=True):
+    clean = {k: v for k, v in os.environ.items() if not k.startswith("PEAKCAST_")}
+    clean.update(env or {})
+    r = subprocess.run([PEAKCAST, "serve", *args], env=clean, capture_output=True, text=True, timeout=60)
+    if check:
+        assert r.returncode == 0, (args, env, r.stdout, r.stderr)
+    return r
+
+
+def parse(printed):
+    """key -> (value text, source) from --print-config."""
+    out = {}
+    for line in printed.splitlines():
+        m = re.match(r"^(#\s*)?([a-z-]+) = (.*?)\s+# (.*)$", line)
+        if m:
+            out[m.group(2)] = (m.group(3), m.group(4))
+    return out
+
+
+def option_keys():
+    """Every long option `serve --help` lists."""
+    keys = re.findall(r"^\s+--([a-z][a-z-]*)", serve(["--help"]).stdout, re.M)
+    return [k for k in dict.fromkeys(keys) if k not in NOT_SETTINGS]
+
+
+def env_name(key):
+    return "PEAKCAST_" + key.upper().replace("-", "_")
+
+
+def test_defaults_listed_for_every_option():
+    keys = option_keys()
+    printed = parse(serve(["--print-config"]).stdout)
+    assert len(keys) >= 19, keys
+    assert set(printed) == set(keys), (set(keys) ^ set(printed))
+    assert all(src == "default" for _, src in printed.values()), printed
+
+
+def test_every_option_by_flag_env_and_file():
+    """Each option set the three ways (to its own default value, or a list) shows that source."""
+    defaults = parse(serve(["--print-config"]).stdout)
+    with tempfile.TemporaryDirectory() as tmp:
+        for key, (value, _) in defaults.items():
+            if key == "token":
+                raw, toml = "s3cret", '"s3cret"'
+            elif value.startswith("["):
+                raw, toml = tmp, f'["{tmp}"]'
+            else:
+                toml = value
+                raw = value.strip('"')
+            cfg = pathlib.Path(tmp, f"{key}.toml")
+            cfg.write_text(f"{key} = {toml}\n")
+            by_flag = parse(serve([f"--{key}", raw, "--print-config"]).stdout)[key][1]
+            by_env = parse(serve(["--print-config"], {env_name(key): raw}).stdout)[key][1]
+            by_file = parse(serve(["--config", str(cfg), "--print-config"]).stdout)[key][1]
+            assert (by_flag, by_env, by_file) == ("flag", f"env {env_name(key)}", f"file {cfg}"), \
+                (key, by_flag, by_env, by_file)
+
+
+def test_precedence_flag_env_file_default():
+    with tempfile.TemporaryDirectory() as tmp:
+        cfg = pathlib.Path(tmp, "serve.toml")
+        cfg.write_text('port = 9001\nmax-fps = 21\nidle-timeout = 77\n[serve]\nlog-level = "debug"\n'
+                       f'data = ["{tmp}", "/var"]\n')
+        env = {"PEAKCAST_PORT": "9002", "PEAKCAST_MAX_FPS": "22", "PEAKCAST_CONFIG": str(cfg)}
+        got = parse(serve(["--port", "9003", "--print-config"], env).stdout)
+        assert got["port"] == ("9003", "flag"), got["port"]                       # flag over env and file
+        assert got["max-fps"] == ("22", "env PEAKCAST_MAX_FPS"), got["max-fps"]  # env over file
+        assert got["idle-timeout"] == ("77", f"file {cfg}"), got["idle-timeout"]  # file over default
+        assert got["log-level"] == ('"debug"', f"file {cfg}"), got["log-level"]  # a [serve] section works
+        assert got["data"] == (f'["{tmp}", "/var"]', f"file {cfg}"), got["data"]
+        assert got["bind"] == ('"127.0.0.1"', "default"), got["bind"]
+        # Lists: comma-separated in the environment, the flag repeated.
+        got = parse(serve(["--print-config"], {"PEAKCAST_DATA": "/a,/b"}).stdout)
+        assert got["data"][0] == '["/a", "/b"]', got["data"]
+        got = parse(serve(["--data", "/c", "--data", "/d", "--print-config"], {"PEAKCAST_DATA": "/a"}).stdout)
+        assert got["data"] == ('["/c", "/d"]', "flag"), got["data"]
+
+
+def test_printed_config_reads_back_the_same():
+    with tempfile.TemporaryDirectory() as tmp:
+        first = serve(["--print-config", "--port", "9010", "--max-fps", "12.5", "--data", tmp,
+                       "--log-format", "json"], {"PEAKCAST_BIND": "0.0.0.0"}).stdout
+        cfg = pathlib.Path(tmp, "printed.toml")
+        cfg.write_text(first)
+        again = parse(serve(["--config", str(cfg), "--print-config"]).stdout)
+        assert {k: v for k, (v, _) in again.items()} == {k: v for k, (v, _) in parse(first).items()}
+
+
+def test_token_never_printed():
+    out = serve(["--print-config"], {"PEAKCAST_TOKEN": "topsecret-123"}).stdout
+    assert "topsecret-123" not in out and "# token = (set, not printed)" in out, out
+
+
+def test_refusals_name_their_source():
+    cases = [
+        ({"PEAKCAST_PORT": "eighty"}, [], "PEAKCAST_PORT"),
+        ({"PEAKCAST_MAX_FPS": "1000"}, [], "PEAKCAST_MAX_FPS"),
+        ({"PEAKCAST_LOG_FORMAT": "xml"}, [], "PEAKCAST_LOG_FORMAT"),
+        ({}, ["--max-sessions", "0"], "--max-sessions"),
+        ({"PEAKCAST_CONFIG": "/nonexistent/serve.toml"}, [], "/nonexistent/serve.toml"),
+    ]
+    with tempfile.TemporaryDirectory() as tmp:
+        typo = pathlib.Path(tmp, "typo.toml")
+        typo.write_text("prot = 8080\n")
+        bad = pathlib.Path(tmp, "bad.toml")
+        bad.write_text("io-threads = 99\n")
+        cases += [({}, ["--config", str(typo)], "'prot' is not a serve option"),
+                  ({}, ["--config", str(bad)], "key io-threads")]
+        for env, args, expect in cases:
+            r = serve([*args, "--print-config"], env, check=False)
+            assert r.returncode == 2, (env, args, r.returncode, r.stdout, r.stderr)
+            assert expect in r.stderr, (env, args, r.stderr)
+            assert "# Precedence" not in r.stdout, "nothing printed for a refused configuration"
+
+
+if __name__ == "__main__":
+    tests = [v for k, v in list(globals().items()) if k.startswith("test_")]
+    failed = 0
+    for t in tests:
+        try:
+            t()
+            print(f"ok   {t.__name__}", flush=True)
+        except Exception:
+            import traceback
+            traceback.print_exc()
+            print(f"FAIL {t.__name__}", flush=True)
+            failed += 1
+    print(f"{len(tests) - failed} passed, {failed} failed")
+    sys.exit(1 if failed else 0)
