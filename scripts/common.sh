@@ -16,7 +16,7 @@ PEAKCAST_BUILD_PACKAGES=(
 # What the built server needs at run time and nothing more: the container's runtime stage
 # (docker/Dockerfile). The container test checks the binary finds every library in that image.
 PEAKCAST_RUNTIME_PACKAGES=(
-  libepoxy0 libegl1 libegl-mesa0 libgl1-mesa-dri libopenimageio2.4 libturbojpeg0
+  libepoxy0 libegl1 libopengl0 libegl-mesa0 libgl1-mesa-dri libopenimageio2.4 libturbojpeg0
   libspdlog1.10 libfmt9 zlib1g
 )
 # The README's commands: building plus the scripts' own tools.

@@ -8,6 +8,7 @@
 
 int main(int argc, char** argv) {
   CLI::App app{"peakcast " PEAKCAST_VERSION " - peak-finding volume ray caster and render server"};
+  app.set_version_flag("--version", "peakcast " PEAKCAST_VERSION);
   app.require_subcommand(1);
   peakcast::app::Runner run;
   peakcast::app::add_volume_commands(app, run);

@@ -42,7 +42,7 @@ def server_pids():
             continue
         try:
             cmd = (p / "cmdline").read_bytes().split(b"\0")
-            if cmd[:2] == [b"peakcast", b"serve"] and os.readlink(p / "root") != "/":
+            if len(cmd) > 1 and cmd[0].endswith(b"peakcast") and cmd[1] == b"serve" and os.readlink(p / "root") != "/":
                 pids.append(int(p.name))
         except OSError:
             pass
@@ -90,20 +90,27 @@ def main():
         check(inside("sh", "-c", "command -v peakcast").stdout.strip() == "/usr/local/bin/peakcast", "peakcast on PATH")
         ldd = inside("ldd", "/usr/local/bin/peakcast").stdout
         check("not found" not in ldd and "libOpenImageIO" in ldd, "every library of the binary is in the image")
-        print("  " + inside("peakcast", "--version").stdout.strip())
+        version = inside("peakcast", "--version").stdout.strip()
+        check(version.startswith("peakcast "), f"peakcast --version runs inside: {version}")
 
-        # A volume in the /data volume, mounted read-only from the host.
+        # A volume in the data volume, mounted read-only from the host. `buildah run` mounts an
+        # anonymous volume over the image's VOLUME /data (`docker run -v` would replace it), so the
+        # host folder goes beneath it: still inside the image's configured data directory.
         pathlib.Path(data, "heptane.nrrd").write_bytes((ROOT / "tests/data/heptane_151.nrrd").read_bytes())
         os.chmod(data, 0o755)
         port = free_port()
         server = Base(port)
         # The image's own entrypoint and environment; only the port and a token come from here.
         cmd = BUILDAH + ["run", "--isolation", "chroot", "-e", f"PEAKCAST_PORT={port}", "-e", "PEAKCAST_TOKEN=ctest",
-                         "-v", f"{data}:/data:ro", ctr, "--", *config["Entrypoint"]]
+                         "-v", f"{data}:/data/host:ro", ctr, "--", *config["Entrypoint"]]
         t0 = time.time()
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         line = proc.stdout.readline()
         check("serving on" in line, f"the server starts inside ({time.time() - t0:.1f} s): {line.strip()}")
+        if "serving on" not in line:
+            proc.wait(timeout=30)
+            print(proc.stderr.read()[-3000:])
+            return failures
         status, _, body = http(server, "/api/health")
         check(status == 200 and json.loads(body)["status"] == "ok", "GET /api/health from the host: 200 ok")
         hc = subprocess.run(BUILDAH + ["run", "--isolation", "chroot", "-e", f"PEAKCAST_PORT={port}", ctr, "--",
@@ -111,7 +118,7 @@ def main():
         check(hc.returncode == 0, "the image's HEALTHCHECK command passes")
         check(http(server, "/api/volumes")[0] == 401, "the token from the environment is required")
 
-        scene = dict(SCENE, volume="/data/heptane.nrrd")
+        scene = dict(SCENE, volume="/data/host/heptane.nrrd")
         status, headers, png = http(server, "/api/render", "POST", json.dumps(scene).encode(),
                                     {"Authorization": "Bearer ctest"})
         check(status == 200, f"REST render inside the container ({status})")
