@@ -79,6 +79,7 @@ void add_serve_options(CLI::App& s, ServeOptions& o) {
   o.gpu_budget_mib = c.gpu_budget_bytes >> 20;
   o.web_dir = PEAKCAST_WEB_DIR_DEFAULT;
   o.shader_dir = gpu::default_shader_dir().string();
+  c.egl_device = "auto";
   s.option_defaults()->always_capture_default();
   s.add_option("--config", o.config_file, "read options from this TOML file (also PEAKCAST_CONFIG)");
   s.add_flag("--print-config", o.print_config, "print the effective configuration, each value's source, and exit");
@@ -111,6 +112,12 @@ void add_serve_options(CLI::App& s, ServeOptions& o) {
   s.add_option("--encode-threads", c.encode_threads, "JPEG encode threads")->check(CLI::Range(1, 64));
   s.add_option("--web-dir", o.web_dir, "the browser client's files");
   s.add_option("--shader-dir", o.shader_dir, "the GLSL shaders");
+  s.add_option("--egl-device", c.egl_device,
+               "auto (a GPU first, else software) | surfaceless | an EGL device index (one GPU per process)")
+      ->check([](const std::string& v) {
+        const bool index = !v.empty() && v.size() < 4 && std::all_of(v.begin(), v.end(), ::isdigit);
+        return v == "auto" || v == "surfaceless" || index ? std::string() : "auto, surfaceless or a device index";
+      });
   s.footer(
       "Every option is also a PEAKCAST_* environment variable (--max-fps: PEAKCAST_MAX_FPS; lists\n"
       "comma-separated) and a key of the --config TOML file (max-fps = 30; lists as arrays).\n"

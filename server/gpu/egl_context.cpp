@@ -64,10 +64,10 @@ std::string GlInfo::to_string() const {
   return s.str();
 }
 
-std::unique_ptr<EglContext> EglContext::create() {
+std::unique_ptr<EglContext> EglContext::create(const std::string& device) {
   std::unique_ptr<EglContext> self(new EglContext());
   const char* env = std::getenv("PEAKCAST_EGL_DEVICE");
-  const std::string choice = env && *env ? env : "auto";
+  const std::string choice = !device.empty() ? device : env && *env ? env : "auto";
   std::ostringstream tried;
   const char* client_ext = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
 

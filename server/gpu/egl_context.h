@@ -19,7 +19,9 @@ class EglContext {
  public:
   // Selection: env PEAKCAST_EGL_DEVICE = "auto" (default: hardware devices first), an index,
   // or "surfaceless". Throws std::runtime_error saying what was tried when nothing works.
-  static std::unique_ptr<EglContext> create();
+  // device: "auto" (a GPU first, then software), "surfaceless", or a device index; empty: the
+  // PEAKCAST_EGL_DEVICE variable, else auto.
+  static std::unique_ptr<EglContext> create(const std::string& device = "");
   ~EglContext();
   EglContext(const EglContext&) = delete;
   EglContext& operator=(const EglContext&) = delete;

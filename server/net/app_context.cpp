@@ -11,7 +11,8 @@ AppContext::AppContext(ServerConfig c)
       render(residency, metrics,
              RenderServiceOptions{config.shader_dir, config.encode_threads,
                                   SchedulerOptions{config.max_queued_stills, config.still_band_samples,
-                                                   limits::kStillDelay, config.max_fps}}),
+                                                   limits::kStillDelay, config.max_fps},
+                                  config.egl_device}),
       ws_sessions(config.max_sessions) {}
 
 PngLocator AppContext::png_locator() const {

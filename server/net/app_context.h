@@ -37,6 +37,7 @@ struct ServerConfig {
   int io_threads = 2;
   int encode_threads = 2;
   std::filesystem::path web_dir, shader_dir;
+  std::string egl_device;  // "auto" | "surfaceless" | a device index; empty: PEAKCAST_EGL_DEVICE, else auto
 };
 
 struct AppContext {

@@ -30,7 +30,7 @@ void RenderService::start() {
   thread_ = std::thread([this, &ready] {
     auto impl = std::make_unique<Impl>();
     try {
-      impl->context = gpu::EglContext::create();
+      impl->context = gpu::EglContext::create(options_.egl_device);
       impl->shaders = std::make_unique<gpu::ShaderCache>(options_.shader_dir);
       impl->caster = std::make_unique<render::Raycaster>(*impl->shaders);
       ready.set_value(impl->context->info().to_string());

@@ -19,6 +19,7 @@ struct RenderServiceOptions {
   std::filesystem::path shader_dir;
   int encode_threads = 2;
   SchedulerOptions scheduling;
+  std::string egl_device;  // gpu::EglContext::create's choice; empty: PEAKCAST_EGL_DEVICE, else auto
 };
 
 class RenderService {

@@ -122,6 +122,28 @@ def test_refusals_name_their_source():
             assert "# Precedence" not in r.stdout, "nothing printed for a refused configuration"
 
 
+def test_layered_values_reach_the_server():
+    """Not only the printout: a server started from a file, the environment and a flag runs with
+    them (its health reports max-sessions and queued stills; the GL line names the EGL device)."""
+    import json, signal, urllib.request
+    with tempfile.TemporaryDirectory() as tmp:
+        cfg = pathlib.Path(tmp, "serve.toml")
+        cfg.write_text("max-sessions = 5\nmax-queued-stills = 3\n")
+        env = {k: v for k, v in os.environ.items() if not k.startswith("PEAKCAST_")}
+        env.update({"PEAKCAST_CONFIG": str(cfg), "PEAKCAST_EGL_DEVICE": "surfaceless", "PEAKCAST_MAX_QUEUED_STILLS": "7"})
+        p = subprocess.Popen([PEAKCAST, "serve", "--port", "0", "--max-sessions", "6"], env=env,
+                             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+        try:
+            line = p.stdout.readline()
+            assert "EGL surfaceless" in line, line
+            port = re.search(r":(\d+) \(GL", line).group(1)
+            health = json.load(urllib.request.urlopen(f"http://127.0.0.1:{port}/api/health", timeout=30))
+            assert health["max_sessions"] == 6 and health["max_queued_stills"] == 7, health
+        finally:
+            p.send_signal(signal.SIGTERM)
+            p.wait(timeout=10)
+
+
 if __name__ == "__main__":
     tests = [v for k, v in list(globals().items()) if k.startswith("test_")]
     failed = 0
