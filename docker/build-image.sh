@@ -10,8 +10,8 @@
 #   PEAKCAST_IMAGE          the tag to build (default localhost/peakcast:latest)
 #   BASE_IMAGE              the base (default docker.io/library/debian:bookworm-slim)
 #   PEAKCAST_DEBIAN_MIRROR  the mirror for debootstrap (default: this host's, else deb.debian.org)
-# Prints the image size and the build time at the end. Rebuilds are incremental: buildah keeps
-# layers (--layers), so an unchanged scripts/common.sh skips the package installs.
+#   PEAKCAST_IMAGE_LAYERS   set: buildah caches layers (fast rebuilds, many GB under vfs)
+# Prints the image size and the build time at the end. The debootstrap base is made once and kept.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 tag=${PEAKCAST_IMAGE:-localhost/peakcast:latest}
@@ -73,9 +73,14 @@ if ! have_image "$base" && ! "${buildah[@]}" pull -q "$base" >/dev/null 2>&1; th
   base=localhost/peakcast-base:bookworm
   have_image "$base" || make_debootstrap_base "$base"
 fi
-# --format docker: OCI images have no HEALTHCHECK field.
-"${buildah[@]}" bud --isolation chroot --format docker --layers \
+# --format docker: OCI images have no HEALTHCHECK field. Layer caching is off by default: vfs
+# stores every layer as a full copy of the file system (six cached builds took 34 GB here), so a
+# build keeps only its result and the base; PEAKCAST_IMAGE_LAYERS=1 caches layers anyway.
+layers=()
+[[ -n ${PEAKCAST_IMAGE_LAYERS:-} ]] && layers=(--layers)
+"${buildah[@]}" bud --isolation chroot --format docker "${layers[@]}" \
   -f "$root/docker/Dockerfile" --build-arg BASE_IMAGE="$base" -t "$tag" "$root"
+[[ -n ${PEAKCAST_IMAGE_LAYERS:-} ]] || "${buildah[@]}" rmi --prune >/dev/null 2>&1 || true  # the build stage, a replaced image
 size=$("${buildah[@]}" inspect --type image --format '{{.Docker.Size}}' "$tag" 2>/dev/null || echo 0)
 if [[ $size == 0 ]]; then  # vfs does not fill Size: sum the layers' uncompressed sizes
   size=$("${buildah[@]}" images --format '{{.Size}}' "$tag" | head -1)
