@@ -22,9 +22,13 @@ PEAKCAST_RUNTIME_PACKAGES=(
 # The README's commands: building plus the scripts' own tools.
 PEAKCAST_PACKAGES=("${PEAKCAST_BUILD_PACKAGES[@]}" git python3 python3-jsonschema python3-websockets python3-pil)
 # Only the test command needs these (browser tests: Debian's chromium + playwright-core; the
-# container label: buildah and debootstrap; manifests: python3-yaml).
+# container label: buildah and debootstrap; manifests: python3-yaml; the mpi label: OpenMPI and
+# IceT from ParaView's packages).
 PEAKCAST_TEST_PACKAGES=(chromium nodejs python3-vtk9 xvfb xauth clang libclang-rt-14-dev
-  buildah debootstrap python3-yaml)
+  buildah debootstrap python3-yaml
+  libopenmpi-dev openmpi-bin paraview-dev)
+# paraview-dev brings IceT (the mpi label). --no-install-recommends matters for it: with
+# recommends it pulls python3-paraview, which removes python3-vtk9.
 
 install_packages() {
   local missing=()

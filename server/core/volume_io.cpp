@@ -80,7 +80,7 @@ void check_header(const fs::path& file, const VolumeHeader& h, const LoadOptions
   int64_t bytes = 0;
   if (__builtin_mul_overflow(count, int64_t(source_bytes(h.source)), &bytes))
     throw VolumeError(file, "sizes overflow 64-bit byte count");
-  if (count > options.max_voxels)
+  if (count > options.max_voxels && !options.region)  // a region is checked by its own size
     throw VolumeError(file, std::to_string(h.dims[0]) + "x" + std::to_string(h.dims[1]) + "x" +
                                 std::to_string(h.dims[2]) + " = " + std::to_string(count) +
                                 " voxels exceeds the limit of " +
@@ -234,6 +234,7 @@ Volume read_payload(const fs::path& header_file, const VolumeHeader& h, const Pa
                     const LoadOptions& options) {
   check_header(header_file, h, options);
   if (payload.files.empty()) throw VolumeError(header_file, "no data file");
+  if (options.region) return read_payload_region(header_file, h, payload, options);
   const size_t total = size_t(h.voxel_count()) * source_bytes(h.source);
   // Raw data: refuse a short file before allocating anything.
   if (payload.encoding == Encoding::Raw) {
@@ -284,6 +285,7 @@ Volume load_volume(const fs::path& path, const LoadOptions& options) {
   const std::string ext = lower(path.extension().string());
   Volume v;
   if (fs::is_directory(path, ec) || ext == ".tif" || ext == ".tiff") {
+    if (options.region) throw VolumeError(path, "a region of a TIFF stack cannot be read (use NRRD, MetaImage or raw)");
     v = read_tiff(path, options);
   } else if (ext == ".nrrd" || ext == ".nhdr") {
     v = read_nrrd(path, options);

@@ -2,7 +2,9 @@
 // names the file and the reason; nothing larger than the configured limit is ever allocated.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
@@ -23,9 +25,18 @@ class VolumeError : public std::runtime_error {
 // a volume with a few masked voxels to open; `refuse` for pipelines that want to stop instead.
 enum class NonFinitePolicy { Replace, Refuse };
 
+// A box of voxels [lo, hi) to read instead of the whole volume (a brick of a distributed
+// render). The volume read holds hi - lo voxels per axis, its origin moved to voxel lo.
+struct VoxelRegion {
+  std::array<int64_t, 3> lo{}, hi{};
+};
+
 struct LoadOptions {
   int64_t max_voxels = int64_t(1) << 32;
   NonFinitePolicy nonfinite = NonFinitePolicy::Replace;
+  // Raw data reads only the region's rows (pread); compressed data is inflated up to the
+  // region's last row and the rest discarded. TIFF stacks are refused (whole-file format).
+  std::optional<VoxelRegion> region;
 };
 
 // Format by name: .nrrd/.nhdr, .mhd/.mha, .json (sidecar) or .raw with a sidecar,

@@ -26,6 +26,10 @@ void check_header(const std::filesystem::path& file, const VolumeHeader& h,
 Volume read_payload(const std::filesystem::path& header_file, const VolumeHeader& h,
                     const PayloadSpec& payload, const LoadOptions& options);
 
+// read_payload's path for options.region (volume_region.cpp): the region's rows only.
+Volume read_payload_region(const std::filesystem::path& header_file, const VolumeHeader& h,
+                           const PayloadSpec& payload, const LoadOptions& options);
+
 // Post-processing shared with the TIFF reader.
 void finish_volume(const std::filesystem::path& file, Volume& v, bool big_endian,
                    const LoadOptions& options);

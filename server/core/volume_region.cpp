@@ -1,0 +1,163 @@
+// Reading a box of voxels out of a volume file (issue 16: each MPI rank reads only its brick).
+// The payload is the full volume's bytes in x-fastest order, possibly split over several files
+// (NRRD LIST, printf data files) and possibly compressed. The region is a list of rows (one per
+// y and z of the box), each a contiguous run of the payload; only those bytes land in the volume.
+#include <unistd.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <memory>
+
+#include "core/volume_io_detail.h"
+
+namespace fs = std::filesystem;
+
+namespace peakcast::detail {
+namespace {
+
+struct Rows {
+  int64_t nx, ny, x0, y0, z0, rx, ry, rz, bpv;
+  int64_t count() const { return ry * rz; }
+  int64_t bytes() const { return rx * bpv; }
+  int64_t start(int64_t k) const {  // payload byte offset of row k (y fastest, then z)
+    const int64_t y = y0 + k % ry, z = z0 + k / ry;
+    return ((z * ny + y) * nx + x0) * bpv;
+  }
+};
+
+struct FileCloser {
+  void operator()(FILE* f) const { std::fclose(f); }
+};
+
+// Copies the part of payload bytes [c0, c0 + n) that falls into rows, from row `k` on; advances k
+// past rows that are complete.
+void copy_rows(const Rows& rows, int64_t& k, int64_t c0, const uint8_t* chunk, int64_t n, uint8_t* dst) {
+  for (int64_t r = k; r < rows.count(); ++r) {
+    const int64_t s = rows.start(r), e = s + rows.bytes();
+    if (s >= c0 + n) break;
+    const int64_t a = std::max(s, c0), b = std::min(e, c0 + n);
+    if (a < b) std::copy(chunk + (a - c0), chunk + (b - c0), dst + r * rows.bytes() + (a - s));
+    if (e <= c0 + n && r == k) ++k;
+  }
+}
+
+// Raw payload: each row by pread from the file(s) that hold it.
+void read_raw_rows(const PayloadSpec& payload, int64_t total, const Rows& rows, uint8_t* dst) {
+  struct Part {
+    fs::path path;
+    int64_t begin, end, file_offset;  // payload bytes [begin, end) at file_offset in the file
+  };
+  std::vector<Part> parts;
+  int64_t at = 0;
+  for (size_t i = 0; i < payload.files.size() && at < total; ++i) {
+    std::error_code ec;
+    const int64_t size = int64_t(fs::file_size(payload.files[i], ec));
+    int64_t skip = i == 0 ? payload.byte_skip : 0;
+    if (skip < 0) skip = std::max<int64_t>(0, size - total);  // the data is the last bytes
+    const int64_t n = std::min(std::max<int64_t>(size - skip, 0), total - at);
+    parts.push_back({payload.files[i], at, at + n, skip});
+    at += n;
+  }
+  for (const Part& p : parts) {
+    std::unique_ptr<FILE, FileCloser> f(std::fopen(p.path.c_str(), "rb"));
+    if (!f) throw VolumeError(p.path, "cannot open");
+    const int fd = fileno(f.get());
+    for (int64_t r = 0; r < rows.count(); ++r) {
+      const int64_t s = rows.start(r), e = s + rows.bytes();
+      const int64_t a = std::max(s, p.begin), b = std::min(e, p.end);
+      for (int64_t got = 0; a + got < b;) {
+        const ssize_t n = ::pread(fd, dst + r * rows.bytes() + (a - s) + got, size_t(b - a - got),
+                                  off_t(p.file_offset + (a - p.begin) + got));
+        if (n <= 0) throw VolumeError(p.path, "read failed (the file shrank or could not be read)");
+        got += n;
+      }
+    }
+  }
+}
+
+// Compressed payload: inflate in 1 MiB chunks, keep the rows' bytes, stop after the last row.
+void read_compressed_rows(const PayloadSpec& payload, const Rows& rows, uint8_t* dst) {
+  const int64_t last_byte = rows.start(rows.count() - 1) + rows.bytes();
+  std::vector<unsigned char> in(1 << 20), out(1 << 20);
+  int64_t at = 0, k = 0;
+  for (size_t i = 0; i < payload.files.size() && at < last_byte; ++i) {
+    std::unique_ptr<FILE, FileCloser> f(std::fopen(payload.files[i].c_str(), "rb"));
+    if (!f) throw VolumeError(payload.files[i], "cannot open");
+    if (i == 0 && payload.byte_skip > 0) std::fseek(f.get(), long(payload.byte_skip), SEEK_SET);
+    z_stream z{};
+    if (inflateInit2(&z, 15 + 32) != Z_OK) throw VolumeError(payload.files[i], "zlib init failed");
+    std::unique_ptr<z_stream, int (*)(z_stream*)> guard(&z, inflateEnd);
+    bool end = false;
+    while (!end && at < last_byte) {
+      z.avail_in = uInt(std::fread(in.data(), 1, in.size(), f.get()));
+      if (z.avail_in == 0) break;
+      z.next_in = in.data();
+      while (z.avail_in > 0 && at < last_byte) {
+        z.next_out = out.data();
+        z.avail_out = uInt(out.size());
+        const int rc = inflate(&z, Z_NO_FLUSH);
+        const int64_t n = int64_t(out.size() - z.avail_out);
+        copy_rows(rows, k, at, out.data(), n, dst);
+        at += n;
+        if (rc == Z_STREAM_END) {
+          if (z.avail_in > 0 || !std::feof(f.get())) {
+            inflateReset(&z);  // concatenated gzip members
+            continue;
+          }
+          end = true;
+          break;
+        }
+        if (rc != Z_OK && rc != Z_BUF_ERROR)
+          throw VolumeError(payload.files[i], std::string("gzip stream corrupt: ") + (z.msg ? z.msg : "inflate error"));
+        if (rc == Z_BUF_ERROR && n == 0) break;
+      }
+    }
+  }
+  if (at < last_byte)
+    throw VolumeError(payload.files.back(), "truncated: the region ends at data byte " + std::to_string(last_byte) +
+                                                ", the data holds " + std::to_string(at));
+}
+
+}  // namespace
+
+Volume read_payload_region(const fs::path& header_file, const VolumeHeader& h, const PayloadSpec& payload,
+                           const LoadOptions& options) {
+  const VoxelRegion& region = *options.region;
+  VolumeHeader rh = h;
+  for (int a = 0; a < 3; ++a) {
+    if (region.lo[a] < 0 || region.hi[a] > h.dims[a] || region.lo[a] >= region.hi[a])
+      throw VolumeError(header_file, "region [" + std::to_string(region.lo[a]) + ", " + std::to_string(region.hi[a]) +
+                                         ") on axis " + std::to_string(a) + " is not inside the volume's " +
+                                         std::to_string(h.dims[a]) + " voxels");
+    rh.dims[a] = region.hi[a] - region.lo[a];
+    rh.origin[a] = h.origin[a] + double(region.lo[a]) * h.spacing[a];
+  }
+  LoadOptions local = options;
+  local.region.reset();
+  check_header(header_file, rh, local);  // the region's own voxel limit
+  const int64_t bpv = int64_t(source_bytes(h.source));
+  const int64_t total = h.voxel_count() * bpv;
+  const Rows rows{h.dims[0], h.dims[1], region.lo[0], region.lo[1], region.lo[2], rh.dims[0], rh.dims[1], rh.dims[2], bpv};
+  if (payload.encoding == Encoding::Raw) {
+    int64_t available = 0;
+    for (size_t i = 0; i < payload.files.size(); ++i) {
+      std::error_code ec;
+      if (!fs::is_regular_file(payload.files[i], ec))
+        throw VolumeError(payload.files[i], "no such file (data of " + header_file.filename().string() + ")");
+      const int64_t size = int64_t(fs::file_size(payload.files[i], ec));
+      available += std::max<int64_t>(i == 0 && payload.byte_skip > 0 ? size - payload.byte_skip : size, 0);
+    }
+    if (available < total)  // the same refusal as a whole read: the header's promise is checked
+      throw VolumeError(payload.files.back(), "truncated: header " + header_file.filename().string() + " promises " +
+                                                  std::to_string(total) + " data bytes, the data holds " +
+                                                  std::to_string(available));
+  }
+  Volume v(rh);
+  if (payload.encoding == Encoding::Raw) read_raw_rows(payload, total, rows, v.data());
+  else read_compressed_rows(payload, rows, v.data());
+  finish_volume(header_file, v, h.big_endian, local);
+  return v;
+}
+
+}  // namespace peakcast::detail

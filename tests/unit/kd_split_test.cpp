@@ -1,0 +1,104 @@
+// Issue 16: the k-d split into one brick per rank, and the compositing order for a camera.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+#include "dist/kd_split.h"
+
+using namespace peakcast::dist;
+
+namespace {
+
+bool owns_cell(const Brick& b, const Index3& c) {
+  for (int a = 0; a < 3; ++a)
+    if (c[a] < b.lo[a] || c[a] + 1 > b.hi[a]) return false;
+  return true;
+}
+
+TEST(KdSplit, BricksTileTheVolumeOnceForAnyRankCount) {
+  const Index3 dims{17, 9, 12};
+  for (int ranks = 1; ranks <= 9; ++ranks) {
+    const KdSplit s = kd_split(dims, ranks, 2);
+    ASSERT_EQ(int(s.bricks.size()), ranks);
+    for (int64_t z = 0; z + 1 < dims[2]; ++z)
+      for (int64_t y = 0; y + 1 < dims[1]; ++y)
+        for (int64_t x = 0; x + 1 < dims[0]; ++x) {
+          const int owners = int(std::count_if(s.bricks.begin(), s.bricks.end(),
+                                               [&](const Brick& b) { return owns_cell(b, {x, y, z}); }));
+          ASSERT_EQ(owners, 1) << "cell " << x << "," << y << "," << z << " with " << ranks << " ranks";
+        }
+    for (int r = 0; r < ranks; ++r) EXPECT_EQ(s.bricks[r].rank, r);
+  }
+}
+
+TEST(KdSplit, SharesFollowTheRankCountOnTheReferenceVolume) {
+  const Index3 dims{900, 500, 930};
+  const double cells = 899.0 * 499.0 * 929.0;
+  for (int ranks : {2, 3, 4, 5, 7}) {
+    const KdSplit s = kd_split(dims, ranks, 1);
+    for (const Brick& b : s.bricks) {
+      const double share = double(b.hi[0] - b.lo[0]) * double(b.hi[1] - b.lo[1]) * double(b.hi[2] - b.lo[2]) / cells;
+      EXPECT_NEAR(share * ranks, 1.0, 0.01) << b.to_string();
+    }
+  }
+}
+
+TEST(KdSplit, GhostsAreTheFiltersSupportClampedToTheVolume) {
+  EXPECT_EQ(ghost_voxels(false, false), 1);
+  EXPECT_EQ(ghost_voxels(true, false), 2);
+  EXPECT_EQ(ghost_voxels(true, true), 3);
+  const KdSplit s = kd_split({40, 10, 10}, 2, 2);
+  const Brick &a = s.bricks[0], &b = s.bricks[1];
+  EXPECT_EQ(a.hi[0], b.lo[0]);  // the shared plane
+  EXPECT_EQ(a.read_lo[0], 0);
+  EXPECT_EQ(a.read_hi[0], a.hi[0] + 1 + 2);  // voxels up to hi + ghost, exclusive end
+  EXPECT_EQ(b.read_lo[0], b.lo[0] - 2);
+  EXPECT_EQ(b.read_hi[0], 40);
+  EXPECT_EQ(a.read_lo[1], 0);
+  EXPECT_EQ(a.read_hi[1], 10);
+}
+
+TEST(KdSplit, RefusesMoreRanksThanCells) {
+  EXPECT_THROW(kd_split({3, 2, 2}, 5, 1), std::invalid_argument);
+  EXPECT_THROW(kd_split({8, 8, 8}, 0, 1), std::invalid_argument);
+  EXPECT_NO_THROW(kd_split({3, 2, 2}, 2, 1));
+}
+
+// Every ray from the eye enters the bricks in an order consistent with visibility_order.
+TEST(KdSplit, VisibilityOrderIsTheOrderRaysMeetTheBricks) {
+  const Index3 dims{30, 20, 25};
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-40.0, 70.0), in(0.0, 1.0);
+  for (int ranks : {2, 3, 5, 8}) {
+    const KdSplit s = kd_split(dims, ranks, 1);
+    for (int trial = 0; trial < 40; ++trial) {
+      const bool ortho = trial % 2 == 1;
+      const glm::dvec3 eye(u(rng), u(rng), u(rng));
+      const glm::dvec3 dir = glm::normalize(glm::dvec3(in(rng) - 0.5, in(rng) - 0.5, in(rng) - 0.5));
+      const std::vector<int> order = visibility_order(s, eye, dir, ortho);
+      ASSERT_EQ(int(order.size()), ranks);
+      std::vector<int> position(static_cast<size_t>(ranks), 0);
+      for (int i = 0; i < ranks; ++i) position[size_t(order[size_t(i)])] = i;
+      for (int ray = 0; ray < 30; ++ray) {
+        const glm::dvec3 target(in(rng) * 29, in(rng) * 19, in(rng) * 24);
+        const glm::dvec3 origin = ortho ? target - dir * 100.0 : eye;
+        const glm::dvec3 d = ortho ? dir : glm::normalize(target - eye);
+        int last = -1;
+        for (double t = 0; t < 250; t += 0.05) {
+          const glm::dvec3 p = origin + d * t;
+          for (const Brick& b : s.bricks) {
+            bool inside = true;
+            for (int a = 0; a < 3; ++a) inside = inside && p[a] > b.lo[a] && p[a] < b.hi[a];
+            if (inside) {
+              ASSERT_GE(position[size_t(b.rank)], last) << "ray met rank " << b.rank << " after a later one";
+              last = position[size_t(b.rank)];
+            }
+          }
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
