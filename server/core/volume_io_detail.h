@@ -1,7 +1,9 @@
 // Shared by the format readers: where the voxel bytes are and how they are encoded.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -25,6 +27,11 @@ void check_header(const std::filesystem::path& file, const VolumeHeader& h,
 // swaps, shifts signed types, applies the non-finite policy and computes the statistics.
 Volume read_payload(const std::filesystem::path& header_file, const VolumeHeader& h,
                     const PayloadSpec& payload, const LoadOptions& options);
+
+// Inflates a gzip or zlib file (from `skip`) in 1 MiB chunks into `sink`, which returns false to
+// stop early. Concatenated gzip members are read as one stream. Throws VolumeError when corrupt.
+void inflate_file(const std::filesystem::path& path, int64_t skip, Encoding enc,
+                  const std::function<bool(const uint8_t*, size_t)>& sink);
 
 // read_payload's path for options.region (volume_region.cpp): the region's rows only.
 Volume read_payload_region(const std::filesystem::path& header_file, const VolumeHeader& h,

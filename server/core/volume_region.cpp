@@ -3,7 +3,6 @@
 // (NRRD LIST, printf data files) and possibly compressed. The region is a list of rows (one per
 // y and z of the box), each a contiguous run of the payload; only those bytes land in the volume.
 #include <unistd.h>
-#include <zlib.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -76,44 +75,17 @@ void read_raw_rows(const PayloadSpec& payload, int64_t total, const Rows& rows, 
   }
 }
 
-// Compressed payload: inflate in 1 MiB chunks, keep the rows' bytes, stop after the last row.
+// Compressed payload: inflate in chunks, keep the rows' bytes, stop after the last row.
 void read_compressed_rows(const PayloadSpec& payload, const Rows& rows, uint8_t* dst) {
   const int64_t last_byte = rows.start(rows.count() - 1) + rows.bytes();
-  std::vector<unsigned char> in(1 << 20), out(1 << 20);
   int64_t at = 0, k = 0;
-  for (size_t i = 0; i < payload.files.size() && at < last_byte; ++i) {
-    std::unique_ptr<FILE, FileCloser> f(std::fopen(payload.files[i].c_str(), "rb"));
-    if (!f) throw VolumeError(payload.files[i], "cannot open");
-    if (i == 0 && payload.byte_skip > 0) std::fseek(f.get(), long(payload.byte_skip), SEEK_SET);
-    z_stream z{};
-    if (inflateInit2(&z, 15 + 32) != Z_OK) throw VolumeError(payload.files[i], "zlib init failed");
-    std::unique_ptr<z_stream, int (*)(z_stream*)> guard(&z, inflateEnd);
-    bool end = false;
-    while (!end && at < last_byte) {
-      z.avail_in = uInt(std::fread(in.data(), 1, in.size(), f.get()));
-      if (z.avail_in == 0) break;
-      z.next_in = in.data();
-      while (z.avail_in > 0 && at < last_byte) {
-        z.next_out = out.data();
-        z.avail_out = uInt(out.size());
-        const int rc = inflate(&z, Z_NO_FLUSH);
-        const int64_t n = int64_t(out.size() - z.avail_out);
-        copy_rows(rows, k, at, out.data(), n, dst);
-        at += n;
-        if (rc == Z_STREAM_END) {
-          if (z.avail_in > 0 || !std::feof(f.get())) {
-            inflateReset(&z);  // concatenated gzip members
-            continue;
-          }
-          end = true;
-          break;
-        }
-        if (rc != Z_OK && rc != Z_BUF_ERROR)
-          throw VolumeError(payload.files[i], std::string("gzip stream corrupt: ") + (z.msg ? z.msg : "inflate error"));
-        if (rc == Z_BUF_ERROR && n == 0) break;
-      }
-    }
-  }
+  for (size_t i = 0; i < payload.files.size() && at < last_byte; ++i)
+    inflate_file(payload.files[i], i == 0 ? payload.byte_skip : 0, payload.encoding,
+                 [&](const uint8_t* chunk, size_t n) {
+                   copy_rows(rows, k, at, chunk, int64_t(n), dst);
+                   at += int64_t(n);
+                   return at < last_byte;
+                 });
   if (at < last_byte)
     throw VolumeError(payload.files.back(), "truncated: the region ends at data byte " + std::to_string(last_byte) +
                                                 ", the data holds " + std::to_string(at));

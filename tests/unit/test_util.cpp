@@ -3,6 +3,8 @@
 #include <fstream>
 #include <random>
 
+#include "core/generators.h"
+
 namespace fs = std::filesystem;
 
 namespace peakcast::test {
@@ -62,6 +64,17 @@ std::shared_ptr<Volume> float_volume(const Dims& dims, const std::function<float
     for (int64_t j = 0; j < dims[1]; ++j)
       for (int64_t i = 0; i < dims[0]; ++i) p[i + dims[0] * (j + dims[1] * k)] = f(i, j, k);
   v->finalize_statistics();
+  return v;
+}
+
+Volume anisotropic_blobs(SourceType type, const Dims& dims) {
+  GeneratorSpec s;
+  s.kind = GeneratorKind::Blobs;
+  s.dims = dims;
+  s.type = type;
+  s.spacing = {0.5, 1.25, 2.0};
+  Volume v = generate_volume(s);
+  v.origin = {-3.0, 4.5, 0.25};
   return v;
 }
 

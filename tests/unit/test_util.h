@@ -26,6 +26,8 @@ class TempDir {
 };
 
 std::filesystem::path data_dir();  // tests/data
+// A small blobs volume with spacing (0.5, 1.25, 2) and origin (-3, 4.5, 0.25): the loader tests'.
+Volume anisotropic_blobs(SourceType type, const Dims& dims);
 uint64_t fnv1a(const void* data, size_t bytes);
 void write_file(const std::filesystem::path& p, const std::string& bytes);
 // True when both volumes hold the same dims, spacing, origin, types and physical values.

@@ -17,16 +17,7 @@ using namespace peakcast;
 
 namespace {
 
-Volume sample(SourceType type) {
-  GeneratorSpec s;
-  s.kind = GeneratorKind::Blobs;
-  s.dims = {13, 7, 5};
-  s.type = type;
-  s.spacing = {0.5, 1.25, 2.0};
-  Volume v = generate_volume(s);
-  v.origin = {-3.0, 4.5, 0.25};
-  return v;
-}
+Volume sample(SourceType type) { return test::anisotropic_blobs(type, {13, 7, 5}); }
 
 struct Case {
   SourceType type;

@@ -14,16 +14,7 @@ using namespace peakcast;
 
 namespace {
 
-Volume sample(SourceType type) {
-  GeneratorSpec s;
-  s.kind = GeneratorKind::Blobs;
-  s.dims = {23, 11, 9};
-  s.type = type;
-  s.spacing = {0.5, 1.25, 2.0};
-  Volume v = generate_volume(s);
-  v.origin = {-3.0, 4.5, 0.25};
-  return v;
-}
+Volume sample(SourceType type) { return test::anisotropic_blobs(type, {23, 11, 9}); }
 
 void expect_crop(const Volume& whole, const Volume& part, const VoxelRegion& r) {
   ASSERT_EQ(part.dims()[0], r.hi[0] - r.lo[0]);
