@@ -249,7 +249,6 @@ Volume read_payload(const fs::path& header_file, const VolumeHeader& h, const Pa
                     const LoadOptions& options) {
   check_header(header_file, h, options);
   if (payload.files.empty()) throw VolumeError(header_file, "no data file");
-  if (options.region) return read_payload_region(header_file, h, payload, options);
   const size_t total = size_t(h.voxel_count()) * source_bytes(h.source);
   // Raw data: refuse a short file before allocating anything.
   if (payload.encoding == Encoding::Raw) {
@@ -268,6 +267,7 @@ Volume read_payload(const fs::path& header_file, const VolumeHeader& h, const Pa
                             std::to_string(total) + " data bytes, the data holds " +
                             std::to_string(available));
   }
+  if (options.region) return read_payload_region(header_file, h, payload, options);  // raw: checked above
   Volume v(h);
   size_t got = 0;
   for (size_t i = 0; i < payload.files.size() && got < total; ++i) {

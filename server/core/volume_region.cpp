@@ -111,20 +111,6 @@ Volume read_payload_region(const fs::path& header_file, const VolumeHeader& h, c
   const int64_t bpv = int64_t(source_bytes(h.source));
   const int64_t total = h.voxel_count() * bpv;
   const Rows rows{h.dims[0], h.dims[1], region.lo[0], region.lo[1], region.lo[2], rh.dims[0], rh.dims[1], rh.dims[2], bpv};
-  if (payload.encoding == Encoding::Raw) {
-    int64_t available = 0;
-    for (size_t i = 0; i < payload.files.size(); ++i) {
-      std::error_code ec;
-      if (!fs::is_regular_file(payload.files[i], ec))
-        throw VolumeError(payload.files[i], "no such file (data of " + header_file.filename().string() + ")");
-      const int64_t size = int64_t(fs::file_size(payload.files[i], ec));
-      available += std::max<int64_t>(i == 0 && payload.byte_skip > 0 ? size - payload.byte_skip : size, 0);
-    }
-    if (available < total)  // the same refusal as a whole read: the header's promise is checked
-      throw VolumeError(payload.files.back(), "truncated: header " + header_file.filename().string() + " promises " +
-                                                  std::to_string(total) + " data bytes, the data holds " +
-                                                  std::to_string(available));
-  }
   Volume v(rh);
   if (payload.encoding == Encoding::Raw) read_raw_rows(payload, total, rows, v.data());
   else read_compressed_rows(payload, rows, v.data());
