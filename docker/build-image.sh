@@ -52,9 +52,12 @@ make_debootstrap_base() {
     tail -20 "$work/debootstrap.log" >&2
     exit 1
   }
-  # The same suites as a Debian image: the release, its updates and security fixes.
-  local security=${mirror%/debian}/debian-security
-  [[ $mirror == */debian ]] || security=http://deb.debian.org/debian-security
+  # The same suites as a Debian image: the release, its updates and security fixes (the host's
+  # security source when it has one).
+  local security
+  security=$(grep -hE '^(URIs:|deb )' /etc/apt/sources.list.d/*.sources /etc/apt/sources.list 2>/dev/null |
+    grep -E 'security' | head -1 | sed -E 's/^URIs: *//; s/^deb +(\[[^]]*\] +)?//; s/ .*//')
+  security=${security:-http://deb.debian.org/debian-security}
   cat >"$work/rootfs/etc/apt/sources.list" <<SOURCES
 deb $mirror bookworm main
 deb $mirror bookworm-updates main

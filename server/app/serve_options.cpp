@@ -115,7 +115,8 @@ void add_serve_options(CLI::App& s, ServeOptions& o) {
   s.add_option("--egl-device", c.egl_device,
                "auto (a GPU first, else software) | surfaceless | an EGL device index (one GPU per process)")
       ->check([](const std::string& v) {
-        const bool index = !v.empty() && v.size() < 4 && std::all_of(v.begin(), v.end(), ::isdigit);
+        const bool index = !v.empty() && v.size() < 4 &&
+                           std::all_of(v.begin(), v.end(), [](unsigned char ch) { return std::isdigit(ch) != 0; });
         return v == "auto" || v == "surfaceless" || index ? std::string() : "auto, surfaceless or a device index";
       });
   s.footer(
@@ -155,8 +156,9 @@ void apply_env_and_file(CLI::App& s, ServeOptions& o) {
     const char* value = std::getenv(env.c_str());
     if (opt->count() > 0) {
       o.source[key] = "flag";
-    } else if (value && *value) {
-      set_from(*opt, kLists.count(key) ? split_commas(value) : std::vector<std::string>{value}, env);
+    } else if (value && *value) {  // an empty variable counts as unset
+      const auto values = kLists.count(key) ? split_commas(value) : std::vector<std::string>{value};
+      if (!values.empty()) set_from(*opt, values, env);  // "PEAKCAST_DATA=," is an empty list
       o.source[key] = "env " + env;
     } else if (auto it = file.find(key); it != file.end()) {
       std::vector<std::string> values = it->second;

@@ -23,8 +23,9 @@ struct PayloadSpec {
 void check_header(const std::filesystem::path& file, const VolumeHeader& h,
                   const LoadOptions& options);
 
-// Allocates the volume and streams the payload straight into it (no second copy), then byte
-// swaps, shifts signed types, applies the non-finite policy and computes the statistics.
+// Allocates the volume and streams the payload into it (raw: straight in; compressed: through a
+// 1 MiB buffer), then byte swaps, shifts signed types, applies the non-finite policy and
+// computes the statistics.
 Volume read_payload(const std::filesystem::path& header_file, const VolumeHeader& h,
                     const PayloadSpec& payload, const LoadOptions& options);
 

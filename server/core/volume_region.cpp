@@ -58,7 +58,9 @@ void read_raw_rows(const PayloadSpec& payload, int64_t total, const Rows& rows, 
     parts.push_back({payload.files[i], at, at + n, skip});
     at += n;
   }
+  const int64_t first = rows.start(0), last = rows.start(rows.count() - 1) + rows.bytes();
   for (const Part& p : parts) {
+    if (p.end <= first || p.begin >= last) continue;  // a slice file outside the region
     std::unique_ptr<FILE, FileCloser> f(std::fopen(p.path.c_str(), "rb"));
     if (!f) throw VolumeError(p.path, "cannot open");
     const int fd = fileno(f.get());

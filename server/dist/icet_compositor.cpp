@@ -39,6 +39,10 @@ std::vector<float> IceTCompositor::composite(const std::vector<float>& rgba, int
                                              const std::vector<int>& order, CompositeTiming* timing) {
   if (width <= 0 || height <= 0 || rgba.size() != size_t(width) * size_t(height) * 4)
     throw std::invalid_argument("composite: the image is not width x height RGBA floats");
+  std::vector<int> seen(size_t(impl_->size), 0);
+  for (int r : order)
+    if (r < 0 || r >= impl_->size || seen[size_t(r)]++)
+      throw std::invalid_argument("composite: the order must name every rank once");
   if (int(order.size()) != impl_->size) throw std::invalid_argument("composite: the order must name every rank once");
   icetSetContext(impl_->context);
   icetResetTiles();

@@ -32,6 +32,14 @@ def option_keys():
     return [k for k in dict.fromkeys(keys) if k not in NOT_SETTINGS]
 
 
+def is_number(text):
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False
+
+
 def env_name(key):
     return "PEAKCAST_" + key.upper().replace("-", "_")
 
@@ -44,25 +52,39 @@ def test_defaults_listed_for_every_option():
     assert all(src == "default" for _, src in printed.values()), printed
 
 
+# A value other than the default for every option: a new option without one fails the test below.
+NON_DEFAULT = {"bind": "0.0.0.0", "port": "9123", "max-sessions": "5", "idle-timeout": "30", "max-fps": "24",
+               "gpu-budget-mib": "512", "max-queued-stills": "2", "max-still-samples": "1e+09",
+               "still-band-samples": "2e+07", "log-level": "debug", "log-format": "json", "io-threads": "3",
+               "encode-threads": "3", "web-dir": "/tmp", "shader-dir": "/tmp", "egl-device": "surfaceless"}
+
+
 def test_every_option_by_flag_env_and_file():
-    """Each option set the three ways (to its own default value, or a list) shows that source."""
+    """Each option set the three ways to a value that is not its default: printed with that value
+    and that source."""
     defaults = parse(serve(["--print-config"]).stdout)
     with tempfile.TemporaryDirectory() as tmp:
-        for key, (value, _) in defaults.items():
+        for key, (default, _) in defaults.items():
             if key == "token":
-                raw, toml = "s3cret", '"s3cret"'
-            elif value.startswith("["):
-                raw, toml = tmp, f'["{tmp}"]'
+                raw, printed = "s3cret", None
+            elif default.startswith("["):
+                raw, printed = tmp, f'["{tmp}"]'
             else:
-                toml = value
-                raw = value.strip('"')
+                assert key in NON_DEFAULT, f"give --{key} a non-default value in NON_DEFAULT"
+                raw = NON_DEFAULT[key]
+                printed = raw if is_number(raw) else f'"{raw}"'
+                assert printed != default, (key, default)
+            toml = f'"{raw}"' if printed is None or printed.startswith('"') else (f'["{raw}"]' if printed.startswith("[") else raw)
             cfg = pathlib.Path(tmp, f"{key}.toml")
             cfg.write_text(f"{key} = {toml}\n")
-            by_flag = parse(serve([f"--{key}", raw, "--print-config"]).stdout)[key][1]
-            by_env = parse(serve(["--print-config"], {env_name(key): raw}).stdout)[key][1]
-            by_file = parse(serve(["--config", str(cfg), "--print-config"]).stdout)[key][1]
-            assert (by_flag, by_env, by_file) == ("flag", f"env {env_name(key)}", f"file {cfg}"), \
-                (key, by_flag, by_env, by_file)
+            for args, env, source in (([f"--{key}", raw], {}, "flag"), ([], {env_name(key): raw}, f"env {env_name(key)}"),
+                                      (["--config", str(cfg)], {}, f"file {cfg}")):
+                value, src = parse(serve([*args, "--print-config"], env).stdout)[key]
+                assert src == source, (key, source, src)
+                if printed is None:
+                    assert value == "(set, not printed)", (key, value)
+                else:
+                    assert value == printed, (key, source, value, printed)
 
 
 def test_precedence_flag_env_file_default():
@@ -128,9 +150,11 @@ def test_layered_values_reach_the_server():
     import json, signal, urllib.request
     with tempfile.TemporaryDirectory() as tmp:
         cfg = pathlib.Path(tmp, "serve.toml")
-        cfg.write_text("max-sessions = 5\nmax-queued-stills = 3\n")
+        # egl-device only in the file: the EGL context's own PEAKCAST_EGL_DEVICE is unset, so only
+        # the configuration can choose surfaceless (auto would take device 0).
+        cfg.write_text('max-sessions = 5\nmax-queued-stills = 3\nidle-timeout = 42\negl-device = "surfaceless"\n')
         env = {k: v for k, v in os.environ.items() if not k.startswith("PEAKCAST_")}
-        env.update({"PEAKCAST_CONFIG": str(cfg), "PEAKCAST_EGL_DEVICE": "surfaceless", "PEAKCAST_MAX_QUEUED_STILLS": "7"})
+        env.update({"PEAKCAST_CONFIG": str(cfg), "PEAKCAST_MAX_QUEUED_STILLS": "7"})
         p = subprocess.Popen([PEAKCAST, "serve", "--port", "0", "--max-sessions", "6"], env=env,
                              stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
         try:
@@ -138,7 +162,7 @@ def test_layered_values_reach_the_server():
             assert "EGL surfaceless" in line, line
             port = re.search(r":(\d+) \(GL", line).group(1)
             health = json.load(urllib.request.urlopen(f"http://127.0.0.1:{port}/api/health", timeout=30))
-            assert health["max_sessions"] == 6 and health["max_queued_stills"] == 7, health
+            assert health["max_sessions"] == 6 and health["max_queued_stills"] == 7, health  # flag, env
         finally:
             p.send_signal(signal.SIGTERM)
             p.wait(timeout=10)

@@ -66,6 +66,24 @@ INSTANTIATE_TEST_SUITE_P(Formats, Region,
                                            Case{SourceType::U16, ".nhdr", false}, Case{SourceType::U8, ".nhdr", true},
                                            Case{SourceType::I8, ".mhd", false}, Case{SourceType::F32, ".mha", false}));
 
+// Compressed data larger than the 1 MiB inflate chunk: regions whose rows straddle a chunk
+// boundary, and one that ends early (the reader stops inflating after its last row).
+TEST(Region, CompressedRowsAcrossInflateChunks) {
+  test::TempDir dir;
+  const Volume v = test::anisotropic_blobs(SourceType::U16, {170, 97, 41});  // 1.35 MB of voxels
+  write_volume(dir / "big.nrrd", v, WriteOptions{true});
+  const Volume whole = load_volume(dir / "big.nrrd");
+  // Rows of 340 bytes, slices of 32980: byte 1 MiB = 1048576 lies in the row y = 77 of slice
+  // z = 31 (it starts at 1048560), which the first two regions read across the boundary.
+  for (VoxelRegion r : {VoxelRegion{{1, 70, 31}, {169, 85, 32}}, VoxelRegion{{0, 0, 0}, {170, 97, 41}},
+                        VoxelRegion{{100, 0, 0}, {101, 97, 41}},
+                        VoxelRegion{{0, 0, 0}, {170, 97, 2}}}) {
+    LoadOptions o;
+    o.region = r;
+    expect_crop(whole, load_volume(dir / "big.nrrd", o), r);
+  }
+}
+
 TEST(Region, SpreadOverSeveralDataFiles) {
   // A detached NRRD whose slices are separate files (data file: LIST): rows come from each file.
   test::TempDir dir;
