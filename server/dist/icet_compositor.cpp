@@ -40,10 +40,9 @@ std::vector<float> IceTCompositor::composite(const std::vector<float>& rgba, int
   if (width <= 0 || height <= 0 || rgba.size() != size_t(width) * size_t(height) * 4)
     throw std::invalid_argument("composite: the image is not width x height RGBA floats");
   std::vector<int> seen(size_t(impl_->size), 0);
-  for (int r : order)
-    if (r < 0 || r >= impl_->size || seen[size_t(r)]++)
-      throw std::invalid_argument("composite: the order must name every rank once");
-  if (int(order.size()) != impl_->size) throw std::invalid_argument("composite: the order must name every rank once");
+  bool permutation = int(order.size()) == impl_->size;
+  for (int r : order) permutation = permutation && r >= 0 && r < impl_->size && !seen[size_t(r)]++;
+  if (!permutation) throw std::invalid_argument("composite: the order must name every rank once");
   icetSetContext(impl_->context);
   icetResetTiles();
   icetAddTile(0, 0, width, height, impl_->display);

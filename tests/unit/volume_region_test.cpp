@@ -121,6 +121,7 @@ TEST(Region, Refusals) {
   refused(dir / "v.nrrd", {{0, 0, 0}, {24, 11, 9}}, "not inside the volume's 23 voxels");
   refused(dir / "v.nrrd", {{-1, 0, 0}, {5, 11, 9}}, "not inside");
   refused(dir / "v.nrrd", {{5, 0, 0}, {5, 11, 9}}, "not inside");
+  refused(test::data_dir() / "headsq", {{0, 0, 0}, {2, 2, 2}}, "a region of a TIFF stack cannot be read");
   // A truncated file is refused even when the region lies in the part that exists.
   write_volume(dir / "t.nhdr", v);
   fs::resize_file(dir / "t.raw", 100);
