@@ -30,11 +30,8 @@ ResolvedScene bench_scene(const Volume& vol, int size, const std::string& filter
 }
 
 BenchRenderer make_bench_renderer() {
-  BenchRenderer r;
-  r.context = gpu::EglContext::create();
-  std::printf("GL: %s\n", r.context->info().to_string().c_str());
-  r.shaders = std::make_unique<gpu::ShaderCache>(gpu::default_shader_dir());
-  r.caster = std::make_unique<render::Raycaster>(*r.shaders);
+  BenchRenderer r = render::open_backend(render::requested_backend());
+  std::printf("renderer: %s\n", r.description().c_str());
   return r;
 }
 

@@ -7,9 +7,7 @@
 
 #include "core/scene.h"
 #include "core/volume.h"
-#include "gpu/egl_context.h"
-#include "gpu/shader_cache.h"
-#include "render/raycaster.h"
+#include "render/backend.h"
 
 namespace peakcast::app {
 
@@ -17,12 +15,9 @@ namespace peakcast::app {
 std::shared_ptr<Volume> bench_volume(const std::string& what);
 ResolvedScene bench_scene(const Volume& vol, int size, const std::string& filter);
 
-// The EGL context, shader cache and ray caster a benchmark renders with (the GL line printed).
-struct BenchRenderer {
-  std::unique_ptr<gpu::EglContext> context;
-  std::unique_ptr<gpu::ShaderCache> shaders;
-  std::unique_ptr<render::Raycaster> caster;
-};
+// The renderer a benchmark draws with: PEAKCAST_BACKEND's (auto: the CPU backend on a software
+// rasteriser), its line printed.
+using BenchRenderer = render::RenderBackend;
 BenchRenderer make_bench_renderer();
 
 }  // namespace peakcast::app

@@ -13,13 +13,11 @@
 #include "app/commands.h"
 #include "core/generators.h"
 #include "core/volume_io.h"
-#include "gpu/egl_context.h"
-#include "gpu/shader_cache.h"
 #include "core/peaks.h"
 #include "core/preintegration.h"
 #include "reference/cpu_raycaster.h"
 #include "reference/metrics.h"
-#include "render/raycaster.h"
+#include "render/backend.h"
 
 namespace fs = std::filesystem;
 
@@ -84,16 +82,16 @@ void add_bench_commands(CLI::App& app, Runner& run) {
   rc->add_option("--data-dir", a->data_dir, "where generated volumes are cached");
   rc->callback([a, &run] {
     run = [a] {
-      auto ctx = gpu::EglContext::create();
-      std::printf("GL: %s\n", ctx->info().to_string().c_str());
-      gpu::ShaderCache shaders(gpu::default_shader_dir());
-      render::Raycaster caster(shaders);
+      render::RenderBackend b = render::open_backend(render::requested_backend());
+      std::printf("renderer: %s\n", b.description().c_str());
+      render::Renderer& caster = *b.renderer;
       std::printf("%-22s %5s %-5s %-30s %9s %8s %10s | %9s %10s | %6s\n", "volume", "size", "path", "variant",
                   "median_ms", "spr", "Msamples/s", "bare_ms", "bare_MS/s", "ratio");
       for (const auto& name : a->volumes) {
         const BenchVolume bv = bench_volume(name);
         auto vol = load_or_make(bv, a->data_dir);
-        render::GpuVolume gv(vol);
+        auto resident = caster.make_resident(vol);
+        const render::ResidentVolume& gv = *resident;
         for (int size : a->sizes) {
           nlohmann::json j = {{"volume", bv.name}, {"image", {{"width", size}, {"height", size}}}};
           const double lo = vol->min_value, hi = vol->max_value;
@@ -148,11 +146,12 @@ void add_bench_commands(CLI::App& app, Runner& run) {
       const fs::path file = pa->volume.empty() ? fs::path(PEAKCAST_SOURCE_DIR) / "tests/data/heptane_151.nrrd"
                                                : fs::path(pa->volume);
       auto vol = std::make_shared<Volume>(load_volume(file));
-      auto ctx = gpu::EglContext::create();
-      std::printf("GL: %s\nvolume: %s\n", ctx->info().to_string().c_str(), vol->to_string().c_str());
-      gpu::ShaderCache shaders(gpu::default_shader_dir());
-      render::Raycaster caster(shaders);
-      render::GpuVolume gv(vol);
+      render::RenderBackend b = render::open_backend(render::requested_backend());
+      std::printf("renderer: %s\n", b.description().c_str());
+      std::printf("volume: %s\n", vol->to_string().c_str());
+      render::Renderer& caster = *b.renderer;
+      auto resident = caster.make_resident(vol);
+      const render::ResidentVolume& gv = *resident;
       // Fig. 3: a near-Dirac red peak (width 1e-4 of the range) and a smooth blue feature.
       const double lo = vol->min_value, span = vol->max_value - vol->min_value;
       auto x = [&](double r) { return lo + r * span; };

@@ -14,9 +14,7 @@
 #include "core/generators.h"
 #include "core/volume_io.h"
 #include "encode/png.h"
-#include "gpu/egl_context.h"
-#include "gpu/shader_cache.h"
-#include "render/raycaster.h"
+#include "render/backend.h"
 
 namespace peakcast::app {
 namespace {
@@ -47,9 +45,10 @@ struct Case {
 
 void run_readback(const ReadbackArgs& a) {
   BenchRenderer gl = make_bench_renderer();
-  render::Raycaster& caster = *gl.caster;
+  render::Renderer& caster = *gl.renderer;
   auto vol = bench_volume(a.volume);
-  render::GpuVolume gv(vol);
+  auto resident = caster.make_resident(vol);
+  const render::ResidentVolume& gv = *resident;
   std::printf("volume: %s\n", vol->to_string().c_str());
   const Case cases[] = {{"float20+flip (before)", render::RenderOutput::Float, true, true},
                         {"float20", render::RenderOutput::Float, true, false},
@@ -111,13 +110,14 @@ void run_readback(const ReadbackArgs& a) {
 
 void run_switch(const SwitchArgs& a) {
   BenchRenderer gl = make_bench_renderer();
-  render::Raycaster& caster = *gl.caster;
+  render::Renderer& caster = *gl.renderer;
   const auto t_load = Clock::now();
   auto vol = std::make_shared<Volume>(load_volume(a.volume));
   std::printf("volume: %s, loaded in %.0f ms\n", vol->to_string().c_str(), ms_since(t_load));
   const ResolvedScene lin = bench_scene(*vol, a.size, "trilinear"), cub = bench_scene(*vol, a.size, "tricubic");
   {  // warm-up: compile both variants so no measured frame includes a shader compile
-    render::GpuVolume warm(vol);
+    auto warm_resident = caster.make_resident(vol);
+    const render::ResidentVolume& warm = *warm_resident;
     caster.render(warm, lin, render::GpuPath::Fragment);
     caster.render(warm, cub, render::GpuPath::Fragment);
   }
@@ -133,7 +133,8 @@ void run_switch(const SwitchArgs& a) {
       }
       // From here on: the render thread.
       const auto t0 = Clock::now();
-      render::GpuVolume gv(vol, cells);
+      auto resident = caster.make_resident(vol, cells);
+      const render::ResidentVolume& gv = *resident;
       const auto t1 = Clock::now();
       render::RenderStats st;
       caster.render(gv, lin, render::GpuPath::Fragment, &st);
@@ -147,7 +148,7 @@ void run_switch(const SwitchArgs& a) {
                   gv.macrocell_ms(), first, first_cubic, stall, st.render_ms, st.table_ms);
       std::fflush(stdout);
     }
-  std::printf("stall_ms: render-thread time from GpuVolume construction through the first trilinear and the first "
+  std::printf("stall_ms: render-thread time from the resident volume's construction through the first trilinear and the first "
               "tricubic frame (%dx%d); render_cells: macrocell builds on the render thread; loader_ms: both grids "
               "built on the loader pool\n", a.size, a.size);
 }

@@ -27,11 +27,9 @@
 #include "core/sampling.h"
 #include "core/volume_io.h"
 #include "encode/png.h"
-#include "gpu/egl_context.h"
-#include "gpu/shader_cache.h"
 #include "reference/cpu_raycaster.h"
 #include "reference/metrics.h"
-#include "render/raycaster.h"
+#include "render/backend.h"
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
@@ -113,7 +111,7 @@ std::shared_ptr<Volume> scene_volume(const std::string& name, const fs::path& sc
   return v;
 }
 
-std::string machine_line(const gpu::GlInfo& gl) {
+std::string machine_line(const render::RenderBackend& backend) {
   std::string cpu = "unknown CPU";
   std::ifstream in("/proc/cpuinfo");
   for (std::string line; std::getline(in, line);)
@@ -121,12 +119,12 @@ std::string machine_line(const gpu::GlInfo& gl) {
       cpu = line.substr(line.find(':') + 2);
       break;
     }
-  return "Machine: " + cpu + ", " + std::to_string(std::thread::hardware_concurrency()) + " cores; GL: " + gl.to_string();
+  return "Machine: " + cpu + ", " + std::to_string(std::thread::hardware_concurrency()) + " cores; renderer: " + backend.description();
 }
 
 int run_quality(const QualityArgs& a) {
   BenchRenderer gl = make_bench_renderer();
-  render::Raycaster& caster = *gl.caster;
+  render::Renderer& caster = *gl.renderer;
   const fs::path out = a.out;
   fs::create_directories(out);
   std::vector<fs::path> files;
@@ -146,7 +144,8 @@ int run_quality(const QualityArgs& a) {
     const json base_json = json::parse(text.str());
     const std::string scene_name = file.stem().string();
     auto vol = scene_volume(base_json.value("volume", ""), file, volumes);
-    render::GpuVolume gv(vol);
+    auto resident = caster.make_resident(vol);
+    const render::ResidentVolume& gv = *resident;
     const ResolvedScene base = resolve_scene(parse_scene(base_json), *vol);
     std::printf("scene %s: %s, %dx%d\n", scene_name.c_str(), vol->to_string().c_str(), base.scene.width, base.scene.height);
     std::fflush(stdout);
@@ -225,7 +224,7 @@ int run_quality(const QualityArgs& a) {
         rows.push_back(r);
       }
     }
-    // What the variant leaves out, put back (Raycaster::force_variant) and timed on the
+    // What the variant leaves out, put back (Renderer::force_variant) and timed on the
     // scene's own settings at step 1: the macrocell loop when every cell is visible, peak
     // finding for a peak classification whose TF has no peaks.
     auto time_with = [&](const ResolvedScene& s, std::function<void(render::VariantKey&)> f, render::RenderStats& st) {
@@ -256,7 +255,7 @@ int run_quality(const QualityArgs& a) {
     write_svg(out / (scene_name + ".svg"), scene_name, rows, refs);
   }
   write_csv(out / "report.csv", rows);
-  write_markdown(out / "report.md", rows, refs, omissions, machine_line(gl.context->info()));
+  write_markdown(out / "report.md", rows, refs, omissions, machine_line(gl));
   std::printf("wrote %s/report.csv, report.md and %zu SVG plots\n", out.string().c_str(), files.size());
   return 0;
 }

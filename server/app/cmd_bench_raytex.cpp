@@ -13,9 +13,7 @@
 #include "app/bench_scenes.h"
 #include "app/bench_util.h"
 #include "app/commands.h"
-#include "gpu/egl_context.h"
-#include "gpu/shader_cache.h"
-#include "render/raycaster.h"
+#include "render/backend.h"
 
 namespace peakcast::app {
 namespace {
@@ -61,9 +59,10 @@ std::shared_ptr<const RayTextureSpec> empty_texture(int size) {
 
 void run_raytex(const RaytexArgs& a) {
   BenchRenderer gl = make_bench_renderer();
-  render::Raycaster& caster = *gl.caster;
+  render::Renderer& caster = *gl.renderer;
   auto vol = bench_volume(a.volume);
-  render::GpuVolume gv(vol);
+  auto resident = caster.make_resident(vol);
+  const render::ResidentVolume& gv = *resident;
   std::printf("volume: %s, image %dx%d, ray texture %dx%d (view), stroke radius %.3f, %d frames over %.0f deg each\n",
               vol->to_string().c_str(), a.size, a.size, a.size, a.size, a.radius, a.frames, a.orbit);
   const ResolvedScene base = bench_scene(*vol, a.size, "trilinear");

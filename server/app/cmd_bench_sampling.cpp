@@ -9,14 +9,13 @@
 
 #include <glm/geometric.hpp>
 
+#include "app/bench_scenes.h"
 #include "app/bench_util.h"
 #include "app/commands.h"
 #include "core/volume_io.h"
-#include "gpu/egl_context.h"
-#include "gpu/shader_cache.h"
 #include "reference/cpu_raycaster.h"
 #include "reference/metrics.h"
-#include "render/raycaster.h"
+#include "render/backend.h"
 
 namespace fs = std::filesystem;
 
@@ -30,15 +29,13 @@ struct SamplingBenchArgs {
 };
 
 int run_sampling_bench(const SamplingBenchArgs& a) {
-  auto ctx = gpu::EglContext::create();
-  std::printf("GL: %s\n", ctx->info().to_string().c_str());
-  gpu::ShaderCache shaders(gpu::default_shader_dir());
-  render::Raycaster caster(shaders);
+  BenchRenderer b = make_bench_renderer();
+  render::Renderer& caster = *b.renderer;
   struct Timed {
     double ms = 0, spr = 0;
     Image img;
   };
-  auto time_render = [&](const render::GpuVolume& gv, const ResolvedScene& s) {
+  auto time_render = [&](const render::ResidentVolume& gv, const ResolvedScene& s) {
     Timed t;
     std::vector<double> ms;
     render::RenderStats st;
@@ -53,7 +50,8 @@ int run_sampling_bench(const SamplingBenchArgs& a) {
   std::printf("%-16s %-5s %-26s %9s %8s %9s\n", "volume", "view", "method", "median_ms", "spr", "PSNR_dB");
   for (const auto& path : a.volumes) {
     auto vol = std::make_shared<Volume>(load_volume(path));
-    render::GpuVolume gv(vol);
+    auto resident = caster.make_resident(vol);
+    const render::ResidentVolume& gv = *resident;
     const double lo = vol->min_value, hi = vol->max_value;
     nlohmann::json j = {{"volume", vol->name}, {"image", {{"width", a.size}, {"height", a.size}}}};
     j["tf"] = {{"points", {{lo, 0, 0, 0, 0}, {lo + 0.3 * (hi - lo), 0.2, 0.4, 1.0, 0.0},

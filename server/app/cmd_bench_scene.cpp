@@ -9,12 +9,11 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>
 
+#include "app/bench_scenes.h"
 #include "app/bench_util.h"
 #include "app/commands.h"
 #include "app/scene_file.h"
-#include "gpu/egl_context.h"
-#include "gpu/shader_cache.h"
-#include "render/raycaster.h"
+#include "render/backend.h"
 
 namespace peakcast::app {
 namespace {
@@ -38,13 +37,13 @@ int run_scene_bench(const SceneBenchArgs& a) {
   const auto t_load = std::chrono::steady_clock::now();
   LoadedScene ls = load_scene_file(a.scene);
   const double load_ms = ms_between(t_load, std::chrono::steady_clock::now());
-  auto ctx = gpu::EglContext::create();
-  gpu::ShaderCache shaders(gpu::default_shader_dir());
+  BenchRenderer b = make_bench_renderer();
+  render::Renderer& caster = *b.renderer;
   const auto t_upload = std::chrono::steady_clock::now();
-  render::GpuVolume gv(ls.volume);  // upload + the trilinear macrocell grid
+  auto resident = caster.make_resident(ls.volume);  // upload (GL) + the trilinear macrocell grid
+  const render::ResidentVolume& gv = *resident;
   const double upload_total_ms = ms_between(t_upload, std::chrono::steady_clock::now());
   double first_frame_ms = 0;
-  render::Raycaster caster(shaders);
   render::RenderRequest req;
   req.path = a.path == "compute" ? render::GpuPath::Compute : render::GpuPath::Fragment;
   req.output = render::RenderOutput::Rgb8;
@@ -97,7 +96,7 @@ int run_scene_bench(const SceneBenchArgs& a) {
                       {"gpu_volume_ms", upload_total_ms},
                       {"first_frame_ms", first_frame_ms},
                       {"load_to_first_frame_ms", load_ms + upload_total_ms + first_frame_ms},
-                      {"gl_renderer", ctx->info().renderer}};
+                      {"renderer", b.description()}, {"backend", render::to_string(b.backend)}};
   if (a.bare) {
     j["bare_ms"] = median(bare_ms);
     j["full_render_ms_float"] = median(full_ms);
@@ -106,7 +105,7 @@ int run_scene_bench(const SceneBenchArgs& a) {
     std::printf("%s\n", j.dump().c_str());
     return 0;
   }
-  std::printf("GL: %s\nscene: %s (%dx%d, step %.4g, variant %s)\n", ctx->info().to_string().c_str(), a.scene.c_str(),
+  std::printf("renderer: %s\nscene: %s (%dx%d, step %.4g, variant %s)\n", b.description().c_str(), a.scene.c_str(),
               ls.scene.scene.width, ls.scene.scene.height, ls.scene.step, st.variant.c_str());
   std::printf("load %.0f ms (file, range, histogram), upload %.0f ms, macrocells %.0f ms, first frame %.0f ms "
               "(shader compile included): load to first frame %.0f ms\n",

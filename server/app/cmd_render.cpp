@@ -8,17 +8,15 @@
 #include "app/commands.h"
 #include "app/scene_file.h"
 #include "encode/png.h"
-#include "gpu/egl_context.h"
-#include "gpu/shader_cache.h"
 #include "reference/cpu_raycaster.h"
 #include "reference/metrics.h"
-#include "render/raycaster.h"
+#include "render/backend.h"
 
 namespace peakcast::app {
 namespace {
 
 struct RenderArgs {
-  std::string scene, out, stats, path = "fragment";
+  std::string scene, out, stats, path = "fragment", backend;
 };
 
 struct ReferenceArgs {
@@ -36,30 +34,34 @@ struct CompareArgs {
 
 void add_render_commands(CLI::App& app, Runner& run) {
   auto ra = std::make_shared<RenderArgs>();
-  auto* render = app.add_subcommand("render", "Render a scene file on the GPU (EGL) to a PNG");
+  auto* render = app.add_subcommand("render", "Render a scene file to a PNG (GL through EGL, or the CPU backend)");
   render->add_option("scene", ra->scene, "scene JSON (proto/scene.schema.json)")->required()->check(CLI::ExistingFile);
   render->add_option("-o,--out", ra->out, "output PNG")->required();
   render->add_option("--stats", ra->stats, "write render stats as JSON here");
-  render->add_option("--path", ra->path, "fragment | compute")->check(CLI::IsMember({"fragment", "compute"}));
+  render->add_option("--path", ra->path, "fragment | compute (GL backend)")->check(CLI::IsMember({"fragment", "compute"}));
+  render->add_option("--backend", ra->backend, "auto | gl | cpu (default: PEAKCAST_BACKEND, else auto)")
+      ->check(CLI::IsMember({"auto", "gl", "cpu"}));
   render->callback([ra, &run] {
     run = [ra] {
       LoadedScene ls = load_scene_file(ra->scene);
-      auto ctx = gpu::EglContext::create();
-      gpu::ShaderCache shaders(gpu::default_shader_dir());
-      render::GpuVolume gv(ls.volume);
-      render::Raycaster caster(shaders);
+      render::RenderBackend b = render::open_backend(render::requested_backend(ra->backend));
+      auto gv = b.renderer->make_resident(ls.volume);
       render::RenderStats st;
       const auto path = ra->path == "compute" ? render::GpuPath::Compute : render::GpuPath::Fragment;
-      Image img = caster.render(gv, ls.scene, path, &st);
+      Image img = b.renderer->render(*gv, ls.scene, path, &st);
       encode::write_png(img, ra->out);
       std::printf("wrote %s: %dx%d, %s, %s\n", ra->out.c_str(), img.width, img.height, st.to_string().c_str(),
-                  ctx->info().renderer.c_str());
+                  b.description().c_str());
       if (!ra->stats.empty()) {
-        // The render keys are the stream's stats keys (RenderStats::to_json); the GL keys are the CLI's.
+        // The render keys are the stream's stats keys (RenderStats::to_json); the backend's are the CLI's.
         nlohmann::json j = st.to_json();
-        j["gl_renderer"] = ctx->info().renderer;
-        j["gl_version"] = ctx->info().version;
-        j["egl_platform"] = ctx->info().platform;
+        j["backend"] = render::to_string(b.backend);
+        j["renderer"] = b.renderer->description();
+        if (b.context) {
+          j["gl_renderer"] = b.context->info().renderer;
+          j["gl_version"] = b.context->info().version;
+          j["egl_platform"] = b.context->info().platform;
+        }
         std::ofstream(ra->stats) << j.dump(2) << "\n";
       }
       return 0;

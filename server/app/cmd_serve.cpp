@@ -26,9 +26,9 @@ void add_serve_command(CLI::App& app, Runner& run) {
       net::Server server(c);
       server.start();
       // This line on stdout is the contract scripts and tests wait for; the log goes to stderr.
-      std::printf("peakcast: serving on http://%s:%u (GL: %s)\n", c.bind.c_str(), unsigned(server.port()),
+      std::printf("peakcast: serving on http://%s:%u (renderer %s)\n", c.bind.c_str(), unsigned(server.port()),
                   server.app().render.gl_renderer().c_str());
-      log::info("serving", {{"bind", c.bind}, {"port", server.port()}, {"gl", server.app().render.gl_renderer()},
+      log::info("serving", {{"bind", c.bind}, {"port", server.port()}, {"renderer", server.app().render.gl_renderer()},
                             {"data", o->data}, {"volumes", o->volumes}, {"auth", !c.token.empty()}});
       std::fflush(stdout);
       server.run_until_signal();

@@ -80,6 +80,7 @@ void add_serve_options(CLI::App& s, ServeOptions& o) {
   o.web_dir = PEAKCAST_WEB_DIR_DEFAULT;
   o.shader_dir = gpu::default_shader_dir().string();
   c.egl_device = "auto";
+  c.backend = "auto";
   s.option_defaults()->always_capture_default();
   s.add_option("--config", o.config_file, "read options from this TOML file (also PEAKCAST_CONFIG)");
   s.add_flag("--print-config", o.print_config, "print the effective configuration, each value's source, and exit");
@@ -119,6 +120,9 @@ void add_serve_options(CLI::App& s, ServeOptions& o) {
                            std::all_of(v.begin(), v.end(), [](unsigned char ch) { return std::isdigit(ch) != 0; });
         return v == "auto" || v == "surfaceless" || index ? std::string() : "auto, surfaceless or a device index";
       });
+  s.add_option("--backend", c.backend,
+               "auto (the CPU backend when EGL offers only a software rasteriser, else GL) | gl | cpu")
+      ->check(CLI::IsMember({"auto", "gl", "cpu"}));
   s.footer(
       "Every option is also a PEAKCAST_* environment variable (--max-fps: PEAKCAST_MAX_FPS; lists\n"
       "comma-separated) and a key of the --config TOML file (max-fps = 30; lists as arrays).\n"

@@ -75,7 +75,9 @@ Volume::Volume(const VolumeHeader& h)
       dims_(h.dims),
       type_(storage_type(h.source)),
       source_(h.source),
-      data_(new uint8_t[size_t(h.voxel_count()) * voxel_bytes(storage_type(h.source))]) {}
+      data_(new uint8_t[size_t(h.voxel_count()) * voxel_bytes(storage_type(h.source)) + kTailPadding]) {
+  std::fill_n(data_.get() + byte_size(), kTailPadding, uint8_t(0));
+}
 
 namespace {
 

@@ -41,7 +41,9 @@ struct VolumeHeader {
 class Volume {
  public:
   Volume() = default;
-  // Allocates uninitialised storage for the header's dims in storage_type(header.source).
+  // Allocates uninitialised storage for the header's dims in storage_type(header.source), plus
+  // kTailPadding zero bytes after the last voxel.
+  static constexpr size_t kTailPadding = 16;
   explicit Volume(const VolumeHeader& header);
 
   const Dims& dims() const { return dims_; }
@@ -49,6 +51,8 @@ class Volume {
   VoxelType type() const { return type_; }
   SourceType source_type() const { return source_; }
   size_t byte_size() const { return size_t(voxel_count()) * voxel_bytes(type_); }
+  // The voxels, x fastest. kTailPadding readable zero bytes follow them: the CPU backend's
+  // gathers load 4 bytes at a voxel's address (cpu/sampler.h).
   uint8_t* data() { return data_.get(); }
   const uint8_t* data() const { return data_.get(); }
   // The voxels, freed once a GPU copy holds them (GpuResidency, the server): the volume's host

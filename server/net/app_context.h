@@ -38,6 +38,7 @@ struct ServerConfig {
   int encode_threads = 2;
   std::filesystem::path web_dir, shader_dir;
   std::string egl_device;  // "auto" | "surfaceless" | a device index; empty: PEAKCAST_EGL_DEVICE, else auto
+  std::string backend;     // "auto" | "gl" | "cpu" (render/backend.h); empty: PEAKCAST_BACKEND, else auto
 };
 
 struct AppContext {

@@ -225,6 +225,7 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
     return send(json_response(req, status,
                               nlohmann::json{{"status", stopping ? "stopping" : "ok"},
                                              {"gl_renderer", app.render.gl_renderer()},
+                                             {"backend", app.render.backend()},
                                              {"sessions", app.ws_sessions.count()},
                                              {"max_sessions", app.config.max_sessions},
                                              {"volumes", app.volumes.list().size()},

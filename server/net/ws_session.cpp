@@ -254,6 +254,7 @@ void WsSession::start_session(const protocol::Hello& hello, std::shared_ptr<Volu
   welcome.state = session_->state_json();
   welcome.capabilities = render::capabilities();
   welcome.gl_renderer = app_.render.gl_renderer();
+  welcome.backend = app_.render.backend();
   welcome.limits = {{"max_message_bytes", limits::kMaxWsMessageBytes},
                     {"max_viewport_side", limits::kMaxViewportSide},
                     {"max_viewport_pixels", limits::kMaxViewportPixels},

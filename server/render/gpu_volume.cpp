@@ -1,7 +1,6 @@
 #include "render/gpu_volume.h"
 #include "core/value_range.h"
 
-#include <atomic>
 #include <chrono>
 #include <stdexcept>
 #include <vector>
@@ -15,13 +14,8 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 }  // namespace
 
 GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells)
-    : volume_(std::move(volume)), cells_trilinear_(std::move(cells.trilinear)), cells_tricubic_(std::move(cells.tricubic)) {
-  if (cells_trilinear_) check_macrocells(*cells_trilinear_, *volume_, FilterSupport::Trilinear);
-  if (cells_tricubic_) check_macrocells(*cells_tricubic_, *volume_, FilterSupport::Tricubic);
-  if (!volume_->has_voxels()) throw std::invalid_argument("GpuVolume: the volume's voxels were dropped");
+    : ResidentVolume(std::move(volume), std::move(cells)) {
   const auto t0 = std::chrono::steady_clock::now();
-  static std::atomic<uint64_t> next_serial{1};
-  serial_ = next_serial++;
   const Volume& v = *volume_;
   const auto& d = v.dims();
   GLenum internal = GL_R8, type = GL_UNSIGNED_BYTE;
@@ -45,8 +39,6 @@ GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cell
   glTextureStorage3D(texture_.id(), 1, internal, GLsizei(d[0]), GLsizei(d[1]), GLsizei(d[2]));
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   const ValueRange range = table_range(v.min_value, v.max_value);
-  lo_ = range.lo;
-  hi_ = range.hi;
   // Integer voxels go up as they are and are mapped to TF coordinates in the shader. Float
   // voxels go up already in TF coordinates, computed in double: raw, a volume of denormal values
   // (1e-40) would be flushed to zero by the GPU and 1 / (hi - lo) would overflow a float, so the
@@ -75,28 +67,13 @@ GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cell
   gpu::check_gl("volume upload");
   upload_ms_ = ms_since(t0);
 
-  scale_ = normalise ? 1.0f : float(texel_to_stored / (hi_ - lo_));
-  bias_ = normalise ? 0.0f : float((v.value_offset - lo_) / (hi_ - lo_));
-  if (!cells_trilinear_) {
-    const auto t1 = std::chrono::steady_clock::now();
-    cells_trilinear_ = std::make_shared<const MacrocellGrid>(build_macrocells(v, 0, FilterSupport::Trilinear));
-    macrocell_ms_ += ms_since(t1);
-  }
-}
-
-const MacrocellGrid& GpuVolume::macrocells(Filter filter) const {
-  if (filter != Filter::Tricubic) return *cells_trilinear_;
-  if (!cells_tricubic_) {  // most views never ask for the wider filter support
-    if (!volume_->has_voxels()) throw std::logic_error("GpuVolume: no tricubic grid and no voxels to build it");
-    const auto t1 = std::chrono::steady_clock::now();
-    cells_tricubic_ = std::make_shared<const MacrocellGrid>(build_macrocells(*volume_, 0, FilterSupport::Tricubic));
-    macrocell_ms_ += ms_since(t1);
-  }
-  return *cells_tricubic_;
+  scale_ = normalise ? 1.0f : float(texel_to_stored / (range.hi - range.lo));
+  bias_ = normalise ? 0.0f : float((v.value_offset - range.lo) / (range.hi - range.lo));
+  ensure_trilinear_grid();
 }
 
 bool GpuVolume::drop_host_voxels() {
-  if (!cells_trilinear_ || !cells_tricubic_) return false;  // a grid may still need the voxels
+  if (!has_both_grids()) return false;  // a grid may still need the voxels
   volume_->drop_voxels();
   return true;
 }

@@ -47,6 +47,23 @@ Raycaster::Raycaster(gpu::ShaderCache& shaders) : shaders_(shaders) {
   vao_ = gpu::make_vertex_array();
 }
 
+std::string Raycaster::description() const {
+  const char* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+  return std::string("OpenGL: ") + (renderer ? renderer : "unknown");
+}
+
+std::unique_ptr<ResidentVolume> Raycaster::make_resident(std::shared_ptr<const Volume> volume, VolumeMacrocells cells) {
+  return std::make_unique<GpuVolume>(std::move(volume), std::move(cells));
+}
+
+namespace {
+const GpuVolume& gpu_volume(const ResidentVolume& v) {
+  const auto* gv = dynamic_cast<const GpuVolume*>(&v);
+  if (!gv) throw std::invalid_argument("the GL renderer draws GPU volumes only (this one was made by another backend)");
+  return *gv;
+}
+}  // namespace
+
 int Raycaster::sample_cap(const VariantKey& key) const {
   if (!llvmpipe_) return kMaxSamplesPerRay;
   // llvmpipe ends a shader invocation's loops after 65535 iterations in all, shared by every
@@ -91,14 +108,9 @@ Raycaster::Targets& Raycaster::targets(int w, int h, RenderOutput output) {
   return targets_.front();
 }
 
-Image Raycaster::render(const GpuVolume& gv, const ResolvedScene& s, GpuPath path, RenderStats* stats) {
-  RenderRequest req;
-  req.path = path;
-  return std::move(render(gv, s, req, stats).image);
-}
-
-RenderResult Raycaster::render(const GpuVolume& gv, const ResolvedScene& s, const RenderRequest& req,
+RenderResult Raycaster::render(const ResidentVolume& v, const ResolvedScene& s, const RenderRequest& req,
                                RenderStats* stats) {
+  const GpuVolume& gv = gpu_volume(v);
   const PixelRect rect = req.tile.value_or(PixelRect{0, 0, s.scene.width, s.scene.height});
   check_rect(rect, s.scene.width, s.scene.height);
   if (stats) *stats = RenderStats{};
@@ -107,15 +119,9 @@ RenderResult Raycaster::render(const GpuVolume& gv, const ResolvedScene& s, cons
   return draw(gv, s, key, rect, req.output == RenderOutput::Float || req.sample_stats, stats);
 }
 
-// The TF as an 8192-entry RGBA32F table whose opacities are already corrected for the scene's
-// uniform step, 1 - (1 - a)^(step / unit), as VTK's mappers bake theirs: a sample that stands
-// for that step (every sample of a uniform lattice) composites the looked-up alpha as is, no
-// pow per sample (15% of a blobs frame on llvmpipe); other steps correct from it (tf.glsl).
-// Filtering between corrected entries differs from correcting the filtered alpha by far less
-// than 1/255 at 8192 entries (bounded by the GPU tests against the CPU reference).
+// The TF table for the scene's step (render/frame_setup.h), linearly filtered like a texture.
 void Raycaster::bind_tf_table(const GpuVolume& gv, const ResolvedScene& s, const std::string& tf_sig) {
-  const double exponent = double(float(plan_sampling(s).step)) / double(float(s.tf.opacity_unit));
-  const std::string sig = tf_sig + " opacity exponent " + std::to_string(exponent);
+  const std::string sig = step_tf_key(s, tf_sig);
   TfTable* tf_table = cache_find(tf_tables_, sig);
   if (!tf_table) {
     TfTable e{sig, gpu::make_texture(GL_TEXTURE_1D)};
@@ -123,10 +129,7 @@ void Raycaster::bind_tf_table(const GpuVolume& gv, const ResolvedScene& s, const
     glTextureParameteri(e.texture.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     glTextureParameteri(e.texture.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     glTextureParameteri(e.texture.id(), GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    std::vector<float> table = s.tf.bake(TransferFunction::kTableSize, gv.tf_lo(), gv.tf_hi());
-    if (exponent != 1.0)
-      for (size_t k = 3; k < table.size(); k += 4)
-        table[k] = float(1.0 - std::pow(std::max(0.0, 1.0 - double(table[k])), exponent));
+    const std::vector<float> table = step_tf_table(s, gv.tf_lo(), gv.tf_hi());
     glTextureSubImage1D(e.texture.id(), 0, 0, TransferFunction::kTableSize, GL_RGBA, GL_FLOAT, table.data());
     tf_table = &cache_insert(tf_tables_, std::move(e), kCacheEntries);
     ++table_builds_;
@@ -136,73 +139,39 @@ void Raycaster::bind_tf_table(const GpuVolume& gv, const ResolvedScene& s, const
 
 VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPath path, RenderStats* stats) {
   const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
-
-  // Per-frame state that depends on the TF: table and macrocell occupancy.
-  const std::string tf_sig = tf_signature(s.tf, gv.tf_lo(), gv.tf_hi());
+  SetupOptions o;
+  o.leaps = leaps_;
+  o.vs_widening = vs_widening_;
+  o.force_variant = &force_variant_;
+  const FrameSetup f = setup_frame(gv, s, path, o, occupancy_cache_, table_builds_);
   const auto t_tables = Clock::now();
-  const std::vector<Peak> peaks =
-      s.scene.render.classification == Classification::Peaks ? find_peaks(s.tf) : std::vector<Peak>{};
-  std::vector<double> peak_values;
-  for (const auto& p : peaks) peak_values.push_back(p.value);
-  // Occupancy depends on the grid, the TF over the value range and the peaks: a camera move
-  // reuses it (and its texture).
-  Occupancy no_skipping;
-  const Occupancy* occ = &no_skipping;
-  OccupancyEntry* occ_entry = nullptr;
-  // A virtual sample reads a Catmull-Rom window two steps either side: its cell's range is the
-  // union over the cells that window can reach (ring), widened by Lee's (M - m)/8 (eq. 8), the
-  // most the spline overshoots its samples. Windows reaching too far sample without skipping.
-  const bool vs = s.scene.render.virtual_samples != 0;
-  const int ring = vs ? virtual_sample_ring(plan_sampling(s), s, cells.cell) : 0;
-  if (s.scene.render.space_skipping && ring >= 0) {
-    const double overshoot = vs ? vs_widening_ : 0.0;
-    const int reach = vs && vs_widening_ > 0.0 ? ring : 0;  // widening 0 (a test's): neither
-    const std::string occ_key = tf_sig + " cells " + std::to_string(gv.serial()) + " " + cells.to_string() +
-                                " peaks " + std::to_string(peaks.size()) + " overshoot " + std::to_string(overshoot) +
-                                " ring " + std::to_string(reach) + (leaps_ ? "" : " no leaps");
-    occ_entry = cache_find(occupancy_cache_, occ_key);
-    if (!occ_entry) {
-      occ_entry = &cache_insert(
-          occupancy_cache_,
-          OccupancyEntry{occ_key,
-                         classify_cells(reach ? dilate_ranges(cells, reach) : cells, s.tf, gv.tf_lo(), gv.tf_hi(),
-                                        peak_values, TransferFunction::kTableSize, overshoot),
-                         {}},
-          kCacheEntries);
-      ++table_builds_;
-    }
-    occ = &occ_entry->occupancy;
-  }
-  VariantKey key = choose_variant(s, occ->empty_cells, path, peaks.size());
-  if (force_variant_) {
-    force_variant_(key);
-    key.space_skipping = key.space_skipping && occ_entry;  // forced only where occupancy was built
-  }
-  bind_tf_table(gv, s, tf_sig);
-  upload_tables(gv, s, key.peaks ? peaks : std::vector<Peak>{});
-  const double table_ms = ms_since(t_tables);
-  if (key.space_skipping) {
-    gpu::Buffer& buf = occ_entry->buffer;
-    if (!buf) {
-      std::vector<uint8_t> distance = occ->distance;
+  bind_tf_table(gv, s, f.tf_sig);
+  upload_tables(gv, s, f.key.peaks ? f.peaks : std::vector<Peak>{});
+  const double table_ms = f.table_ms + ms_since(t_tables);
+  if (f.key.space_skipping) {
+    DistanceEntry* e = cache_find(distance_cache_, f.occupancy_key);
+    if (!e) {
+      std::vector<uint8_t> distance = f.occupancy->distance;
       if (!leaps_)
         for (auto& d : distance) d = std::min<uint8_t>(d, 1);
-      buf = make_cell_buffer(cells, distance);
+      e = &cache_insert(distance_cache_, DistanceEntry{f.occupancy_key, make_cell_buffer(cells, distance)},
+                        kCacheEntries);
     }
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboCellDistance, buf.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboCellDistance, e->buffer.id());
   }
-  if (key.adaptive) bind_multipliers(gv, cells);
-  if (key.ray_texture) bind_ray_texture(s, stats);
+  if (f.key.adaptive) bind_multipliers(gv, cells);
+  if (f.key.ray_texture) bind_ray_texture(s, stats);
   if (stats) {
-    stats->empty_cells = occ->empty_cells;
-    stats->peaks = peaks.size();
+    stats->empty_cells = f.occupancy->empty_cells;
+    stats->peaks = f.peaks.size();
     stats->table_ms = table_ms;
   }
-  return key;
+  return f.key;
 }
 
-Image Raycaster::render_bare(const GpuVolume& gv, const ResolvedScene& s, GpuPath path, const Image& full,
+Image Raycaster::render_bare(const ResidentVolume& v, const ResolvedScene& s, GpuPath path, const Image& full,
                              RenderStats* stats) {
+  const GpuVolume& gv = gpu_volume(v);
   const int w = s.scene.width, h = s.scene.height;
   if (full.width != w || full.height != h) throw std::invalid_argument("render_bare: image size differs");
   std::vector<float> budget(full.samples.size());  // rows top-down, like the render targets

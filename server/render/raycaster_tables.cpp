@@ -10,15 +10,6 @@
 
 namespace peakcast::render {
 
-// Everything a per-TF table depends on: the points, the opacity unit and the value range.
-std::string tf_signature(const TransferFunction& tf, double lo, double hi) {
-  std::ostringstream s;
-  s.precision(17);
-  s << lo << ' ' << hi << ' ' << tf.opacity_unit;
-  for (const auto& p : tf.points) s << ' ' << p.value << ' ' << p.r << ' ' << p.g << ' ' << p.b << ' ' << p.a;
-  return s.str();
-}
-
 gpu::Buffer make_cell_buffer(const MacrocellGrid& cells, const std::vector<uint8_t>& bytes) {
   if (bytes.size() != cells.size()) throw std::invalid_argument("make_cell_buffer: one byte per cell");
   std::vector<uint32_t> words((bytes.size() + 3) / 4, 0u);
@@ -29,56 +20,34 @@ gpu::Buffer make_cell_buffer(const MacrocellGrid& cells, const std::vector<uint8
 }
 
 // The ray texture as an RGB32F texture read with linear filtering between texel centres,
-// clamped at the edges (what sample_ray_texture does on the CPU).
+// clamped at the edges (what sample_ray_texture does on the CPU): made when the host cache
+// builds a lineage, refreshed by the rectangle new strokes touched.
 void Raycaster::bind_ray_texture(const ResolvedScene& s, RenderStats* stats) {
   const auto t0 = Clock::now();
-  const RayTextureSpec& spec = *s.ray_texture;
-  const std::string key = std::to_string(spec.lineage) + " termination " + std::to_string(s.scene.render.early_termination);
-  RayTextureEntry* e = cache_find(ray_texture_cache_, key);
-  if (e && e->strokes > spec.strokes.size()) {  // an older spec of the lineage: rebuilt, the newer one dropped
-    ray_texture_cache_.erase(ray_texture_cache_.begin());
-    e = nullptr;
+  auto u = ray_textures_.get(*s.ray_texture, s.scene.render.early_termination);
+  RayTextureEntry& e = *u.entry;
+  if (u.created) {
+    e.extra = gpu::make_texture(GL_TEXTURE_2D);
+    glTextureStorage2D(e.extra.id(), 1, GL_RGB32F, e.texels.width(), e.texels.height());
+    glTextureParameteri(e.extra.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTextureParameteri(e.extra.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTextureParameteri(e.extra.id(), GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(e.extra.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
   }
-  TexelRect dirty;
-  size_t applied = 0;
-  if (!e) {
-    RayTexture rt = build_ray_texture(spec, s.scene.render.early_termination);
-    gpu::Texture tex = gpu::make_texture(GL_TEXTURE_2D);
-    glTextureStorage2D(tex.id(), 1, GL_RGB32F, rt.width(), rt.height());
-    glTextureParameteri(tex.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    glTextureParameteri(tex.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTextureParameteri(tex.id(), GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTextureParameteri(tex.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    dirty = {0, 0, rt.width(), rt.height()};
-    applied = spec.strokes.size();
-    e = &cache_insert(ray_texture_cache_, RayTextureEntry{key, spec.strokes.size(), std::move(rt), std::move(tex)},
-                      kRayTextureEntries);
-    // Each entry holds its texels twice (host and GPU, 12 bytes a texel): a few 2048^2
-    // textures, not eight, before the least recently used go.
-    size_t bytes = 0;
-    for (const auto& c : ray_texture_cache_) bytes += c.texels.texels().size() * sizeof(float);
-    while (bytes > kRayTextureCacheBytes && ray_texture_cache_.size() > 1) {
-      bytes -= ray_texture_cache_.back().texels.texels().size() * sizeof(float);
-      ray_texture_cache_.pop_back();
-    }
-  } else {
-    for (size_t i = e->strokes; i < spec.strokes.size(); ++i) dirty.merge(e->texels.apply(spec.strokes[i]));
-    applied = spec.strokes.size() - e->strokes;
-    e->strokes = spec.strokes.size();
-  }
+  const TexelRect& dirty = u.dirty;
   if (!dirty.empty()) {  // only the touched rectangle of rows goes up
-    const int w = e->texels.width();
+    const int w = e.texels.width();
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
     glPixelStorei(GL_UNPACK_ROW_LENGTH, w);
-    const float* first = e->texels.texels().data() + (size_t(dirty.y0) * size_t(w) + size_t(dirty.x0)) * 3;
-    glTextureSubImage2D(e->texture.id(), 0, dirty.x0, dirty.y0, dirty.x1 - dirty.x0, dirty.y1 - dirty.y0, GL_RGB,
+    const float* first = e.texels.texels().data() + (size_t(dirty.y0) * size_t(w) + size_t(dirty.x0)) * 3;
+    glTextureSubImage2D(e.extra.id(), 0, dirty.x0, dirty.y0, dirty.x1 - dirty.x0, dirty.y1 - dirty.y0, GL_RGB,
                         GL_FLOAT, first);
     glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
   }
-  glBindTextureUnit(kUnitRayTexture, e->texture.id());
+  glBindTextureUnit(kUnitRayTexture, e.extra.id());
   if (stats) {
     stats->ray_texture_ms = ms_since(t0);
-    stats->ray_texture_strokes = int64_t(applied);
+    stats->ray_texture_strokes = int64_t(u.applied);
     stats->ray_texture_texels = dirty.empty() ? 0 : int64_t(dirty.x1 - dirty.x0) * (dirty.y1 - dirty.y0);
   }
 }
@@ -98,16 +67,10 @@ void Raycaster::bind_multipliers(const GpuVolume& gv, const MacrocellGrid& cells
 void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const std::vector<Peak>& peaks) {
   const RenderSettings& r = s.scene.render;
   const double lo = gv.tf_lo(), hi = gv.tf_hi();
-  const double preint_step = plan_sampling(s).step;  // segments the table is built for
   // The tables depend on the TF, the value range, the method's sizes and (preintegration) the
   // step: a frame that changes none of them (a camera move) reuses what is bound.
-  std::ostringstream key;
-  key.precision(17);
-  key << tf_signature(s.tf, lo, hi) << ' ' << to_string(r.classification) << ' ' << r.peak_table_bins << ' '
-      << r.max_peaks << ' ' << r.secant_iterations << ' ' << r.preint_table_size << ' ' << r.preint_method << ' '
-      << peaks.size() << ' '
-      << (r.classification == Classification::Preint ? preint_step : 0.0);
-  if (const Tables* t = cache_find(tables_cache_, key.str())) {
+  const std::string key = tables_key(s, lo, hi, peaks.size());
+  if (const Tables* t = cache_find(tables_cache_, key)) {
     if (t->peak_table) glBindTextureUnit(kUnitPeakTable, t->peak_table.id());
     if (t->tf_points) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboTfPoints, t->tf_points.id());
     if (t->preint_table) glBindTextureUnit(kUnitPreint, t->preint_table.id());
@@ -115,12 +78,10 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
     return;
   }
   Tables t;
-  t.key = key.str();
+  t.key = key;
   if (r.classification == Classification::Peaks) {
     const PeakTable table = build_peak_table(peaks, lo, hi, r.peak_table_bins);
-    std::vector<float> texels(table.texels.size());
-    for (size_t k = 0; k < texels.size(); ++k)  // to TF coordinates
-      texels[k] = table.texels[k] == PeakTable::kNoPeak ? kNoPeakTexel : float((table.texels[k] - lo) / (hi - lo));
+    const std::vector<float> texels = peak_texels(table, lo, hi);
     t.peak_table = gpu::make_texture(GL_TEXTURE_2D_ARRAY);
     glTextureStorage3D(t.peak_table.id(), 1, GL_RGBA32F, table.bins, table.bins, table.layers);
     glTextureSubImage3D(t.peak_table.id(), 0, 0, 0, 0, table.bins, table.bins, table.layers, GL_RGBA, GL_FLOAT,
@@ -128,11 +89,7 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
     glTextureParameteri(t.peak_table.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTextureParameteri(t.peak_table.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     glBindTextureUnit(kUnitPeakTable, t.peak_table.id());
-    std::vector<glm::vec4> points;
-    for (const auto& p : s.tf.points) {
-      points.emplace_back(float((p.value - lo) / (hi - lo)), 0.f, 0.f, 0.f);
-      points.emplace_back(float(p.r), float(p.g), float(p.b), float(p.a));
-    }
+    const std::vector<glm::vec4> points = tf_point_pairs(s.tf, lo, hi);
     t.tf_points = gpu::make_buffer();
     glNamedBufferStorage(t.tf_points.id(), GLsizeiptr(points.size() * sizeof(glm::vec4)), points.data(), 0);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboTfPoints, t.tf_points.id());
@@ -144,8 +101,7 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
     t.sizes.peak_count = peaks.size();
   }
   if (r.classification == Classification::Preint) {
-    const PreintegrationTable table = build_preintegration(s.tf, lo, hi, preint_step, r.preint_table_size,
-                                                           preint_method(r));
+    const PreintegrationTable table = scene_preintegration(s, lo, hi);
     t.preint_table = gpu::make_texture(GL_TEXTURE_2D);
     glTextureStorage2D(t.preint_table.id(), 1, GL_RGBA32F, table.size, table.size);
     glTextureSubImage2D(t.preint_table.id(), 0, 0, 0, table.size, table.size, GL_RGBA, GL_FLOAT, table.rgba.data());

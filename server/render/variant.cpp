@@ -52,7 +52,7 @@ std::vector<std::string> VariantKey::defines() const {
 }
 
 std::string VariantKey::name() const {
-  std::string n = path == GpuPath::Compute ? "comp" : "frag";
+  std::string n = cpu ? "cpu" : path == GpuPath::Compute ? "comp" : "frag";
   n += tricubic ? "+tricubic" : "+trilinear";
   if (peaks) n += std::string("+peaks:") + to_string(peak_mode);
   if (preintegration) n += "+preint";

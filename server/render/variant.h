@@ -15,6 +15,7 @@ enum class GpuPath { Fragment, Compute };
 
 struct VariantKey {
   GpuPath path = GpuPath::Fragment;
+  bool cpu = false;  // drawn by the CPU backend (cpu/): its name starts "cpu" instead of the GL path
   bool tricubic = false;
   bool shading = false;
   bool space_skipping = false;  // only when the TF leaves some macrocell empty
@@ -34,7 +35,7 @@ struct VariantKey {
   bool cell_dda = false;
 
   std::vector<std::string> defines() const;
-  std::string name() const;  // e.g. "frag+tricubic+skip"
+  std::string name() const;  // e.g. "frag+tricubic+skip", "cpu+trilinear+preint"
 };
 
 // What this build renders; the server's welcome lists it so clients build their controls from it.

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <string>
 
-#include "render/gpu_volume.h"
+#include "render/renderer.h"
 #include "session/volume_store.h"
 
 namespace peakcast {
@@ -52,15 +52,16 @@ size_t GpuResidency::counted_volumes() const {
   return admitted_.size();
 }
 
-render::GpuVolume& GpuResidency::acquire(const std::shared_ptr<VolumeEntry>& e) {
+render::ResidentVolume& GpuResidency::acquire(const std::shared_ptr<VolumeEntry>& e, render::Renderer& renderer) {
   for (auto it = copies_.begin(); it != copies_.end();)
     it = it->second.entry.expired() ? copies_.erase(it) : std::next(it);
   auto& c = copies_[e.get()];
   if (!c.gpu) {
     c.entry = e;
-    c.gpu = std::make_unique<render::GpuVolume>(e->volume, e->macrocells);  // grids built by the loader
-    // The texture is now the volume's one copy (on llvmpipe it lives in host memory too): the
-    // host voxels go. The copy lives as long as the entry, so they are never needed again.
+    c.gpu = renderer.make_resident(e->volume, e->macrocells);  // grids built by the loader
+    // Where the backend made a copy (the GL texture, the CPU's float volumes in TF
+    // coordinates), it is now the volume's one copy: the host voxels go. The copy lives as long
+    // as the entry, so they are never needed again.
     c.gpu->drop_host_voxels();
     e->upload_ms = c.gpu->upload_ms();
   }
@@ -69,7 +70,7 @@ render::GpuVolume& GpuResidency::acquire(const std::shared_ptr<VolumeEntry>& e) 
 
 int64_t GpuResidency::gpu_bytes() const {
   int64_t total = 0;
-  for (auto& [_, c] : copies_) total += int64_t(c.gpu->gpu_bytes());
+  for (auto& [_, c] : copies_) total += int64_t(c.gpu->resident_bytes());
   return total;
 }
 

@@ -15,7 +15,8 @@ namespace peakcast {
 
 struct VolumeEntry;
 namespace render {
-class GpuVolume;
+class Renderer;
+class ResidentVolume;
 }
 
 class GpuResidency {
@@ -33,10 +34,11 @@ class GpuResidency {
   int64_t counted_bytes() const;  // admitted volumes somebody still holds
   size_t counted_volumes() const;
 
-  // Render thread only: the volume's GPU copy (uploaded on first use). Copies of volumes nobody
-  // holds any more are freed first.
-  render::GpuVolume& acquire(const std::shared_ptr<VolumeEntry>& e);
-  int64_t gpu_bytes() const;     // render thread: bytes of the GPU copies alive
+  // Render thread only: the volume's copy for `renderer`'s backend (made on first use: the
+  // texture upload, or the CPU backend's view). Copies of volumes nobody holds any more are
+  // freed first. One renderer per residency.
+  render::ResidentVolume& acquire(const std::shared_ptr<VolumeEntry>& e, render::Renderer& renderer);
+  int64_t gpu_bytes() const;     // render thread: bytes the backend's copies hold besides the volumes
   size_t gpu_volumes() const;    // render thread
   void release_gpu();            // render thread, before its GL context goes
 
@@ -47,7 +49,7 @@ class GpuResidency {
   mutable std::vector<std::weak_ptr<VolumeEntry>> admitted_;
   struct Copy {
     std::weak_ptr<VolumeEntry> entry;
-    std::unique_ptr<render::GpuVolume> gpu;
+    std::unique_ptr<render::ResidentVolume> gpu;
   };
   std::map<const VolumeEntry*, Copy> copies_;  // render thread only
 };

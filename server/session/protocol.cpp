@@ -208,7 +208,8 @@ std::string welcome_message(const Welcome& w) {
   return json{{"type", "welcome"},         {"session", w.session},
               {"volume", w.volume},        {"volumes", w.volumes},
               {"state", w.state},          {"capabilities", w.capabilities},
-              {"gl_renderer", w.gl_renderer}, {"limits", w.limits}}
+              {"gl_renderer", w.gl_renderer}, {"backend", w.backend},
+              {"limits", w.limits}}
       .dump();
 }
 

@@ -93,7 +93,7 @@ std::string stroke_ack_message(uint32_t seq, size_t strokes);
 // A volume switch: the new volume's info (with histogram) and the session's reset state.
 std::string volume_message(const nlohmann::json& volume_info, const nlohmann::json& state);
 struct Welcome {
-  std::string session, gl_renderer;
+  std::string session, gl_renderer, backend;
   nlohmann::json volume, volumes, state, capabilities, limits;
 };
 std::string welcome_message(const Welcome& w);

@@ -2,20 +2,17 @@
 
 #include <algorithm>
 #include <future>
+#include <tuple>
 
 #include "encode/png.h"
-#include "gpu/egl_context.h"
-#include "gpu/shader_cache.h"
-#include "render/raycaster.h"
+#include "render/backend.h"
 #include "session/frame_encoder.h"
 
 namespace peakcast {
 
-// GL state that lives on the render thread only.
+// The renderer (and GL state) that lives on the render thread only.
 struct RenderService::Impl {
-  std::unique_ptr<gpu::EglContext> context;
-  std::unique_ptr<gpu::ShaderCache> shaders;
-  std::unique_ptr<render::Raycaster> caster;
+  render::RenderBackend backend;
 };
 
 RenderService::RenderService(GpuResidency& residency, Metrics& metrics, RenderServiceOptions options)
@@ -25,15 +22,14 @@ RenderService::~RenderService() { stop(); }
 
 void RenderService::start() {
   pool_ = std::make_unique<encode::EncodePool>(options_.encode_threads);
-  std::promise<std::string> ready;
+  std::promise<std::pair<std::string, std::string>> ready;
   auto started = ready.get_future();
   thread_ = std::thread([this, &ready] {
     auto impl = std::make_unique<Impl>();
     try {
-      impl->context = gpu::EglContext::create(options_.egl_device);
-      impl->shaders = std::make_unique<gpu::ShaderCache>(options_.shader_dir);
-      impl->caster = std::make_unique<render::Raycaster>(*impl->shaders);
-      ready.set_value(impl->context->info().to_string());
+      impl->backend = render::open_backend(render::requested_backend(options_.backend), options_.egl_device,
+                                           options_.shader_dir);
+      ready.set_value({impl->backend.description(), render::to_string(impl->backend.backend)});
     } catch (...) {
       ready.set_exception(std::current_exception());
       return;
@@ -44,7 +40,7 @@ void RenderService::start() {
     impl_.reset();
   });
   try {
-    gl_renderer_ = started.get();
+    std::tie(gl_renderer_, backend_) = started.get();
   } catch (...) {
     thread_.join();
     throw;
@@ -100,7 +96,8 @@ void RenderService::render_frame(Scheduler::Work& w) {
     render::RenderRequest req;
     req.output = render::RenderOutput::Rgb8;
     req.sample_stats = job.final;
-    render::RenderResult out = impl_->caster->render(residency_.acquire(job.volume), job.scene, req, &st);
+    render::RenderResult out = impl_->backend.renderer->render(residency_.acquire(job.volume, *impl_->backend.renderer),
+                                                                   job.scene, req, &st);
     metrics_.set("peakcast_gpu_volumes", "", double(residency_.gpu_volumes()));
     metrics_.set("peakcast_gpu_volume_bytes", "", double(residency_.gpu_bytes()));
     RenderedFrame f;
@@ -129,7 +126,8 @@ void RenderService::render_band(Scheduler::Work& w) {
     render::RenderStats st;
     render::RenderRequest req;
     req.tile = render::PixelRect{0, w.y0, sw.job.scene.scene.width, w.rows};
-    render::RenderResult band = impl_->caster->render(residency_.acquire(sw.job.volume), sw.job.scene, req, &st);
+    render::RenderResult band = impl_->backend.renderer->render(
+        residency_.acquire(sw.job.volume, *impl_->backend.renderer), sw.job.scene, req, &st);
     render::place_tile(sw.image, band.rect, band.image);
     sw.render_ms += st.render_ms;
     sw.samples_total += st.samples_total;

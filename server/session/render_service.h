@@ -1,4 +1,5 @@
-// The render thread (DESIGN §2): owns the one GL context and every GL object. It asks the
+// The render thread (DESIGN §2): owns the renderer (render/backend.h) and, with the GL backend,
+// the one GL context and every GL object. It asks the
 // scheduler what to do next (a viewer's frame, or the next band of a still), renders through the
 // GPU residency's copy of the volume, and hands the image to the encode pool, whose threads
 // deliver to the session's connection or answer the still.
@@ -20,6 +21,7 @@ struct RenderServiceOptions {
   int encode_threads = 2;
   SchedulerOptions scheduling;
   std::string egl_device;  // gpu::EglContext::create's choice; empty: PEAKCAST_EGL_DEVICE, else auto
+  std::string backend;     // auto | gl | cpu (render/backend.h); empty: PEAKCAST_BACKEND, else auto
 };
 
 class RenderService {
@@ -27,12 +29,13 @@ class RenderService {
   RenderService(GpuResidency& residency, Metrics& metrics, RenderServiceOptions options);
   ~RenderService();
 
-  // Creates the GL context on the render thread; throws if that fails.
+  // Opens the backend on the render thread (the GL context for gl); throws if that fails.
   void start();
   // Refuses the queued stills (error "shutting_down"), stops after the band or frame being
   // rendered now, answers that still too, drains the encodes and joins. Idempotent.
   void stop();
-  std::string gl_renderer() const;
+  std::string gl_renderer() const;  // the backend's description (render/backend.h)
+  std::string backend() const { return backend_; }  // "gl" or "cpu"
 
   void add_session(const std::shared_ptr<Session>& s) { scheduler_.add_session(s); }
   void remove_session(const std::string& id) { scheduler_.remove_session(id); }
@@ -53,7 +56,7 @@ class RenderService {
   Metrics& metrics_;
   RenderServiceOptions options_;
   Scheduler scheduler_;
-  std::string gl_renderer_;
+  std::string gl_renderer_, backend_;
   std::unique_ptr<encode::EncodePool> pool_;
   std::unique_ptr<Impl> impl_;  // touched only by the render thread
   std::thread thread_;

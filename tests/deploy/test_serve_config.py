@@ -56,7 +56,8 @@ def test_defaults_listed_for_every_option():
 NON_DEFAULT = {"bind": "0.0.0.0", "port": "9123", "max-sessions": "5", "idle-timeout": "30", "max-fps": "24",
                "gpu-budget-mib": "512", "max-queued-stills": "2", "max-still-samples": "1e+09",
                "still-band-samples": "2e+07", "log-level": "debug", "log-format": "json", "io-threads": "3",
-               "encode-threads": "3", "web-dir": "/tmp", "shader-dir": "/tmp", "egl-device": "surfaceless"}
+               "encode-threads": "3", "web-dir": "/tmp", "shader-dir": "/tmp", "egl-device": "surfaceless",
+               "backend": "cpu"}
 
 
 def test_every_option_by_flag_env_and_file():
@@ -153,7 +154,10 @@ def test_layered_values_reach_the_server():
         cfg = pathlib.Path(tmp, "serve.toml")
         # egl-device only in the file: the EGL context's own PEAKCAST_EGL_DEVICE is unset, so only
         # the configuration can choose surfaceless (auto would take device 0).
-        cfg.write_text('max-sessions = 5\nmax-queued-stills = 3\nidle-timeout = 42\negl-device = "surfaceless"\n')
+        # backend = "gl" from the file too: auto would choose the CPU backend on llvmpipe and open
+        # no GL context to name.
+        cfg.write_text('max-sessions = 5\nmax-queued-stills = 3\nidle-timeout = 42\negl-device = "surfaceless"\n'
+                       'backend = "gl"\n')
         env = {k: v for k, v in os.environ.items() if not k.startswith("PEAKCAST_")}
         env.update({"PEAKCAST_CONFIG": str(cfg), "PEAKCAST_MAX_QUEUED_STILLS": "7"})
         p = subprocess.Popen([PEAKCAST, "serve", "--port", "0", "--max-sessions", "6"], env=env,
@@ -161,9 +165,10 @@ def test_layered_values_reach_the_server():
         try:
             line = p.stdout.readline()
             assert "EGL surfaceless" in line, line
-            port = re.search(r":(\d+) \(GL", line).group(1)
+            port = re.search(r":(\d+) \(renderer gl: ", line).group(1)
             health = json.load(urllib.request.urlopen(f"http://127.0.0.1:{port}/api/health", timeout=30))
             assert health["max_sessions"] == 6 and health["max_queued_stills"] == 7, health  # flag, env
+            assert health["backend"] == "gl", health  # file
         finally:
             p.send_signal(signal.SIGTERM)
             p.wait(timeout=10)

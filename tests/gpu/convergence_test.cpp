@@ -11,7 +11,7 @@ namespace {
 
 TEST(Convergence, GpuErrorFallsAsTheStepHalves) {
   auto v = test::make_volume(GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32);
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   nlohmann::json over = {
       {"image", {{"width", 64}, {"height", 64}}},
       {"camera", {{"eye", {75, 55, 95}}, {"center", {20, 20, 20}}, {"up", {0, 1, 0}}, {"fov_y", 30}}},

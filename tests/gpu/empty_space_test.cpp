@@ -63,7 +63,7 @@ class Leaps : public ::testing::TestWithParam<LeapCase> {};
 TEST_P(Leaps, SkipExactlyWhatSteppingThroughEmptyCellsSkips) {
   const LeapCase& c = GetParam();
   auto v = test::make_volume(c.kind, c.dims, default_type(c.kind));
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   json j = {{"image", {{"width", 96}, {"height", 96}}}, {"tf", tf_points(*v, c.tf)}, {"camera", c.camera},
             {"render", c.render}};
   const ResolvedScene s = test::make_scene(*v, j);

@@ -1,23 +1,39 @@
 #include "gpu/gpu_fixture.h"
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 
+#include "cpu/cpu_renderer.h"
 #include "encode/png.h"
 
 namespace peakcast::test {
 
+bool cpu_backend() {
+  const char* b = std::getenv("PEAKCAST_TEST_BACKEND");
+  return b && std::string(b) == "cpu";
+}
+
 Gpu& gpu() {
   static Gpu g = [] {
     Gpu x;
-    x.context = gpu::EglContext::create();
-    x.shaders = std::make_unique<gpu::ShaderCache>(std::filesystem::path(PEAKCAST_SOURCE_DIR) / "shaders");
-    x.caster = std::make_unique<render::Raycaster>(*x.shaders);
-    std::printf("GL: %s\n", x.context->info().to_string().c_str());
+    if (cpu_backend()) {
+      x.caster = std::make_unique<cpu::CpuRenderer>();
+    } else {
+      x.context = gpu::EglContext::create();
+      x.shaders = std::make_unique<gpu::ShaderCache>(std::filesystem::path(PEAKCAST_SOURCE_DIR) / "shaders");
+      auto gl = std::make_unique<render::Raycaster>(*x.shaders);
+      x.gl = gl.get();
+      x.caster = std::move(gl);
+    }
+    std::printf("renderer: %s\n", x.caster->description().c_str());
     return x;
   }();
   return g;
 }
+
+TestVolume::TestVolume(std::shared_ptr<const Volume> v, VolumeMacrocells cells)
+    : r_(gpu().caster->make_resident(std::move(v), std::move(cells))) {}
 
 ResolvedScene make_scene(const Volume& v, const nlohmann::json& overrides) {
   nlohmann::json j = {{"volume", "test"}, {"image", {{"width", 96}, {"height", 80}}}};
@@ -34,7 +50,7 @@ std::shared_ptr<Volume> make_volume(GeneratorKind kind, Dims dims, SourceType ty
   return std::make_shared<Volume>(generate_volume(s));
 }
 
-Image render_gpu(const render::GpuVolume& gv, const ResolvedScene& s, render::GpuPath path, render::RenderStats* st) {
+Image render_gpu(const render::ResidentVolume& gv, const ResolvedScene& s, render::GpuPath path, render::RenderStats* st) {
   return gpu().caster->render(gv, s, path, st);
 }
 
@@ -62,7 +78,8 @@ bool all_finite(const Image& img) {
 }  // namespace peakcast::test
 
 namespace {
-// Every test in a GPU binary needs the context current before it creates GL objects.
+// Every test in a GPU binary needs the context current before it creates GL objects (and the
+// renderer line printed first).
 class GpuEnvironment : public ::testing::Environment {
  public:
   void SetUp() override { peakcast::test::gpu(); }

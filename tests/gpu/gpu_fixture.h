@@ -1,5 +1,9 @@
-// One EGL context and shader cache per test process, and image-test helpers: failures write
-// actual, expected and diff PNGs under build/test-artifacts/.
+// One renderer per test process, and image-test helpers: failures write actual, expected and
+// diff PNGs under build/test-artifacts/.
+//
+// The renderer is the GL ray caster (an EGL context and shader cache), or the native CPU
+// backend when PEAKCAST_TEST_BACKEND=cpu: CTest runs every binary of these folders once per
+// backend (tests/gpu/CMakeLists.txt), so each method is held to the same bounds on both.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -15,22 +19,46 @@
 #include "reference/metrics.h"
 #include "render/gpu_volume.h"
 #include "render/raycaster.h"
+#include "render/renderer.h"
 
 namespace peakcast::test {
 
 struct Gpu {
-  std::unique_ptr<gpu::EglContext> context;
+  std::unique_ptr<gpu::EglContext> context;  // GL backend only
   std::unique_ptr<gpu::ShaderCache> shaders;
-  std::unique_ptr<render::Raycaster> caster;
+  std::unique_ptr<render::Renderer> caster;  // the backend under test
+  render::Raycaster* gl = nullptr;           // the same renderer when it is the GL one
 };
 Gpu& gpu();  // created on first use
+bool cpu_backend();  // PEAKCAST_TEST_BACKEND=cpu
+// Skips the current test under a backend it does not apply to (GL shader programs, llvmpipe's
+// loop limit).
+#define PEAKCAST_GL_ONLY()                                           \
+  do {                                                               \
+    if (::peakcast::test::cpu_backend()) GTEST_SKIP() << "GL backend only"; \
+  } while (0)
+
+// A volume made ready for the backend under test (a GpuVolume or a CpuVolume).
+class TestVolume {
+ public:
+  explicit TestVolume(std::shared_ptr<const Volume> v, VolumeMacrocells cells = {});
+  operator const render::ResidentVolume&() const { return *r_; }
+  const render::ResidentVolume& get() const { return *r_; }
+  const MacrocellGrid& macrocells(Filter f) const { return r_->macrocells(f); }
+  double tf_lo() const { return r_->tf_lo(); }
+  double tf_hi() const { return r_->tf_hi(); }
+  double macrocell_ms() const { return r_->macrocell_ms(); }
+
+ private:
+  std::unique_ptr<render::ResidentVolume> r_;
+};
 
 // A scene resolved for `v`, with optional JSON overrides merged over the defaults.
 ResolvedScene make_scene(const Volume& v, const nlohmann::json& overrides = {});
 std::shared_ptr<Volume> make_volume(GeneratorKind kind, Dims dims, SourceType type,
                                     glm::dvec3 spacing = {1, 1, 1});
 
-Image render_gpu(const render::GpuVolume& gv, const ResolvedScene& s, render::GpuPath path,
+Image render_gpu(const render::ResidentVolume& gv, const ResolvedScene& s, render::GpuPath path,
                  render::RenderStats* stats = nullptr);
 
 // Writes actual/expected/diff PNGs named after the current test.

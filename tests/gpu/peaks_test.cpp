@@ -57,7 +57,7 @@ class SameAlgorithm : public ::testing::TestWithParam<ModeCase> {};
 TEST_P(SameAlgorithm, GpuMatchesTheCpuTwin) {
   const ModeCase m = GetParam();
   for (auto vol : {marschner_lobb(), heptane()}) {
-    render::GpuVolume gv(vol);
+    test::TestVolume gv(vol);
     for (const char* filter : {"trilinear", "tricubic"}) {
       ResolvedScene s = test::make_scene(
           *vol, {{"tf", fig3_tf(*vol, 0.62, 1e-4)},
@@ -110,7 +110,7 @@ TEST_P(DiracPeak, PeakFindingMatchesThePeakModelWherePostclassificationFails) {
   auto vol = std::string(d.volume) == "heptane"
                  ? heptane()
                  : test::make_volume(GeneratorKind::MarschnerLobb, {d.dims, d.dims, d.dims}, SourceType::F32);
-  render::GpuVolume gv(vol);
+  test::TestVolume gv(vol);
   json over = {{"tf", fig3_tf(*vol, 0.62, d.width)},
                {"camera", view_of(*vol, {1.0, -0.8, 0.6})},
                {"image", {{"width", 96}, {"height", 80}}},
@@ -150,7 +150,7 @@ INSTANTIATE_TEST_SUITE_P(Volumes, DiracPeak,
 // looking up the ramp shows the lowest value's colour and looking down it the highest's.
 TEST(PeakOrder, SeveralPeaksInOneSegmentComeOutInRayOrder) {
   auto vol = test::make_volume(GeneratorKind::Ramp, {33, 9, 9}, SourceType::F32);
-  render::GpuVolume gv(vol);
+  test::TestVolume gv(vol);
   auto spike = [](double v, double r, double g, double b) {
     return std::vector<json>{{v - 1e-4, r, g, b, 0.0}, {v, r, g, b, 1.0}, {v + 1e-4, r, g, b, 0.0}};
   };
@@ -184,7 +184,7 @@ TEST(PeakOrder, SeveralPeaksInOneSegmentComeOutInRayOrder) {
 // A plateau of the field exactly at the peak value: both samples of a segment equal the isovalue.
 TEST(PeakEdgeCases, NoNanWhenBothSamplesEqualTheIsovalue) {
   auto vol = test::float_volume({17, 9, 9}, [](int64_t i, int64_t, int64_t) { return i < 4 ? 0.0f : i > 12 ? 1.0f : 0.5f; });
-  render::GpuVolume gv(vol);
+  test::TestVolume gv(vol);
   json tf = {{"points", {{0.0, 0, 0, 0, 0}, {0.5 - 1e-6, 1, 0, 0, 0}, {0.5, 1, 0, 0, 0.7}, {0.5 + 1e-6, 1, 0, 0, 0},
                          {1.0, 0, 0, 0, 0}}}};
   for (const char* filter : {"trilinear", "tricubic"}) {
@@ -204,7 +204,7 @@ TEST(PeakEdgeCases, NoNanWhenBothSamplesEqualTheIsovalue) {
 
 TEST(PeakModes, PeaksOnlyAddsNoDvrAndDvrOnlyIsPostclassification) {
   auto vol = marschner_lobb();
-  render::GpuVolume gv(vol);
+  test::TestVolume gv(vol);
   // A rising opacity ramp (no local maximum: not a peak) with one spike on it.
   auto tf_with_ramp = [](double ramp) {
     return json{{"points",
@@ -260,7 +260,7 @@ TEST(Preintegration, AgreesWithTheConvergedDvrReferenceOnASmoothTf) {
   } cases[] = {{marschner_lobb(), 32.9, 32.2}, {heptane(), 40.3, 38.5}};
   for (const auto& c : cases) {
     auto vol = c.vol;
-    render::GpuVolume gv(vol);
+    test::TestVolume gv(vol);
     const double lo = vol->min_value, span = vol->max_value - vol->min_value;
     json tf = {{"points",
                 {{lo, 0.1, 0.2, 0.9, 0.0}, {lo + 0.35 * span, 0.2, 0.6, 0.9, 0.08}, {lo + 0.6 * span, 1.0, 0.6, 0.2, 0.25},

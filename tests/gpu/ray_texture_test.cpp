@@ -46,7 +46,7 @@ double disk_distance(int x, int y, double u, double v) { return std::hypot((x + 
 
 TEST(ray_texture, WithoutStrokesRendersAsNoTexturePixelForPixel) {
   auto v = ml();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   const Image none = test::render_gpu(gv, test::make_scene(*v, scene(nullptr)), render::GpuPath::Fragment);
   for (const char* mapping : {"view", "volume"}) {
     render::RenderStats st;
@@ -61,7 +61,7 @@ TEST(ray_texture, WithoutStrokesRendersAsNoTexturePixelForPixel) {
 
 TEST(ray_texture, GpuMatchesTheCpuTwin) {
   auto v = ml();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   const json strokes = {stroke("step", 0.4, 0.5, 0.2, 0.25), stroke("termination", 0.7, 0.3, 0.15, 0.3),
                         stroke("blend", 0.3, 0.8, 0.2, 0.8)};
   for (const char* mapping : {"view", "volume"}) {
@@ -78,7 +78,7 @@ TEST(ray_texture, GpuMatchesTheCpuTwin) {
 // it, and no pixel outside the disk changes by more than 1/255.
 TEST(ray_texture, StepStrokeChangesTheErrorInsideItsDiskOnly) {
   auto v = ml();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   const ResolvedScene plain = test::make_scene(*v, scene(nullptr));
   const auto conv = reference::render_converged(*v, plain, reference::OpticalModel::Dvr, 1e-4);
   ASSERT_TRUE(conv.converged);
@@ -118,7 +118,7 @@ TEST(ray_texture, StepStrokeChangesTheErrorInsideItsDiskOnly) {
 // the volume: the changed pixels move with it.
 TEST(ray_texture, VolumeAlignedEditsFollowTheCameraViewAlignedOnesDoNot) {
   auto v = ml();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   auto changed = [&](const char* mapping, double azimuth) {
     const Image a = test::render_gpu(gv, test::make_scene(*v, scene(nullptr, azimuth)), render::GpuPath::Fragment);
     const json t = texture(mapping, {stroke("termination", 0.55, 0.5, 0.12, 0.05)});
@@ -145,7 +145,7 @@ TEST(ray_texture, VolumeAlignedEditsFollowTheCameraViewAlignedOnesDoNot) {
 // The termination and blend channels change only their region too.
 TEST(ray_texture, TerminationAndBlendChangeOnlyTheirDisk) {
   auto v = ml();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   const Image base = test::render_gpu(gv, test::make_scene(*v, scene(nullptr)), render::GpuPath::Fragment);
   const double u = 0.45, vv = 0.55, radius = 0.18;
   for (const auto& [channel, value] : {std::pair{"termination", 0.05}, std::pair{"blend", 1.0}}) {

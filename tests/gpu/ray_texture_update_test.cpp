@@ -40,7 +40,7 @@ size_t differing(const Image& a, const Image& b) {
 
 TEST(ray_texture, PaintedStrokesUploadOnlyTheirRegionAndMatchAFreshBuild) {
   auto v = ml();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   auto spec = std::make_shared<const RayTextureSpec>(parse_ray_texture({{"mapping", "view"}, {"size", {128, 128}}}));
   spec = with_stroke(*spec, stroke("step", 0.3, 0.3, 0.2, 0.5));
   render::RenderStats st;
@@ -77,7 +77,7 @@ TEST(ray_texture, PaintedStrokesUploadOnlyTheirRegionAndMatchAFreshBuild) {
 // held texture is never shown for a spec it does not belong to.
 TEST(ray_texture, AnOlderSpecOfTheLineageIsRebuilt) {
   auto v = ml();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   const auto base = std::make_shared<const RayTextureSpec>(parse_ray_texture({{"mapping", "view"}, {"size", {64, 64}}}));
   const auto one = with_stroke(*base, stroke("termination", 0.5, 0.5, 0.2, 0.05));
   const Image first = test::render_gpu(gv, scene_of(*v, one), render::GpuPath::Fragment);
@@ -94,7 +94,7 @@ TEST(ray_texture, AnOlderSpecOfTheLineageIsRebuilt) {
 // strokes renders as those strokes do, within what 8 bits per channel keep.
 TEST(ray_texture, PngTexturesRenderAsTheirStrokes) {
   auto v = ml();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   const auto dir = std::filesystem::temp_directory_path() / ("peakcast_rtpng_gpu_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const Image none = test::render_gpu(gv, scene_of(*v, nullptr), render::GpuPath::Fragment);

@@ -32,7 +32,7 @@ std::shared_ptr<Volume> odd_volume() {
 TEST_P(Cameras, FiniteAndMatchesTheReference) {
   const CameraCase cc = GetParam();
   auto v = odd_volume();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   for (auto path : {render::GpuPath::Fragment, render::GpuPath::Compute}) {
     ResolvedScene s = test::make_scene(*v, {{"tf", grey_tf(*v)}, {"camera", cc.camera}});
     render::RenderStats st;
@@ -70,7 +70,7 @@ TEST(Orientation, RowZeroIsTheTop) {
   // Ramp along x seen from +z with up = +y: x grows to the right. Rotate so up = +x:
   // the bright end (x = max) must be in the top rows.
   auto v = test::make_volume(GeneratorKind::Ramp, {16, 16, 16}, SourceType::F32);
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   json tf = {{"points", {{0.0, 1, 1, 1, 0.0}, {1.0, 1, 1, 1, 1.0}}}};
   ResolvedScene s = test::make_scene(
       *v, {{"tf", tf}, {"image", {{"width", 32}, {"height", 64}}},
@@ -93,7 +93,7 @@ TEST(Orientation, RowZeroIsTheTop) {
 TEST(Orientation, RightIsCrossOfViewAndUp) {
   // Seen from +z with up +y (VTK's default view), +x is to the right.
   auto v = test::make_volume(GeneratorKind::Ramp, {16, 16, 16}, SourceType::F32);
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   json tf = {{"points", {{0.0, 1, 1, 1, 0.0}, {1.0, 1, 1, 1, 1.0}}}};
   ResolvedScene s = test::make_scene(*v, {{"tf", tf}, {"image", {{"width", 64}, {"height", 32}}}});
   Image g = test::render_gpu(gv, s, render::GpuPath::Fragment);
@@ -102,7 +102,7 @@ TEST(Orientation, RightIsCrossOfViewAndUp) {
 
 TEST(Background, ShowsWhereTheRayMisses) {
   auto v = odd_volume();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   ResolvedScene s = test::make_scene(*v, {{"tf", grey_tf(*v)}, {"background", {0.25, 0.5, 0.75}}});
   Image g = test::render_gpu(gv, s, render::GpuPath::Fragment);
   EXPECT_NEAR(g.pixel(0, 0)[0], 0.25, 1e-6);

@@ -77,7 +77,7 @@ TEST_P(GpuVsCpu, SameStepMatchesTheReference) {
                {"camera", camera_for(*v, {1.0, 0.7, 1.6}, {0, 1, 0})},
                {"render", {{"filter", to_string(p.filter)}, {"shading", p.shading}}}};
   ResolvedScene s = test::make_scene(*v, over);
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   render::RenderStats st;
   Image g = test::render_gpu(gv, s, p.path, &st);
   Image c = reference::render_reference(*v, s);
@@ -112,7 +112,7 @@ class Skipping : public ::testing::TestWithParam<int> {};
 TEST_P(Skipping, OnAndOffAgreeWithin1Over255) {
   const SceneCase sc = cases()[size_t(GetParam())];
   auto v = sc.volume();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   for (auto filter : {Filter::Trilinear, Filter::Tricubic}) {
     json over = {{"tf", tf_over_range(*v, sc.tf)},
                  {"camera", camera_for(*v, {-0.4, 1.0, 0.8}, {0, 0, 1})},

@@ -45,7 +45,7 @@ std::vector<std::pair<std::string, json>> scenes(const Volume& v) {
 
 const char* name(render::GpuPath p) { return p == render::GpuPath::Compute ? "comp" : "frag"; }
 
-render::RenderResult draw(const render::GpuVolume& gv, const ResolvedScene& s, render::GpuPath path,
+render::RenderResult draw(const render::ResidentVolume& gv, const ResolvedScene& s, render::GpuPath path,
                             render::RenderOutput out, std::optional<render::PixelRect> tile = std::nullopt,
                             render::RenderStats* st = nullptr, bool sample_stats = false) {
   render::RenderRequest r;
@@ -61,7 +61,7 @@ render::RenderResult draw(const render::GpuVolume& gv, const ResolvedScene& s, r
 // Measured on llvmpipe: identical (0 bytes differ) for every scene and path.
 TEST(Rgb8Output, EqualsToRgb8OfTheFloatOutput) {
   auto v = blobs();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   for (const auto& [label, over] : scenes(*v))
     for (auto path : {render::GpuPath::Fragment, render::GpuPath::Compute}) {
       const ResolvedScene s = test::make_scene(*v, over);
@@ -88,7 +88,7 @@ TEST(Rgb8Output, EqualsToRgb8OfTheFloatOutput) {
 // paths; assembling the tiles gives the full image.
 TEST(Tiles, EqualTheFullRenderExactly) {
   auto v = blobs();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   const auto all = scenes(*v);
   for (const auto& [label, over] : {all[1], all[2], all[4]}) {
     const ResolvedScene s = test::make_scene(*v, over);
@@ -145,7 +145,7 @@ TEST(Tiles, EqualTheFullRenderExactly) {
 // the tables and occupancy both built at their first draw: nothing is rebuilt per tile.
 TEST(Tiles, InterleavedWithAnotherTfRebuildNothing) {
   auto v = blobs();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   const auto all = scenes(*v);
   for (auto [a, b] : {std::pair{all[3].second, all[2].second}, std::pair{all[0].second, all[3].second}}) {
     json other_tf = tf_over_range(*v, {{0.0, 0, 0, 0, 0}, {0.4, 0.2, 0.5, 1.0, 0.3}, {1.0, 1, 1, 1, 0.8}});
@@ -165,7 +165,7 @@ TEST(Tiles, InterleavedWithAnotherTfRebuildNothing) {
 
 TEST(Tiles, RefusesRectanglesOutsideTheImage) {
   auto v = blobs();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   const ResolvedScene s = test::make_scene(*v, {{"image", {{"width", 40}, {"height", 30}}}});
   for (render::PixelRect r : {render::PixelRect{0, 0, 0, 5}, render::PixelRect{0, 0, 5, 0},
                               render::PixelRect{-1, 0, 5, 5}, render::PixelRect{0, -1, 5, 5},
@@ -190,7 +190,7 @@ TEST(Tiles, RefusesRectanglesOutsideTheImage) {
 // Rgb8 reads the sample counts only when asked; then they equal the float path's.
 TEST(Rgb8Output, SampleStatsOnlyWhenAsked) {
   auto v = blobs();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   const ResolvedScene s = test::make_scene(*v, scenes(*v)[0].second);
   render::RenderStats f, without, with;
   draw(gv, s, render::GpuPath::Fragment, render::RenderOutput::Float, std::nullopt, &f);
@@ -212,7 +212,7 @@ TEST(Rgb8Output, SampleStatsOnlyWhenAsked) {
 // to_string showing the same keys and values.
 TEST(RenderStats, JsonUsesTheStreamKeysAndToStringMatches) {
   auto v = blobs();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   const ResolvedScene s = test::make_scene(*v, scenes(*v)[2].second);  // peaks: peaks and empty cells > 0
   render::RenderStats st;
   draw(gv, s, render::GpuPath::Fragment, render::RenderOutput::Float, std::nullopt, &st);

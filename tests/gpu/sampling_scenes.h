@@ -51,7 +51,7 @@ constexpr double kMinTwinPsnr = 50.0;
 
 // Each case rendered by the GL ray caster and by its CPU twin at the same settings; the variant
 // must contain `marker`.
-inline void check_twins(const Volume& v, const render::GpuVolume& gv, const std::vector<Twin>& twins, const std::string& marker) {
+inline void check_twins(const Volume& v, const render::ResidentVolume& gv, const std::vector<Twin>& twins, const std::string& marker) {
   for (const auto& t : twins) {
     const ResolvedScene s = test::make_scene(v, scene_json(t.camera, t.render));
     render::RenderStats st;

@@ -21,7 +21,7 @@ namespace {
 
 TEST(Differential, GpuMatchesTheCpuTwin) {
   auto v = ml();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   const std::vector<Twin> twins = {
       {"close post trilinear", close_camera(), {{"sampling", "differential"}, {"s_k", 2}}},
       {"far post trilinear", far_camera(), {{"sampling", "differential"}, {"s_k", 2}}},
@@ -69,7 +69,7 @@ struct EqualCost {
   double samples, psnr_diff, psnr_uniform, uniform_step;
 };
 
-EqualCost differential_vs_uniform(const Volume& v, render::GpuVolume& gv, json tf, double sk, bool early_termination) {
+EqualCost differential_vs_uniform(const Volume& v, const render::ResidentVolume& gv, json tf, double sk, bool early_termination) {
   json dj = scene_json(close_camera(), {{"sampling", "differential"}, {"s_k", sk}}, 96);
   dj["tf"] = tf;
   if (early_termination) dj["render"].erase("early_termination");
@@ -93,7 +93,7 @@ EqualCost differential_vs_uniform(const Volume& v, render::GpuVolume& gv, json t
 
 TEST(Differential, AgainstUniformOnACloseUpAtEqualSamples) {
   auto v = ml();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   const json opaque = {{"points", {{0.0, 0.1, 0.2, 0.8, 0.0}, {0.45, 0.3, 0.6, 0.9, 0.15}, {0.6, 0.9, 0.6, 0.3, 1.0},
                                    {1.0, 1.0, 1.0, 1.0, 0.0}}}};
   std::printf("%-22s %5s %9s %12s %12s %10s\n", "scene", "s_k", "samples", "diff_dB", "uniform_dB", "step_u");
@@ -118,7 +118,7 @@ TEST(Differential, AgainstUniformOnACloseUpAtEqualSamples) {
 // sampling` prints frame times). The uniform step is matched to the differential run's count.
 TEST(Differential, AgainstUniformAtEqualCostOnAVesselCloseUp) {
   auto v = test::make_volume(GeneratorKind::Vessels, {96, 96, 96}, SourceType::U16);
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   const double lo = v->min_value, hi = v->max_value, r = 0.5 * std::sqrt(3.0) * 95.0;
   const glm::dvec3 c(47.5), eye = c + 1.05 * r * glm::normalize(glm::dvec3(0.55, 0.45, 0.7));
   std::printf("%-8s %5s %9s %12s %12s %10s\n", "lumen", "s_k", "samples", "diff_dB", "uniform_dB", "step_u");
@@ -162,7 +162,7 @@ TEST(Differential, AgainstUniformAtEqualCostOnAVesselCloseUp) {
 // error falling as s_k falls until the minimum step takes over.
 TEST(Differential, SkSweepIsStableAndConverges) {
   auto v = ml();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   const ResolvedScene s0 = test::make_scene(*v, scene_json(close_camera(), {}, 48));
   const auto conv = reference::render_converged(*v, s0, reference::OpticalModel::Dvr, 1e-4);
   ASSERT_TRUE(conv.converged);
@@ -195,7 +195,7 @@ TEST(Differential, SkSweepIsStableAndConverges) {
 // Under the cap every sample is taken: nothing is cut silently.
 TEST(Sampling, PerRayCapIsReportedWhenHit) {
   auto v = test::make_volume(GeneratorKind::Ramp, {2, 2, 1200}, SourceType::F32);
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   json sj = {{"image", {{"width", 2}, {"height", 2}}},
              {"camera", {{"eye", {0.5, 0.5, -5.0}}, {"center", {0.5, 0.5, 600.0}}, {"up", {0, 1, 0}}, {"fov_y", 0.01}}},
              {"tf", {{"points", {{0.0, 1, 1, 1, 0.0}, {1.0, 1, 1, 1, 0.0}}}}},  // clear: no ray turns opaque
@@ -227,7 +227,7 @@ TEST(Sampling, PerRayCapIsReportedWhenHit) {
 
 TEST(Differential, OrthographicIsUniformAtTheFootprint) {
   auto v = ml();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   const json cam = {{"eye", {20, 20, 120}}, {"center", {20, 20, 20}}, {"up", {0, 1, 0}}, {"projection", "orthographic"},
                     {"height", 60}};
   const ResolvedScene sd = test::make_scene(*v, scene_json(cam, {{"sampling", "differential"}, {"s_k", 3}}));
@@ -249,7 +249,7 @@ TEST(Adaptive, ConstantVolumeSameImageEighthOfTheSamples) {
   auto v = test::make_volume(GeneratorKind::Blobs, {48, 48, 48}, SourceType::U8);
   std::memset(v->data(), 100, size_t(v->voxel_count()));
   v->finalize_statistics();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   const json tf = {{"points", {{0, 0, 0, 0, 0}, {255, 1, 0.8, 0.5, 0.5}}}};
   json over = {{"image", {{"width", 64}, {"height", 64}}}, {"tf", tf}, {"camera", far_camera()},
                {"render", {{"step", 0.5}, {"early_termination", 1.0}}}};
@@ -286,7 +286,7 @@ TEST(Adaptive, MultipliersFollowTheCellsDeviation) {
 
 TEST(Adaptive, GpuMatchesTheCpuTwinAndTheReference) {
   auto v = ml();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   for (const json& render : {json{{"adaptive", true}, {"step", 0.25}, {"space_skipping", false}},
                              json{{"adaptive", true}, {"step", 0.25}},
                              json{{"adaptive", true}, {"sampling", "differential"}, {"s_k", 1}}}) {

@@ -27,9 +27,9 @@ TEST(ShaderCache, CompileErrorNamesFileAndLine) {
 TEST(ShaderCache, ProgramsAreCachedByKey) {
   auto& g = test::gpu();
   render::VariantKey k;
-  const auto& a = g.caster->program(k);  // compiled now or by an earlier test
+  const auto& a = g.gl->program(k);  // compiled now or by an earlier test
   const size_t compiles = g.shaders->compiles(), size = g.shaders->size();
-  const auto& b = g.caster->program(k);
+  const auto& b = g.gl->program(k);
   EXPECT_EQ(a.id(), b.id());
   EXPECT_EQ(g.shaders->compiles(), compiles) << "a second get() of the same key must not compile again";
   EXPECT_EQ(g.shaders->size(), size);
@@ -37,10 +37,10 @@ TEST(ShaderCache, ProgramsAreCachedByKey) {
   render::VariantKey other = k;
   other.shading = !k.shading;
   other.tricubic = !k.tricubic;
-  const auto& c = g.caster->program(other);
+  const auto& c = g.gl->program(other);
   const size_t after_other = g.shaders->compiles();
   EXPECT_LE(after_other, compiles + 1);
-  EXPECT_EQ(g.caster->program(other).id(), c.id());
+  EXPECT_EQ(g.gl->program(other).id(), c.id());
   EXPECT_EQ(g.shaders->compiles(), after_other);
 }
 
@@ -50,14 +50,14 @@ TEST(ShaderCache, UniformBlockOffsetsMatchTheHostStruct) {
     render::VariantKey k;
     k.path = path;
     k.space_skipping = k.shading = k.tricubic = true;
-    const auto offsets = render::gl_uniform_offsets(g.caster->program(k));
+    const auto offsets = render::gl_uniform_offsets(g.gl->program(k));
     const auto host = render::host_uniform_offsets();
     ASSERT_EQ(offsets.size(), host.size());
     for (const auto& [name, off] : host) {
       ASSERT_TRUE(offsets.count(name)) << name;
       EXPECT_EQ(offsets.at(name), off) << name;
     }
-    EXPECT_EQ(render::gl_uniform_block_size(g.caster->program(k)), sizeof(render::RayUniforms));
+    EXPECT_EQ(render::gl_uniform_block_size(g.gl->program(k)), sizeof(render::RayUniforms));
   }
 }
 

@@ -33,7 +33,7 @@ const json kTexture = {{"mapping", "view"},
 
 const VariantCase kCases[] = {
     // A smooth TF seen whole: nothing to skip, no peaks, plain trilinear postclassification.
-    {"smooth_tf_dense", {{"tf", kSmooth}}, {"frag+trilinear"},
+    {"smooth_tf_dense", {{"tf", kSmooth}}, {"+trilinear"},
      {"+peaks", "+skip", "+diff", "+shade", "+tricubic", "+vs", "+raytex", "+preint", "+adaptive"},
      [](render::VariantKey& k) { k.space_skipping = true; }},
     // Peak classification of a TF without peaks: the peak code is left out.
@@ -65,13 +65,14 @@ class Variants : public ::testing::TestWithParam<VariantCase> {};
 TEST_P(Variants, HoldOnlyWhatTheSceneUsesAndOmissionsChangeNoPixel) {
   const VariantCase& c = GetParam();
   static auto v = test::make_volume(GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32);
-  static render::GpuVolume gv(v);
+  static test::TestVolume gv(v);
   json j = {{"image", {{"width", 48}, {"height", 48}}},
             {"camera", {{"eye", {75, 60, 110}}, {"center", {20, 20, 20}}, {"up", {0, 1, 0}}, {"fov_y", 30}}}};
   j.merge_patch(c.scene);
   const ResolvedScene s = test::make_scene(*v, j);
   render::RenderStats st;
   const Image chosen = test::render_gpu(gv, s, render::GpuPath::Fragment, &st);
+  EXPECT_EQ(st.variant.rfind(test::cpu_backend() ? "cpu+" : "frag+", 0), 0u) << st.variant << ": the backend's name first";
   for (const char* part : c.has) EXPECT_NE(st.variant.find(part), std::string::npos) << st.variant << " lacks " << part;
   for (const char* part : c.lacks) EXPECT_EQ(st.variant.find(part), std::string::npos) << st.variant << " has " << part;
   if (!c.put_back) return;

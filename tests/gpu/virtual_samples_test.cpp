@@ -16,7 +16,7 @@ namespace {
 // Virtual samples (Lee et al. 2010): the shader against its CPU twin at the same settings.
 TEST(VirtualSamples, GpuMatchesTheCpuTwin) {
   auto v = ml();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   const std::vector<Twin> twins = {
       {"far vs3 trilinear", far_camera(), {{"virtual_samples", 3}, {"step", 1.0}}},
       {"close vs7 tricubic", close_camera(), {{"virtual_samples", 7}, {"step", 1.0}, {"filter", "tricubic"}}},
@@ -33,7 +33,7 @@ TEST(VirtualSamples, GpuMatchesTheCpuTwin) {
 // (the same number of composited samples, a quarter of the filter evaluations).
 TEST(VirtualSamples, StepOnePlusThreeAgainstStepQuarter) {
   auto v = ml();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   const ResolvedScene s1 = test::make_scene(*v, scene_json(far_camera(), {{"filter", "tricubic"}, {"step", 1.0}}, 96));
   const auto conv = reference::render_converged(*v, s1, reference::OpticalModel::Dvr, 1e-4);
   ASSERT_TRUE(conv.converged);
@@ -125,7 +125,7 @@ std::shared_ptr<Volume> slabs() {
 // nothing at all (the skipping traversal visits the same samples, in the same windows).
 TEST(VirtualSamples, WideningKeepsTheCellsSkippingWouldStreak) {
   auto v = slabs();
-  render::GpuVolume gv(v);
+  test::TestVolume gv(v);
   auto& caster = *test::gpu().caster;
   const json camera = {{"eye", {-60, 30, 20}}, {"center", {24, 24, 24}}, {"up", {0, 1, 0}}, {"fov_y", 40}};
   json sj = scene_json(camera, {{"virtual_samples", 7}, {"step", 2.0}}, 96);

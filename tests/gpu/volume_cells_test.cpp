@@ -1,5 +1,6 @@
 // Macrocell grids off the render thread (issue 9, point 7): the store builds them with the
-// volume on the loader pool, GpuVolume takes them and builds nothing on the render thread.
+// volume on the loader pool, the backend's resident volume takes them and builds nothing on the
+// render thread.
 #include <filesystem>
 
 #include "core/volume_writer.h"
@@ -50,10 +51,10 @@ TEST(VolumeCells, StoreBuildsBothGridsWithTheVolume) {
   EXPECT_EQ(e->macrocells.tricubic->stddev, want_cub.stddev);
 }
 
-TEST(VolumeCells, GpuVolumeUsesTheGivenGridsAndRendersTheSame) {
+TEST(VolumeCells, ResidentVolumeUsesTheGivenGridsAndRendersTheSame) {
   auto v = test::make_volume(GeneratorKind::Blobs, {40, 33, 21}, SourceType::U8);
   const VolumeMacrocells cells = build_volume_macrocells(*v);
-  render::GpuVolume given(v, cells), built(v);
+  test::TestVolume given(v, cells), built(v);
   for (const char* filter : {"trilinear", "tricubic"}) {
     const ResolvedScene s = scene(*v, filter);
     render::RenderStats a, b;
@@ -69,21 +70,22 @@ TEST(VolumeCells, GpuVolumeUsesTheGivenGridsAndRendersTheSame) {
   EXPECT_GT(built.macrocell_ms(), 0.0);
 }
 
-TEST(VolumeCells, GpuVolumeRefusesGridsOfAnotherVolume) {
+TEST(VolumeCells, ResidentVolumeRefusesGridsOfAnotherVolume) {
   auto v = test::make_volume(GeneratorKind::Blobs, {40, 33, 21}, SourceType::U8);
   auto w = test::make_volume(GeneratorKind::Blobs, {40, 33, 40}, SourceType::U8);
   try {
-    render::GpuVolume gv(v, build_volume_macrocells(*w));
+    test::TestVolume gv(v, build_volume_macrocells(*w));
     ADD_FAILURE() << "grids of a 40x33x40 volume were accepted for a 40x33x21 one";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("do not fit the 40x33x21 volume"), std::string::npos) << e.what();
   }
 }
 
-// Issue 13: the server keeps a volume once. GpuResidency drops the host voxels when it makes
-// the GPU copy (on llvmpipe the texture is itself host memory); the renders, the entry's
-// metadata and the copy for later frames stay, and a GpuVolume cannot be made again from a
-// volume without voxels (a clear error, no read of freed memory).
+// Issue 13: the server keeps a volume once. GpuResidency drops the host voxels when the backend
+// makes its own copy (the GL texture, which on llvmpipe is itself host memory); the CPU backend
+// reads integer voxels where they lie, so they stay and no copy is made. The renders, the
+// entry's metadata and the copy for later frames stay, and no resident volume can be made
+// again from a volume without voxels (a clear error, no read of freed memory).
 TEST(VolumeCells, ResidencyKeepsTheVolumeOnceAfterTheUpload) {
   Stored st;
   auto& v = st.v;
@@ -91,11 +93,16 @@ TEST(VolumeCells, ResidencyKeepsTheVolumeOnceAfterTheUpload) {
   GpuResidency& residency = st.residency;
   ASSERT_TRUE(e->volume->has_voxels());
   const ResolvedScene s = scene(*e->volume, "tricubic");
-  render::GpuVolume fresh(v);  // the same voxels, kept
+  test::TestVolume fresh(v);  // the same voxels, kept
   const Image want = test::render_gpu(fresh, s, render::GpuPath::Fragment);
-  render::GpuVolume& gv = residency.acquire(e);
-  EXPECT_FALSE(e->volume->has_voxels()) << "the host copy outlived the upload";
-  EXPECT_EQ(e->volume->data(), nullptr);
+  const render::ResidentVolume& gv = residency.acquire(e, *test::gpu().caster);
+  if (test::cpu_backend()) {
+    EXPECT_TRUE(e->volume->has_voxels()) << "the CPU backend reads integer voxels where they lie";
+    EXPECT_EQ(gv.resident_bytes(), 0u) << "no second copy of integer voxels";
+  } else {
+    EXPECT_FALSE(e->volume->has_voxels()) << "the host copy outlived the upload";
+    EXPECT_EQ(e->volume->data(), nullptr);
+  }
   EXPECT_EQ(e->volume->byte_size(), v->byte_size()) << "metadata must stay";
   EXPECT_EQ(e->volume->min_value, v->min_value);
   EXPECT_EQ(e->volume->histogram, v->histogram);
@@ -104,11 +111,12 @@ TEST(VolumeCells, ResidencyKeepsTheVolumeOnceAfterTheUpload) {
     const Image ref = test::render_gpu(fresh, scene(*v, filter), render::GpuPath::Fragment);
     EXPECT_EQ(got.rgba, ref.rgba) << filter;
   }
-  EXPECT_EQ(&residency.acquire(e), &gv) << "a second frame must reuse the copy";
+  EXPECT_EQ(&residency.acquire(e, *test::gpu().caster), &gv) << "a second frame must reuse the copy";
   EXPECT_EQ(test::render_gpu(gv, s, render::GpuPath::Fragment).rgba, want.rgba);
+  if (test::cpu_backend()) return;
   try {
-    render::GpuVolume again(e->volume);
-    ADD_FAILURE() << "a GpuVolume was made from a volume without voxels";
+    test::TestVolume again(e->volume);
+    ADD_FAILURE() << "a resident volume was made from a volume without voxels";
   } catch (const std::invalid_argument& err) {
     EXPECT_NE(std::string(err.what()).find("voxels were dropped"), std::string::npos) << err.what();
   }

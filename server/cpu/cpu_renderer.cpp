@@ -1,0 +1,271 @@
+#include "cpu/cpu_renderer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "core/camera.h"
+#include "core/parallel.h"
+#include "core/sampling.h"
+#include "render/small_cache.h"
+
+namespace peakcast::cpu {
+
+using render::cache_find;
+using render::cache_insert;
+using render::Clock;
+using render::ms_since;
+using render::PixelRect;
+using render::RenderResult;
+using render::RenderStats;
+
+namespace {
+
+constexpr int kTile = 16;  // pixels per tile side: neighbouring rays share cache lines of the volume
+
+const CpuVolume& cpu_volume(const render::ResidentVolume& v) {
+  const auto* cv = dynamic_cast<const CpuVolume*>(&v);
+  if (!cv) throw std::invalid_argument("the CPU renderer draws CPU volumes only (this one was made by another backend)");
+  return *cv;
+}
+
+// The colour over the background and the opacity (output.glsl's finish_pixel).
+glm::vec3 finish_pixel(const glm::vec4& acc, const glm::vec3& background) {
+  return glm::vec3(acc) + (1.f - acc.a) * background;
+}
+
+// encode::to_rgb8 for one channel: non-finite -> 0, clamp, times 255 in float, round half up.
+uint8_t quantise(float v) {
+  return uint8_t(std::lround(std::clamp(std::isfinite(v) ? v : 0.f, 0.f, 1.f) * 255.f));
+}
+
+}  // namespace
+
+CpuRenderer::CpuRenderer(int threads) : threads_(threads > 0 ? threads : hardware_threads()) {}
+
+std::string CpuRenderer::description() const {
+  return std::string("CPU: ") + simd_target() + ", " + std::to_string(threads_) + " threads";
+}
+
+std::unique_ptr<render::ResidentVolume> CpuRenderer::make_resident(std::shared_ptr<const Volume> volume,
+                                                                   VolumeMacrocells cells) {
+  return std::make_unique<CpuVolume>(std::move(volume), std::move(cells));
+}
+
+int CpuRenderer::sample_cap(const render::VariantKey&) const { return kMaxSamplesPerRay; }
+
+CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, render::GpuPath path, RenderStats* stats) {
+  const MacrocellGrid& cells = cv.macrocells(s.scene.render.filter);
+  render::SetupOptions o;
+  o.leaps = leaps_;
+  o.vs_widening = vs_widening_;
+  o.force_variant = &force_variant_;
+  const render::FrameSetup fs = render::setup_frame(cv, s, path, o, occupancy_, table_builds_);
+  const auto t_tables = Clock::now();
+  const double lo = cv.tf_lo(), hi = cv.tf_hi();
+
+  CpuFrame f;
+  f.key = fs.key;
+  f.key.cpu = true;
+  f.voxels = cv.grid(s.scene.render.filter);
+
+  // The uniforms (raycaster.cpp's make_uniforms), in float like the GL path.
+  const SamplingPlan plan = plan_sampling(s);
+  const Volume& v = cv.volume();
+  const ViewSetup view = setup_view(s.camera, (s.box_min + s.box_max) * 0.5, s.scene.width, s.scene.height);
+  f.p0 = glm::vec3(view.p0);
+  f.right = glm::vec3(view.right);
+  f.up = glm::vec3(view.up);
+  f.forward = glm::vec3(view.forward);
+  f.half_w = float(view.half_w);
+  f.half_h = float(view.half_h);
+  f.dist = float(view.dist);
+  f.box_half = glm::vec3((s.box_max - s.box_min) * 0.5);
+  f.step = float(plan.step);
+  f.spacing = glm::vec3(v.spacing);
+  f.inv_spacing = 1.f / f.spacing;
+  f.stop = float(s.scene.render.early_termination);
+  f.sample_cap = sample_cap(f.key);
+  f.image_w = s.scene.width;
+  f.image_h = s.scene.height;
+  for (int a = 0; a < 3; ++a) f.grid[a] = int(cells.grid[a]);
+  f.cell_edge = float(cells.cell);
+  f.diff_k = float(plan.k);
+  f.min_step = float(plan.min_step);
+
+  // The TF for the scene's step.
+  const std::string tf_key = render::step_tf_key(s, fs.tf_sig);
+  TfTable* tf = cache_find(tf_tables_, tf_key);
+  if (!tf) {
+    tf = &cache_insert(tf_tables_, TfTable{tf_key, render::step_tf_table(s, lo, hi)}, kCacheEntries);
+    ++table_builds_;
+  }
+  f.tf = tf->rgba.data();
+  f.tf_size = TransferFunction::kTableSize;
+
+  // Peak table + TF points, or the preintegration table.
+  const std::vector<Peak> no_peaks;
+  const std::vector<Peak>& peaks = f.key.peaks ? fs.peaks : no_peaks;
+  const std::string key = render::tables_key(s, lo, hi, peaks.size());
+  Tables* t = cache_find(tables_, key);
+  if (!t) {
+    Tables n;
+    n.key = key;
+    if (s.scene.render.classification == Classification::Peaks) {
+      const PeakTable table = build_peak_table(peaks, lo, hi, s.scene.render.peak_table_bins);
+      n.peak_texels = render::peak_texels(table, lo, hi);
+      n.peak_bins = table.bins;
+      n.peak_layers = table.layers;
+      n.tf_points = render::tf_point_pairs(s.tf, lo, hi);
+    }
+    if (s.scene.render.classification == Classification::Preint) {
+      PreintegrationTable table = render::scene_preintegration(s, lo, hi);
+      n.preint = std::move(table.rgba);
+      n.preint_size = table.size;
+    }
+    t = &cache_insert(tables_, std::move(n), kCacheEntries);
+    ++table_builds_;
+  }
+  f.peak_texels = t->peak_texels.data();
+  f.peak_bins = t->peak_bins;
+  f.peak_layers = t->peak_layers;
+  f.max_peaks = s.scene.render.max_peaks;
+  f.secant_iterations = s.scene.render.secant_iterations;
+  f.tf_points = t->tf_points.data();
+  f.tf_point_count = int(t->tf_points.size() / 2);
+  f.preint = t->preint.data();
+  f.preint_size = t->preint_size;
+
+  if (f.key.space_skipping) {
+    CellBytes* d = cache_find(distances_, fs.occupancy_key);
+    if (!d) {
+      std::vector<uint8_t> distance = fs.occupancy->distance;
+      if (!leaps_)
+        for (auto& x : distance) x = std::min<uint8_t>(x, 1);
+      d = &cache_insert(distances_, CellBytes{fs.occupancy_key, std::move(distance)}, kCacheEntries);
+    }
+    f.cell_distance = d->bytes.data();
+  }
+  if (f.key.adaptive) {  // data only (no TF): built once per grid
+    const std::string mkey = std::to_string(cv.serial()) + " " + cells.to_string();
+    CellBytes* m = cache_find(multipliers_, mkey);
+    if (!m) {
+      m = &cache_insert(multipliers_, CellBytes{mkey, adaptive_multipliers(cells, volume_stddev(v))}, kCacheEntries);
+      ++table_builds_;
+    }
+    f.cell_stride = m->bytes.data();
+  }
+  if (f.key.ray_texture) {
+    const auto u = ray_textures_.get(*s.ray_texture, s.scene.render.early_termination);
+    f.ray_texture = &u.entry->texels;
+    if (stats) {
+      stats->ray_texture_ms = u.ms;
+      stats->ray_texture_strokes = int64_t(u.applied);
+      stats->ray_texture_texels = u.dirty.empty() ? 0 : int64_t(u.dirty.x1 - u.dirty.x0) * (u.dirty.y1 - u.dirty.y0);
+    }
+  }
+  if (stats) {
+    stats->empty_cells = fs.occupancy->empty_cells;
+    stats->peaks = fs.peaks.size();
+    stats->table_ms = fs.table_ms + ms_since(t_tables);
+  }
+  return f;
+}
+
+template <class PerPixel>
+void CpuRenderer::for_each_pixel(const PixelRect& rect, const PerPixel& fn) const {
+  const int tiles_x = (rect.w + kTile - 1) / kTile, tiles_y = (rect.h + kTile - 1) / kTile;
+  parallel_for(
+      size_t(tiles_x) * size_t(tiles_y),
+      [&](size_t tile) {
+        const int x0 = int(tile % size_t(tiles_x)) * kTile, y0 = int(tile / size_t(tiles_x)) * kTile;
+        for (int y = y0; y < std::min(rect.h, y0 + kTile); ++y)
+          for (int x = x0; x < std::min(rect.w, x0 + kTile); ++x) fn(x, y);
+      },
+      threads_);
+}
+
+RenderResult CpuRenderer::render(const render::ResidentVolume& v, const ResolvedScene& s,
+                                 const render::RenderRequest& req, RenderStats* stats) {
+  const CpuVolume& cv = cpu_volume(v);
+  const PixelRect rect = req.tile.value_or(PixelRect{0, 0, s.scene.width, s.scene.height});
+  render::check_rect(rect, s.scene.width, s.scene.height);
+  if (stats) *stats = RenderStats{};
+  CpuFrame f = prepare(cv, s, req.path, stats);
+  const bool rgb8 = req.output == render::RenderOutput::Rgb8;
+  f.key.rgb8 = rgb8;
+  const bool read_samples = !rgb8 || req.sample_stats;
+  const glm::vec3 background(s.scene.background);
+
+  RenderResult res;
+  res.rect = rect;
+  std::vector<float> samples(read_samples ? size_t(rect.w) * size_t(rect.h) : 0);
+  if (rgb8)
+    res.rgb8 = render::Rgb8Image(rect.w, rect.h);
+  else
+    res.image = Image(rect.w, rect.h);
+  const auto t0 = Clock::now();
+  for_each_pixel(rect, [&](int x, int y) {
+    const RayResult r = cast_ray(f, float(rect.x + x) + 0.5f, float(rect.y + y) + 0.5f);
+    const size_t p = size_t(y) * size_t(rect.w) + size_t(x);
+    const glm::vec3 c = finish_pixel(r.acc, background);
+    if (rgb8) {
+      for (int k = 0; k < 3; ++k) res.rgb8.rgb[p * 3 + k] = quantise(c[k]);
+    } else {
+      float* px = &res.image.rgba[p * 4];
+      px[0] = c.r;
+      px[1] = c.g;
+      px[2] = c.b;
+      px[3] = r.acc.a;
+    }
+    if (read_samples) samples[p] = r.samples;
+  });
+  const double render_ms = ms_since(t0);
+  if (!rgb8) res.image.samples = samples;
+  if (stats) {
+    stats->render_ms = render_ms;
+    stats->variant = f.key.name();
+    stats->has_samples = read_samples;
+    stats->sample_cap = f.sample_cap;
+    if (read_samples) {
+      for (float n : samples) {
+        if (n < 0) continue;  // missed the box
+        stats->samples_total += n;
+        stats->samples_max = std::max<double>(stats->samples_max, n);
+        stats->rays_hit++;
+        if (n >= float(f.sample_cap)) stats->rays_at_cap++;
+      }
+      stats->samples_mean = stats->rays_hit ? stats->samples_total / double(stats->rays_hit) : 0.0;
+    }
+  }
+  return res;
+}
+
+Image CpuRenderer::render_bare(const render::ResidentVolume& v, const ResolvedScene& s, render::GpuPath path,
+                               const Image& full, RenderStats* stats) {
+  const CpuVolume& cv = cpu_volume(v);
+  const int w = s.scene.width, h = s.scene.height;
+  if (full.width != w || full.height != h) throw std::invalid_argument("render_bare: image size differs");
+  if (stats) *stats = RenderStats{};
+  CpuFrame f = prepare(cv, s, path, nullptr);
+  f.key = render::choose_variant(s, 0, path);
+  f.key.cpu = true;
+  f.key.shading = false;
+  f.key.bare_sampling = true;
+  Image img(w, h);
+  const auto t0 = Clock::now();
+  for_each_pixel(PixelRect{0, 0, w, h}, [&](int x, int y) {
+    const size_t p = size_t(y) * size_t(w) + size_t(x);
+    const int budget = int(std::max(0.f, full.samples[p]));
+    const RayResult r = cast_ray_bare(f, float(x) + 0.5f, float(y) + 0.5f, budget);
+    img.rgba[p * 4 + 3] = r.acc.a;
+    img.samples[p] = r.samples;
+  });
+  if (stats) {
+    stats->render_ms = ms_since(t0);
+    stats->variant = f.key.name();
+  }
+  return img;
+}
+
+}  // namespace peakcast::cpu

@@ -1,0 +1,73 @@
+// The native CPU backend (issue 13; docs/performance.md has the decision and its numbers): the
+// GL ray caster's algorithm and scene contract on the host, for machines whose EGL offers only
+// a software rasteriser. Threads take 16x16-pixel tiles; each ray is cpu/ray_kernel.cpp, its
+// samples reconstructed a SIMD run at a time (cpu/sampler_simd.cpp); the volume is read where
+// it already lies in host memory (CpuVolume).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/vec4.hpp>
+
+#include "cpu/cpu_volume.h"
+#include "cpu/ray_kernel.h"
+#include "render/frame_setup.h"
+#include "render/ray_texture_cache.h"
+#include "render/renderer.h"
+
+namespace peakcast::cpu {
+
+class CpuRenderer : public render::Renderer {
+ public:
+  // threads <= 0: every core.
+  explicit CpuRenderer(int threads = 0);
+  const char* backend() const override { return "cpu"; }
+  std::string description() const override;
+  std::unique_ptr<render::ResidentVolume> make_resident(std::shared_ptr<const Volume> volume,
+                                                        VolumeMacrocells cells = {}) override;
+  using Renderer::render;
+  // `volume` must be a CpuVolume (std::invalid_argument otherwise). The GL path in the request
+  // is ignored: both draw the same pixels.
+  render::RenderResult render(const render::ResidentVolume& volume, const ResolvedScene& scene,
+                              const render::RenderRequest& request, render::RenderStats* stats = nullptr) override;
+  Image render_bare(const render::ResidentVolume& volume, const ResolvedScene& scene, render::GpuPath path,
+                    const Image& full, render::RenderStats* stats = nullptr) override;
+  int sample_cap(const render::VariantKey&) const override;
+
+ private:
+  // The frame's inputs, from the caches (built on a miss).
+  CpuFrame prepare(const CpuVolume& volume, const ResolvedScene& scene, render::GpuPath path,
+                   render::RenderStats* stats);
+  // Casts every ray of `rect` from the threads, tile by tile.
+  template <class PerPixel>
+  void for_each_pixel(const render::PixelRect& rect, const PerPixel& fn) const;
+
+  int threads_ = 1;
+  struct TfTable {
+    std::string key;
+    std::vector<float> rgba;
+  };
+  struct Tables {  // peak table + TF points, or the preintegration table
+    std::string key;
+    std::vector<float> peak_texels;
+    int peak_bins = 0, peak_layers = 0;
+    std::vector<glm::vec4> tf_points;
+    std::vector<float> preint;
+    int preint_size = 0;
+  };
+  struct CellBytes {  // empty-space distances of one occupancy, or adaptive multipliers of one grid
+    std::string key;
+    std::vector<uint8_t> bytes;
+  };
+  static constexpr size_t kCacheEntries = 4;
+  std::vector<TfTable> tf_tables_;
+  std::vector<Tables> tables_;
+  render::OccupancyCache occupancy_;
+  std::vector<CellBytes> distances_, multipliers_;
+  struct NoCopy {};
+  render::RayTextureCache<NoCopy> ray_textures_;
+};
+
+}  // namespace peakcast::cpu

@@ -1,0 +1,622 @@
+// shaders/raycast_body.glsl (and ray_setup, sampling, tf, compositing, shading, peak_find,
+// preintegration, ray_texture .glsl) for one ray on the CPU. Function and variable names follow
+// the shaders so the two can be read side by side; where they differ, the comment says why.
+#include "cpu/ray_kernel.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/geometric.hpp>
+
+#include "core/ray_texture_mapping.h"
+#include "render/shader_interface.h"
+
+namespace peakcast::cpu {
+namespace {
+
+using glm::ivec3;
+using glm::vec3;
+using glm::vec4;
+
+constexpr int kExtension = 1;  // lattice points visited on each side of an occupied cell's run
+constexpr float kHuge = 3.0e38f;
+constexpr float kAmbient = 0.3f, kDiffuse = 0.6f, kSpecular = 0.25f, kShininess = 32.0f;
+
+struct Ray {
+  vec3 o{0}, d{0};
+  float t_eye = 0;
+};
+
+struct Lattice {
+  float t0 = 0, A = 0, B = 1;
+};
+
+float lattice_t(const Lattice& L, float j) { return L.t0 + j * (L.B + L.A * j * 0.5f); }
+float lattice_step(const Lattice& L, float j, float m) { return m * (L.B + L.A * (j + 0.5f * m)); }
+float lattice_index(const Lattice& L, float t) {
+  const float d = std::max(0.f, t - L.t0);
+  return 2.f * d / (L.B + std::sqrt(L.B * L.B + 2.f * L.A * d));
+}
+// A float index to int, bounded: a leap far beyond the ray's end stops at `cap`.
+int index_floor_cap(float x, int cap) { return x >= float(cap) ? cap : int(x); }
+
+Ray make_ray(const CpuFrame& f, float px, float py) {
+  const float nx = px / float(f.image_w) * 2.f - 1.f;
+  const float ny = 1.f - py / float(f.image_h) * 2.f;
+  const vec3 lateral = nx * f.half_w * f.right + ny * f.half_h * f.up;
+  Ray r;
+  if (f.key.orthographic) {
+    r.o = f.p0 + lateral;
+    r.d = f.forward;
+    r.t_eye = -f.dist;
+  } else {
+    const vec3 d = f.forward + lateral;
+    const float len = glm::length(d);
+    r.o = f.p0 + f.dist * lateral;
+    r.d = d / len;
+    r.t_eye = -f.dist * len;
+  }
+  return r;
+}
+
+// Slab test against [-half, half]: (t_enter, t_exit), empty when enter > exit.
+void intersect_box(const CpuFrame& f, const Ray& r, float& enter, float& exit_) {
+  exit_ = kHuge;
+  float tmin_max = -kHuge;
+  for (int a = 0; a < 3; ++a) {
+    const float d = std::abs(r.d[a]) < 1e-20f ? 1e-20f : r.d[a];
+    const float inv = 1.f / d;
+    const float t0 = (-f.box_half[a] - r.o[a]) * inv, t1 = (f.box_half[a] - r.o[a]) * inv;
+    tmin_max = std::max(tmin_max, std::min(t0, t1));
+    exit_ = std::min(exit_, std::max(t0, t1));
+  }
+  enter = std::max(tmin_max, r.t_eye);
+}
+
+Lattice ray_lattice(const CpuFrame& f, const Ray& r, float t_enter) {
+  Lattice L;
+  L.t0 = t_enter;
+  if (f.key.differential) {
+    const vec3 d = r.d / glm::dot(r.d, f.forward);                          // depth-1 direction (eq. 7)
+    const vec3 u = f.right * (2.f * f.half_w / float(f.image_w));          // one pixel along x
+    const float dd = glm::dot(d, d);
+    const float dD_dx = glm::length(dd * u - glm::dot(d, u) * d) / (dd * std::sqrt(dd));  // eq. 10
+    const float k = f.diff_k;
+    const float a = k * dD_dx;
+    const float s = std::max(0.f, t_enter - r.t_eye);  // eye -> box entry
+    const float x = 2.f * s / (k + std::sqrt(k * k + 2.f * a * s));  // eq. 18, stable form
+    L.A = a;
+    L.B = std::max(k + a * x, f.min_step);
+  } else {
+    L.A = 0.f;
+    L.B = f.step;
+  }
+  return L;
+}
+
+float catmull_rom(float p0, float p1, float p2, float p3, float s) {
+  return 0.5f * (2.f * p1 + (p2 - p0) * s + (2.f * p0 - 5.f * p1 + 4.f * p2 - p3) * s * s +
+                 (3.f * p1 - p0 - 3.f * p2 + p3) * s * s * s);
+}
+vec3 catmull_rom3(vec3 p0, vec3 p1, vec3 p2, vec3 p3, float s) {
+  return 0.5f * (2.f * p1 + (p2 - p0) * s + (2.f * p0 - 5.f * p1 + 4.f * p2 - p3) * s * s +
+                 (3.f * p1 - p0 - 3.f * p2 + p3) * s * s * s);
+}
+
+class RayCaster {
+ public:
+  explicit RayCaster(const CpuFrame& f)
+      : f_(f),
+        segments_(f.key.peaks || f.key.preintegration || f.key.virtual_samples),
+        varying_steps_(f.key.differential || f.key.adaptive || f.key.virtual_samples),
+        min_spacing_(std::min(f.spacing.x, std::min(f.spacing.y, f.spacing.z))) {}
+
+  RayResult cast(float px, float py);
+  RayResult cast_bare(float px, float py, int budget);
+
+ private:
+  vec3 voxel_coords(vec3 p) const { return (p + f_.box_half) * f_.inv_spacing; }
+  float sample_field(vec3 x) const { return cpu::sample_field(f_.voxels, x); }
+  vec3 field_gradient(vec3 x) const {
+    vec3 g;
+    g.x = sample_field(x + vec3(1, 0, 0)) - sample_field(x - vec3(1, 0, 0));
+    g.y = sample_field(x + vec3(0, 1, 0)) - sample_field(x - vec3(0, 1, 0));
+    g.z = sample_field(x + vec3(0, 0, 1)) - sample_field(x - vec3(0, 0, 1));
+    return g / (2.f * f_.spacing);
+  }
+  // The value at lattice index i: from the current run, or a new run from i (stride m).
+  float field_at(int i, int m);
+
+  vec4 tf_lookup(float s) const;
+  vec4 tf_exact(float v) const;
+  vec4 preint_lookup(float s_front, float s_back) const;
+  float correct_opacity(float a, float dt) const {
+    return dt == f_.step ? a : 1.f - std::pow(std::max(1.f - a, 0.f), dt / f_.step);
+  }
+  vec3 shade(vec3 rgb, vec3 gradient) const {
+    const float len = glm::length(gradient);
+    if (len * min_spacing_ < 1e-5f) return rgb;
+    const vec3 n = gradient / len;
+    const float ndotl = std::abs(glm::dot(n, -r_.d));  // head light: l = h = direction to the eye
+    return rgb * (kAmbient + kDiffuse * ndotl) + vec3(kSpecular * std::pow(ndotl, kShininess));
+  }
+  void composite(vec3 rgb, float alpha) {
+    const float w = (1.f - res_.acc.a) * alpha;
+    res_.acc += vec4(w * rgb, w);
+  }
+  vec3 sample_gradient(float t, vec3 g) {
+    return f_.key.virtual_samples ? g : field_gradient(voxel_coords(r_.o + t * r_.d));
+  }
+
+  float solve_root(float t0, float f0, float t1, float f1, float v);
+  bool find_peaks(float t0, float f0, float t1, float f1);
+  bool consume(float t, float fv, vec3 g, float dt);
+  bool visit(int i, int m);
+  // Virtual samples (Lee et al. 2010): the window of four true samples, newest last.
+  bool vs_segment(float t1, float t2, float dt1, vec4 fw, vec3 g0, vec3 g1, vec3 g2, vec3 g3, float t_limit);
+  bool vs_last_segment(float t_limit);
+  bool vs_flush();
+  bool vs_push(float t, float fv, vec3 g, float dt);
+  void vs_finish(int last, float t_exit);
+  bool walk_leaps(float span_x, float span_y);
+  bool walk_cells(float span_x, float span_y);
+
+  const CpuFrame& f_;
+  const bool segments_, varying_steps_;
+  const float min_spacing_;
+  Ray r_;
+  Lattice L_;
+  RayResult res_;
+  int last_ = 0;
+  float stop_ = 1, dvr_weight_ = 1, peak_weight_ = 1;
+  // The previous sample, for segment methods (see raycast_body.glsl).
+  float prev_t_ = 0, prev_f_ = 0;
+  bool have_prev_ = false, gap_ = false;
+  int expect_ = 0;
+  vec4 w_t_{0}, w_f_{0}, w_dt_{0};
+  vec3 w_g0_{0}, w_g1_{0}, w_g2_{0}, w_g3_{0};
+  int w_n_ = 0;
+  // The current run of samples (sample_run): indices run_first_ + k * run_stride_, k < run_count_.
+  float run_[kMaxRun];
+  int run_first_ = 0, run_stride_ = 1, run_count_ = 0, run_batch_ = 0;
+};
+
+float RayCaster::field_at(int i, int m) {
+  const int k = i - run_first_;
+  if (run_count_ > 0 && k >= 0 && k % run_stride_ == 0 && k / run_stride_ < run_count_) return run_[k / run_stride_];
+  // Runs grow while the ray walks on without a gap (8, 16), and start short after one: a leap
+  // or the end of an occupied run would waste the rest of a long run.
+  const bool continues = run_count_ > 0 && m == run_stride_ && i == run_first_ + run_count_ * run_stride_;
+  run_batch_ = continues ? std::min(2 * run_batch_, kMaxRun) : 8;
+  SampleRun run;
+  run.o = r_.o;
+  run.d = r_.d;
+  run.half = f_.box_half;
+  run.inv_spacing = f_.inv_spacing;
+  run.t0 = L_.t0;
+  run.A = L_.A;
+  run.B = L_.B;
+  run.first = i;
+  run.stride = m;
+  run.count = std::clamp((last_ + 1 - i) / m + 1, 1, run_batch_);  // up to last + 1 (vs_finish's extra one)
+  sample_run(f_.voxels, run, run_);
+  run_first_ = i;
+  run_stride_ = m;
+  run_count_ = run.count;
+  return run_[0];
+}
+
+vec4 RayCaster::tf_lookup(float s) const {
+  // GL_LINEAR between texel centres of an n-entry table, clamped: texel space u = s (n - 1).
+  const float u = std::clamp(s, 0.f, 1.f) * float(f_.tf_size - 1);
+  const int i = std::min(int(u), f_.tf_size - 2);
+  const float w = u - float(i);
+  const float* a = f_.tf + 4 * i;
+  const float* b = a + 4;
+  return {a[0] + w * (b[0] - a[0]), a[1] + w * (b[1] - a[1]), a[2] + w * (b[2] - a[2]), a[3] + w * (b[3] - a[3])};
+}
+
+vec4 RayCaster::tf_exact(float v) const {
+  const int n = f_.tf_point_count;
+  int lo = 0, hi = n;  // first point with value > v
+  while (lo < hi) {
+    const int mid = (lo + hi) / 2;
+    if (f_.tf_points[2 * mid].x > v)
+      hi = mid;
+    else
+      lo = mid + 1;
+  }
+  if (lo == 0) return f_.tf_points[1];
+  if (lo == n) return f_.tf_points[2 * n - 1];
+  const float va = f_.tf_points[2 * (lo - 1)].x, vb = f_.tf_points[2 * lo].x;
+  return glm::mix(f_.tf_points[2 * (lo - 1) + 1], f_.tf_points[2 * lo + 1], (v - va) / (vb - va));
+}
+
+vec4 RayCaster::preint_lookup(float s_front, float s_back) const {
+  const int n = f_.preint_size;
+  const float u = std::clamp(s_front, 0.f, 1.f) * float(n - 1), v = std::clamp(s_back, 0.f, 1.f) * float(n - 1);
+  const int i = std::min(int(u), n - 2), j = std::min(int(v), n - 2);
+  const float wu = u - float(i), wv = v - float(j);
+  auto texel = [&](int x, int y) {
+    const float* p = f_.preint + (size_t(y) * size_t(n) + size_t(x)) * 4;
+    return vec4(p[0], p[1], p[2], p[3]);
+  };
+  return glm::mix(glm::mix(texel(i, j), texel(i + 1, j), wu), glm::mix(texel(i, j + 1), texel(i + 1, j + 1), wu), wv);
+}
+
+// Regula falsi (secant steps kept inside the bracket), guarded against g_a == g_b.
+float RayCaster::solve_root(float t0, float f0, float t1, float f1, float v) {
+  float ta = t0, tb = t1, ga = f0 - v, gb = f1 - v;
+  for (int k = 0; k < f_.secant_iterations; ++k) {
+    if (gb == ga) break;
+    const float t = std::clamp(ta - ga * (tb - ta) / (gb - ga), std::min(ta, tb), std::max(ta, tb));
+    const float g = sample_field(voxel_coords(r_.o + t * r_.d)) - v;
+    res_.samples += 1.f;
+    if ((g >= 0.f) == (ga >= 0.f)) {
+      ta = t;
+      ga = g;
+    } else {
+      tb = t;
+      gb = g;
+    }
+  }
+  return gb == ga ? 0.5f * (ta + tb) : std::clamp(ta - ga * (tb - ta) / (gb - ga), std::min(ta, tb), std::max(ta, tb));
+}
+
+// Knoll et al. 2009 Algorithm 1 with the errata (peak_find.glsl).
+bool RayCaster::find_peaks(float t0, float f0, float t1, float f1) {
+  const int bins = f_.peak_bins;
+  auto bin = [&](float v) { return std::clamp(int(std::floor(v * float(bins))), 0, bins - 1); };
+  const int i = bin(f0), j = bin(f1);
+  const bool reverse = (i == j) && f0 > f1;  // the diagonal is stored ascending
+  const int max_peaks = f_.max_peaks;
+  float found[4];
+  int n = 0;
+  bool done = false;
+  for (int layer = 0; layer < f_.peak_layers && !done; ++layer) {
+    const float* slots = f_.peak_texels + ((size_t(layer) * bins + size_t(j)) * bins + size_t(i)) * 4;
+    for (int s = 0; s < 4; ++s) {
+      const float v = slots[s];
+      if (v == render::kNoPeakTexel) {
+        done = true;
+        break;
+      }
+      if (!(std::min(f0, f1) < v && v <= std::max(f0, f1))) continue;
+      if (reverse) {  // keep the last four in table order: the first four along the ray
+        if (n == 4) {
+          found[0] = found[1];
+          found[1] = found[2];
+          found[2] = found[3];
+          n = 3;
+        }
+        found[n++] = v;
+      } else {
+        found[n++] = v;
+        if (n == max_peaks) {
+          done = true;
+          break;
+        }
+      }
+    }
+  }
+  const int count = std::min(n, max_peaks);
+  for (int k = 0; k < count; ++k) {
+    const float v = reverse ? found[n - 1 - k] : found[k];
+    const float t = solve_root(t0, f0, t1, f1, v);
+    const vec4 c = tf_exact(v);
+    vec3 rgb(c);
+    if (f_.key.shading) rgb = shade(rgb, field_gradient(voxel_coords(r_.o + t * r_.d)));
+    composite(rgb, c.a * peak_weight_);  // unscaled opacity at the peak (Knoll §4.2)
+    if (res_.acc.a >= stop_) break;
+  }
+  return count > 0;
+}
+
+// One sample (true or virtual) at t with value fv, standing for the step dt. g: its gradient
+// (virtual samples only). True when the ray is opaque enough to stop.
+bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
+  const render::VariantKey& key = f_.key;
+  const bool segment = have_prev_ && !gap_;
+  bool peak_hit = false;
+  if (key.peaks && segment) peak_hit = find_peaks(prev_t_, prev_f_, t, fv);
+  if (key.preintegration) {
+    if (segment) {
+      vec4 c = preint_lookup(prev_f_, fv);
+      if (varying_steps_ && c.a > 0.f) {  // the table holds segments of the uniform step
+        const float a = 1.f - std::pow(std::max(1.f - c.a, 0.f), (t - prev_t_) / f_.step);
+        c = vec4(vec3(c) * (a / c.a), a);
+      }
+      if (key.shading) {
+        if (c.a > 0.f) composite(shade(vec3(c) / c.a, sample_gradient(t, g)), c.a * dvr_weight_);
+      } else {
+        res_.acc += (1.f - res_.acc.a) * dvr_weight_ * c;  // opacity-weighted already
+      }
+    }
+  } else if (!(key.peaks && key.peak_mode == PeakMode::PeaksOnly)) {
+    if (!(key.peaks && key.peak_mode == PeakMode::Xor && peak_hit)) {
+      const vec4 c = tf_lookup(fv);
+      if (c.a > 0.f) {
+        vec3 rgb(c);
+        if (key.shading) rgb = shade(rgb, sample_gradient(t, g));
+        composite(rgb, correct_opacity(c.a, dt) * dvr_weight_);
+      }
+    }
+  }
+  prev_t_ = t;
+  prev_f_ = fv;
+  have_prev_ = true;
+  gap_ = false;
+  return res_.acc.a >= stop_;
+}
+
+bool RayCaster::vs_segment(float t1, float t2, float dt1, vec4 fw, vec3 g0, vec3 g1, vec3 g2, vec3 g3,
+                           float t_limit) {
+  const int vs = f_.key.virtual_samples;
+  const float k = float(vs);
+  const float sub = dt1 / (k + 1.f);
+  if (consume(t1, fw.y, g1, sub)) return true;
+  const float span = t2 - t1;
+  for (int q = 1; q <= vs; ++q) {
+    const float s = float(q) / (k + 1.f);
+    if (t1 + s * span > t_limit) break;
+    const float v = catmull_rom(fw.x, fw.y, fw.z, fw.w, s);
+    const vec3 g = catmull_rom3(g0, g1, g2, g3, s);
+    if (consume(t1 + s * span, v, g, sub)) return true;
+  }
+  return false;
+}
+
+bool RayCaster::vs_last_segment(float t_limit) {
+  const bool prev = w_n_ >= 3;
+  return vs_segment(w_t_.z, w_t_.w, w_dt_.z, vec4(prev ? w_f_.y : w_f_.z, w_f_.z, w_f_.w, w_f_.w), prev ? w_g1_ : w_g2_,
+                    w_g2_, w_g3_, w_g3_, t_limit);
+}
+
+bool RayCaster::vs_flush() {
+  bool done = res_.acc.a >= stop_;
+  if (!done && w_n_ >= 2) done = vs_last_segment(kHuge);
+  if (!done && w_n_ >= 1) done = consume(w_t_.w, w_f_.w, w_g3_, w_dt_.w);
+  w_n_ = 0;
+  return done;
+}
+
+bool RayCaster::vs_push(float t, float fv, vec3 g, float dt) {
+  w_t_ = vec4(w_t_.y, w_t_.z, w_t_.w, t);
+  w_f_ = vec4(w_f_.y, w_f_.z, w_f_.w, fv);
+  w_dt_ = vec4(w_dt_.y, w_dt_.z, w_dt_.w, dt);
+  w_g0_ = w_g1_;
+  w_g1_ = w_g2_;
+  w_g2_ = w_g3_;
+  w_g3_ = g;
+  w_n_ = std::min(w_n_ + 1, 4);
+  if (w_n_ < 3) return false;
+  const bool prev = w_n_ == 4;
+  return vs_segment(w_t_.y, w_t_.z, w_dt_.y, vec4(prev ? w_f_.x : w_f_.y, w_f_.y, w_f_.z, w_f_.w), prev ? w_g0_ : w_g1_,
+                    w_g1_, w_g2_, w_g3_, kHuge);
+}
+
+void RayCaster::vs_finish(int last, float t_exit) {
+  if (res_.acc.a >= stop_ || w_n_ == 0) return;
+  if (w_t_.w != lattice_t(L_, float(last))) {  // the ray ended in a skipped cell
+    vs_flush();
+    return;
+  }
+  const float t = lattice_t(L_, float(last + 1));
+  const float fv = field_at(last + 1, 1);
+  res_.samples += 1.f;
+  const vec3 g = f_.key.shading ? field_gradient(voxel_coords(r_.o + t * r_.d)) : vec3(0.f);
+  if (vs_push(t, fv, g, lattice_step(L_, float(last + 1), 1.f))) return;
+  vs_last_segment(t_exit);  // the extra sample itself is not composited
+  w_n_ = 0;
+}
+
+// Visits lattice index i, standing for the step to index i + m.
+bool RayCaster::visit(int i, int m) {
+  const float dt = lattice_step(L_, float(i), float(m));
+  const float t = lattice_t(L_, float(i));
+  const float fv = field_at(i, m);
+  res_.samples += 1.f;
+  const bool gap = i != expect_;  // lattice points between the last visit and this one were skipped
+  expect_ = i + m;
+  if (gap) gap_ = true;  // until the next sample is consumed: no segment across the gap
+  if (f_.key.virtual_samples) {
+    if (gap && w_n_ > 0) {  // the run before the gap ends here
+      gap_ = false;
+      if (vs_flush()) return true;
+      gap_ = true;
+    }
+    const vec3 g = f_.key.shading ? field_gradient(voxel_coords(r_.o + t * r_.d)) : vec3(0.f);
+    return vs_push(t, fv, g, dt);
+  }
+  return consume(t, fv, vec3(0.f), dt);
+}
+
+uint8_t cell_byte(const uint8_t* table, const CpuFrame& f, ivec3 c) {
+  return table[size_t(c.x) + size_t(f.grid[0]) * (size_t(c.y) + size_t(f.grid[1]) * size_t(c.z))];
+}
+
+// Space skipping without adaptive multipliers, driven by the lattice with empty-space leaps
+// (SAMPLE_LEAPS in raycast_body.glsl). True when the ray stopped early.
+bool RayCaster::walk_leaps(float span_x, float span_y) {
+  const float edge = f_.cell_edge;
+  const vec3 xo = voxel_coords(r_.o);
+  const vec3 dv = r_.d / f_.spacing;
+  const ivec3 grid(f_.grid[0], f_.grid[1], f_.grid[2]);
+  ivec3 stp;
+  vec3 inv_dv, ahead;
+  bool moves[3];
+  for (int a = 0; a < 3; ++a) {
+    stp[a] = dv[a] > 0.f ? 1 : (dv[a] < 0.f ? -1 : 0);
+    moves[a] = std::abs(dv[a]) >= 1e-20f;
+    inv_dv[a] = moves[a] ? 1.f / dv[a] : 0.f;
+    ahead[a] = dv[a] > 0.f ? 1.f : 0.f;
+  }
+  int i = 0, visited = -2;
+  const int64_t limit = int64_t(last_) + 2 + 8 * int64_t(grid.x + grid.y + grid.z) + 4096;
+  for (int64_t iter = 0; iter < limit && i <= last_; ++iter) {
+    const vec3 x = xo + lattice_t(L_, float(i)) * dv;
+    ivec3 c;
+    for (int a = 0; a < 3; ++a) c[a] = std::clamp(int(std::floor(x[a] * (1.f / edge))), 0, grid[a] - 1);
+    const uint8_t empty_distance = cell_byte(f_.cell_distance, f_, c);
+    if (empty_distance == 0) {
+      if (segments_ && i >= 1 && visited != i - 1 && visit(i - 1, 1)) return true;  // the segment into the run
+      if (visit(i, 1)) return true;
+      visited = i;
+      ++i;
+    } else {
+      if (segments_ && visited == i - 1) {  // the segment out of the run
+        if (visit(i, 1)) return true;
+        visited = i;
+      }
+      const int reach = int(empty_distance) - 1;
+      float t_leave = kHuge;
+      for (int a = 0; a < 3; ++a)
+        if (moves[a]) t_leave = std::min(t_leave, (float(c[a] + stp[a] * reach + ahead[a]) * edge - xo[a]) * inv_dv[a]);
+      const float next = std::ceil(lattice_index(L_, std::min(t_leave, span_y + f_.step)));
+      i = std::max(i + 1, index_floor_cap(next, last_ + 1));
+    }
+  }
+  (void)span_x;
+  return false;
+}
+
+// The 3D-DDA over the macrocells (Amanatides & Woo): adaptive multipliers, or the tests' CELL_DDA.
+bool RayCaster::walk_cells(float span_x, float span_y) {
+  const float edge = f_.cell_edge;
+  const vec3 x0 = voxel_coords(r_.o + span_x * r_.d);
+  const vec3 dv = r_.d / f_.spacing;
+  const ivec3 grid(f_.grid[0], f_.grid[1], f_.grid[2]);
+  ivec3 cell, stp;
+  vec3 inv_dv, ahead, t_delta, t_max;
+  bool moves[3];
+  for (int a = 0; a < 3; ++a) {
+    cell[a] = std::clamp(int(std::floor(x0[a] / edge)), 0, grid[a] - 1);
+    stp[a] = dv[a] > 0.f ? 1 : (dv[a] < 0.f ? -1 : 0);
+    moves[a] = std::abs(dv[a]) >= 1e-20f;
+    inv_dv[a] = moves[a] ? 1.f / dv[a] : 0.f;
+    ahead[a] = dv[a] > 0.f ? 1.f : 0.f;
+    t_delta[a] = moves[a] ? edge * std::abs(inv_dv[a]) : kHuge;
+    t_max[a] = moves[a] ? span_x + ((float(cell[a]) + ahead[a]) * edge - x0[a]) * inv_dv[a] : kHuge;
+  }
+  auto outside = [&](ivec3 c) {
+    return c.x < 0 || c.y < 0 || c.z < 0 || c.x >= grid.x || c.y >= grid.y || c.z >= grid.z;
+  };
+  float t_in = span_x;
+  int next = 0;  // first lattice index not yet visited
+  const int last = last_;
+  for (int guard = 0; guard < 4 * (grid.x + grid.y + grid.z) + 4; ++guard) {
+    const ivec3 c = glm::clamp(cell, ivec3(0), grid - 1);
+    bool occupied = true;
+    if (f_.key.space_skipping) {
+      const uint8_t empty_distance = cell_byte(f_.cell_distance, f_, c);
+      if (empty_distance > 1 && cell == c) {
+        // Every cell within empty_distance - 1 of this one is empty: leap out of that cube.
+        const int reach = int(empty_distance) - 1;
+        vec3 t_face;
+        for (int a = 0; a < 3; ++a)
+          t_face[a] = moves[a] ? span_x + ((float(cell[a] + stp[a] * reach) + ahead[a]) * edge - x0[a]) * inv_dv[a]
+                               : kHuge;
+        const float t_leave = std::min(std::min(t_face.x, t_face.y), t_face.z);
+        if (t_leave >= span_y) break;
+        const vec3 x = x0 + (t_leave - span_x) * dv;
+        for (int a = 0; a < 3; ++a) {
+          const int beyond = std::clamp(int(std::floor(x[a] / edge)), cell[a] - reach, cell[a] + reach);
+          cell[a] = t_face[a] <= t_leave ? cell[a] + stp[a] * (reach + 1) : beyond;
+        }
+        if (outside(cell)) break;
+        for (int a = 0; a < 3; ++a)
+          t_max[a] = moves[a] ? span_x + ((float(cell[a]) + ahead[a]) * edge - x0[a]) * inv_dv[a] : kHuge;
+        t_in = t_leave;
+        continue;
+      }
+      occupied = empty_distance == 0;
+    }
+    const float t_out = std::min(std::min(t_max.x, t_max.y), t_max.z);
+    const bool final_cell = t_out >= span_y || outside(cell);
+    // Lattice points with t in [t_in, t_out); all remaining ones in the last cell.
+    const int first = index_floor_cap(std::ceil(lattice_index(L_, t_in)), last + 1);
+    int end = final_cell ? last : std::min(last, index_floor_cap(std::ceil(lattice_index(L_, t_out)), last + 1) - 1);
+    const int m = f_.key.adaptive ? std::clamp(int(cell_byte(f_.cell_stride, f_, c)), 1, 8) : 1;
+    if (occupied) {
+      int i = std::max(next, first);
+      if (segments_)
+        for (int e = kExtension; e >= 1; --e)
+          if (first - e >= next && visit(first - e, 1)) return true;
+      for (; i <= end; i += m)
+        if (visit(i, std::min(m, end + 1 - i))) return true;
+      if (segments_) {
+        for (int j = std::max(next, end + 1); j <= std::min(last, end + kExtension); ++j)
+          if (visit(j, 1)) return true;
+        end = std::min(last, end + kExtension);
+      }
+      next = std::max(next, end + 1);
+    }
+    if (final_cell || next > last) break;
+    // Step to the neighbour across the nearest face; ties step every tied axis at once.
+    for (int a = 0; a < 3; ++a)
+      if (t_max[a] <= t_out) {
+        cell[a] += stp[a];
+        t_max[a] += t_delta[a];
+      }
+    t_in = t_out;
+  }
+  return false;
+}
+
+RayResult RayCaster::cast(float px, float py) {
+  r_ = make_ray(f_, px, py);
+  float span_x, span_y;
+  intersect_box(f_, r_, span_x, span_y);
+  if (!(span_x <= span_y)) {  // missed (also false for NaN)
+    res_.samples = -1.f;
+    return res_;
+  }
+  L_ = ray_lattice(f_, r_, span_x);
+  stop_ = f_.stop;
+  if (f_.ray_texture) {
+    const glm::dvec2 uv = f_.key.ray_texture_volume
+                              ? volume_uv(glm::dvec3(r_.o + span_x * r_.d), glm::dvec3(f_.box_half))
+                              : glm::dvec2(px / float(f_.image_w), py / float(f_.image_h));
+    const auto c = sample_ray_texture(*f_.ray_texture, uv);
+    stop_ = float(c[1]);
+    dvr_weight_ = 1.f - std::max(float(c[2]), 0.f);
+    peak_weight_ = 1.f + std::min(float(c[2]), 0.f);
+    L_.A *= float(c[0]);
+    L_.B *= float(c[0]);
+  }
+  last_ = int(std::min(std::floor(lattice_index(L_, span_y)), float(f_.sample_cap - 1)));
+  const render::VariantKey& key = f_.key;
+  bool stopped = false;
+  if (!key.space_skipping && !key.adaptive) {
+    for (int i = 0; i <= last_ && !stopped; ++i) stopped = visit(i, 1);
+  } else if (!key.adaptive && !key.cell_dda) {
+    stopped = walk_leaps(span_x, span_y);
+  } else {
+    stopped = walk_cells(span_x, span_y);
+  }
+  if (!stopped && key.virtual_samples) vs_finish(last_, span_y);
+  return res_;
+}
+
+RayResult RayCaster::cast_bare(float px, float py, int budget) {
+  r_ = make_ray(f_, px, py);
+  float span_x, span_y;
+  intersect_box(f_, r_, span_x, span_y);
+  L_ = ray_lattice(f_, r_, span_x);
+  last_ = budget;
+  float sum = 0.f;
+  for (int i = 0; i < budget; ++i) sum += field_at(i, 1);
+  res_.acc = vec4(sum * 1e-9f);  // keeps the loop from being optimised away
+  res_.samples = float(budget);
+  return res_;
+}
+
+}  // namespace
+
+RayResult cast_ray(const CpuFrame& f, float px, float py) { return RayCaster(f).cast(px, py); }
+
+RayResult cast_ray_bare(const CpuFrame& f, float px, float py, int budget) {
+  return RayCaster(f).cast_bare(px, py, budget);
+}
+
+}  // namespace peakcast::cpu

@@ -1,0 +1,60 @@
+// One ray of the CPU backend: shaders/raycast_body.glsl ported to C++, the same algorithm in
+// float on the same lattice (sampling.h), with the same variant switches read at run time
+// (a branch the whole frame takes the same way costs a CPU next to nothing). Samples come in
+// runs along the ray from sample_run (SIMD); everything after the sample is scalar.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include "core/ray_texture.h"
+#include "cpu/sampler.h"
+#include "render/variant.h"
+
+namespace peakcast::cpu {
+
+// A frame's inputs: the uniforms, tables and buffers the GL path binds, as host pointers.
+struct CpuFrame {
+  render::VariantKey key;
+  VoxelGrid voxels;
+  // Camera (ray_setup.glsl's uniforms, box-centred).
+  glm::vec3 p0{0}, right{0}, up{0}, forward{0};
+  float half_w = 0, half_h = 0, dist = 0;
+  glm::vec3 box_half{0};
+  float step = 1;  // the uniform step
+  glm::vec3 spacing{1}, inv_spacing{1};
+  float stop = 1;  // early-termination opacity
+  int sample_cap = 0;
+  int image_w = 1, image_h = 1;
+  // Macrocells: one byte per cell in grid order.
+  int grid[3] = {1, 1, 1};
+  float cell_edge = 8;
+  const uint8_t* cell_distance = nullptr;  // space skipping
+  const uint8_t* cell_stride = nullptr;    // adaptive multipliers
+  // Per-TF tables.
+  const float* tf = nullptr;  // TransferFunction::kTableSize RGBA, opacity for `step`
+  int tf_size = 0;
+  const float* peak_texels = nullptr;  // [layer][j][i][4], TF coordinates, kNoPeakTexel = none
+  int peak_bins = 0, peak_layers = 0, max_peaks = 0, secant_iterations = 0;
+  const glm::vec4* tf_points = nullptr;  // tf_point_pairs
+  int tf_point_count = 0;
+  const float* preint = nullptr;  // [j][i][4]
+  int preint_size = 0;
+  const RayTexture* ray_texture = nullptr;
+  float diff_k = 0, min_step = 0;  // differential sampling
+};
+
+struct RayResult {
+  glm::vec4 acc{0.f};   // premultiplied colour and opacity, not yet over the background
+  float samples = 0.f;  // filter evaluations (root-solving steps included); -1: missed the box
+};
+
+// The ray through pixel centre (px, py) of the full image (row 0 at the top).
+RayResult cast_ray(const CpuFrame& f, float px, float py);
+// Benchmark baseline: the same ray's first `budget` lattice points, reconstruction only.
+RayResult cast_ray_bare(const CpuFrame& f, float px, float py, int budget);
+
+}  // namespace peakcast::cpu

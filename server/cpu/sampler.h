@@ -1,0 +1,118 @@
+// Field reconstruction for the CPU backend (the twin of shaders/common_sampling.glsl): trilinear
+// with GL's clamp-to-edge, and the cubic B-spline from eight trilinear fetches (Sigg & Hadwiger
+// 2005). Positions in voxel coordinates (voxel i at i), values in TF coordinates.
+//
+// One point at a time (sample_field: root solving, gradients) or a run of lattice points along
+// a ray at once (sample_run, SIMD through Highway: sampler_simd.cpp): the ray caster's samples.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+#include <glm/vec3.hpp>
+
+#include "core/volume.h"
+
+namespace peakcast::cpu {
+
+// The voxels as the sampler reads them: integer types as stored, float volumes already in TF
+// coordinates (CpuVolume). At least Volume::kTailPadding readable bytes follow the last voxel.
+struct VoxelGrid {
+  const uint8_t* data = nullptr;
+  VoxelType type = VoxelType::U8;
+  int64_t n[3] = {1, 1, 1};
+  int64_t stride_y = 1, stride_z = 1;   // in voxels
+  int64_t next_y = 0, next_z = 0;       // the +1 neighbour's offset (0 on an axis of one voxel)
+  float hi[3] = {0, 0, 0};              // n - 1: positions are clamped to [0, hi]
+  int32_t base_max[3] = {0, 0, 0};      // the lower corner's largest index, max(n - 2, 0)
+  float scale = 1.f, bias = 0.f;        // stored value -> TF coordinate
+  bool tricubic = false;
+  bool simd_offsets = true;  // byte offsets fit the SIMD gathers' 32-bit lanes
+
+  template <class T>
+  float at(int64_t i) const {
+    T v;
+    std::memcpy(&v, data + size_t(i) * sizeof(T), sizeof(T));
+    return float(v);
+  }
+  float voxel(int64_t i) const {
+    switch (type) {
+      case VoxelType::U8: return float(data[i]);
+      case VoxelType::U16: return at<uint16_t>(i);
+      case VoxelType::F32: return at<float>(i);
+    }
+    return 0.f;
+  }
+};
+
+// Makes the grid of `data` laid out like `v` (x fastest).
+VoxelGrid make_voxel_grid(const Volume& v, const uint8_t* data, VoxelType type, float scale, float bias, bool tricubic);
+
+// Trilinear in stored units (GL_LINEAR, GL_CLAMP_TO_EDGE on every axis).
+inline float trilinear_raw(const VoxelGrid& g, float x, float y, float z) {
+  const float p[3] = {x, y, z};
+  int32_t i[3];
+  float f[3];
+  for (int a = 0; a < 3; ++a) {
+    const float c = std::fmin(std::fmax(p[a], 0.f), g.hi[a]);  // NaN -> 0
+    i[a] = std::min(int32_t(c), g.base_max[a]);
+    f[a] = c - float(i[a]);
+  }
+  const int64_t o = i[0] + i[1] * g.stride_y + i[2] * g.stride_z;
+  const int64_t nx = g.n[0] > 1 ? 1 : 0;
+  auto row = [&](int64_t at) {
+    const float a = g.voxel(at), b = g.voxel(at + nx);
+    return a + f[0] * (b - a);
+  };
+  const float c00 = row(o), c10 = row(o + g.next_y), c01 = row(o + g.next_z), c11 = row(o + g.next_y + g.next_z);
+  const float c0 = c00 + f[1] * (c10 - c00), c1 = c01 + f[1] * (c11 - c01);
+  return c0 + f[2] * (c1 - c0);
+}
+
+// The cubic B-spline from eight trilinear fetches, as common_sampling.glsl computes it.
+inline float tricubic_raw(const VoxelGrid& g, float x, float y, float z) {
+  const float p[3] = {x, y, z};
+  float g0[3], g1[3], h0[3], h1[3];
+  for (int a = 0; a < 3; ++a) {
+    const float i = std::floor(p[a]), f = p[a] - i;
+    const float f2 = f * f, f3 = f2 * f;
+    const float w0 = (1.f - 3.f * f + 3.f * f2 - f3) / 6.f;
+    const float w1 = (4.f - 6.f * f2 + 3.f * f3) / 6.f;
+    const float w2 = (1.f + 3.f * f + 3.f * f2 - 3.f * f3) / 6.f;
+    const float w3 = f3 / 6.f;
+    g0[a] = w0 + w1;
+    g1[a] = w2 + w3;
+    h0[a] = i - 1.f + w1 / g0[a];  // voxel coordinates of the two fetches
+    h1[a] = i + 1.f + w3 / g1[a];
+  }
+  const float v000 = trilinear_raw(g, h0[0], h0[1], h0[2]), v100 = trilinear_raw(g, h1[0], h0[1], h0[2]);
+  const float v010 = trilinear_raw(g, h0[0], h1[1], h0[2]), v110 = trilinear_raw(g, h1[0], h1[1], h0[2]);
+  const float v001 = trilinear_raw(g, h0[0], h0[1], h1[2]), v101 = trilinear_raw(g, h1[0], h0[1], h1[2]);
+  const float v011 = trilinear_raw(g, h0[0], h1[1], h1[2]), v111 = trilinear_raw(g, h1[0], h1[1], h1[2]);
+  const float z0 = g0[1] * (g0[0] * v000 + g1[0] * v100) + g1[1] * (g0[0] * v010 + g1[0] * v110);
+  const float z1 = g0[1] * (g0[0] * v001 + g1[0] * v101) + g1[1] * (g0[0] * v011 + g1[0] * v111);
+  return g0[2] * z0 + g1[2] * z1;
+}
+
+inline float sample_field(const VoxelGrid& g, const glm::vec3& x) {
+  const float raw = g.tricubic ? tricubic_raw(g, x.x, x.y, x.z) : trilinear_raw(g, x.x, x.y, x.z);
+  return raw * g.scale + g.bias;
+}
+
+// A run of lattice points along one ray: index j = first + k * stride for k < count, at
+// t_j = t0 + j (B + A j / 2), position ((o + t d) + half) * inv_spacing (ray_setup.glsl's order).
+struct SampleRun {
+  glm::vec3 o, d, half, inv_spacing;
+  float t0 = 0, A = 0, B = 1;
+  int first = 0, stride = 1, count = 0;
+};
+constexpr int kMaxRun = 16;  // samples per run at most
+
+// out[k] = sample_field at the run's k-th point (SIMD where the target has it).
+void sample_run(const VoxelGrid& g, const SampleRun& run, float* out);
+// The SIMD target sample_run dispatches to on this machine (e.g. "AVX3", "AVX2").
+const char* simd_target();
+
+}  // namespace peakcast::cpu

@@ -1,0 +1,74 @@
+// What every backend derives from a scene before it draws, on the host: the TF's peaks, the
+// macrocell occupancy (cached on the TF), the variant, and the per-TF tables (the TF baked for
+// the scene's step, the peak table in TF coordinates, the preintegration table). The GL
+// backend uploads them (raycaster.cpp, raycaster_tables.cpp); the CPU backend reads them.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/vec4.hpp>
+
+#include "core/occupancy.h"
+#include "core/peaks.h"
+#include "core/preintegration.h"
+#include "core/scene.h"
+#include "render/resident_volume.h"
+#include "render/variant.h"
+
+namespace peakcast::render {
+
+// Everything a per-TF table depends on: the points, the opacity unit and the value range.
+std::string tf_signature(const TransferFunction& tf, double lo, double hi);
+
+// Occupancy of one volume's grid under one TF, most recently used first.
+class OccupancyCache {
+ public:
+  // The entry named `key`, built by `build` when absent (counted in `builds`).
+  const Occupancy& get(const std::string& key, const std::function<Occupancy()>& build, size_t& builds);
+
+ private:
+  struct Entry {
+    std::string key;
+    std::shared_ptr<const Occupancy> occupancy;
+  };
+  std::vector<Entry> entries_;
+};
+
+struct FrameSetup {
+  VariantKey key;
+  std::vector<Peak> peaks;          // of the TF (classification peaks), even where the variant finds none
+  const Occupancy* occupancy = nullptr;  // never null; no empty cells without space skipping
+  std::string occupancy_key;        // empty when the frame does not skip space
+  std::string tf_sig;
+  double table_ms = 0.0;            // peaks and occupancy built for this frame
+};
+
+struct SetupOptions {
+  bool leaps = true;          // Renderer::set_empty_space_leaps
+  double vs_widening = 0.125;  // Renderer::set_virtual_sample_widening
+  const std::function<void(VariantKey&)>* force_variant = nullptr;
+};
+
+FrameSetup setup_frame(const ResidentVolume& volume, const ResolvedScene& s, GpuPath path, const SetupOptions& o,
+                       OccupancyCache& cache, size_t& builds);
+
+// The TF as TransferFunction::kTableSize RGBA entries over [lo, hi] whose opacities are already
+// corrected for the scene's uniform step, 1 - (1 - a)^(step / unit), as VTK's mappers bake
+// theirs: a sample that stands for that step composites the looked-up alpha as is, others
+// correct from it (tf.glsl). The key names the table (the TF signature and the exponent).
+std::string step_tf_key(const ResolvedScene& s, const std::string& tf_sig);
+std::vector<float> step_tf_table(const ResolvedScene& s, double lo, double hi);
+
+// What the peak and preintegration tables depend on (a camera move reuses them).
+std::string tables_key(const ResolvedScene& s, double lo, double hi, size_t peak_count);
+// The peak table's texels in TF coordinates, kNoPeakTexel where there is no peak.
+std::vector<float> peak_texels(const PeakTable& table, double lo, double hi);
+// Per TF point: (value in TF coordinates, 0, 0, 0), then (r, g, b, a).
+std::vector<glm::vec4> tf_point_pairs(const TransferFunction& tf, double lo, double hi);
+// The preintegration table for the scene's step.
+PreintegrationTable scene_preintegration(const ResolvedScene& s, double lo, double hi);
+
+}  // namespace peakcast::render

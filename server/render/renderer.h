@@ -1,0 +1,73 @@
+// The ray caster's interface, whichever backend draws: the GL ray caster (render/raycaster.h,
+// shaders/) or the native CPU one (cpu/cpu_renderer.h). Both take the same scene contract
+// (DESIGN §4a), choose the same variant and produce the same outputs; render/backend.h picks one.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "core/image.h"
+#include "core/scene.h"
+#include "render/frame.h"
+#include "render/render_stats.h"
+#include "render/resident_volume.h"
+#include "render/variant.h"
+
+namespace peakcast::render {
+
+class Renderer {
+ public:
+  virtual ~Renderer() = default;
+  virtual const char* backend() const = 0;  // "gl" or "cpu"
+  // A human-readable description (GL renderer string, or the CPU's SIMD target and threads).
+  virtual std::string description() const = 0;
+
+  // This backend's copy of a volume (the texture upload, or the CPU's view of the voxels).
+  virtual std::unique_ptr<ResidentVolume> make_resident(std::shared_ptr<const Volume> volume,
+                                                        VolumeMacrocells cells = {}) = 0;
+
+  // Float or 8-bit output, whole image or a tile (checked: std::invalid_argument naming the
+  // limit). Tables and occupancy are cached on the TF, so the tiles of one still rebuild
+  // nothing after the first. `volume` must come from this backend's make_resident.
+  virtual RenderResult render(const ResidentVolume& volume, const ResolvedScene& scene, const RenderRequest& request,
+                              RenderStats* stats = nullptr) = 0;
+  // The whole image as floats (tests, CLI, reference comparisons).
+  Image render(const ResidentVolume& volume, const ResolvedScene& scene, GpuPath path = GpuPath::Fragment,
+               RenderStats* stats = nullptr) {
+    RenderRequest req;
+    req.path = path;
+    return std::move(render(volume, scene, req, stats).image);
+  }
+  // Benchmark baseline: the rays of `full` (an image this renderer made of the same scene)
+  // with its per-pixel sample counts, reconstruction only.
+  virtual Image render_bare(const ResidentVolume& volume, const ResolvedScene& scene, GpuPath path, const Image& full,
+                            RenderStats* stats = nullptr) = 0;
+  // The most samples a ray of this variant takes (kMaxSamplesPerRay, or less where a driver
+  // bounds a shader's loops: llvmpipe); rays that reach it are counted in the stats.
+  virtual int sample_cap(const VariantKey& key) const = 0;
+
+  // TF tables, peak/preintegration tables and occupancy grids built so far (for tests: tiles
+  // interleaved with another session's frames must not rebuild them).
+  size_t table_builds() const { return table_builds_; }
+  // How far the cells' value ranges are widened for virtual samples, as a fraction of each
+  // range: Lee's 1/8 (kCatmullRomOvershoot). Tests set 0 to show the skipped-cell streaks it
+  // prevents (Lee Fig. 14).
+  void set_virtual_sample_widening(double fraction) { vs_widening_ = fraction; }
+  // Off: the traversal steps through every empty macrocell one at a time instead of leaping
+  // by the empty-space distance (tests show the leaps skip exactly what the steps skip).
+  void set_empty_space_leaps(bool on) { leaps_ = on; }
+  // Changes the variant chosen for every later frame (nullptr: none): how tests and the quality
+  // bench put back code the scene's variant leaves out, to show the omission changes no pixel
+  // and to time what it saves. Only features whose tables the frame builds anyway may be forced
+  // on (peaks, space skipping, the differential lattice).
+  void force_variant(std::function<void(VariantKey&)> change) { force_variant_ = std::move(change); }
+
+ protected:
+  size_t table_builds_ = 0;
+  bool leaps_ = true;
+  double vs_widening_ = 0.125;  // kCatmullRomOvershoot
+  std::function<void(VariantKey&)> force_variant_;
+};
+
+}  // namespace peakcast::render

@@ -1,0 +1,48 @@
+#include "render/resident_volume.h"
+
+#include <atomic>
+#include <chrono>
+#include <stdexcept>
+
+#include "core/value_range.h"
+
+namespace peakcast::render {
+
+namespace {
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+ResidentVolume::ResidentVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells)
+    : volume_(std::move(volume)), cells_trilinear_(std::move(cells.trilinear)), cells_tricubic_(std::move(cells.tricubic)) {
+  if (!volume_) throw std::invalid_argument("ResidentVolume: no volume");
+  if (cells_trilinear_) check_macrocells(*cells_trilinear_, *volume_, FilterSupport::Trilinear);
+  if (cells_tricubic_) check_macrocells(*cells_tricubic_, *volume_, FilterSupport::Tricubic);
+  if (!volume_->has_voxels()) throw std::invalid_argument("ResidentVolume: the volume's voxels were dropped");
+  static std::atomic<uint64_t> next_serial{1};
+  serial_ = next_serial++;
+  const ValueRange range = table_range(volume_->min_value, volume_->max_value);
+  lo_ = range.lo;
+  hi_ = range.hi;
+}
+
+void ResidentVolume::ensure_trilinear_grid() {
+  if (cells_trilinear_) return;
+  const auto t1 = std::chrono::steady_clock::now();
+  cells_trilinear_ = std::make_shared<const MacrocellGrid>(build_macrocells(*volume_, 0, FilterSupport::Trilinear));
+  macrocell_ms_ += ms_since(t1);
+}
+
+const MacrocellGrid& ResidentVolume::macrocells(Filter filter) const {
+  if (filter != Filter::Tricubic) return *cells_trilinear_;
+  if (!cells_tricubic_) {  // most views never ask for the wider filter support
+    if (!volume_->has_voxels()) throw std::logic_error("ResidentVolume: no tricubic grid and no voxels to build it");
+    const auto t1 = std::chrono::steady_clock::now();
+    cells_tricubic_ = std::make_shared<const MacrocellGrid>(build_macrocells(*volume_, 0, FilterSupport::Tricubic));
+    macrocell_ms_ += ms_since(t1);
+  }
+  return *cells_tricubic_;
+}
+
+}  // namespace peakcast::render
