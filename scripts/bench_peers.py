@@ -14,8 +14,11 @@ renders, in one run:
 Frame times are medians over an orbit (--frames frames over --orbit degrees) after warm-up;
 VTK's time is Render() + glFinish, peakcast's the whole frame with its 8-bit read-back.
 
+With --backends cpu,gl, peakcast's candidates run under each backend (PEAKCAST_BACKEND) in the
+same run, one row each; the default is whatever auto chooses on this machine.
+
 Usage: scripts/bench_peers.py [--peakcast build/server/peakcast] [--sizes 512,1024]
-       [--scenes blobs,ml-peak,em] [--frames 7] [--data-dir bench-data/peers]
+       [--scenes blobs,ml-peak,em] [--frames 7] [--data-dir bench-data/peers] [--backends auto]
 Runs itself under xvfb-run when there is no DISPLAY. Needs python3-vtk9 and python3-pil.
 """
 import argparse, json, math, os, pathlib, re, shutil, statistics, subprocess, sys, tempfile, time
@@ -164,9 +167,11 @@ def vtk_case(scene_path, mapper, step, frames, orbit, out_png):
     return statistics.median(j["times"]), j["load_first_ms"]
 
 
-def peakcast_case(peakcast, scene_path, frames, orbit, out_png):
-    run([peakcast, "render", scene_path, "-o", out_png])
-    j = json.loads(run([peakcast, "bench", "scene", scene_path, "--frames", frames, "--orbit", orbit, "--json"]))
+def peakcast_case(peakcast, scene_path, frames, orbit, out_png, backend):
+    env = dict(os.environ, PEAKCAST_BACKEND=backend)
+    run([peakcast, "render", scene_path, "-o", out_png], env=env)
+    j = json.loads(run([peakcast, "bench", "scene", scene_path, "--frames", frames, "--orbit", orbit, "--json"],
+                       env=env))
     return j
 
 
@@ -182,6 +187,7 @@ def main():
     ap.add_argument("--keep", help="keep the images in this directory")
     ap.add_argument("--preint", action="store_true", help="also preintegrated candidates (DVR of the same TF)")
     ap.add_argument("--steps", help="candidate steps in voxels, e.g. 1,2,4 (default: each scene's list)")
+    ap.add_argument("--backends", default="auto", help="peakcast backends to compare, e.g. cpu,gl")
     ap.add_argument("--vtk-scene")
     ap.add_argument("--vtk-mapper")
     ap.add_argument("--vtk-step", type=float)
@@ -197,7 +203,8 @@ def main():
     work = pathlib.Path(args.keep) if args.keep else pathlib.Path(tempfile.mkdtemp(prefix="peers-"))
     work.mkdir(parents=True, exist_ok=True)
     rows = []
-    print(f"{'scene':<8} {'size':>5} {'mapper':<11} {'step':>5} {'ms':>8} {'PSNR':>6} | {'pc step':>7} "
+    backends = args.backends.split(",")
+    print(f"{'scene':<8} {'size':>5} {'mapper':<11} {'step':>5} {'ms':>8} {'PSNR':>6} | {'backend':<7} {'pc step':>7} "
           f"{'pc ms':>8} {'pc PSNR':>7} {'spr':>6} {'ratio':>6} | {'peaks ms':>8} {'ratio':>6}", flush=True)
     for name in args.scenes.split(","):
         spec = SCENES[name]
@@ -210,61 +217,71 @@ def main():
             ref_png = work / f"{tag}_converged.png"
             vtk_case(ref_scene, "gpu", args.converged_step, 1, 0, ref_png)
             load_first = {}
-            # peakcast at each candidate step
-            pc = []
-            # Postclassified at each step, and preintegrated (--preint) at the same steps: both are
-            # DVR of the same TF, so both may be picked "at equal error".
-            for method in ["post"] + (["preint"] if args.preint else []):
-                for step in ([float(x) for x in args.steps.split(",")] if args.steps else spec["steps"]):
-                    sp = work / f"{tag}_{method}_{step}.json"
-                    j = scene_json(spec, volume, lo, hi, size, step)
-                    if method == "preint":
-                        j["render"]["classification"] = "preint"
-                    sp.write_text(json.dumps(j))
-                    png = work / f"{tag}_{method}_{step}.png"
-                    j = peakcast_case(args.peakcast, sp, args.frames, args.orbit, png)
-                    pc.append(dict(method=method, step=step, ms=j["frame_ms_median"], psnr=psnr(png, ref_png),
-                                   spr=j["samples_per_ray"], variant=j["variant"],
-                                   load_first_ms=j["load_to_first_frame_ms"]))
-            peaks_cache = {}
-
-            def peaks_at(step):
-                if step not in peaks_cache:
-                    sp = work / f"{tag}_peaks_{step}.json"
-                    j = scene_json(spec, volume, lo, hi, size, step)
-                    j["render"]["classification"] = "peaks"
-                    sp.write_text(json.dumps(j))
-                    png = work / f"{tag}_peaks_{step}.png"
-                    r = peakcast_case(args.peakcast, sp, args.frames, args.orbit, png)
-                    peaks_cache[step] = dict(step=step, ms=r["frame_ms_median"], psnr=psnr(png, ref_png),
-                                             variant=r["variant"])
-                return peaks_cache[step]
-
             for mapper in ("fixed-point", "gpu"):
                 sp = work / f"{tag}_vtk.json"
                 sp.write_text(json.dumps(scene_json(spec, volume, lo, hi, size, 1.0)))
                 png = work / f"{tag}_vtk_{mapper}.png"
-                ms, load_first[mapper] = vtk_case(sp, mapper, 1.0, args.frames, args.orbit, png)
-                q = psnr(png, ref_png)
-                ok = [p for p in pc if p["psnr"] >= q - 1e-9]
-                best = min(ok, key=lambda p: p["ms"]) if ok else max(pc, key=lambda p: p["psnr"])
-                # The same scene with peak finding at the chosen step: a different optical model
-                # (Knoll's peaks on top of DVR), so timed and scored but not used to pick the step.
-                pk = peaks_at(best["step"])  # at the chosen step, whichever method won
-                row = dict(scene=name, size=size, mapper=mapper, vtk_ms=ms, vtk_psnr=q, pc=best, equal_error=bool(ok),
-                           pc_all=pc, peaks=pk)
-                rows.append(row)
-                print(f"{name:<8} {size:>5} {mapper:<11} {1.0:>5} {ms:>8.1f} {q:>6.1f} | {best['method'][:4]}@{best['step']:<4} "
-                      f"{best['ms']:>8.1f} {best['psnr']:>7.1f} {best['spr']:>6.1f} {best['ms'] / ms:>6.2f} | "
-                      f"{pk['ms']:>8.1f} {pk['ms'] / ms:>6.2f}"
-                      f"{'' if ok else '  (no step reaches VTK: best PSNR shown)'}", flush=True)
-            pc1 = min((p for p in pc if p["method"] == "post"), key=lambda p: abs(p["step"] - 1.0))
-            print(f"    load + first frame (step 1): VTK fixed-point {load_first['fixed-point']:.0f} ms, VTK GPU "
-                  f"{load_first['gpu']:.0f} ms, peakcast {pc1['load_first_ms']:.0f} ms (volume file in the page cache)")
-            rows.append(dict(scene=name, size=size, load_first_ms=dict(load_first, peakcast=pc1["load_first_ms"])))
-            for p in pc:
-                print(f"    peakcast {p['method']} step {p['step']}: {p['ms']:.1f} ms, {p['psnr']:.1f} dB, {p['spr']:.1f} samples/ray,"
-                      f" {p['variant']}", flush=True)
+                vtk = vtk_case(sp, mapper, 1.0, args.frames, args.orbit, png)
+                load_first[mapper] = vtk[1]
+                load_first[mapper + "_ms"] = vtk[0]
+                load_first[mapper + "_psnr"] = psnr(png, ref_png)
+            for backend in backends:
+                btag = f"{tag}_{backend}"
+                # peakcast at each candidate step. Postclassified at each step, and preintegrated
+                # (--preint) at the same steps: both are DVR of the same TF, so both may be picked
+                # "at equal error".
+                pc = []
+                for method in ["post"] + (["preint"] if args.preint else []):
+                    for step in ([float(x) for x in args.steps.split(",")] if args.steps else spec["steps"]):
+                        sp = work / f"{btag}_{method}_{step}.json"
+                        j = scene_json(spec, volume, lo, hi, size, step)
+                        if method == "preint":
+                            j["render"]["classification"] = "preint"
+                        sp.write_text(json.dumps(j))
+                        png = work / f"{btag}_{method}_{step}.png"
+                        j = peakcast_case(args.peakcast, sp, args.frames, args.orbit, png, backend)
+                        pc.append(dict(method=method, step=step, ms=j["frame_ms_median"], psnr=psnr(png, ref_png),
+                                       spr=j["samples_per_ray"], variant=j["variant"],
+                                       load_first_ms=j["load_to_first_frame_ms"]))
+                peaks_cache = {}
+
+                def peaks_at(step):
+                    if step not in peaks_cache:
+                        sp = work / f"{btag}_peaks_{step}.json"
+                        j = scene_json(spec, volume, lo, hi, size, step)
+                        j["render"]["classification"] = "peaks"
+                        sp.write_text(json.dumps(j))
+                        png = work / f"{btag}_peaks_{step}.png"
+                        r = peakcast_case(args.peakcast, sp, args.frames, args.orbit, png, backend)
+                        peaks_cache[step] = dict(step=step, ms=r["frame_ms_median"], psnr=psnr(png, ref_png),
+                                                 variant=r["variant"])
+                    return peaks_cache[step]
+
+                for mapper in ("fixed-point", "gpu"):
+                    ms, q = load_first[mapper + "_ms"], load_first[mapper + "_psnr"]
+                    ok = [p for p in pc if p["psnr"] >= q - 1e-9]
+                    best = min(ok, key=lambda p: p["ms"]) if ok else max(pc, key=lambda p: p["psnr"])
+                    # The same scene with peak finding at the chosen step: a different optical model
+                    # (Knoll's peaks on top of DVR), so timed and scored but not used to pick the step.
+                    pk = peaks_at(best["step"])  # at the chosen step, whichever method won
+                    row = dict(scene=name, size=size, mapper=mapper, backend=backend, vtk_ms=ms, vtk_psnr=q, pc=best,
+                               equal_error=bool(ok), pc_all=pc, peaks=pk)
+                    rows.append(row)
+                    print(f"{name:<8} {size:>5} {mapper:<11} {1.0:>5} {ms:>8.1f} {q:>6.1f} | {backend:<7} "
+                          f"{best['method'][:4]}@{best['step']:<4} "
+                          f"{best['ms']:>8.1f} {best['psnr']:>7.1f} {best['spr']:>6.1f} {best['ms'] / ms:>6.2f} | "
+                          f"{pk['ms']:>8.1f} {pk['ms'] / ms:>6.2f}"
+                          f"{'' if ok else '  (no step reaches VTK: best PSNR shown)'}", flush=True)
+                pc1 = min((p for p in pc if p["method"] == "post"), key=lambda p: abs(p["step"] - 1.0))
+                print(f"    load + first frame (step 1): VTK fixed-point {load_first['fixed-point']:.0f} ms, VTK GPU "
+                      f"{load_first['gpu']:.0f} ms, peakcast {backend} {pc1['load_first_ms']:.0f} ms "
+                      f"(volume file in the page cache)")
+                rows.append(dict(scene=name, size=size, backend=backend,
+                                 load_first_ms={"fixed-point": load_first["fixed-point"], "gpu": load_first["gpu"],
+                                                "peakcast": pc1["load_first_ms"]}))
+                for p in pc:
+                    print(f"    peakcast {backend} {p['method']} step {p['step']}: {p['ms']:.1f} ms, {p['psnr']:.1f} dB, "
+                          f"{p['spr']:.1f} samples/ray, {p['variant']}", flush=True)
     (work / "peers.json").write_text(json.dumps(rows, indent=1))
     print("ratio: peakcast frame ms / VTK frame ms at equal error (the fastest peakcast candidate, post@step or "
           "prei(ntegrated)@step, whose PSNR against the converged image is >= VTK's); peaks: peakcast with peak "

@@ -31,7 +31,7 @@ ResolvedScene bench_scene(const Volume& vol, int size, const std::string& filter
 
 BenchRenderer make_bench_renderer() {
   BenchRenderer r = render::open_backend(render::requested_backend());
-  std::printf("renderer: %s\n", r.description().c_str());
+  std::fprintf(stderr, "renderer: %s\n", r.description().c_str());  // stdout may be --json
   return r;
 }
 

@@ -68,6 +68,7 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
   f.key = fs.key;
   f.key.cpu = true;
   f.voxels = cv.grid(s.scene.render.filter);
+  f.run_lanes = sample_run_lanes();
 
   // The uniforms (raycaster.cpp's make_uniforms), in float like the GL path.
   const SamplingPlan plan = plan_sampling(s);

@@ -1,6 +1,9 @@
 // shaders/raycast_body.glsl (and ray_setup, sampling, tf, compositing, shading, peak_find,
 // preintegration, ray_texture .glsl) for one ray on the CPU. Function and variable names follow
 // the shaders so the two can be read side by side; where they differ, the comment says why.
+// Compiled once per x86 SIMD target (Highway's foreach_target) and chosen at run time: the
+// scalar code gains the target's instructions (SSE4's floor, AVX's three-operand forms) and
+// calls its own target's run sampler inline.
 #include "cpu/ray_kernel.h"
 
 #include <algorithm>
@@ -11,7 +14,16 @@
 #include "core/ray_texture_mapping.h"
 #include "render/shader_interface.h"
 
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "cpu/ray_kernel.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
+
+#include "cpu/sampler-inl.h"
+
+HWY_BEFORE_NAMESPACE();
 namespace peakcast::cpu {
+namespace HWY_NAMESPACE {
 namespace {
 
 using glm::ivec3;
@@ -35,10 +47,20 @@ float lattice_t(const Lattice& L, float j) { return L.t0 + j * (L.B + L.A * j * 
 float lattice_step(const Lattice& L, float j, float m) { return m * (L.B + L.A * (j + 0.5f * m)); }
 float lattice_index(const Lattice& L, float t) {
   const float d = std::max(0.f, t - L.t0);
+  // A uniform lattice: 2d / (B + sqrt(B^2)) is d / B exactly (sqrt of a rounded square is |B|,
+  // and halving is exact), without the square root.
+  if (L.A == 0.f) return d / L.B;
   return 2.f * d / (L.B + std::sqrt(L.B * L.B + 2.f * L.A * d));
 }
 // A float index to int, bounded: a leap far beyond the ray's end stops at `cap`.
 int index_floor_cap(float x, int cap) { return x >= float(cap) ? cap : int(x); }
+// floor(x) clamped to [0, hi]: what a cell index needs, without floor (a library call or a
+// dozen instructions below SSE4.1). Truncation equals floor for x >= 0; x < 0 clamps to 0
+// either way; NaN goes to 0 as the clamp of the GL path's int(floor(NaN)) is undefined anyway.
+int cell_of(float x, int hi) {
+  if (!(x > 0.f)) return 0;
+  return x >= float(hi) ? hi : int(x);
+}
 
 Ray make_ray(const CpuFrame& f, float px, float py) {
   const float nx = px / float(f.image_w) * 2.f - 1.f;
@@ -184,10 +206,11 @@ class RayCaster {
 float RayCaster::field_at(int i, int m) {
   const int k = i - run_first_;
   if (run_count_ > 0 && k >= 0 && k % run_stride_ == 0 && k / run_stride_ < run_count_) return run_[k / run_stride_];
-  // Runs grow while the ray walks on without a gap (8, 16), and start short after one: a leap
-  // or the end of an occupied run would waste the rest of a long run.
+  // Runs grow while the ray walks on without a gap, and start at one SIMD vector after one: a
+  // leap or the end of an occupied run would waste the rest of a long run, and a vector costs
+  // the same however few of its lanes are used.
   const bool continues = run_count_ > 0 && m == run_stride_ && i == run_first_ + run_count_ * run_stride_;
-  run_batch_ = continues ? std::min(2 * run_batch_, kMaxRun) : 8;
+  run_batch_ = continues ? std::min(2 * run_batch_, kMaxRun) : f_.run_lanes;
   SampleRun run;
   run.o = r_.o;
   run.d = r_.d;
@@ -199,7 +222,7 @@ float RayCaster::field_at(int i, int m) {
   run.first = i;
   run.stride = m;
   run.count = std::clamp((last_ + 1 - i) / m + 1, 1, run_batch_);  // up to last + 1 (vs_finish's extra one)
-  sample_run(f_.voxels, run, run_);
+  Run(f_.voxels, run, run_);
   run_first_ = i;
   run_stride_ = m;
   run_count_ = run.count;
@@ -456,7 +479,7 @@ bool RayCaster::walk_leaps(float span_x, float span_y) {
   for (int64_t iter = 0; iter < limit && i <= last_; ++iter) {
     const vec3 x = xo + lattice_t(L_, float(i)) * dv;
     ivec3 c;
-    for (int a = 0; a < 3; ++a) c[a] = std::clamp(int(std::floor(x[a] * (1.f / edge))), 0, grid[a] - 1);
+    for (int a = 0; a < 3; ++a) c[a] = cell_of(x[a] * (1.f / edge), grid[a] - 1);
     const uint8_t empty_distance = cell_byte(f_.cell_distance, f_, c);
     if (empty_distance == 0) {
       if (segments_ && i >= 1 && visited != i - 1 && visit(i - 1, 1)) return true;  // the segment into the run
@@ -613,10 +636,23 @@ RayResult RayCaster::cast_bare(float px, float py, int budget) {
 
 }  // namespace
 
-RayResult cast_ray(const CpuFrame& f, float px, float py) { return RayCaster(f).cast(px, py); }
+RayResult CastRay(const CpuFrame& f, float px, float py) { return RayCaster(f).cast(px, py); }
+RayResult CastRayBare(const CpuFrame& f, float px, float py, int budget) { return RayCaster(f).cast_bare(px, py, budget); }
+
+}  // namespace HWY_NAMESPACE
+}  // namespace peakcast::cpu
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace peakcast::cpu {
+HWY_EXPORT(CastRay);
+HWY_EXPORT(CastRayBare);
+
+RayResult cast_ray(const CpuFrame& f, float px, float py) { return HWY_DYNAMIC_DISPATCH(CastRay)(f, px, py); }
 
 RayResult cast_ray_bare(const CpuFrame& f, float px, float py, int budget) {
-  return RayCaster(f).cast_bare(px, py, budget);
+  return HWY_DYNAMIC_DISPATCH(CastRayBare)(f, px, py, budget);
 }
 
 }  // namespace peakcast::cpu
+#endif

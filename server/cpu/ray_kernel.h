@@ -20,6 +20,7 @@ namespace peakcast::cpu {
 struct CpuFrame {
   render::VariantKey key;
   VoxelGrid voxels;
+  int run_lanes = 8;  // sample_run_lanes()
   // Camera (ray_setup.glsl's uniforms, box-centred).
   glm::vec3 p0{0}, right{0}, up{0}, forward{0};
   float half_w = 0, half_h = 0, dist = 0;

@@ -108,11 +108,13 @@ struct SampleRun {
   float t0 = 0, A = 0, B = 1;
   int first = 0, stride = 1, count = 0;
 };
-constexpr int kMaxRun = 16;  // samples per run at most
+constexpr int kMaxRun = 32;  // samples per run at most
 
 // out[k] = sample_field at the run's k-th point (SIMD where the target has it).
 void sample_run(const VoxelGrid& g, const SampleRun& run, float* out);
-// The SIMD target sample_run dispatches to on this machine (e.g. "AVX3", "AVX2").
+// The SIMD target sample_run dispatches to on this machine (e.g. "AVX3", "AVX2"), and its
+// float lanes (a run of fewer points costs as much as a run of that many).
 const char* simd_target();
+int sample_run_lanes();
 
 }  // namespace peakcast::cpu

@@ -1,162 +1,37 @@
-// sample_run: a ray's run of lattice points reconstructed a vector at a time (Highway, compiled
-// for every x86 target and chosen at run time). Lanes are consecutive points of one ray, not
-// one point of many rays: a run never diverges (every lane samples), where a packet of rays
-// would (leaps, early termination). The arithmetic is sampler.h's, operation for operation, so
-// a run's values equal sample_field's at the same points.
+// sample_run and the SIMD target's name: the per-target sampler (sampler-inl.h) compiled for
+// every x86 target and chosen at run time. The ray kernel includes the same header and calls
+// its own target's copy directly.
 #include "cpu/sampler.h"
+
+#include <algorithm>
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "cpu/sampler_simd.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
 #include <hwy/highway.h>
 
+#include "cpu/sampler-inl.h"
+
 HWY_BEFORE_NAMESPACE();
 namespace peakcast::cpu {
 namespace HWY_NAMESPACE {
-namespace hn = hwy::HWY_NAMESPACE;
-
-using DF = hn::ScalableTag<float>;
-using DI = hn::RebindToSigned<DF>;
-using VF = hn::Vec<DF>;
-using VI = hn::Vec<DI>;
-
-// Trilinear in stored units at (x, y, z), positions in voxel coordinates (sampler.h).
-template <VoxelType kType>
-HWY_INLINE VF Trilinear(const VoxelGrid& g, VF x, VF y, VF z) {
-  const DF df;
-  const DI di;
-  VF f[3];
-  VI i[3];
-  const VF p[3] = {x, y, z};
-  for (int a = 0; a < 3; ++a) {
-    // max first: NaN lanes become 0, as fmax does in the scalar sampler.
-    const VF c = hn::Min(hn::Max(p[a], hn::Zero(df)), hn::Set(df, g.hi[a]));
-    i[a] = hn::Min(hn::ConvertTo(di, c), hn::Set(di, g.base_max[a]));
-    f[a] = hn::Sub(c, hn::ConvertTo(df, i[a]));
-  }
-  const VI o = hn::Add(i[0], hn::Add(hn::Mul(i[1], hn::Set(di, int32_t(g.stride_y))),
-                                     hn::Mul(i[2], hn::Set(di, int32_t(g.stride_z)))));
-  const VI oy = hn::Set(di, int32_t(g.next_y)), oz = hn::Set(di, int32_t(g.next_z));
-  const VI offs[4] = {o, hn::Add(o, oy), hn::Add(o, oz), hn::Add(o, hn::Add(oy, oz))};
-  VF rows[4];
-  for (int k = 0; k < 4; ++k) {
-    VF a, b;
-    if constexpr (kType == VoxelType::F32) {
-      const float* base = reinterpret_cast<const float*>(g.data);
-      a = hn::GatherIndex(df, base, offs[k]);
-      b = hn::GatherIndex(df, base, hn::Add(offs[k], hn::Set(di, g.n[0] > 1 ? 1 : 0)));
-    } else {
-      // One 32-bit load per lane holds the voxel and its +x neighbour (the bytes after the
-      // volume's last voxel are Volume::kTailPadding).
-      const int32_t* base = reinterpret_cast<const int32_t*>(g.data);
-      if constexpr (kType == VoxelType::U8) {
-        const VI w = hn::GatherOffset(di, base, offs[k]);
-        a = hn::ConvertTo(df, hn::And(w, hn::Set(di, 0xFF)));
-        b = hn::ConvertTo(df, hn::And(hn::ShiftRight<8>(w), hn::Set(di, 0xFF)));
-      } else {
-        const VI w = hn::GatherOffset(di, base, hn::Add(offs[k], offs[k]));
-        a = hn::ConvertTo(df, hn::And(w, hn::Set(di, 0xFFFF)));
-        b = hn::ConvertTo(df, hn::And(hn::ShiftRight<16>(w), hn::Set(di, 0xFFFF)));
-      }
-      if (g.n[0] == 1) b = a;
-    }
-    rows[k] = hn::Add(a, hn::Mul(f[0], hn::Sub(b, a)));
-  }
-  const VF c0 = hn::Add(rows[0], hn::Mul(f[1], hn::Sub(rows[1], rows[0])));
-  const VF c1 = hn::Add(rows[2], hn::Mul(f[1], hn::Sub(rows[3], rows[2])));
-  return hn::Add(c0, hn::Mul(f[2], hn::Sub(c1, c0)));
-}
-
-template <VoxelType kType>
-HWY_INLINE VF Tricubic(const VoxelGrid& g, VF x, VF y, VF z) {
-  const DF df;
-  const VF p[3] = {x, y, z};
-  VF g0[3], g1[3], h0[3], h1[3];
-  const VF one = hn::Set(df, 1.f), three = hn::Set(df, 3.f), six = hn::Set(df, 6.f);
-  for (int a = 0; a < 3; ++a) {
-    const VF i = hn::Floor(p[a]), f = hn::Sub(p[a], i);
-    const VF f2 = hn::Mul(f, f), f3 = hn::Mul(f2, f);
-    const VF w0 = hn::Div(hn::Sub(hn::Add(hn::Sub(one, hn::Mul(three, f)), hn::Mul(three, f2)), f3), six);
-    const VF w1 = hn::Div(hn::Add(hn::Sub(hn::Set(df, 4.f), hn::Mul(hn::Set(df, 6.f), f2)), hn::Mul(three, f3)), six);
-    const VF w2 =
-        hn::Div(hn::Sub(hn::Add(hn::Add(one, hn::Mul(three, f)), hn::Mul(three, f2)), hn::Mul(three, f3)), six);
-    const VF w3 = hn::Div(f3, six);
-    g0[a] = hn::Add(w0, w1);
-    g1[a] = hn::Add(w2, w3);
-    h0[a] = hn::Add(hn::Sub(i, one), hn::Div(w1, g0[a]));
-    h1[a] = hn::Add(hn::Add(i, one), hn::Div(w3, g1[a]));
-  }
-  const VF v000 = Trilinear<kType>(g, h0[0], h0[1], h0[2]), v100 = Trilinear<kType>(g, h1[0], h0[1], h0[2]);
-  const VF v010 = Trilinear<kType>(g, h0[0], h1[1], h0[2]), v110 = Trilinear<kType>(g, h1[0], h1[1], h0[2]);
-  const VF v001 = Trilinear<kType>(g, h0[0], h0[1], h1[2]), v101 = Trilinear<kType>(g, h1[0], h0[1], h1[2]);
-  const VF v011 = Trilinear<kType>(g, h0[0], h1[1], h1[2]), v111 = Trilinear<kType>(g, h1[0], h1[1], h1[2]);
-  auto pair = [](VF wa, VF a, VF wb, VF b) { return hn::Add(hn::Mul(wa, a), hn::Mul(wb, b)); };
-  const VF z0 = pair(g0[1], pair(g0[0], v000, g1[0], v100), g1[1], pair(g0[0], v010, g1[0], v110));
-  const VF z1 = pair(g0[1], pair(g0[0], v001, g1[0], v101), g1[1], pair(g0[0], v011, g1[0], v111));
-  return pair(g0[2], z0, g1[2], z1);
-}
-
-template <VoxelType kType, bool kTricubic>
-void RunT(const VoxelGrid& g, const SampleRun& r, float* HWY_RESTRICT out) {
-  const DF df;
-  const size_t N = hn::Lanes(df);
-  alignas(64) float tail[kMaxRun + 64];
-  for (int k = 0; k < r.count; k += int(N)) {
-    // j = first + (k + lane) * stride, exact in float below 2^24 (kMaxSamplesPerRay is 2^20).
-    const VF j = hn::Add(hn::Set(df, float(r.first)),
-                         hn::Mul(hn::Add(hn::Set(df, float(k)), hn::Iota(df, 0.f)), hn::Set(df, float(r.stride))));
-    // t = t0 + j * (B + A * j * 0.5), then ((o + t d) + half) * inv_spacing, as ray_setup.glsl.
-    const VF t = hn::Add(hn::Set(df, r.t0),
-                         hn::Mul(j, hn::Add(hn::Set(df, r.B), hn::Mul(hn::Mul(hn::Set(df, r.A), j), hn::Set(df, 0.5f)))));
-    VF p[3];
-    for (int a = 0; a < 3; ++a)
-      p[a] = hn::Mul(hn::Add(hn::Add(hn::Set(df, r.o[a]), hn::Mul(t, hn::Set(df, r.d[a]))), hn::Set(df, r.half[a])),
-                     hn::Set(df, r.inv_spacing[a]));
-    VF v = kTricubic ? Tricubic<kType>(g, p[0], p[1], p[2]) : Trilinear<kType>(g, p[0], p[1], p[2]);
-    v = hn::Add(hn::Mul(v, hn::Set(df, g.scale)), hn::Set(df, g.bias));
-    if (k + int(N) <= r.count) {
-      hn::StoreU(v, df, out + k);
-    } else {
-      hn::Store(v, df, tail);
-      for (int q = 0; k + q < r.count; ++q) out[k + q] = tail[q];
-    }
-  }
-}
-
-void Run(const VoxelGrid& g, const SampleRun& r, float* HWY_RESTRICT out) {
-  switch (g.type) {
-    case VoxelType::U8: return g.tricubic ? RunT<VoxelType::U8, true>(g, r, out) : RunT<VoxelType::U8, false>(g, r, out);
-    case VoxelType::U16:
-      return g.tricubic ? RunT<VoxelType::U16, true>(g, r, out) : RunT<VoxelType::U16, false>(g, r, out);
-    case VoxelType::F32:
-      return g.tricubic ? RunT<VoxelType::F32, true>(g, r, out) : RunT<VoxelType::F32, false>(g, r, out);
-  }
-}
-
 const char* Target() { return hwy::TargetName(HWY_TARGET); }
-
+void RunExported(const VoxelGrid& g, const SampleRun& r, float* out) { Run(g, r, out); }
+int Lanes() { return int(hwy::HWY_NAMESPACE::Lanes(hwy::HWY_NAMESPACE::ScalableTag<float>())); }
 }  // namespace HWY_NAMESPACE
 }  // namespace peakcast::cpu
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
 namespace peakcast::cpu {
-HWY_EXPORT(Run);
+HWY_EXPORT(RunExported);
 HWY_EXPORT(Target);
+HWY_EXPORT(Lanes);
 
-void sample_run(const VoxelGrid& g, const SampleRun& r, float* out) {
-  if (!g.simd_offsets) {  // offsets beyond 32 bits: one point at a time
-    for (int k = 0; k < r.count; ++k) {
-      const float j = float(r.first) + float(k) * float(r.stride);
-      const float t = r.t0 + j * (r.B + r.A * j * 0.5f);
-      out[k] = sample_field(g, ((r.o + t * r.d) + r.half) * r.inv_spacing);
-    }
-    return;
-  }
-  HWY_DYNAMIC_DISPATCH(Run)(g, r, out);
-}
+void sample_run(const VoxelGrid& g, const SampleRun& r, float* out) { HWY_DYNAMIC_DISPATCH(RunExported)(g, r, out); }
 
 const char* simd_target() { return HWY_DYNAMIC_DISPATCH(Target)(); }
+int sample_run_lanes() { return std::min(HWY_DYNAMIC_DISPATCH(Lanes)(), kMaxRun); }
 
 }  // namespace peakcast::cpu
 #endif
