@@ -26,6 +26,7 @@ namespace peakcast::cpu {
 namespace HWY_NAMESPACE {
 namespace {
 
+namespace hn = hwy::HWY_NAMESPACE;
 using glm::ivec3;
 using glm::vec3;
 using glm::vec4;
@@ -205,7 +206,11 @@ class RayCaster {
 
 float RayCaster::field_at(int i, int m) {
   const int k = i - run_first_;
-  if (run_count_ > 0 && k >= 0 && k % run_stride_ == 0 && k / run_stride_ < run_count_) return run_[k / run_stride_];
+  if (run_stride_ == 1) {  // the common case, without integer divisions
+    if (unsigned(k) < unsigned(run_count_)) return run_[k];
+  } else if (run_count_ > 0 && k >= 0 && k % run_stride_ == 0 && k / run_stride_ < run_count_) {
+    return run_[k / run_stride_];
+  }
   // Runs grow while the ray walks on without a gap, and start at one SIMD vector after one: a
   // leap or the end of an occupied run would waste the rest of a long run, and a vector costs
   // the same however few of its lanes are used.
@@ -229,14 +234,37 @@ float RayCaster::field_at(int i, int m) {
   return run_[0];
 }
 
+// RGBA texels a + w (b - a) as one 4-lane vector (one lane at a time on the scalar target), no
+// fused multiply-add: every target rounds the same.
+#if HWY_TARGET == HWY_SCALAR
+struct Rgba {
+  float v[4];
+};
+HWY_INLINE Rgba load4(const float* p) { return {{p[0], p[1], p[2], p[3]}}; }
+HWY_INLINE Rgba lerp4(Rgba a, Rgba b, float w) {
+  for (int k = 0; k < 4; ++k) a.v[k] = a.v[k] + w * (b.v[k] - a.v[k]);
+  return a;
+}
+HWY_INLINE vec4 to_vec4(Rgba a) { return {a.v[0], a.v[1], a.v[2], a.v[3]}; }
+#else
+using D4 = hn::FixedTag<float, 4>;
+HWY_INLINE hn::Vec<D4> load4(const float* p) { return hn::LoadU(D4(), p); }
+HWY_INLINE hn::Vec<D4> lerp4(hn::Vec<D4> a, hn::Vec<D4> b, float w) {
+  return hn::Add(a, hn::Mul(hn::Set(D4(), w), hn::Sub(b, a)));
+}
+HWY_INLINE vec4 to_vec4(hn::Vec<D4> v) {
+  vec4 out;
+  hn::StoreU(v, D4(), &out.x);
+  return out;
+}
+#endif
+
 vec4 RayCaster::tf_lookup(float s) const {
   // GL_LINEAR between texel centres of an n-entry table, clamped: texel space u = s (n - 1).
   const float u = std::clamp(s, 0.f, 1.f) * float(f_.tf_size - 1);
   const int i = std::min(int(u), f_.tf_size - 2);
-  const float w = u - float(i);
   const float* a = f_.tf + 4 * i;
-  const float* b = a + 4;
-  return {a[0] + w * (b[0] - a[0]), a[1] + w * (b[1] - a[1]), a[2] + w * (b[2] - a[2]), a[3] + w * (b[3] - a[3])};
+  return to_vec4(lerp4(load4(a), load4(a + 4), u - float(i)));
 }
 
 vec4 RayCaster::tf_exact(float v) const {
@@ -260,11 +288,11 @@ vec4 RayCaster::preint_lookup(float s_front, float s_back) const {
   const float u = std::clamp(s_front, 0.f, 1.f) * float(n - 1), v = std::clamp(s_back, 0.f, 1.f) * float(n - 1);
   const int i = std::min(int(u), n - 2), j = std::min(int(v), n - 2);
   const float wu = u - float(i), wv = v - float(j);
-  auto texel = [&](int x, int y) {
-    const float* p = f_.preint + (size_t(y) * size_t(n) + size_t(x)) * 4;
-    return vec4(p[0], p[1], p[2], p[3]);
-  };
-  return glm::mix(glm::mix(texel(i, j), texel(i + 1, j), wu), glm::mix(texel(i, j + 1), texel(i + 1, j + 1), wu), wv);
+  const float* row0 = f_.preint + (size_t(j) * size_t(n) + size_t(i)) * 4;
+  const float* row1 = row0 + size_t(n) * 4;
+  const auto c0 = lerp4(load4(row0), load4(row0 + 4), wu);
+  const auto c1 = lerp4(load4(row1), load4(row1 + 4), wu);
+  return to_vec4(lerp4(c0, c1, wv));
 }
 
 // Regula falsi (secant steps kept inside the bracket), guarded against g_a == g_b.
