@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
+
+#include "render/small_cache.h"
 #include <cmath>
 #include <sstream>
 
@@ -12,9 +14,6 @@ namespace peakcast::render {
 
 namespace {
 constexpr size_t kOccupancyEntries = 4;  // sessions with different TFs take turns without rebuilds
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 }  // namespace
 
 std::string tf_signature(const TransferFunction& tf, double lo, double hi) {

@@ -1,17 +1,13 @@
 #include "render/gpu_volume.h"
-#include "core/value_range.h"
 
 #include <chrono>
 #include <stdexcept>
 #include <vector>
 
-namespace peakcast::render {
+#include "core/value_range.h"
+#include "render/small_cache.h"
 
-namespace {
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
-}  // namespace
+namespace peakcast::render {
 
 GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells)
     : ResidentVolume(std::move(volume), std::move(cells)) {

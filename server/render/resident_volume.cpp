@@ -5,14 +5,9 @@
 #include <stdexcept>
 
 #include "core/value_range.h"
+#include "render/small_cache.h"
 
 namespace peakcast::render {
-
-namespace {
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
-}  // namespace
 
 ResidentVolume::ResidentVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells)
     : volume_(std::move(volume)), cells_trilinear_(std::move(cells.trilinear)), cells_tricubic_(std::move(cells.tricubic)) {
@@ -29,7 +24,7 @@ ResidentVolume::ResidentVolume(std::shared_ptr<const Volume> volume, VolumeMacro
 
 void ResidentVolume::ensure_trilinear_grid() {
   if (cells_trilinear_) return;
-  const auto t1 = std::chrono::steady_clock::now();
+  const auto t1 = Clock::now();
   cells_trilinear_ = std::make_shared<const MacrocellGrid>(build_macrocells(*volume_, 0, FilterSupport::Trilinear));
   macrocell_ms_ += ms_since(t1);
 }
@@ -38,7 +33,7 @@ const MacrocellGrid& ResidentVolume::macrocells(Filter filter) const {
   if (filter != Filter::Tricubic) return *cells_trilinear_;
   if (!cells_tricubic_) {  // most views never ask for the wider filter support
     if (!volume_->has_voxels()) throw std::logic_error("ResidentVolume: no tricubic grid and no voxels to build it");
-    const auto t1 = std::chrono::steady_clock::now();
+    const auto t1 = Clock::now();
     cells_tricubic_ = std::make_shared<const MacrocellGrid>(build_macrocells(*volume_, 0, FilterSupport::Tricubic));
     macrocell_ms_ += ms_since(t1);
   }
