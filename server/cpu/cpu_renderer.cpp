@@ -21,7 +21,7 @@ using render::RenderStats;
 
 namespace {
 
-constexpr int kTile = 16;  // pixels per tile side: neighbouring rays share cache lines of the volume
+constexpr int kTile = kRayPacket;  // pixels per tile side: neighbouring rays share cache lines of the volume
 
 const CpuVolume& cpu_volume(const render::ResidentVolume& v) {
   const auto* cv = dynamic_cast<const CpuVolume*>(&v);
@@ -143,6 +143,7 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
       std::vector<uint8_t> distance = fs.occupancy->distance;
       if (!leaps_)
         for (auto& x : distance) x = std::min<uint8_t>(x, 1);
+      distance.resize(distance.size() + 4, 0);  // the packet leaps read 4 bytes at a cell's index
       d = &cache_insert(distances_, CellBytes{fs.occupancy_key, std::move(distance)}, kCacheEntries);
     }
     f.cell_distance = d->bytes.data();
@@ -173,15 +174,14 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
   return f;
 }
 
-template <class PerPixel>
-void CpuRenderer::for_each_pixel(const PixelRect& rect, const PerPixel& fn) const {
+template <class PerRow>
+void CpuRenderer::for_each_row(const PixelRect& rect, const PerRow& fn) const {
   const int tiles_x = (rect.w + kTile - 1) / kTile, tiles_y = (rect.h + kTile - 1) / kTile;
   parallel_for(
       size_t(tiles_x) * size_t(tiles_y),
       [&](size_t tile) {
         const int x0 = int(tile % size_t(tiles_x)) * kTile, y0 = int(tile / size_t(tiles_x)) * kTile;
-        for (int y = y0; y < std::min(rect.h, y0 + kTile); ++y)
-          for (int x = x0; x < std::min(rect.w, x0 + kTile); ++x) fn(x, y);
+        for (int y = y0; y < std::min(rect.h, y0 + kTile); ++y) fn(x0, std::min(rect.w, x0 + kTile), y);
       },
       threads_);
 }
@@ -206,20 +206,33 @@ RenderResult CpuRenderer::render(const render::ResidentVolume& v, const Resolved
   else
     res.image = Image(rect.w, rect.h);
   const auto t0 = Clock::now();
-  for_each_pixel(rect, [&](int x, int y) {
-    const RayResult r = cast_ray(f, float(rect.x + x) + 0.5f, float(rect.y + y) + 0.5f);
-    const size_t p = size_t(y) * size_t(rect.w) + size_t(x);
-    const glm::vec3 c = finish_pixel(r.acc, background);
-    if (rgb8) {
-      for (int k = 0; k < 3; ++k) res.rgb8.rgb[p * 3 + k] = quantise(c[k]);
-    } else {
-      float* px = &res.image.rgba[p * 4];
-      px[0] = c.r;
-      px[1] = c.g;
-      px[2] = c.b;
-      px[3] = r.acc.a;
+  for_each_row(rect, [&](int x0, int x1, int y) {
+    float px[kTile], py[kTile];
+    RayResult rays[kTile];
+    for (int x = x0; x < x1; ++x) {
+      px[x - x0] = float(rect.x + x) + 0.5f;
+      py[x - x0] = float(rect.y + y) + 0.5f;
     }
-    if (read_samples) samples[p] = r.samples;
+    if (packets_) {
+      cast_rays(f, px, py, x1 - x0, rays);
+    } else {
+      for (int q = 0; q < x1 - x0; ++q) rays[q] = cast_ray(f, px[q], py[q]);
+    }
+    for (int x = x0; x < x1; ++x) {
+      const RayResult& r = rays[x - x0];
+      const size_t p = size_t(y) * size_t(rect.w) + size_t(x);
+      const glm::vec3 c = finish_pixel(r.acc, background);
+      if (rgb8) {
+        for (int k = 0; k < 3; ++k) res.rgb8.rgb[p * 3 + k] = quantise(c[k]);
+      } else {
+        float* out = &res.image.rgba[p * 4];
+        out[0] = c.r;
+        out[1] = c.g;
+        out[2] = c.b;
+        out[3] = r.acc.a;
+      }
+      if (read_samples) samples[p] = r.samples;
+    }
   });
   const double render_ms = ms_since(t0);
   if (!rgb8) res.image.samples = samples;
@@ -255,12 +268,14 @@ Image CpuRenderer::render_bare(const render::ResidentVolume& v, const ResolvedSc
   f.key.bare_sampling = true;
   Image img(w, h);
   const auto t0 = Clock::now();
-  for_each_pixel(PixelRect{0, 0, w, h}, [&](int x, int y) {
-    const size_t p = size_t(y) * size_t(w) + size_t(x);
-    const int budget = int(std::max(0.f, full.samples[p]));
-    const RayResult r = cast_ray_bare(f, float(x) + 0.5f, float(y) + 0.5f, budget);
-    img.rgba[p * 4 + 3] = r.acc.a;
-    img.samples[p] = r.samples;
+  for_each_row(PixelRect{0, 0, w, h}, [&](int x0, int x1, int y) {
+    for (int x = x0; x < x1; ++x) {
+      const size_t p = size_t(y) * size_t(w) + size_t(x);
+      const int budget = int(std::max(0.f, full.samples[p]));
+      const RayResult r = cast_ray_bare(f, float(x) + 0.5f, float(y) + 0.5f, budget);
+      img.rgba[p * 4 + 3] = r.acc.a;
+      img.samples[p] = r.samples;
+    }
   });
   if (stats) {
     stats->render_ms = ms_since(t0);

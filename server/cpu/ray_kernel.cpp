@@ -134,8 +134,23 @@ class RayCaster {
         varying_steps_(f.key.differential || f.key.adaptive || f.key.virtual_samples),
         min_spacing_(std::min(f.spacing.x, std::min(f.spacing.y, f.spacing.z))) {}
 
-  RayResult cast(float px, float py);
+  RayResult cast(float px, float py) { return setup(px, py) ? walk(0) : res_; }
   RayResult cast_bare(float px, float py, int budget);
+  // The ray through (px, py) up to its traversal; false (and samples -1) when it misses the box.
+  bool setup(float px, float py);
+  // The traversal from lattice index `first` (walk_leaps only: the points before it lie in empty
+  // cells, as leaps_to_first_occupied found), then the ray's end.
+  RayResult walk(int first);
+  RayResult result() const { return res_; }
+  // What the empty-space leaps of a set-up ray read (walk_leaps's first lines).
+  struct LeapInputs {
+    vec3 xo, dv;
+    float t0, A, B, t_limit;
+    int last;
+  };
+  LeapInputs leap_inputs() const {
+    return {voxel_coords(r_.o), r_.d / f_.spacing, L_.t0, L_.A, L_.B, span_y_ + f_.step, last_};
+  }
 
  private:
   vec3 voxel_coords(vec3 p) const { return (p + f_.box_half) * f_.inv_spacing; }
@@ -181,11 +196,12 @@ class RayCaster {
   bool vs_flush();
   bool vs_push(float t, float fv, vec3 g, float dt);
   void vs_finish(int last, float t_exit);
-  bool walk_leaps(float span_x, float span_y);
+  bool walk_leaps(float span_y, int first);
   bool walk_cells(float span_x, float span_y);
 
   const CpuFrame& f_;
   const bool segments_, varying_steps_;
+  float span_x_ = 0, span_y_ = 0;
   const float min_spacing_;
   Ray r_;
   Lattice L_;
@@ -488,7 +504,7 @@ uint8_t cell_byte(const uint8_t* table, const CpuFrame& f, ivec3 c) {
 
 // Space skipping without adaptive multipliers, driven by the lattice with empty-space leaps
 // (SAMPLE_LEAPS in raycast_body.glsl). True when the ray stopped early.
-bool RayCaster::walk_leaps(float span_x, float span_y) {
+bool RayCaster::walk_leaps(float span_y, int first) {
   const float edge = f_.cell_edge;
   const vec3 xo = voxel_coords(r_.o);
   const vec3 dv = r_.d / f_.spacing;
@@ -502,7 +518,7 @@ bool RayCaster::walk_leaps(float span_x, float span_y) {
     inv_dv[a] = moves[a] ? 1.f / dv[a] : 0.f;
     ahead[a] = dv[a] > 0.f ? 1.f : 0.f;
   }
-  int i = 0, visited = -2;
+  int i = first, visited = -2;
   const int64_t limit = int64_t(last_) + 2 + 8 * int64_t(grid.x + grid.y + grid.z) + 4096;
   for (int64_t iter = 0; iter < limit && i <= last_; ++iter) {
     const vec3 x = xo + lattice_t(L_, float(i)) * dv;
@@ -527,7 +543,6 @@ bool RayCaster::walk_leaps(float span_x, float span_y) {
       i = std::max(i + 1, index_floor_cap(next, last_ + 1));
     }
   }
-  (void)span_x;
   return false;
 }
 
@@ -614,19 +629,18 @@ bool RayCaster::walk_cells(float span_x, float span_y) {
   return false;
 }
 
-RayResult RayCaster::cast(float px, float py) {
+bool RayCaster::setup(float px, float py) {
   r_ = make_ray(f_, px, py);
-  float span_x, span_y;
-  intersect_box(f_, r_, span_x, span_y);
-  if (!(span_x <= span_y)) {  // missed (also false for NaN)
+  intersect_box(f_, r_, span_x_, span_y_);
+  if (!(span_x_ <= span_y_)) {  // missed (also false for NaN)
     res_.samples = -1.f;
-    return res_;
+    return false;
   }
-  L_ = ray_lattice(f_, r_, span_x);
+  L_ = ray_lattice(f_, r_, span_x_);
   stop_ = f_.stop;
   if (f_.ray_texture) {
     const glm::dvec2 uv = f_.key.ray_texture_volume
-                              ? volume_uv(glm::dvec3(r_.o + span_x * r_.d), glm::dvec3(f_.box_half))
+                              ? volume_uv(glm::dvec3(r_.o + span_x_ * r_.d), glm::dvec3(f_.box_half))
                               : glm::dvec2(px / float(f_.image_w), py / float(f_.image_h));
     const auto c = sample_ray_texture(*f_.ray_texture, uv);
     stop_ = float(c[1]);
@@ -635,17 +649,21 @@ RayResult RayCaster::cast(float px, float py) {
     L_.A *= float(c[0]);
     L_.B *= float(c[0]);
   }
-  last_ = int(std::min(std::floor(lattice_index(L_, span_y)), float(f_.sample_cap - 1)));
+  last_ = int(std::min(std::floor(lattice_index(L_, span_y_)), float(f_.sample_cap - 1)));
+  return true;
+}
+
+RayResult RayCaster::walk(int first) {
   const render::VariantKey& key = f_.key;
   bool stopped = false;
   if (!key.space_skipping && !key.adaptive) {
     for (int i = 0; i <= last_ && !stopped; ++i) stopped = visit(i, 1);
   } else if (!key.adaptive && !key.cell_dda) {
-    stopped = walk_leaps(span_x, span_y);
+    stopped = walk_leaps(span_y_, first);
   } else {
-    stopped = walk_cells(span_x, span_y);
+    stopped = walk_cells(span_x_, span_y_);
   }
-  if (!stopped && key.virtual_samples) vs_finish(last_, span_y);
+  if (!stopped && key.virtual_samples) vs_finish(last_, span_y_);
   return res_;
 }
 
@@ -662,9 +680,116 @@ RayResult RayCaster::cast_bare(float px, float py, int budget) {
   return res_;
 }
 
+// walk_leaps's empty-space leaps up to each ray's first occupied lattice point, for a packet of
+// rays in SIMD lanes (issue 13: on sparse scenes most of a ray's leaps come before its first
+// occupied cell, and one ray's leaps are a chain of dependent scalar operations). Every lane
+// does walk_leaps's arithmetic operation for operation (no fused multiply-add), so each ray
+// arrives where its scalar walk would: walk() then goes on from there, its visits unchanged.
+void leaps_to_first_occupied(const CpuFrame& f, const RayCaster::LeapInputs* in, int n, int* first) {
+  using DF = hn::ScalableTag<float>;
+  using DI = hn::RebindToSigned<DF>;
+  const DF df;
+  const DI di;
+  const int N = int(hn::Lanes(df));
+  const float edge = f.cell_edge, inv_edge = 1.f / f.cell_edge;
+  const int grid[3] = {f.grid[0], f.grid[1], f.grid[2]};
+  const int32_t* table = reinterpret_cast<const int32_t*>(f.cell_distance);  // padded by 3 bytes
+  for (int k0 = 0; k0 < n; k0 += N) {
+    alignas(64) float xo[3][64], dv[3][64], inv_dv[3][64], ahead[3][64], t0[64], A[64], B[64], lim[64];
+    alignas(64) int32_t stp[3][64], last[64], out[64];
+    int max_last = 0;
+    for (int q = 0; q < N; ++q) {
+      const RayCaster::LeapInputs& r = in[std::min(k0 + q, n - 1)];  // spare lanes repeat the last ray
+      for (int a = 0; a < 3; ++a) {
+        xo[a][q] = r.xo[a];
+        dv[a][q] = r.dv[a];
+        stp[a][q] = r.dv[a] > 0.f ? 1 : (r.dv[a] < 0.f ? -1 : 0);
+        inv_dv[a][q] = std::abs(r.dv[a]) >= 1e-20f ? 1.f / r.dv[a] : 0.f;
+        ahead[a][q] = r.dv[a] > 0.f ? 1.f : 0.f;
+      }
+      t0[q] = r.t0;
+      A[q] = r.A;
+      B[q] = r.B;
+      lim[q] = r.t_limit;
+      last[q] = r.last;
+      max_last = std::max(max_last, r.last);
+    }
+    auto i = hn::Zero(di);
+    const auto vlast = hn::Load(di, last);
+    const auto vlast1 = hn::Add(vlast, hn::Set(di, 1));
+    auto active = hn::Lt(i, vlast1);  // i <= last
+    const int64_t limit = int64_t(max_last) + 2 + 8 * int64_t(grid[0] + grid[1] + grid[2]) + 4096;
+    for (int64_t iter = 0; iter < limit && !hn::AllFalse(di, active); ++iter) {
+      const auto fi = hn::ConvertTo(df, i);
+      const auto vA = hn::Load(df, A), vB = hn::Load(df, B), vt0 = hn::Load(df, t0);
+      // lattice_t: t0 + j (B + A j 0.5)
+      const auto t = hn::Add(vt0, hn::Mul(fi, hn::Add(vB, hn::Mul(hn::Mul(vA, fi), hn::Set(df, 0.5f)))));
+      hn::Vec<DI> c[3];
+      for (int a = 0; a < 3; ++a) {
+        const auto x = hn::Add(hn::Load(df, xo[a]), hn::Mul(t, hn::Load(df, dv[a])));
+        // cell_of: 0 for x <= 0 or NaN (max returns its second operand then), else min(int(x), hi)
+        const auto u = hn::Min(hn::Max(hn::Mul(x, hn::Set(df, inv_edge)), hn::Zero(df)), hn::Set(df, float(grid[a] - 1)));
+        c[a] = hn::ConvertTo(di, u);
+      }
+      const auto index = hn::Add(c[0], hn::Mul(hn::Set(di, grid[0]), hn::Add(c[1], hn::Mul(hn::Set(di, grid[1]), c[2]))));
+      const auto d = hn::And(hn::GatherOffset(di, table, index), hn::Set(di, 0xFF));
+      const auto empty = hn::And(active, hn::RebindMask(di, hn::Ne(d, hn::Zero(di))));
+      const auto reach = hn::Sub(d, hn::Set(di, 1));
+      auto t_leave = hn::Set(df, kHuge);
+      for (int a = 0; a < 3; ++a) {
+        const auto face = hn::Add(hn::ConvertTo(df, hn::Add(c[a], hn::Mul(hn::Load(di, stp[a]), reach))), hn::Load(df, ahead[a]));
+        const auto ta = hn::Mul(hn::Sub(hn::Mul(face, hn::Set(df, edge)), hn::Load(df, xo[a])), hn::Load(df, inv_dv[a]));
+        const auto moves = hn::Ge(hn::Abs(hn::Load(df, dv[a])), hn::Set(df, 1e-20f));
+        t_leave = hn::IfThenElse(moves, hn::Min(t_leave, ta), t_leave);
+      }
+      // lattice_index(min(t_leave, t_limit)): d / B on a uniform lattice, else the stable form
+      const auto dd = hn::Max(hn::Zero(df), hn::Sub(hn::Min(t_leave, hn::Load(df, lim)), vt0));
+      const auto general = hn::Div(hn::Mul(hn::Set(df, 2.f), dd),
+                                   hn::Add(vB, hn::Sqrt(hn::Add(hn::Mul(vB, vB), hn::Mul(hn::Mul(hn::Set(df, 2.f), vA), dd)))));
+      const auto idx = hn::IfThenElse(hn::Eq(vA, hn::Zero(df)), hn::Div(dd, vB), general);
+      const auto next = hn::Ceil(idx);
+      const auto cap = hn::Add(vlast, hn::Set(di, 1));
+      // index_floor_cap: next >= cap ? cap : int(next)
+      const auto capped = hn::IfThenElse(hn::RebindMask(di, hn::Ge(next, hn::ConvertTo(df, cap))), cap,
+                                         hn::ConvertTo(di, hn::Min(next, hn::ConvertTo(df, cap))));
+      const auto leapt = hn::Max(hn::Add(i, hn::Set(di, 1)), capped);
+      i = hn::IfThenElse(empty, leapt, i);
+      active = hn::And(empty, hn::Lt(i, vlast1));
+    }
+    hn::Store(i, di, out);
+    for (int q = 0; q < N && k0 + q < n; ++q) first[k0 + q] = out[q];
+  }
+}
+
 }  // namespace
 
 RayResult CastRay(const CpuFrame& f, float px, float py) { return RayCaster(f).cast(px, py); }
+
+void CastRays(const CpuFrame& f, const float* px, const float* py, int n, RayResult* out) {
+  const bool leaps = f.key.space_skipping && !f.key.adaptive && !f.key.cell_dda;
+  for (int k0 = 0; k0 < n; k0 += kRayPacket) {
+    const int m = std::min(kRayPacket, n - k0);
+    alignas(64) unsigned char storage[kRayPacket][sizeof(RayCaster)];
+    RayCaster* rays[kRayPacket];
+    RayCaster::LeapInputs in[kRayPacket];
+    int first[kRayPacket] = {}, hit_index[kRayPacket];
+    int hits = 0;
+    for (int q = 0; q < m; ++q) {
+      rays[q] = new (storage[q]) RayCaster(f);
+      if (rays[q]->setup(px[k0 + q], py[k0 + q])) {
+        if (leaps) in[hits] = rays[q]->leap_inputs();
+        hit_index[hits++] = q;
+      }
+    }
+    int firsts[kRayPacket] = {};
+    if (leaps && hits > 0) leaps_to_first_occupied(f, in, hits, firsts);
+    for (int h = 0; h < hits; ++h) first[hit_index[h]] = firsts[h];
+    for (int q = 0; q < m; ++q) {
+      out[k0 + q] = rays[q]->result().samples < 0.f ? rays[q]->result() : rays[q]->walk(first[q]);
+      rays[q]->~RayCaster();
+    }
+  }
+}
 RayResult CastRayBare(const CpuFrame& f, float px, float py, int budget) { return RayCaster(f).cast_bare(px, py, budget); }
 
 }  // namespace HWY_NAMESPACE
@@ -674,9 +799,14 @@ HWY_AFTER_NAMESPACE();
 #if HWY_ONCE
 namespace peakcast::cpu {
 HWY_EXPORT(CastRay);
+HWY_EXPORT(CastRays);
 HWY_EXPORT(CastRayBare);
 
 RayResult cast_ray(const CpuFrame& f, float px, float py) { return HWY_DYNAMIC_DISPATCH(CastRay)(f, px, py); }
+
+void cast_rays(const CpuFrame& f, const float* px, const float* py, int n, RayResult* out) {
+  HWY_DYNAMIC_DISPATCH(CastRays)(f, px, py, n, out);
+}
 
 RayResult cast_ray_bare(const CpuFrame& f, float px, float py, int budget) {
   return HWY_DYNAMIC_DISPATCH(CastRayBare)(f, px, py, budget);

@@ -55,6 +55,10 @@ struct RayResult {
 
 // The ray through pixel centre (px, py) of the full image (row 0 at the top).
 RayResult cast_ray(const CpuFrame& f, float px, float py);
+// n rays at once, the same results as cast_ray each: with space skipping by leaps, the leaps up
+// to each ray's first occupied cell are taken for a packet of rays in SIMD lanes.
+constexpr int kRayPacket = 16;
+void cast_rays(const CpuFrame& f, const float* px, const float* py, int n, RayResult* out);
 // Benchmark baseline: the same ray's first `budget` lattice points, reconstruction only.
 RayResult cast_ray_bare(const CpuFrame& f, float px, float py, int budget);
 

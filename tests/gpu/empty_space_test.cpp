@@ -8,6 +8,7 @@
 #include <tuple>
 
 #include "core/occupancy.h"
+#include "cpu/cpu_renderer.h"
 #include "gpu/gpu_fixture.h"
 
 namespace peakcast {
@@ -104,6 +105,28 @@ TEST_P(Leaps, SkipExactlyWhatSteppingThroughEmptyCellsSkips) {
     }
     if (e.max_abs > 1.0 / 255.0) test::save_artifacts(*img, step, std::string(c.name) + "_" + name);
   }
+}
+
+// The CPU backend takes the leaps up to each ray's first occupied cell for 16 rays at once in
+// SIMD lanes (cpu::cast_rays): bit for bit what each ray alone does, pixels and sample counts.
+TEST_P(Leaps, CpuRayPacketsEqualSingleRays) {
+  auto* cpu = dynamic_cast<cpu::CpuRenderer*>(test::gpu().caster.get());
+  if (!cpu) GTEST_SKIP() << "CPU backend only";
+  const LeapCase& c = GetParam();
+  auto v = test::make_volume(c.kind, c.dims, default_type(c.kind));
+  test::TestVolume gv(v);
+  json j = {{"image", {{"width", 93}, {"height", 77}}}, {"tf", tf_points(*v, c.tf)}, {"camera", c.camera},
+            {"render", c.render}};
+  const ResolvedScene s = test::make_scene(*v, j);
+  render::RenderStats st_packets, st_single;
+  const Image packets = test::render_gpu(gv, s, render::GpuPath::Fragment, &st_packets);
+  cpu->set_ray_packets(false);
+  const Image single = test::render_gpu(gv, s, render::GpuPath::Fragment, &st_single);
+  cpu->set_ray_packets(true);
+  ASSERT_NE(st_packets.variant.find("+skip"), std::string::npos) << st_packets.variant;
+  EXPECT_GT(st_single.samples_mean, 0.0) << "nothing visible: the test would prove nothing";
+  EXPECT_EQ(packets.rgba, single.rgba);
+  EXPECT_EQ(packets.samples, single.samples);
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, Leaps, ::testing::ValuesIn(kCases),
