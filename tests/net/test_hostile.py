@@ -164,32 +164,51 @@ def test_1_gb_frame_header_is_refused_unread():
     assert SERVER.rss_kib() - rss0 < 200 * 1024, "no allocation for the promised size"
 
 
+# kMaxMessagesPerSecond and kMessageBurst (server/session/limits.h): how fast the server reads
+# one client's messages.
+MAX_MESSAGES_PER_SECOND, MESSAGE_BURST = 250, 500
+
+
 def test_ping_only_client_is_paced():
+    """A client that floods pings and never reads is either closed (1008, too slow: its unread
+    pongs filled the queue) or held to the paced read rate (TCP backpressure: its sends block),
+    and the viewer beside it keeps its frame rate. The client's own phases are bounded, so a
+    loaded machine cannot keep it busy: 4 s of sending (a send the server does not take within
+    1 s ends it), then at most 15 s of reading what was answered."""
     def pings(stop, result):
         async def run():
             c = await Client.connect(SERVER)
-            n, t0 = 0, time.time()
-            while not stop.is_set() and time.time() - t0 < 4:
-                await c.send({"type": "ping", "id": str(n)})
-                n += 1
-                if n % 50 == 0:
-                    await asyncio.sleep(0)
-            # It never reads: the server answers until kMaxQueuedTextMessages pongs wait unread, then
-            # closes it (1008, client too slow).
-            code = None
+            n, t0, blocked = 0, time.time(), False
             try:
-                while True:
+                while not stop.is_set() and time.time() - t0 < 4:
+                    try:
+                        await asyncio.wait_for(c.send({"type": "ping", "id": str(n)}), 1.0)
+                    except asyncio.TimeoutError:
+                        blocked = True  # backpressure: the server reads this client no faster
+                        break
+                    n += 1
+                    if n % 50 == 0:
+                        await asyncio.sleep(0)
+            except websockets.exceptions.ConnectionClosed:
+                pass  # closed while sending: the drain below reads the close code
+            code = None
+            t1 = time.time()
+            try:
+                while time.time() - t1 < 15:
                     await c.recv(2)
             except asyncio.TimeoutError:
                 pass
             except websockets.exceptions.ConnectionClosed as e:
                 code = e.rcvd.code if e.rcvd else None
             result.update(sent=n, pongs=len([t for t in c.texts if t["type"] == "pong"]), close=code,
-                          seconds=round(time.time() - t0, 1))
+                          blocked=blocked, seconds=round(time.time() - t0, 1))
             c.ws.transport.abort()
         asyncio.run(run())
     r = measure(SERVER, "pings only, never reading", pings)
-    assert r["pongs"] > 0 and r["close"] == 1008, r
+    assert r["pongs"] > 0, r
+    # Closed as too slow, or answered no faster than the server reads (with a margin for timing).
+    paced = r["pongs"] <= MESSAGE_BURST + 1.2 * MAX_MESSAGES_PER_SECOND * r["seconds"] + 50
+    assert r["close"] == 1008 or paced, r
 
 
 def test_10000_tf_edits_per_second_are_paced():
