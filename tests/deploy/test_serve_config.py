@@ -129,6 +129,7 @@ def test_refusals_name_their_source():
         ({"PEAKCAST_MAX_FPS": "1000"}, [], "PEAKCAST_MAX_FPS"),
         ({"PEAKCAST_LOG_FORMAT": "xml"}, [], "PEAKCAST_LOG_FORMAT"),
         ({"PEAKCAST_EGL_DEVICE": "gpu0"}, [], "auto, surfaceless or a device index"),
+        ({"PEAKCAST_BACKEND": "vulkan"}, [], "PEAKCAST_BACKEND"),
         ({}, ["--max-sessions", "0"], "--max-sessions"),
         ({"PEAKCAST_CONFIG": "/nonexistent/serve.toml"}, [], "/nonexistent/serve.toml"),
     ]

@@ -4,7 +4,9 @@
 #include <filesystem>
 
 #include "core/volume_writer.h"
+#include "cpu/cpu_renderer.h"
 #include "gpu/gpu_fixture.h"
+#include "render/backend.h"
 #include "session/gpu_residency.h"
 #include "session/volume_store.h"
 
@@ -121,3 +123,58 @@ TEST(VolumeCells, ResidencyKeepsTheVolumeOnceAfterTheUpload) {
     EXPECT_NE(std::string(err.what()).find("voxels were dropped"), std::string::npos) << err.what();
   }
 }
+
+namespace peakcast {
+namespace {
+
+// Each backend draws only its own resident volumes, and says so (no cast of a texture handle to
+// host voxels or back); an unknown backend name is refused naming the choices, and a bad
+// PEAKCAST_BACKEND names the variable.
+TEST(Backends, RefuseAnotherBackendsVolumeAndUnknownNames) {
+  auto v = test::make_volume(GeneratorKind::Blobs, {24, 20, 16}, SourceType::U8);
+  const ResolvedScene s = test::make_scene(*v, nlohmann::json::object());
+  cpu::CpuRenderer cpu_renderer;
+  auto cpu_volume = cpu_renderer.make_resident(v);
+  if (!test::cpu_backend()) {
+    render::Raycaster& gl = *test::gpu().gl;
+    auto gl_volume = gl.make_resident(v);
+    try {
+      gl.render(*cpu_volume, s);
+      ADD_FAILURE() << "the GL renderer drew a CPU volume";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("GPU volumes only"), std::string::npos) << e.what();
+    }
+    try {
+      cpu_renderer.render(*gl_volume, s);
+      ADD_FAILURE() << "the CPU renderer drew a GPU volume";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("CPU volumes only"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_GT(cpu_renderer.render(*cpu_volume, s).rgba.size(), 0u);
+  EXPECT_EQ(render::parse_backend("cpu"), render::Backend::Cpu);
+  EXPECT_EQ(render::parse_backend("gl"), render::Backend::Gl);
+  EXPECT_EQ(render::requested_backend("auto"), render::Backend::Auto);
+  try {
+    render::parse_backend("vulkan");
+    ADD_FAILURE() << "an unknown backend was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("choose auto, gl or cpu"), std::string::npos) << e.what();
+  }
+  setenv("PEAKCAST_BACKEND", "vulkan", 1);
+  try {
+    render::requested_backend();
+    ADD_FAILURE() << "a bad PEAKCAST_BACKEND was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("PEAKCAST_BACKEND"), std::string::npos) << e.what();
+  }
+  unsetenv("PEAKCAST_BACKEND");
+  // A forced cpu backend opens no EGL display at all.
+  render::RenderBackend b = render::open_backend(render::Backend::Cpu);
+  EXPECT_EQ(b.backend, render::Backend::Cpu);
+  EXPECT_EQ(b.context, nullptr);
+  EXPECT_EQ(std::string(b.renderer->backend()), "cpu");
+}
+
+}  // namespace
+}  // namespace peakcast
