@@ -20,111 +20,13 @@
 #include <hwy/highway.h>
 
 #include "cpu/sampler-inl.h"
+#include "cpu/ray_geometry-inl.h"
+#include "cpu/leap_packets-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace peakcast::cpu {
 namespace HWY_NAMESPACE {
 namespace {
-
-namespace hn = hwy::HWY_NAMESPACE;
-using glm::ivec3;
-using glm::vec3;
-using glm::vec4;
-
-constexpr int kExtension = 1;  // lattice points visited on each side of an occupied cell's run
-constexpr float kHuge = 3.0e38f;
-constexpr float kAmbient = 0.3f, kDiffuse = 0.6f, kSpecular = 0.25f, kShininess = 32.0f;
-
-struct Ray {
-  vec3 o{0}, d{0};
-  float t_eye = 0;
-};
-
-struct Lattice {
-  float t0 = 0, A = 0, B = 1;
-};
-
-float lattice_t(const Lattice& L, float j) { return L.t0 + j * (L.B + L.A * j * 0.5f); }
-float lattice_step(const Lattice& L, float j, float m) { return m * (L.B + L.A * (j + 0.5f * m)); }
-float lattice_index(const Lattice& L, float t) {
-  const float d = std::max(0.f, t - L.t0);
-  // A uniform lattice: 2d / (B + sqrt(B^2)) is d / B exactly (sqrt of a rounded square is |B|,
-  // and halving is exact), without the square root.
-  if (L.A == 0.f) return d / L.B;
-  return 2.f * d / (L.B + std::sqrt(L.B * L.B + 2.f * L.A * d));
-}
-// A float index to int, bounded: a leap far beyond the ray's end stops at `cap`.
-int index_floor_cap(float x, int cap) { return x >= float(cap) ? cap : int(x); }
-// floor(x) clamped to [0, hi]: what a cell index needs, without floor (a library call or a
-// dozen instructions below SSE4.1). Truncation equals floor for x >= 0; x < 0 clamps to 0
-// either way; NaN goes to 0 as the clamp of the GL path's int(floor(NaN)) is undefined anyway.
-int cell_of(float x, int hi) {
-  if (!(x > 0.f)) return 0;
-  return x >= float(hi) ? hi : int(x);
-}
-
-Ray make_ray(const CpuFrame& f, float px, float py) {
-  const float nx = px / float(f.image_w) * 2.f - 1.f;
-  const float ny = 1.f - py / float(f.image_h) * 2.f;
-  const vec3 lateral = nx * f.half_w * f.right + ny * f.half_h * f.up;
-  Ray r;
-  if (f.key.orthographic) {
-    r.o = f.p0 + lateral;
-    r.d = f.forward;
-    r.t_eye = -f.dist;
-  } else {
-    const vec3 d = f.forward + lateral;
-    const float len = glm::length(d);
-    r.o = f.p0 + f.dist * lateral;
-    r.d = d / len;
-    r.t_eye = -f.dist * len;
-  }
-  return r;
-}
-
-// Slab test against [-half, half]: (t_enter, t_exit), empty when enter > exit.
-void intersect_box(const CpuFrame& f, const Ray& r, float& enter, float& exit_) {
-  exit_ = kHuge;
-  float tmin_max = -kHuge;
-  for (int a = 0; a < 3; ++a) {
-    const float d = std::abs(r.d[a]) < 1e-20f ? 1e-20f : r.d[a];
-    const float inv = 1.f / d;
-    const float t0 = (-f.box_half[a] - r.o[a]) * inv, t1 = (f.box_half[a] - r.o[a]) * inv;
-    tmin_max = std::max(tmin_max, std::min(t0, t1));
-    exit_ = std::min(exit_, std::max(t0, t1));
-  }
-  enter = std::max(tmin_max, r.t_eye);
-}
-
-Lattice ray_lattice(const CpuFrame& f, const Ray& r, float t_enter) {
-  Lattice L;
-  L.t0 = t_enter;
-  if (f.key.differential) {
-    const vec3 d = r.d / glm::dot(r.d, f.forward);                          // depth-1 direction (eq. 7)
-    const vec3 u = f.right * (2.f * f.half_w / float(f.image_w));          // one pixel along x
-    const float dd = glm::dot(d, d);
-    const float dD_dx = glm::length(dd * u - glm::dot(d, u) * d) / (dd * std::sqrt(dd));  // eq. 10
-    const float k = f.diff_k;
-    const float a = k * dD_dx;
-    const float s = std::max(0.f, t_enter - r.t_eye);  // eye -> box entry
-    const float x = 2.f * s / (k + std::sqrt(k * k + 2.f * a * s));  // eq. 18, stable form
-    L.A = a;
-    L.B = std::max(k + a * x, f.min_step);
-  } else {
-    L.A = 0.f;
-    L.B = f.step;
-  }
-  return L;
-}
-
-float catmull_rom(float p0, float p1, float p2, float p3, float s) {
-  return 0.5f * (2.f * p1 + (p2 - p0) * s + (2.f * p0 - 5.f * p1 + 4.f * p2 - p3) * s * s +
-                 (3.f * p1 - p0 - 3.f * p2 + p3) * s * s * s);
-}
-vec3 catmull_rom3(vec3 p0, vec3 p1, vec3 p2, vec3 p3, float s) {
-  return 0.5f * (2.f * p1 + (p2 - p0) * s + (2.f * p0 - 5.f * p1 + 4.f * p2 - p3) * s * s +
-                 (3.f * p1 - p0 - 3.f * p2 + p3) * s * s * s);
-}
 
 class RayCaster {
  public:
@@ -142,12 +44,6 @@ class RayCaster {
   // cells, as leaps_to_first_occupied found), then the ray's end.
   RayResult walk(int first);
   RayResult result() const { return res_; }
-  // What the empty-space leaps of a set-up ray read (walk_leaps's first lines).
-  struct LeapInputs {
-    vec3 xo, dv;
-    float t0, A, B, t_limit;
-    int last;
-  };
   LeapInputs leap_inputs() const {
     return {voxel_coords(r_.o), r_.d / f_.spacing, L_.t0, L_.A, L_.B, span_y_ + f_.step, last_};
   }
@@ -250,30 +146,6 @@ float RayCaster::field_at(int i, int m) {
   return run_[0];
 }
 
-// RGBA texels a + w (b - a) as one 4-lane vector (one lane at a time on the scalar target), no
-// fused multiply-add: every target rounds the same.
-#if HWY_TARGET == HWY_SCALAR
-struct Rgba {
-  float v[4];
-};
-HWY_INLINE Rgba load4(const float* p) { return {{p[0], p[1], p[2], p[3]}}; }
-HWY_INLINE Rgba lerp4(Rgba a, Rgba b, float w) {
-  for (int k = 0; k < 4; ++k) a.v[k] = a.v[k] + w * (b.v[k] - a.v[k]);
-  return a;
-}
-HWY_INLINE vec4 to_vec4(Rgba a) { return {a.v[0], a.v[1], a.v[2], a.v[3]}; }
-#else
-using D4 = hn::FixedTag<float, 4>;
-HWY_INLINE hn::Vec<D4> load4(const float* p) { return hn::LoadU(D4(), p); }
-HWY_INLINE hn::Vec<D4> lerp4(hn::Vec<D4> a, hn::Vec<D4> b, float w) {
-  return hn::Add(a, hn::Mul(hn::Set(D4(), w), hn::Sub(b, a)));
-}
-HWY_INLINE vec4 to_vec4(hn::Vec<D4> v) {
-  vec4 out;
-  hn::StoreU(v, D4(), &out.x);
-  return out;
-}
-#endif
 
 vec4 RayCaster::tf_lookup(float s) const {
   // GL_LINEAR between texel centres of an n-entry table, clamped: texel space u = s (n - 1).
@@ -680,87 +552,6 @@ RayResult RayCaster::cast_bare(float px, float py, int budget) {
   return res_;
 }
 
-// walk_leaps's empty-space leaps up to each ray's first occupied lattice point, for a packet of
-// rays in SIMD lanes (issue 13: on sparse scenes most of a ray's leaps come before its first
-// occupied cell, and one ray's leaps are a chain of dependent scalar operations). Every lane
-// does walk_leaps's arithmetic operation for operation (no fused multiply-add), so each ray
-// arrives where its scalar walk would: walk() then goes on from there, its visits unchanged.
-void leaps_to_first_occupied(const CpuFrame& f, const RayCaster::LeapInputs* in, int n, int* first) {
-  using DF = hn::ScalableTag<float>;
-  using DI = hn::RebindToSigned<DF>;
-  const DF df;
-  const DI di;
-  const int N = int(hn::Lanes(df));
-  const float edge = f.cell_edge, inv_edge = 1.f / f.cell_edge;
-  const int grid[3] = {f.grid[0], f.grid[1], f.grid[2]};
-  const int32_t* table = reinterpret_cast<const int32_t*>(f.cell_distance);  // padded by 3 bytes
-  for (int k0 = 0; k0 < n; k0 += N) {
-    alignas(64) float xo[3][64], dv[3][64], inv_dv[3][64], ahead[3][64], t0[64], A[64], B[64], lim[64];
-    alignas(64) int32_t stp[3][64], last[64], out[64];
-    int max_last = 0;
-    for (int q = 0; q < N; ++q) {
-      const RayCaster::LeapInputs& r = in[std::min(k0 + q, n - 1)];  // spare lanes repeat the last ray
-      for (int a = 0; a < 3; ++a) {
-        xo[a][q] = r.xo[a];
-        dv[a][q] = r.dv[a];
-        stp[a][q] = r.dv[a] > 0.f ? 1 : (r.dv[a] < 0.f ? -1 : 0);
-        inv_dv[a][q] = std::abs(r.dv[a]) >= 1e-20f ? 1.f / r.dv[a] : 0.f;
-        ahead[a][q] = r.dv[a] > 0.f ? 1.f : 0.f;
-      }
-      t0[q] = r.t0;
-      A[q] = r.A;
-      B[q] = r.B;
-      lim[q] = r.t_limit;
-      last[q] = r.last;
-      max_last = std::max(max_last, r.last);
-    }
-    auto i = hn::Zero(di);
-    const auto vlast = hn::Load(di, last);
-    const auto vlast1 = hn::Add(vlast, hn::Set(di, 1));
-    auto active = hn::Lt(i, vlast1);  // i <= last
-    const int64_t limit = int64_t(max_last) + 2 + 8 * int64_t(grid[0] + grid[1] + grid[2]) + 4096;
-    for (int64_t iter = 0; iter < limit && !hn::AllFalse(di, active); ++iter) {
-      const auto fi = hn::ConvertTo(df, i);
-      const auto vA = hn::Load(df, A), vB = hn::Load(df, B), vt0 = hn::Load(df, t0);
-      // lattice_t: t0 + j (B + A j 0.5)
-      const auto t = hn::Add(vt0, hn::Mul(fi, hn::Add(vB, hn::Mul(hn::Mul(vA, fi), hn::Set(df, 0.5f)))));
-      hn::Vec<DI> c[3];
-      for (int a = 0; a < 3; ++a) {
-        const auto x = hn::Add(hn::Load(df, xo[a]), hn::Mul(t, hn::Load(df, dv[a])));
-        // cell_of: 0 for x <= 0 or NaN (max returns its second operand then), else min(int(x), hi)
-        const auto u = hn::Min(hn::Max(hn::Mul(x, hn::Set(df, inv_edge)), hn::Zero(df)), hn::Set(df, float(grid[a] - 1)));
-        c[a] = hn::ConvertTo(di, u);
-      }
-      const auto index = hn::Add(c[0], hn::Mul(hn::Set(di, grid[0]), hn::Add(c[1], hn::Mul(hn::Set(di, grid[1]), c[2]))));
-      const auto d = hn::And(hn::GatherOffset(di, table, index), hn::Set(di, 0xFF));
-      const auto empty = hn::And(active, hn::RebindMask(di, hn::Ne(d, hn::Zero(di))));
-      const auto reach = hn::Sub(d, hn::Set(di, 1));
-      auto t_leave = hn::Set(df, kHuge);
-      for (int a = 0; a < 3; ++a) {
-        const auto face = hn::Add(hn::ConvertTo(df, hn::Add(c[a], hn::Mul(hn::Load(di, stp[a]), reach))), hn::Load(df, ahead[a]));
-        const auto ta = hn::Mul(hn::Sub(hn::Mul(face, hn::Set(df, edge)), hn::Load(df, xo[a])), hn::Load(df, inv_dv[a]));
-        const auto moves = hn::Ge(hn::Abs(hn::Load(df, dv[a])), hn::Set(df, 1e-20f));
-        t_leave = hn::IfThenElse(moves, hn::Min(t_leave, ta), t_leave);
-      }
-      // lattice_index(min(t_leave, t_limit)): d / B on a uniform lattice, else the stable form
-      const auto dd = hn::Max(hn::Zero(df), hn::Sub(hn::Min(t_leave, hn::Load(df, lim)), vt0));
-      const auto general = hn::Div(hn::Mul(hn::Set(df, 2.f), dd),
-                                   hn::Add(vB, hn::Sqrt(hn::Add(hn::Mul(vB, vB), hn::Mul(hn::Mul(hn::Set(df, 2.f), vA), dd)))));
-      const auto idx = hn::IfThenElse(hn::Eq(vA, hn::Zero(df)), hn::Div(dd, vB), general);
-      const auto next = hn::Ceil(idx);
-      const auto cap = hn::Add(vlast, hn::Set(di, 1));
-      // index_floor_cap: next >= cap ? cap : int(next)
-      const auto capped = hn::IfThenElse(hn::RebindMask(di, hn::Ge(next, hn::ConvertTo(df, cap))), cap,
-                                         hn::ConvertTo(di, hn::Min(next, hn::ConvertTo(df, cap))));
-      const auto leapt = hn::Max(hn::Add(i, hn::Set(di, 1)), capped);
-      i = hn::IfThenElse(empty, leapt, i);
-      active = hn::And(empty, hn::Lt(i, vlast1));
-    }
-    hn::Store(i, di, out);
-    for (int q = 0; q < N && k0 + q < n; ++q) first[k0 + q] = out[q];
-  }
-}
-
 }  // namespace
 
 RayResult CastRay(const CpuFrame& f, float px, float py) { return RayCaster(f).cast(px, py); }
@@ -771,7 +562,7 @@ void CastRays(const CpuFrame& f, const float* px, const float* py, int n, RayRes
     const int m = std::min(kRayPacket, n - k0);
     alignas(64) unsigned char storage[kRayPacket][sizeof(RayCaster)];
     RayCaster* rays[kRayPacket];
-    RayCaster::LeapInputs in[kRayPacket];
+    LeapInputs in[kRayPacket];
     int first[kRayPacket] = {}, hit_index[kRayPacket];
     int hits = 0;
     for (int q = 0; q < m; ++q) {
