@@ -1,7 +1,10 @@
 // shaders/raycast_body.glsl (and ray_setup, sampling, tf, compositing, shading, peak_find,
 // preintegration, ray_texture .glsl) for one ray on the CPU. Function and variable names follow
 // the shaders so the two can be read side by side; where they differ, the comment says why.
-// Compiled once per x86 SIMD target (Highway's foreach_target) and chosen at run time: the
+// The caster's class is in ray_caster-inl.h, its peak finding in ray_peaks-inl.h, its virtual
+// samples in ray_virtual_samples-inl.h, the geometry in ray_geometry-inl.h and the 16-ray leaps
+// in leap_packets-inl.h; this file holds the traversal, sampling and compositing, and the entry
+// points. Compiled once per x86 SIMD target (Highway's foreach_target) and chosen at run time: the
 // scalar code gains the target's instructions (SSE4's floor, AVX's three-operand forms) and
 // calls its own target's run sampler inline.
 #include "cpu/ray_kernel.h"
@@ -22,99 +25,14 @@
 #include "cpu/sampler-inl.h"
 #include "cpu/ray_geometry-inl.h"
 #include "cpu/leap_packets-inl.h"
+#include "cpu/ray_caster-inl.h"
+#include "cpu/ray_peaks-inl.h"
+#include "cpu/ray_virtual_samples-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace peakcast::cpu {
 namespace HWY_NAMESPACE {
 namespace {
-
-class RayCaster {
- public:
-  explicit RayCaster(const CpuFrame& f)
-      : f_(f),
-        segments_(f.key.peaks || f.key.preintegration || f.key.virtual_samples),
-        varying_steps_(f.key.differential || f.key.adaptive || f.key.virtual_samples),
-        min_spacing_(std::min(f.spacing.x, std::min(f.spacing.y, f.spacing.z))) {}
-
-  RayResult cast(float px, float py) { return setup(px, py) ? walk(0) : res_; }
-  RayResult cast_bare(float px, float py, int budget);
-  // The ray through (px, py) up to its traversal; false (and samples -1) when it misses the box.
-  bool setup(float px, float py);
-  // The traversal from lattice index `first` (walk_leaps only: the points before it lie in empty
-  // cells, as leaps_to_first_occupied found), then the ray's end.
-  RayResult walk(int first);
-  RayResult result() const { return res_; }
-  LeapInputs leap_inputs() const {
-    return {voxel_coords(r_.o), r_.d / f_.spacing, L_.t0, L_.A, L_.B, span_y_ + f_.step, last_};
-  }
-
- private:
-  vec3 voxel_coords(vec3 p) const { return (p + f_.box_half) * f_.inv_spacing; }
-  float sample_field(vec3 x) const { return cpu::sample_field(f_.voxels, x); }
-  vec3 field_gradient(vec3 x) const {
-    vec3 g;
-    g.x = sample_field(x + vec3(1, 0, 0)) - sample_field(x - vec3(1, 0, 0));
-    g.y = sample_field(x + vec3(0, 1, 0)) - sample_field(x - vec3(0, 1, 0));
-    g.z = sample_field(x + vec3(0, 0, 1)) - sample_field(x - vec3(0, 0, 1));
-    return g / (2.f * f_.spacing);
-  }
-  // The value at lattice index i: from the current run, or a new run from i (stride m).
-  float field_at(int i, int m);
-
-  vec4 tf_lookup(float s) const;
-  vec4 tf_exact(float v) const;
-  vec4 preint_lookup(float s_front, float s_back) const;
-  float correct_opacity(float a, float dt) const {
-    return dt == f_.step ? a : 1.f - std::pow(std::max(1.f - a, 0.f), dt / f_.step);
-  }
-  vec3 shade(vec3 rgb, vec3 gradient) const {
-    const float len = glm::length(gradient);
-    if (len * min_spacing_ < 1e-5f) return rgb;
-    const vec3 n = gradient / len;
-    const float ndotl = std::abs(glm::dot(n, -r_.d));  // head light: l = h = direction to the eye
-    return rgb * (kAmbient + kDiffuse * ndotl) + vec3(kSpecular * std::pow(ndotl, kShininess));
-  }
-  void composite(vec3 rgb, float alpha) {
-    const float w = (1.f - res_.acc.a) * alpha;
-    res_.acc += vec4(w * rgb, w);
-  }
-  vec3 sample_gradient(float t, vec3 g) {
-    return f_.key.virtual_samples ? g : field_gradient(voxel_coords(r_.o + t * r_.d));
-  }
-
-  float solve_root(float t0, float f0, float t1, float f1, float v);
-  bool find_peaks(float t0, float f0, float t1, float f1);
-  bool consume(float t, float fv, vec3 g, float dt);
-  bool visit(int i, int m);
-  // Virtual samples (Lee et al. 2010): the window of four true samples, newest last.
-  bool vs_segment(float t1, float t2, float dt1, vec4 fw, vec3 g0, vec3 g1, vec3 g2, vec3 g3, float t_limit);
-  bool vs_last_segment(float t_limit);
-  bool vs_flush();
-  bool vs_push(float t, float fv, vec3 g, float dt);
-  void vs_finish(int last, float t_exit);
-  bool walk_leaps(float span_y, int first);
-  bool walk_cells(float span_x, float span_y);
-
-  const CpuFrame& f_;
-  const bool segments_, varying_steps_;
-  float span_x_ = 0, span_y_ = 0;
-  const float min_spacing_;
-  Ray r_;
-  Lattice L_;
-  RayResult res_;
-  int last_ = 0;
-  float stop_ = 1, dvr_weight_ = 1, peak_weight_ = 1;
-  // The previous sample, for segment methods (see raycast_body.glsl).
-  float prev_t_ = 0, prev_f_ = 0;
-  bool have_prev_ = false, gap_ = false;
-  int expect_ = 0;
-  vec4 w_t_{0}, w_f_{0}, w_dt_{0};
-  vec3 w_g0_{0}, w_g1_{0}, w_g2_{0}, w_g3_{0};
-  int w_n_ = 0;
-  // The current run of samples (sample_run): indices run_first_ + k * run_stride_, k < run_count_.
-  float run_[kMaxRun];
-  int run_first_ = 0, run_stride_ = 1, run_count_ = 0, run_batch_ = 0;
-};
 
 float RayCaster::field_at(int i, int m) {
   const int k = i - run_first_;
@@ -183,73 +101,6 @@ vec4 RayCaster::preint_lookup(float s_front, float s_back) const {
   return to_vec4(lerp4(c0, c1, wv));
 }
 
-// Regula falsi (secant steps kept inside the bracket), guarded against g_a == g_b.
-float RayCaster::solve_root(float t0, float f0, float t1, float f1, float v) {
-  float ta = t0, tb = t1, ga = f0 - v, gb = f1 - v;
-  for (int k = 0; k < f_.secant_iterations; ++k) {
-    if (gb == ga) break;
-    const float t = std::clamp(ta - ga * (tb - ta) / (gb - ga), std::min(ta, tb), std::max(ta, tb));
-    const float g = sample_field(voxel_coords(r_.o + t * r_.d)) - v;
-    res_.samples += 1.f;
-    if ((g >= 0.f) == (ga >= 0.f)) {
-      ta = t;
-      ga = g;
-    } else {
-      tb = t;
-      gb = g;
-    }
-  }
-  return gb == ga ? 0.5f * (ta + tb) : std::clamp(ta - ga * (tb - ta) / (gb - ga), std::min(ta, tb), std::max(ta, tb));
-}
-
-// Knoll et al. 2009 Algorithm 1 with the errata (peak_find.glsl).
-bool RayCaster::find_peaks(float t0, float f0, float t1, float f1) {
-  const int bins = f_.peak_bins;
-  auto bin = [&](float v) { return std::clamp(int(std::floor(v * float(bins))), 0, bins - 1); };
-  const int i = bin(f0), j = bin(f1);
-  const bool reverse = (i == j) && f0 > f1;  // the diagonal is stored ascending
-  const int max_peaks = f_.max_peaks;
-  float found[4];
-  int n = 0;
-  bool done = false;
-  for (int layer = 0; layer < f_.peak_layers && !done; ++layer) {
-    const float* slots = f_.peak_texels + ((size_t(layer) * bins + size_t(j)) * bins + size_t(i)) * 4;
-    for (int s = 0; s < 4; ++s) {
-      const float v = slots[s];
-      if (v == render::kNoPeakTexel) {
-        done = true;
-        break;
-      }
-      if (!(std::min(f0, f1) < v && v <= std::max(f0, f1))) continue;
-      if (reverse) {  // keep the last four in table order: the first four along the ray
-        if (n == 4) {
-          found[0] = found[1];
-          found[1] = found[2];
-          found[2] = found[3];
-          n = 3;
-        }
-        found[n++] = v;
-      } else {
-        found[n++] = v;
-        if (n == max_peaks) {
-          done = true;
-          break;
-        }
-      }
-    }
-  }
-  const int count = std::min(n, max_peaks);
-  for (int k = 0; k < count; ++k) {
-    const float v = reverse ? found[n - 1 - k] : found[k];
-    const float t = solve_root(t0, f0, t1, f1, v);
-    const vec4 c = tf_exact(v);
-    vec3 rgb(c);
-    if (f_.key.shading) rgb = shade(rgb, field_gradient(voxel_coords(r_.o + t * r_.d)));
-    composite(rgb, c.a * peak_weight_);  // unscaled opacity at the peak (Knoll §4.2)
-    if (res_.acc.a >= stop_) break;
-  }
-  return count > 0;
-}
 
 // One sample (true or virtual) at t with value fv, standing for the step dt. g: its gradient
 // (virtual samples only). True when the ray is opaque enough to stop.
@@ -288,66 +139,6 @@ bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
   return res_.acc.a >= stop_;
 }
 
-bool RayCaster::vs_segment(float t1, float t2, float dt1, vec4 fw, vec3 g0, vec3 g1, vec3 g2, vec3 g3,
-                           float t_limit) {
-  const int vs = f_.key.virtual_samples;
-  const float k = float(vs);
-  const float sub = dt1 / (k + 1.f);
-  if (consume(t1, fw.y, g1, sub)) return true;
-  const float span = t2 - t1;
-  for (int q = 1; q <= vs; ++q) {
-    const float s = float(q) / (k + 1.f);
-    if (t1 + s * span > t_limit) break;
-    const float v = catmull_rom(fw.x, fw.y, fw.z, fw.w, s);
-    const vec3 g = catmull_rom3(g0, g1, g2, g3, s);
-    if (consume(t1 + s * span, v, g, sub)) return true;
-  }
-  return false;
-}
-
-bool RayCaster::vs_last_segment(float t_limit) {
-  const bool prev = w_n_ >= 3;
-  return vs_segment(w_t_.z, w_t_.w, w_dt_.z, vec4(prev ? w_f_.y : w_f_.z, w_f_.z, w_f_.w, w_f_.w), prev ? w_g1_ : w_g2_,
-                    w_g2_, w_g3_, w_g3_, t_limit);
-}
-
-bool RayCaster::vs_flush() {
-  bool done = res_.acc.a >= stop_;
-  if (!done && w_n_ >= 2) done = vs_last_segment(kHuge);
-  if (!done && w_n_ >= 1) done = consume(w_t_.w, w_f_.w, w_g3_, w_dt_.w);
-  w_n_ = 0;
-  return done;
-}
-
-bool RayCaster::vs_push(float t, float fv, vec3 g, float dt) {
-  w_t_ = vec4(w_t_.y, w_t_.z, w_t_.w, t);
-  w_f_ = vec4(w_f_.y, w_f_.z, w_f_.w, fv);
-  w_dt_ = vec4(w_dt_.y, w_dt_.z, w_dt_.w, dt);
-  w_g0_ = w_g1_;
-  w_g1_ = w_g2_;
-  w_g2_ = w_g3_;
-  w_g3_ = g;
-  w_n_ = std::min(w_n_ + 1, 4);
-  if (w_n_ < 3) return false;
-  const bool prev = w_n_ == 4;
-  return vs_segment(w_t_.y, w_t_.z, w_dt_.y, vec4(prev ? w_f_.x : w_f_.y, w_f_.y, w_f_.z, w_f_.w), prev ? w_g0_ : w_g1_,
-                    w_g1_, w_g2_, w_g3_, kHuge);
-}
-
-void RayCaster::vs_finish(int last, float t_exit) {
-  if (res_.acc.a >= stop_ || w_n_ == 0) return;
-  if (w_t_.w != lattice_t(L_, float(last))) {  // the ray ended in a skipped cell
-    vs_flush();
-    return;
-  }
-  const float t = lattice_t(L_, float(last + 1));
-  const float fv = field_at(last + 1, 1);
-  res_.samples += 1.f;
-  const vec3 g = f_.key.shading ? field_gradient(voxel_coords(r_.o + t * r_.d)) : vec3(0.f);
-  if (vs_push(t, fv, g, lattice_step(L_, float(last + 1), 1.f))) return;
-  vs_last_segment(t_exit);  // the extra sample itself is not composited
-  w_n_ = 0;
-}
 
 // Visits lattice index i, standing for the step to index i + m.
 bool RayCaster::visit(int i, int m) {

@@ -1,0 +1,115 @@
+// One ray's caster: the state raycast_body.glsl keeps in globals, and its members. Defined
+// across ray_kernel.cpp (traversal, sampling, compositing), ray_peaks-inl.h (peak finding) and
+// ray_virtual_samples-inl.h (Lee's virtual samples). Included per SIMD target by
+// cpu/ray_kernel.cpp (Highway's -inl.h convention).
+#if defined(PEAKCAST_CPU_RAY_CASTER_INL_H_) == defined(HWY_TARGET_TOGGLE)
+#ifdef PEAKCAST_CPU_RAY_CASTER_INL_H_
+#undef PEAKCAST_CPU_RAY_CASTER_INL_H_
+#else
+#define PEAKCAST_CPU_RAY_CASTER_INL_H_
+#endif
+
+#include <hwy/highway.h>
+
+#include "cpu/ray_geometry-inl.h"
+#include "cpu/sampler-inl.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace peakcast::cpu {
+namespace HWY_NAMESPACE {
+namespace {
+
+class RayCaster {
+ public:
+  explicit RayCaster(const CpuFrame& f)
+      : f_(f),
+        segments_(f.key.peaks || f.key.preintegration || f.key.virtual_samples),
+        varying_steps_(f.key.differential || f.key.adaptive || f.key.virtual_samples),
+        min_spacing_(std::min(f.spacing.x, std::min(f.spacing.y, f.spacing.z))) {}
+
+  RayResult cast(float px, float py) { return setup(px, py) ? walk(0) : res_; }
+  RayResult cast_bare(float px, float py, int budget);
+  // The ray through (px, py) up to its traversal; false (and samples -1) when it misses the box.
+  bool setup(float px, float py);
+  // The traversal from lattice index `first` (walk_leaps only: the points before it lie in empty
+  // cells, as leaps_to_first_occupied found), then the ray's end.
+  RayResult walk(int first);
+  RayResult result() const { return res_; }
+  LeapInputs leap_inputs() const {
+    return {voxel_coords(r_.o), r_.d / f_.spacing, L_.t0, L_.A, L_.B, span_y_ + f_.step, last_};
+  }
+
+ private:
+  vec3 voxel_coords(vec3 p) const { return (p + f_.box_half) * f_.inv_spacing; }
+  float sample_field(vec3 x) const { return cpu::sample_field(f_.voxels, x); }
+  vec3 field_gradient(vec3 x) const {
+    vec3 g;
+    g.x = sample_field(x + vec3(1, 0, 0)) - sample_field(x - vec3(1, 0, 0));
+    g.y = sample_field(x + vec3(0, 1, 0)) - sample_field(x - vec3(0, 1, 0));
+    g.z = sample_field(x + vec3(0, 0, 1)) - sample_field(x - vec3(0, 0, 1));
+    return g / (2.f * f_.spacing);
+  }
+  // The value at lattice index i: from the current run, or a new run from i (stride m).
+  float field_at(int i, int m);
+
+  vec4 tf_lookup(float s) const;
+  vec4 tf_exact(float v) const;
+  vec4 preint_lookup(float s_front, float s_back) const;
+  float correct_opacity(float a, float dt) const {
+    return dt == f_.step ? a : 1.f - std::pow(std::max(1.f - a, 0.f), dt / f_.step);
+  }
+  vec3 shade(vec3 rgb, vec3 gradient) const {
+    const float len = glm::length(gradient);
+    if (len * min_spacing_ < 1e-5f) return rgb;
+    const vec3 n = gradient / len;
+    const float ndotl = std::abs(glm::dot(n, -r_.d));  // head light: l = h = direction to the eye
+    return rgb * (kAmbient + kDiffuse * ndotl) + vec3(kSpecular * std::pow(ndotl, kShininess));
+  }
+  void composite(vec3 rgb, float alpha) {
+    const float w = (1.f - res_.acc.a) * alpha;
+    res_.acc += vec4(w * rgb, w);
+  }
+  vec3 sample_gradient(float t, vec3 g) {
+    return f_.key.virtual_samples ? g : field_gradient(voxel_coords(r_.o + t * r_.d));
+  }
+
+  float solve_root(float t0, float f0, float t1, float f1, float v);
+  bool find_peaks(float t0, float f0, float t1, float f1);
+  bool consume(float t, float fv, vec3 g, float dt);
+  bool visit(int i, int m);
+  // Virtual samples (Lee et al. 2010): the window of four true samples, newest last.
+  bool vs_segment(float t1, float t2, float dt1, vec4 fw, vec3 g0, vec3 g1, vec3 g2, vec3 g3, float t_limit);
+  bool vs_last_segment(float t_limit);
+  bool vs_flush();
+  bool vs_push(float t, float fv, vec3 g, float dt);
+  void vs_finish(int last, float t_exit);
+  bool walk_leaps(float span_y, int first);
+  bool walk_cells(float span_x, float span_y);
+
+  const CpuFrame& f_;
+  const bool segments_, varying_steps_;
+  float span_x_ = 0, span_y_ = 0;
+  const float min_spacing_;
+  Ray r_;
+  Lattice L_;
+  RayResult res_;
+  int last_ = 0;
+  float stop_ = 1, dvr_weight_ = 1, peak_weight_ = 1;
+  // The previous sample, for segment methods (see raycast_body.glsl).
+  float prev_t_ = 0, prev_f_ = 0;
+  bool have_prev_ = false, gap_ = false;
+  int expect_ = 0;
+  vec4 w_t_{0}, w_f_{0}, w_dt_{0};
+  vec3 w_g0_{0}, w_g1_{0}, w_g2_{0}, w_g3_{0};
+  int w_n_ = 0;
+  // The current run of samples (sample_run): indices run_first_ + k * run_stride_, k < run_count_.
+  float run_[kMaxRun];
+  int run_first_ = 0, run_stride_ = 1, run_count_ = 0, run_batch_ = 0;
+};
+
+}  // namespace
+}  // namespace HWY_NAMESPACE
+}  // namespace peakcast::cpu
+HWY_AFTER_NAMESPACE();
+
+#endif  // PEAKCAST_CPU_RAY_CASTER_INL_H_

@@ -1,0 +1,94 @@
+// Peak finding between samples for the CPU ray caster (Knoll et al. 2009 §4.2, Algorithm 1,
+// DESIGN §3 errata): shaders/peak_find.glsl in C++. Included per SIMD target by
+// cpu/ray_kernel.cpp (Highway's -inl.h convention).
+#if defined(PEAKCAST_CPU_RAY_PEAKS_INL_H_) == defined(HWY_TARGET_TOGGLE)
+#ifdef PEAKCAST_CPU_RAY_PEAKS_INL_H_
+#undef PEAKCAST_CPU_RAY_PEAKS_INL_H_
+#else
+#define PEAKCAST_CPU_RAY_PEAKS_INL_H_
+#endif
+
+#include <hwy/highway.h>
+
+#include "cpu/ray_caster-inl.h"
+#include "render/shader_interface.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace peakcast::cpu {
+namespace HWY_NAMESPACE {
+namespace {
+
+// Regula falsi (secant steps kept inside the bracket), guarded against g_a == g_b.
+float RayCaster::solve_root(float t0, float f0, float t1, float f1, float v) {
+  float ta = t0, tb = t1, ga = f0 - v, gb = f1 - v;
+  for (int k = 0; k < f_.secant_iterations; ++k) {
+    if (gb == ga) break;
+    const float t = std::clamp(ta - ga * (tb - ta) / (gb - ga), std::min(ta, tb), std::max(ta, tb));
+    const float g = sample_field(voxel_coords(r_.o + t * r_.d)) - v;
+    res_.samples += 1.f;
+    if ((g >= 0.f) == (ga >= 0.f)) {
+      ta = t;
+      ga = g;
+    } else {
+      tb = t;
+      gb = g;
+    }
+  }
+  return gb == ga ? 0.5f * (ta + tb) : std::clamp(ta - ga * (tb - ta) / (gb - ga), std::min(ta, tb), std::max(ta, tb));
+}
+
+// Knoll et al. 2009 Algorithm 1 with the errata (peak_find.glsl).
+bool RayCaster::find_peaks(float t0, float f0, float t1, float f1) {
+  const int bins = f_.peak_bins;
+  auto bin = [&](float v) { return std::clamp(int(std::floor(v * float(bins))), 0, bins - 1); };
+  const int i = bin(f0), j = bin(f1);
+  const bool reverse = (i == j) && f0 > f1;  // the diagonal is stored ascending
+  const int max_peaks = f_.max_peaks;
+  float found[4];
+  int n = 0;
+  bool done = false;
+  for (int layer = 0; layer < f_.peak_layers && !done; ++layer) {
+    const float* slots = f_.peak_texels + ((size_t(layer) * bins + size_t(j)) * bins + size_t(i)) * 4;
+    for (int s = 0; s < 4; ++s) {
+      const float v = slots[s];
+      if (v == render::kNoPeakTexel) {
+        done = true;
+        break;
+      }
+      if (!(std::min(f0, f1) < v && v <= std::max(f0, f1))) continue;
+      if (reverse) {  // keep the last four in table order: the first four along the ray
+        if (n == 4) {
+          found[0] = found[1];
+          found[1] = found[2];
+          found[2] = found[3];
+          n = 3;
+        }
+        found[n++] = v;
+      } else {
+        found[n++] = v;
+        if (n == max_peaks) {
+          done = true;
+          break;
+        }
+      }
+    }
+  }
+  const int count = std::min(n, max_peaks);
+  for (int k = 0; k < count; ++k) {
+    const float v = reverse ? found[n - 1 - k] : found[k];
+    const float t = solve_root(t0, f0, t1, f1, v);
+    const vec4 c = tf_exact(v);
+    vec3 rgb(c);
+    if (f_.key.shading) rgb = shade(rgb, field_gradient(voxel_coords(r_.o + t * r_.d)));
+    composite(rgb, c.a * peak_weight_);  // unscaled opacity at the peak (Knoll §4.2)
+    if (res_.acc.a >= stop_) break;
+  }
+  return count > 0;
+}
+
+}  // namespace
+}  // namespace HWY_NAMESPACE
+}  // namespace peakcast::cpu
+HWY_AFTER_NAMESPACE();
+
+#endif  // PEAKCAST_CPU_RAY_PEAKS_INL_H_
