@@ -140,9 +140,7 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
   if (f.key.space_skipping) {
     CellBytes* d = cache_find(distances_, fs.occupancy_key);
     if (!d) {
-      std::vector<uint8_t> distance = fs.occupancy->distance;
-      if (!leaps_)
-        for (auto& x : distance) x = std::min<uint8_t>(x, 1);
+      std::vector<uint8_t> distance = render::traversal_distances(*fs.occupancy, leaps_);
       distance.resize(distance.size() + 4, 0);  // the packet leaps read 4 bytes at a cell's index
       d = &cache_insert(distances_, CellBytes{fs.occupancy_key, std::move(distance)}, kCacheEntries);
     }

@@ -78,6 +78,13 @@ FrameSetup setup_frame(const ResidentVolume& gv, const ResolvedScene& s, GpuPath
   return f;
 }
 
+std::vector<uint8_t> traversal_distances(const Occupancy& occupancy, bool leaps) {
+  std::vector<uint8_t> distance = occupancy.distance;
+  if (!leaps)
+    for (auto& d : distance) d = std::min<uint8_t>(d, 1);
+  return distance;
+}
+
 std::string step_tf_key(const ResolvedScene& s, const std::string& tf_sig) {
   const double exponent = double(float(plan_sampling(s).step)) / double(float(s.tf.opacity_unit));
   return tf_sig + " opacity exponent " + std::to_string(exponent);

@@ -55,6 +55,10 @@ struct SetupOptions {
 FrameSetup setup_frame(const ResidentVolume& volume, const ResolvedScene& s, GpuPath path, const SetupOptions& o,
                        OccupancyCache& cache, size_t& builds);
 
+// The empty-space distance per cell a traversal reads: the occupancy's, or, with leaps off
+// (Renderer::set_empty_space_leaps), at most 1 so that every empty cell is stepped through.
+std::vector<uint8_t> traversal_distances(const Occupancy& occupancy, bool leaps);
+
 // The TF as TransferFunction::kTableSize RGBA entries over [lo, hi] whose opacities are already
 // corrected for the scene's uniform step, 1 - (1 - a)^(step / unit), as VTK's mappers bake
 // theirs: a sample that stands for that step composites the looked-up alpha as is, others

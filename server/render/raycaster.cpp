@@ -151,10 +151,8 @@ VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPa
   if (f.key.space_skipping) {
     DistanceEntry* e = cache_find(distance_cache_, f.occupancy_key);
     if (!e) {
-      std::vector<uint8_t> distance = f.occupancy->distance;
-      if (!leaps_)
-        for (auto& d : distance) d = std::min<uint8_t>(d, 1);
-      e = &cache_insert(distance_cache_, DistanceEntry{f.occupancy_key, make_cell_buffer(cells, distance)},
+      e = &cache_insert(distance_cache_,
+                        DistanceEntry{f.occupancy_key, make_cell_buffer(cells, traversal_distances(*f.occupancy, leaps_))},
                         kCacheEntries);
     }
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboCellDistance, e->buffer.id());
