@@ -7,6 +7,7 @@
 #include "core/camera.h"
 #include "core/parallel.h"
 #include "core/sampling.h"
+#include "cpu/table_bits.h"
 #include "render/small_cache.h"
 
 namespace peakcast::cpu {
@@ -98,11 +99,14 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
   const std::string tf_key = render::step_tf_key(s, fs.tf_sig);
   TfTable* tf = cache_find(tf_tables_, tf_key);
   if (!tf) {
-    tf = &cache_insert(tf_tables_, TfTable{tf_key, render::step_tf_table(s, lo, hi)}, kCacheEntries);
+    std::vector<float> rgba = render::step_tf_table(s, lo, hi);
+    std::vector<uint64_t> bits = tf_cell_bits(rgba, TransferFunction::kTableSize);
+    tf = &cache_insert(tf_tables_, TfTable{tf_key, std::move(rgba), std::move(bits)}, kCacheEntries);
     ++table_builds_;
   }
   f.tf = tf->rgba.data();
   f.tf_size = TransferFunction::kTableSize;
+  f.tf_alpha_any = tf->alpha_any.data();
 
   // Peak table + TF points, or the preintegration table.
   const std::vector<Peak> no_peaks;
@@ -117,12 +121,14 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
       n.peak_texels = render::peak_texels(table, lo, hi);
       n.peak_bins = table.bins;
       n.peak_layers = table.layers;
+      n.peak_any = peak_texel_bits(n.peak_texels, n.peak_bins);
       n.tf_points = render::tf_point_pairs(s.tf, lo, hi);
     }
     if (s.scene.render.classification == Classification::Preint) {
       PreintegrationTable table = render::scene_preintegration(s, lo, hi);
       n.preint = std::move(table.rgba);
       n.preint_size = table.size;
+      n.preint_any = preint_cell_bits(n.preint, n.preint_size);
     }
     t = &cache_insert(tables_, std::move(n), kCacheEntries);
     ++table_builds_;
@@ -136,6 +142,8 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
   f.tf_point_count = int(t->tf_points.size() / 2);
   f.preint = t->preint.data();
   f.preint_size = t->preint_size;
+  f.peak_any = t->peak_any.data();
+  f.preint_any = t->preint_any.data();
 
   if (f.key.space_skipping) {
     CellBytes* d = cache_find(distances_, fs.occupancy_key);

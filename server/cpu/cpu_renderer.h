@@ -53,6 +53,7 @@ class CpuRenderer : public render::Renderer {
   struct TfTable {
     std::string key;
     std::vector<float> rgba;
+    std::vector<uint64_t> alpha_any;  // tf_cell_bits
   };
   struct Tables {  // peak table + TF points, or the preintegration table
     std::string key;
@@ -61,6 +62,7 @@ class CpuRenderer : public render::Renderer {
     std::vector<glm::vec4> tf_points;
     std::vector<float> preint;
     int preint_size = 0;
+    std::vector<uint64_t> peak_any, preint_any;  // table_bits: which lookups can find something
   };
   struct CellBytes {  // empty-space distances of one occupancy, or adaptive multipliers of one grid
     std::string key;

@@ -41,7 +41,7 @@ class RayCaster {
 
  private:
   vec3 voxel_coords(vec3 p) const { return (p + f_.box_half) * f_.inv_spacing; }
-  float sample_field(vec3 x) const { return cpu::sample_field(f_.voxels, x); }
+  float sample_field(vec3 x) const { return SamplePoint(f_.voxels, x); }
   vec3 field_gradient(vec3 x) const {
     vec3 g;
     g.x = sample_field(x + vec3(1, 0, 0)) - sample_field(x - vec3(1, 0, 0));
@@ -52,9 +52,11 @@ class RayCaster {
   // The value at lattice index i: from the current run, or a new run from i (stride m).
   float field_at(int i, int m);
 
-  vec4 tf_lookup(float s) const;
+  // The TF table at s; false, leaving `out` alone, where its opacity is exactly zero.
+  bool tf_lookup(float s, vec4& out) const;
   vec4 tf_exact(float v) const;
-  vec4 preint_lookup(float s_front, float s_back) const;
+  // The table at (s_front, s_back); false, leaving `out` alone, where it is exactly zero.
+  bool preint_lookup(float s_front, float s_back, vec4& out) const;
   float correct_opacity(float a, float dt) const {
     return dt == f_.step ? a : 1.f - std::pow(std::max(1.f - a, 0.f), dt / f_.step);
   }

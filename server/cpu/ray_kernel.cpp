@@ -15,6 +15,7 @@
 #include <glm/geometric.hpp>
 
 #include "core/ray_texture_mapping.h"
+#include "cpu/table_bits.h"
 #include "render/shader_interface.h"
 
 #undef HWY_TARGET_INCLUDE
@@ -65,12 +66,14 @@ float RayCaster::field_at(int i, int m) {
 }
 
 
-vec4 RayCaster::tf_lookup(float s) const {
+bool RayCaster::tf_lookup(float s, vec4& out) const {
   // GL_LINEAR between texel centres of an n-entry table, clamped: texel space u = s (n - 1).
   const float u = std::clamp(s, 0.f, 1.f) * float(f_.tf_size - 1);
   const int i = std::min(int(u), f_.tf_size - 2);
+  if (!test_bit(f_.tf_alpha_any, size_t(i))) return false;  // both texels transparent
   const float* a = f_.tf + 4 * i;
-  return to_vec4(lerp4(load4(a), load4(a + 4), u - float(i)));
+  out = to_vec4(lerp4(load4(a), load4(a + 4), u - float(i)));
+  return true;
 }
 
 vec4 RayCaster::tf_exact(float v) const {
@@ -89,16 +92,18 @@ vec4 RayCaster::tf_exact(float v) const {
   return glm::mix(f_.tf_points[2 * (lo - 1) + 1], f_.tf_points[2 * lo + 1], (v - va) / (vb - va));
 }
 
-vec4 RayCaster::preint_lookup(float s_front, float s_back) const {
+bool RayCaster::preint_lookup(float s_front, float s_back, vec4& out) const {
   const int n = f_.preint_size;
   const float u = std::clamp(s_front, 0.f, 1.f) * float(n - 1), v = std::clamp(s_back, 0.f, 1.f) * float(n - 1);
   const int i = std::min(int(u), n - 2), j = std::min(int(v), n - 2);
+  if (!test_bit(f_.preint_any, size_t(j) * size_t(n - 1) + size_t(i))) return false;  // zeros only
   const float wu = u - float(i), wv = v - float(j);
   const float* row0 = f_.preint + (size_t(j) * size_t(n) + size_t(i)) * 4;
   const float* row1 = row0 + size_t(n) * 4;
   const auto c0 = lerp4(load4(row0), load4(row0 + 4), wu);
   const auto c1 = lerp4(load4(row1), load4(row1 + 4), wu);
-  return to_vec4(lerp4(c0, c1, wv));
+  out = to_vec4(lerp4(c0, c1, wv));
+  return true;
 }
 
 
@@ -110,8 +115,8 @@ bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
   bool peak_hit = false;
   if (key.peaks && segment) peak_hit = find_peaks(prev_t_, prev_f_, t, fv);
   if (key.preintegration) {
-    if (segment) {
-      vec4 c = preint_lookup(prev_f_, fv);
+    vec4 c;
+    if (segment && preint_lookup(prev_f_, fv, c)) {  // else the segment adds exactly nothing
       if (varying_steps_ && c.a > 0.f) {  // the table holds segments of the uniform step
         const float a = 1.f - std::pow(std::max(1.f - c.a, 0.f), (t - prev_t_) / f_.step);
         c = vec4(vec3(c) * (a / c.a), a);
@@ -124,8 +129,8 @@ bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
     }
   } else if (!(key.peaks && key.peak_mode == PeakMode::PeaksOnly)) {
     if (!(key.peaks && key.peak_mode == PeakMode::Xor && peak_hit)) {
-      const vec4 c = tf_lookup(fv);
-      if (c.a > 0.f) {
+      vec4 c;
+      if (tf_lookup(fv, c) && c.a > 0.f) {
         vec3 rgb(c);
         if (key.shading) rgb = shade(rgb, sample_gradient(t, g));
         composite(rgb, correct_opacity(c.a, dt) * dvr_weight_);

@@ -38,12 +38,19 @@ struct CpuFrame {
   // Per-TF tables.
   const float* tf = nullptr;  // TransferFunction::kTableSize RGBA, opacity for `step`
   int tf_size = 0;
+  const uint64_t* tf_alpha_any = nullptr;  // bit i: texel i or i + 1 has opacity (tf_cell_bits)
   const float* peak_texels = nullptr;  // [layer][j][i][4], TF coordinates, kNoPeakTexel = none
+  // Bit j * peak_bins + i: texel (i, j) of layer 0 holds a peak (peak_texel_bits). A segment
+  // whose bit is clear finds none without reading the table, which misses the cache.
+  const uint64_t* peak_any = nullptr;
   int peak_bins = 0, peak_layers = 0, max_peaks = 0, secant_iterations = 0;
   const glm::vec4* tf_points = nullptr;  // tf_point_pairs
   int tf_point_count = 0;
   const float* preint = nullptr;  // [j][i][4]
   int preint_size = 0;
+  // Bit j * (preint_size - 1) + i: one of the texels (i..i+1, j..j+1) that a lookup in that cell
+  // interpolates is not all zero (preint_cell_bits). A clear bit: the segment adds nothing.
+  const uint64_t* preint_any = nullptr;
   const RayTexture* ray_texture = nullptr;
   float diff_k = 0, min_step = 0;  // differential sampling
 };

@@ -11,6 +11,7 @@
 #include <hwy/highway.h>
 
 #include "cpu/ray_caster-inl.h"
+#include "cpu/table_bits.h"
 #include "render/shader_interface.h"
 
 HWY_BEFORE_NAMESPACE();
@@ -42,6 +43,7 @@ bool RayCaster::find_peaks(float t0, float f0, float t1, float f1) {
   const int bins = f_.peak_bins;
   auto bin = [&](float v) { return std::clamp(int(std::floor(v * float(bins))), 0, bins - 1); };
   const int i = bin(f0), j = bin(f1);
+  if (!test_bit(f_.peak_any, size_t(j) * size_t(bins) + size_t(i))) return false;  // an empty texel
   const bool reverse = (i == j) && f0 > f1;  // the diagonal is stored ascending
   const int max_peaks = f_.max_peaks;
   float found[4];

@@ -147,6 +147,19 @@ HWY_INLINE void Run(const VoxelGrid& g, const SampleRun& r, float* HWY_RESTRICT 
   }
 }
 
+// sample_field (sampler.h) at one point, compiled for this target: root solving and gradients
+// call it point by point. The same arithmetic, so the same values.
+inline float SamplePoint(const VoxelGrid& g, const glm::vec3& x) {
+  if (g.tricubic) return sample_field(g, x);
+  float raw = 0.f;
+  switch (g.type) {
+    case VoxelType::U8: raw = trilinear_typed<uint8_t>(g, x.x, x.y, x.z); break;
+    case VoxelType::U16: raw = trilinear_typed<uint16_t>(g, x.x, x.y, x.z); break;
+    case VoxelType::F32: raw = trilinear_typed<float>(g, x.x, x.y, x.z); break;
+  }
+  return raw * g.scale + g.bias;
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace peakcast::cpu
 HWY_AFTER_NAMESPACE();

@@ -50,8 +50,11 @@ struct VoxelGrid {
 // Makes the grid of `data` laid out like `v` (x fastest).
 VoxelGrid make_voxel_grid(const Volume& v, const uint8_t* data, VoxelType type, float scale, float bias, bool tricubic);
 
-// Trilinear in stored units (GL_LINEAR, GL_CLAMP_TO_EDGE on every axis).
-inline float trilinear_raw(const VoxelGrid& g, float x, float y, float z) {
+// Trilinear in stored units (GL_LINEAR, GL_CLAMP_TO_EDGE on every axis), for voxels of type T.
+// Always inlined: the per-target ray kernel's point sampler (sampler-inl.h's SamplePoint) then
+// gets its target's instructions, where an out-of-line copy would link as the baseline's.
+template <class T>
+[[gnu::always_inline]] inline float trilinear_typed(const VoxelGrid& g, float x, float y, float z) {
   const float p[3] = {x, y, z};
   int32_t i[3];
   float f[3];
@@ -63,12 +66,22 @@ inline float trilinear_raw(const VoxelGrid& g, float x, float y, float z) {
   const int64_t o = i[0] + i[1] * g.stride_y + i[2] * g.stride_z;
   const int64_t nx = g.n[0] > 1 ? 1 : 0;
   auto row = [&](int64_t at) {
-    const float a = g.voxel(at), b = g.voxel(at + nx);
+    const float a = g.at<T>(at), b = g.at<T>(at + nx);
     return a + f[0] * (b - a);
   };
   const float c00 = row(o), c10 = row(o + g.next_y), c01 = row(o + g.next_z), c11 = row(o + g.next_y + g.next_z);
   const float c0 = c00 + f[1] * (c10 - c00), c1 = c01 + f[1] * (c11 - c01);
   return c0 + f[2] * (c1 - c0);
+}
+
+// The same for the grid's voxel type.
+inline float trilinear_raw(const VoxelGrid& g, float x, float y, float z) {
+  switch (g.type) {
+    case VoxelType::U8: return trilinear_typed<uint8_t>(g, x, y, z);
+    case VoxelType::U16: return trilinear_typed<uint16_t>(g, x, y, z);
+    case VoxelType::F32: return trilinear_typed<float>(g, x, y, z);
+  }
+  return 0.f;
 }
 
 // The cubic B-spline from eight trilinear fetches, as common_sampling.glsl computes it.
