@@ -34,7 +34,7 @@ SCENES = {
     "ml-peak": dict(kind="marschner-lobb", dims=(128, 128, 128), type="float32",
                     tf=[(0.0, 0.2, 0.4, 1.0, 0.0), (0.49, 0.2, 0.4, 1.0, 0.0), (0.5, 1.0, 0.8, 0.3, 0.8),
                         (0.51, 0.2, 0.4, 1.0, 0.0), (1.0, 0.2, 0.4, 1.0, 0.0)],
-                    view=(0.55, 0.45, 0.7), render={}, steps=[0.5, 1, 1.5, 2, 3]),
+                    view=(0.55, 0.45, 0.7), render={}, steps=[0.5, 1, 1.5, 2, 3, 4, 5, 6]),
     "em": dict(kind="em", dims=(900, 500, 930), type="uint8",
                # the quality suite's em_band (tests/bench/quality/em_band.json): a band at 0.2 of the range
                tf=[(0.0, 0, 0, 0, 0), (0.18, 0.9, 0.8, 0.5, 0.0), (0.2, 0.9, 0.8, 0.5, 0.6), (0.22, 0.9, 0.8, 0.5, 0.0),

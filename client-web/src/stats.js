@@ -3,6 +3,8 @@
 export class StatsOverlay {
   #shown = [];        // display times in the last second
   #latency = { interactive: [], final: [] };
+  #parts = { interactive: [], final: [] };
+  #renderMs = { interactive: [], final: [] };  // the server's render ms per frame (stats messages)  // per frame: where the input -> frame time went
   #inputSent = new Map();  // camera version -> time the input was sent
   last = {};
 
@@ -19,22 +21,38 @@ export class StatsOverlay {
     while (this.#shown.length && now - this.#shown[0] > 1000) this.#shown.shift();
     const sent = this.#inputSent.get(frame.cameraVersion);
     if (sent !== undefined) {
-      const list = this.#latency[frame.final ? 'final' : 'interactive'];
+      const kind = frame.final ? 'final' : 'interactive';
+      const list = this.#latency[kind];
       list.push(now - sent);
       if (list.length > 200) list.shift();
+      // Where that time went: the server's clock from the input's arrival to the render's end
+      // and the encode's, the page's from receipt to decoded and to drawn; the rest is the way
+      // there and back (and the page's own queues).
+      const parts = this.#parts[kind];
+      parts.push({ total: now - sent, server_render: (frame.tRenderUs - frame.tInputUs) / 1000,
+        encode: (frame.tEncodeUs - frame.tRenderUs) / 1000, decode: frame.decodedAt - frame.receivedAt,
+        draw: now - frame.decodedAt, width: frame.width, height: frame.height });
+      if (parts.length > 200) parts.shift();
       if (frame.final) this.#inputSent.delete(frame.cameraVersion);
     }
     this.last.frame = frame;
     this.render();
   }
 
-  stats(msg) { this.last.stats = msg; this.render(); }
+  stats(msg) {
+    this.last.stats = msg;
+    this.#renderMs[msg.final ? 'final' : 'interactive'].push(msg.render_ms);
+    for (const k of ['final', 'interactive']) if (this.#renderMs[k].length > 200) this.#renderMs[k].shift();
+    this.render();
+  }
+  renderTimes(kind) { return [...this.#renderMs[kind]]; }
 
   percentile(kind, p) {
     const v = [...this.#latency[kind]].sort((a, b) => a - b);
     return v.length ? v[Math.min(v.length - 1, Math.round(p * (v.length - 1)))] : NaN;
   }
   latencies(kind) { return [...this.#latency[kind]]; }
+  latencyParts(kind) { return this.#parts[kind].map((p) => ({ ...p })); }
 
   render() {
     const f = this.last.frame, s = this.last.stats ?? {};

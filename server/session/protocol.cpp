@@ -153,9 +153,10 @@ ClientMessage parse_client_message(const std::string& text) {
     return RenderMsg{j["render"]};
   }
   if (type == "quality") {
-    only_keys(j, "quality", {"interactive_scale", "interactive_quality", "final_quality", "final_format"});
+    only_keys(j, "quality", {"interactive_scale", "interactive_ms", "interactive_quality", "final_quality", "final_format"});
     QualityMsg q;
     if (j.contains("interactive_scale")) q.interactive_scale = number_in(j["interactive_scale"], "quality.interactive_scale", 0.1, 1.0);
+    if (j.contains("interactive_ms")) q.interactive_ms = number_in(j["interactive_ms"], "quality.interactive_ms", 0.0, 1000.0);
     if (j.contains("interactive_quality")) q.interactive_quality = int_in(j["interactive_quality"], "quality.interactive_quality", limits::kMinJpegQuality, limits::kMaxJpegQuality);
     if (j.contains("final_quality")) q.final_quality = int_in(j["final_quality"], "quality.final_quality", limits::kMinJpegQuality, limits::kMaxJpegQuality);
     if (j.contains("final_format")) {

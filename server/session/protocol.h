@@ -57,6 +57,7 @@ struct RenderMsg {
 };
 struct QualityMsg {
   std::optional<double> interactive_scale;  // 0.1..1
+  std::optional<double> interactive_ms;     // 0..1000; 0: a fixed interactive scale
   std::optional<int> interactive_quality, final_quality;  // 10..100
   std::optional<std::string> final_format;  // jpeg | png
 };

@@ -103,6 +103,7 @@ void RenderService::render_frame(Scheduler::Work& w) {
     RenderedFrame f;
     f.rendered = Clock::now();
     metrics_.observe("peakcast_render_ms", job.final ? "kind=\"final\"" : "kind=\"interactive\"", st.render_ms);
+    if (!job.final) w.session->interactive_rendered(int64_t(out.rgb8.width) * out.rgb8.height, st.render_ms);
     f.width = out.rgb8.width;
     f.height = out.rgb8.height;
     f.rgb = std::move(out.rgb8.rgb);

@@ -1,6 +1,7 @@
 #include "session/session.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "render/variant.h"
 #include "session/limits.h"
@@ -134,6 +135,7 @@ size_t Session::add_stroke(const Stroke& stroke) {
 void Session::set_quality(const protocol::QualityMsg& q) {
   std::lock_guard lock(m_);
   if (q.interactive_scale) quality_.interactive_scale = *q.interactive_scale;
+  if (q.interactive_ms) quality_.interactive_ms = *q.interactive_ms;
   if (q.interactive_quality) quality_.interactive_quality = *q.interactive_quality;
   if (q.final_quality) quality_.final_quality = *q.final_quality;
   if (q.final_format) quality_.final_png = *q.final_format == "png";
@@ -152,6 +154,29 @@ void Session::ack(uint32_t frame_id) {
 }
 
 void Session::frame_dropped(uint32_t frame_id) { ack(frame_id); }
+
+void Session::interactive_rendered(int64_t pixels, double render_ms) {
+  if (pixels <= 0 || !(render_ms >= 0.0) || !std::isfinite(render_ms)) return;
+  std::lock_guard lock(m_);
+  const double per_pixel = render_ms / double(pixels);
+  // A running mean over the last few frames: one slow frame (a page fault, a neighbour's
+  // still band) moves the resolution a little, a heavier view moves it within a few frames.
+  interactive_ms_per_pixel_ = interactive_ms_per_pixel_ > 0.0 ? 0.6 * interactive_ms_per_pixel_ + 0.4 * per_pixel
+                                                              : per_pixel;
+}
+
+double Session::interactive_scale(int width, int height) const {
+  const double most = quality_.interactive_scale;
+  if (quality_.interactive_ms <= 0.0 || interactive_ms_per_pixel_ <= 0.0) return most;
+  const double pixels = double(width) * double(height) * most * most;
+  const double expected_ms = pixels * interactive_ms_per_pixel_;
+  if (expected_ms <= quality_.interactive_ms) return most;
+  const double fit = most * std::sqrt(quality_.interactive_ms / expected_ms);
+  // In steps of 1/64 of the full size, rounded down: the resolution does not flicker with
+  // every frame's noise.
+  const double stepped = std::floor(fit * 64.0) / 64.0;
+  return std::clamp(stepped, most / Quality::kMaxInteractiveReduction, most);
+}
 
 uint32_t Session::in_flight() const {
   std::lock_guard lock(m_);
@@ -199,8 +224,9 @@ std::optional<FrameJob> Session::take_job(Clock::time_point now, std::chrono::mi
     return std::nullopt;
   }
   if (!job.final) {  // reduced resolution and coarser sampling while the input moves
-    job.scene.scene.width = std::max(1, int(job.scene.scene.width * quality_.interactive_scale));
-    job.scene.scene.height = std::max(1, int(job.scene.scene.height * quality_.interactive_scale));
+    const double scale = interactive_scale(job.scene.scene.width, job.scene.scene.height);
+    job.scene.scene.width = std::max(1, int(job.scene.scene.width * scale));
+    job.scene.scene.height = std::max(1, int(job.scene.scene.height * scale));
     // Uniform: twice the step. Differential: the footprint of the smaller image already makes
     // the steps 1 / interactive_scale longer (s_k counts pixels), so s_k stays.
     if (job.scene.scene.render.sampling != Sampling::Differential) job.scene.step *= 2.0;

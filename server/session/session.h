@@ -33,7 +33,12 @@ class FrameSink {
 };
 
 struct Quality {
-  double interactive_scale = 0.5;  // resolution ratio while input arrives
+  double interactive_scale = 0.5;  // resolution ratio while input arrives (the most it may be)
+  // Render-time budget of an interactive frame, ms (VTK's desired update rate): when the last
+  // interactive frames took longer, the next ones drop below interactive_scale to hold it, down
+  // to interactive_scale / kMaxInteractiveReduction; 0: always interactive_scale.
+  double interactive_ms = 30.0;
+  static constexpr double kMaxInteractiveReduction = 2.0;
   int interactive_quality = 70;    // JPEG, 4:2:0
   int final_quality = 95;          // JPEG, 4:4:4
   bool final_png = false;
@@ -77,6 +82,9 @@ class Session {
   void set_quality(const protocol::QualityMsg& q);
   void set_viewport(const protocol::Viewport& vp);
   void ack(uint32_t frame_id);
+  // The render thread's report of an interactive frame: its pixels and render time, which set
+  // the next interactive frames' resolution (Quality::interactive_ms).
+  void interactive_rendered(int64_t pixels, double render_ms);
   void frame_dropped(uint32_t frame_id);  // the connection replaced it before sending
   nlohmann::json state_json() const;      // volume, camera, tf, render, viewport: what the client restores
 
@@ -102,7 +110,10 @@ class Session {
   std::shared_ptr<const RayTextureSpec> ray_texture_;      // null: none
   PngLocator locate_png_;
   protocol::Viewport viewport_;
+  // The resolution ratio of the next interactive frame of a width x height view (m_ held).
+  double interactive_scale(int width, int height) const;
   Quality quality_;
+  double interactive_ms_per_pixel_ = 0.0;  // running mean of interactive frames; 0: none yet
   uint32_t camera_version_ = 0, tf_version_ = 0, render_version_ = 0;
   bool dirty_ = false, final_pending_ = false;
   Clock::time_point last_input_{}, last_frame_{};

@@ -119,4 +119,60 @@ TEST(SessionFlow, FinalFollowsInteractiveAfterTheStillDelay) {
   EXPECT_TRUE(b->final);
 }
 
+TEST(SessionFlow, InteractiveFramesShrinkToHoldTheirBudgetAndRecover) {
+  Session s("s3", {});
+  s.start(entry(), Viewport{400, 400, 1.0}, {});
+  const auto still = std::chrono::milliseconds(150);
+  const auto rate = std::chrono::duration<double>(0.0);
+  Clock::time_point wake;
+  Camera c;
+  auto next_interactive = [&]() {
+    c.eye.x += 1;
+    s.set_camera(c);
+    auto j = s.take_job(Clock::now(), still, rate, wake);
+    EXPECT_TRUE(j && !j->final);
+    if (j) s.ack(j->frame_id);
+    return j ? j->scene.scene.width : -1;
+  };
+  {
+    auto a = s.take_job(Clock::now(), still, rate, wake);
+    ASSERT_TRUE(a && !a->final);
+    c = a->scene.camera;
+    s.ack(a->frame_id);
+    EXPECT_EQ(a->scene.scene.width, 200) << "nothing measured yet: interactive_scale";
+  }
+  s.interactive_rendered(200 * 200, 60.0);  // twice the 30 ms budget
+  // 0.5 * sqrt(30 / 60) = 0.354, down to a 64th: 22/64 of 400 pixels.
+  EXPECT_EQ(next_interactive(), 137);
+  for (int k = 0; k < 20; ++k) s.interactive_rendered(200 * 200, 1000.0);
+  EXPECT_EQ(next_interactive(), 100) << "never below half the interactive scale";
+  for (int k = 0; k < 20; ++k) s.interactive_rendered(100 * 100, 1.0);
+  EXPECT_EQ(next_interactive(), 200) << "fast frames: back to interactive_scale, never above";
+  s.interactive_rendered(0, 5.0);  // ignored: no pixels, or no time
+  s.interactive_rendered(100, std::nan(""));
+  EXPECT_EQ(next_interactive(), 200);
+  for (int k = 0; k < 20; ++k) s.interactive_rendered(200 * 200, 1000.0);
+  protocol::QualityMsg q;
+  q.interactive_ms = 0.0;  // a fixed scale
+  s.set_quality(q);
+  EXPECT_EQ(next_interactive(), 200);
+  auto f = s.take_job(Clock::now() + std::chrono::seconds(1), still, rate, wake);
+  ASSERT_TRUE(f && f->final);
+  EXPECT_EQ(f->scene.scene.width, 400) << "final frames are never reduced";
+}
+
+TEST(Protocol, QualityInteractiveMsIsANumberOfMilliseconds) {
+  auto q = std::get<QualityMsg>(parse_client_message(R"({"type":"quality","interactive_ms":45})"));
+  EXPECT_EQ(q.interactive_ms, 45.0);
+  for (const char* bad : {R"({"type":"quality","interactive_ms":-1})", R"({"type":"quality","interactive_ms":1001})",
+                          R"({"type":"quality","interactive_ms":"fast"})", R"({"type":"quality","interactive_ms":null})"}) {
+    try {
+      parse_client_message(bad);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const ProtocolError& e) {
+      EXPECT_NE(std::string(e.what()).find("quality.interactive_ms"), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace

@@ -30,6 +30,29 @@ async def test_hello_then_frames_decode():
     await c.close()
 
 
+async def test_interactive_frames_shrink_to_hold_their_budget():
+    # A budget no frame can meet: after the first interactive frame's time is known, the next
+    # ones are rendered at half the interactive scale (the most they are reduced), finals never.
+    c = await Client.connect(SERVER)
+    await c.hello(240, 180)
+    await c.next_frame(final=True)
+    await c.send({"type": "quality", "interactive_ms": 0.001})
+    cam, widths = dict(SCENE_CAMERA), []
+    for i in range(12):
+        cam = dict(cam, eye=[75 + 10 * i, -160, 230])
+        await c.send({"type": "camera", "camera": cam})
+        f = await c.next_frame()
+        if f["final"]:
+            continue
+        widths.append((f["width"], f["height"]))
+    assert widths and widths[0][0] <= 120, widths
+    assert widths[-1] == (60, 45), widths
+    assert all(w >= 60 for w, _ in widths), widths
+    last = await c.next_frame(final=True)
+    assert (last["width"], last["height"]) == (240, 180)
+    await c.close()
+
+
 async def test_still_frame_matches_cli_render():
     tf = {"points": [[0, 0, 0, 0, 0], [90, 0.2, 0.5, 1.0, 0.04], [140, 0.2, 0.5, 1, 0], [199, 1, 0.1, 0, 0],
                      [200, 1, 0.1, 0, 0.9], [201, 1, 0.1, 0, 0], [255, 1, 1, 1, 0]]}
@@ -57,6 +80,8 @@ async def test_progressive_interactive_then_final():
     c = await Client.connect(SERVER)
     await c.hello(240, 180)
     await c.next_frame(final=True)
+    await c.send({"type": "quality", "interactive_ms": 0})  # a fixed interactive scale (no budget)
+    await c.next_frame(final=True)  # a quality change re-sends the still
     cam = dict(SCENE_CAMERA)
     for i in range(5):
         cam = dict(cam, eye=[75 + 20 * i, -160, 230])
@@ -147,7 +172,9 @@ HOSTILE = [
     '{"type": "tf", "tf": {"points": "many"}}', '{"type": "render", "render": {"step": 0}}',
     '{"type": "render", "render": {"step": 1e-12}}', '{"type": "render", "render": {"classification": "magic"}}',
     '{"type": "render", "render": {"max_peaks": 99}}', '{"type": "render", "render": {"bogus": true}}',
-    '{"type": "render"}', '{"type": "quality", "interactive_scale": 5}', '{"type": "quality", "final_format": "gif"}',
+    '{"type": "render"}', '{"type": "quality", "interactive_scale": 5}',
+    '{"type": "quality", "interactive_ms": -1}', '{"type": "quality", "interactive_ms": 1001}',
+    '{"type": "quality", "interactive_ms": "fast"}', '{"type": "quality", "final_format": "gif"}',
     '{"type": "viewport", "width": 0, "height": 10}', '{"type": "viewport", "width": 100000, "height": 100000}',
     '{"type": "viewport", "width": 8000, "height": 8000, "dpr": 4}', '{"type": "viewport", "width": 10, "height": 10, "dpr": 0}',
     '{"type": "volume", "volume": "../../etc/passwd"}', '{"type": "volume", "volume": "/etc/passwd"}',
@@ -247,7 +274,8 @@ def main():
     with Server("--max-sessions", "8") as s:
         SERVER = s
         run_tests([test_hello_then_frames_decode, test_still_frame_matches_cli_render,
-                   test_progressive_interactive_then_final, test_fast_input_coalesces,
+                   test_progressive_interactive_then_final, test_interactive_frames_shrink_to_hold_their_budget,
+                   test_fast_input_coalesces,
                    test_non_acking_client_gets_two_frames_and_costs_nothing,
                    test_hostile_messages_get_errors_and_the_session_renders, test_message_before_hello_is_refused,
                    test_disconnect_mid_render, test_switch_volume_and_budget_refusal])
