@@ -59,7 +59,9 @@ template <class T>
   int32_t i[3];
   float f[3];
   for (int a = 0; a < 3; ++a) {
-    const float c = std::fmin(std::fmax(p[a], 0.f), g.hi[a]);  // NaN -> 0
+    // fmin(fmax(p, 0), hi) without libm's calls: NaN -> 0 (the comparison is false).
+    const float lo = p[a] > 0.f ? p[a] : 0.f;
+    const float c = lo < g.hi[a] ? lo : g.hi[a];
     i[a] = std::min(int32_t(c), g.base_max[a]);
     f[a] = c - float(i[a]);
   }
