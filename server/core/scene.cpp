@@ -204,15 +204,19 @@ json scene_to_json(const Scene& s) {
 std::string Scene::to_string() const { return "Scene" + scene_to_json(*this).dump(); }
 
 ResolvedScene resolve_scene(const Scene& s, const Volume& v) {
+  return resolve_scene(s, VolumeBox{v.dims(), v.spacing, v.origin, v.min_value, v.max_value});
+}
+
+ResolvedScene resolve_scene(const Scene& s, const VolumeBox& v) {
   ResolvedScene r;
   r.scene = s;
   for (int a = 0; a < 3; ++a)
-    if (v.dims()[a] < 2)
-      throw SceneError("volume: every dimension must be >= 2 to render (got " + std::to_string(v.dims()[0]) + "x" +
-                       std::to_string(v.dims()[1]) + "x" + std::to_string(v.dims()[2]) +
+    if (v.dims[a] < 2)
+      throw SceneError("volume: every dimension must be >= 2 to render (got " + std::to_string(v.dims[0]) + "x" +
+                       std::to_string(v.dims[1]) + "x" + std::to_string(v.dims[2]) +
                        ": a single voxel, line or slice has no box to ray cast)");
   r.box_min = v.origin;
-  r.box_max = v.origin + v.extent();
+  r.box_max = v.origin + glm::dvec3(v.dims[0] - 1, v.dims[1] - 1, v.dims[2] - 1) * v.spacing;
   r.camera = s.camera ? *s.camera : default_camera(r.box_min, r.box_max);
   r.tf = s.tf ? *s.tf : TransferFunction::grey_ramp(v.min_value, v.max_value);
   const double min_spacing = std::min({v.spacing.x, v.spacing.y, v.spacing.z});

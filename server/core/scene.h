@@ -3,6 +3,7 @@
 // zero or oversized images and degenerate cameras, naming the key.
 #pragma once
 
+#include <array>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -79,6 +80,14 @@ struct ResolvedScene {
   std::shared_ptr<const RayTextureSpec> ray_texture;
 };
 ResolvedScene resolve_scene(const Scene& s, const Volume& v);
+// What resolving needs of a volume: its box and value range. Distributed rendering resolves
+// against the whole volume's, which no rank holds.
+struct VolumeBox {
+  std::array<int64_t, 3> dims{0, 0, 0};
+  glm::dvec3 spacing{1.0}, origin{0.0};
+  double min_value = 0.0, max_value = 0.0;
+};
+ResolvedScene resolve_scene(const Scene& s, const VolumeBox& v);
 
 const char* to_string(Classification c);
 const char* to_string(PeakMode m);

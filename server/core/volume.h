@@ -87,6 +87,10 @@ class Volume {
   double min_value = 0.0, max_value = 0.0;
   std::vector<uint64_t> histogram;  // kHistogramBins bins over [min_value, max_value]
   int64_t nonfinite_replaced = 0;
+  // A region read (LoadOptions::region): the file's whole dims and where the region starts in
+  // them; for a whole read source_dims is {0, 0, 0}.
+  Dims source_dims{0, 0, 0};
+  Dims region_lo{0, 0, 0};
   double load_ms = 0.0;        // the whole load_volume call
   double statistics_ms = 0.0;  // of it: range and histogram (finalize_statistics)
   std::string name;

@@ -117,6 +117,8 @@ Volume read_payload_region(const fs::path& header_file, const VolumeHeader& h, c
   if (payload.encoding == Encoding::Raw) read_raw_rows(payload, total, rows, v.data());
   else read_compressed_rows(payload, rows, v.data());
   finish_volume(header_file, v, h.big_endian, local);
+  v.source_dims = h.dims;
+  v.region_lo = region.lo;
   return v;
 }
 

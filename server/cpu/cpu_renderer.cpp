@@ -83,6 +83,7 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
   f.half_h = float(view.half_h);
   f.dist = float(view.dist);
   f.box_half = glm::vec3((s.box_max - s.box_min) * 0.5);
+  f.sample_half = f.box_half;
   f.step = float(plan.step);
   f.spacing = glm::vec3(v.spacing);
   f.inv_spacing = 1.f / f.spacing;
@@ -259,6 +260,68 @@ RenderResult CpuRenderer::render(const render::ResidentVolume& v, const Resolved
     }
   }
   return res;
+}
+
+Image CpuRenderer::render_brick(const render::ResidentVolume& v, const ResolvedScene& s, const Brick& brick,
+                                RenderStats* stats) {
+  const RenderSettings& r = s.scene.render;
+  const bool segments = r.classification != Classification::Post;
+  if (r.virtual_samples > 0) throw std::invalid_argument("distributed rendering: virtual samples are not supported yet");
+  if (r.adaptive) throw std::invalid_argument("distributed rendering: adaptive sampling is not supported yet");
+  if (s.ray_texture) throw std::invalid_argument("distributed rendering: ray textures are not supported yet");
+  if (r.sampling == Sampling::Differential && segments)
+    throw std::invalid_argument(std::string("distributed rendering: differential sampling with ") +
+                                to_string(r.classification) + " is not supported yet (its segments' length has no bound for the ghosts)");
+  const CpuVolume& cv = cpu_volume(v);
+  const glm::dvec3 spacing = cv.volume().spacing;
+  for (int a = 0; a < 3; ++a) {
+    const double whole = (s.box_max[a] - s.box_min[a]) / spacing[a];
+    if (!(brick.own_lo[a] >= 0 && brick.own_lo[a] < brick.own_hi[a] && brick.own_hi[a] <= whole + 1e-9))
+      throw std::invalid_argument("render_brick: the brick's box is not inside the scene's volume box");
+  }
+  const int w = s.scene.width, h = s.scene.height;
+  if (stats) *stats = RenderStats{};
+  CpuFrame f = prepare(cv, s, render::GpuPath::Fragment, stats);
+  f.brick = true;
+  f.sample_half = f.box_half - glm::vec3(brick.read_lo * spacing);
+  f.own_lo = glm::vec3(brick.own_lo);
+  f.own_hi = glm::vec3(brick.own_hi);
+  for (int a = 0; a < 3; ++a) {
+    f.at_start[a] = brick.at_start[a];
+    f.at_end[a] = brick.at_end[a];
+  }
+  f.stop = 1.f;  // until opaque
+  Image img(w, h);
+  const auto t0 = Clock::now();
+  for_each_row(PixelRect{0, 0, w, h}, [&](int x0, int x1, int y) {
+    float px[kTile], py[kTile];
+    RayResult rays[kTile];
+    for (int x = x0; x < x1; ++x) {
+      px[x - x0] = float(x) + 0.5f;
+      py[x - x0] = float(y) + 0.5f;
+    }
+    cast_rays(f, px, py, x1 - x0, rays);
+    for (int x = x0; x < x1; ++x) {
+      const RayResult& ray = rays[x - x0];
+      const size_t p = size_t(y) * size_t(w) + size_t(x);
+      for (int k = 0; k < 4; ++k) img.rgba[p * 4 + k] = ray.acc[k];
+      img.samples[p] = ray.samples;
+    }
+  });
+  if (stats) {
+    stats->render_ms = ms_since(t0);
+    stats->variant = f.key.name() + "+brick";
+    stats->has_samples = true;
+    stats->sample_cap = f.sample_cap;
+    for (float n : img.samples) {
+      if (n < 0) continue;  // owns no point of this ray
+      stats->samples_total += n;
+      stats->samples_max = std::max<double>(stats->samples_max, n);
+      stats->rays_hit++;
+    }
+    stats->samples_mean = stats->rays_hit ? stats->samples_total / double(stats->rays_hit) : 0.0;
+  }
+  return img;
 }
 
 Image CpuRenderer::render_bare(const render::ResidentVolume& v, const ResolvedScene& s, render::GpuPath path,

@@ -9,6 +9,8 @@
 #define PEAKCAST_CPU_RAY_CASTER_INL_H_
 #endif
 
+#include <limits>
+
 #include <hwy/highway.h>
 
 #include "cpu/ray_geometry-inl.h"
@@ -40,7 +42,17 @@ class RayCaster {
   }
 
  private:
-  vec3 voxel_coords(vec3 p) const { return (p + f_.box_half) * f_.inv_spacing; }
+  vec3 voxel_coords(vec3 p) const { return (p + f_.sample_half) * f_.inv_spacing; }
+  // Distributed rendering: lattice point i lies in this brick's own box (whole-volume voxel
+  // coordinates, computed alike on every rank, so exactly one rank owns each point).
+  bool owns(int i) const {
+    const vec3 x = (r_.o + lattice_t(L_, float(i)) * r_.d + f_.box_half) * f_.inv_spacing;
+    for (int a = 0; a < 3; ++a)
+      if (!((f_.at_start[a] || x[a] >= f_.own_lo[a]) && (f_.at_end[a] || x[a] < f_.own_hi[a]))) return false;
+    return true;
+  }
+  // Restricts the ray to the points it owns (setup, brick frames); false when it owns none.
+  bool clip_to_brick();
   float sample_field(vec3 x) const { return SamplePoint(f_.voxels, x); }
   vec3 field_gradient(vec3 x) const {
     vec3 g;
@@ -96,6 +108,9 @@ class RayCaster {
   Lattice L_;
   RayResult res_;
   int last_ = 0;
+  // The lattice points the ray composites (bricks: those it owns; else all of them).
+  int own_first_ = 0, own_last_ = std::numeric_limits<int>::max();
+  bool own_point_ = true;  // the point being consumed is owned (its own DVR term counts)
   float stop_ = 1, dvr_weight_ = 1, peak_weight_ = 1;
   // The previous sample, for segment methods (see raycast_body.glsl).
   float prev_t_ = 0, prev_f_ = 0;

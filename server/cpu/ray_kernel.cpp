@@ -50,7 +50,7 @@ float RayCaster::field_at(int i, int m) {
   SampleRun run;
   run.o = r_.o;
   run.d = r_.d;
-  run.half = f_.box_half;
+  run.half = f_.sample_half;
   run.inv_spacing = f_.inv_spacing;
   run.t0 = L_.t0;
   run.A = L_.A;
@@ -127,7 +127,7 @@ bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
         res_.acc += (1.f - res_.acc.a) * dvr_weight_ * c;  // opacity-weighted already
       }
     }
-  } else if (!(key.peaks && key.peak_mode == PeakMode::PeaksOnly)) {
+  } else if (own_point_ && !(key.peaks && key.peak_mode == PeakMode::PeaksOnly)) {  // (a brick's closing point: its segment only)
     if (!(key.peaks && key.peak_mode == PeakMode::Xor && peak_hit)) {
       vec4 c;
       if (tf_lookup(fv, c) && c.a > 0.f) {
@@ -151,6 +151,7 @@ bool RayCaster::visit(int i, int m) {
   const float t = lattice_t(L_, float(i));
   const float fv = field_at(i, m);
   res_.samples += 1.f;
+  own_point_ = i <= own_last_;
   const bool gap = i != expect_;  // lattice points between the last visit and this one were skipped
   expect_ = i + m;
   if (gap) gap_ = true;  // until the next sample is consumed: no segment across the gap
@@ -194,7 +195,7 @@ bool RayCaster::walk_leaps(float span_y, int first) {
     for (int a = 0; a < 3; ++a) c[a] = cell_of(x[a] * (1.f / edge), grid[a] - 1);
     const uint8_t empty_distance = cell_byte(f_.cell_distance, f_, c);
     if (empty_distance == 0) {
-      if (segments_ && i >= 1 && visited != i - 1 && visit(i - 1, 1)) return true;  // the segment into the run
+      if (segments_ && i - 1 >= own_first_ && visited != i - 1 && visit(i - 1, 1)) return true;  // the segment into the run
       if (visit(i, 1)) return true;
       visited = i;
       ++i;
@@ -318,14 +319,46 @@ bool RayCaster::setup(float px, float py) {
     L_.B *= float(c[0]);
   }
   last_ = int(std::min(std::floor(lattice_index(L_, span_y_)), float(f_.sample_cap - 1)));
+  if (f_.brick && !clip_to_brick()) {  // none of its points in this brick: nothing to draw here
+    res_.samples = -1.f;
+    return false;
+  }
+  return true;
+}
+
+bool RayCaster::clip_to_brick() {
+  // The ray's parameter interval in the own box, widened by a point on each side, then the
+  // exact test at both ends: the owned points are consecutive (the box is convex and the
+  // points' coordinates are monotone along the ray).
+  const vec3 lo = f_.own_lo * f_.spacing - f_.box_half, hi = f_.own_hi * f_.spacing - f_.box_half;
+  float t_in = -kHuge, t_out = kHuge;
+  for (int a = 0; a < 3; ++a) {
+    const float d = std::abs(r_.d[a]) < 1e-20f ? 1e-20f : r_.d[a];
+    const float t0 = (lo[a] - r_.o[a]) / d, t1 = (hi[a] - r_.o[a]) / d;
+    t_in = std::max(t_in, std::min(t0, t1));
+    t_out = std::min(t_out, std::max(t0, t1));
+  }
+  if (!(t_in <= t_out) || last_ < 0) return false;
+  const float i_in = std::floor(lattice_index(L_, std::max(t_in, span_x_))) - 1.f;
+  const float i_out = std::ceil(lattice_index(L_, std::min(t_out, span_y_))) + 1.f;
+  if (!(i_in <= i_out)) return false;
+  int first = i_in <= 0.f ? 0 : index_floor_cap(i_in, last_ + 1);
+  int last = i_out >= float(last_) ? last_ : std::max(int(i_out), -1);
+  while (first <= last && !owns(first)) ++first;
+  while (last >= first && !owns(last)) --last;
+  if (first > last) return false;
+  own_first_ = first;
+  own_last_ = last;
+  last_ = segments_ ? std::min(last + 1, last_) : last;  // the point closing the last segment
   return true;
 }
 
 RayResult RayCaster::walk(int first) {
   const render::VariantKey& key = f_.key;
   bool stopped = false;
+  first = std::max(first, own_first_);
   if (!key.space_skipping && !key.adaptive) {
-    for (int i = 0; i <= last_ && !stopped; ++i) stopped = visit(i, 1);
+    for (int i = own_first_; i <= last_ && !stopped; ++i) stopped = visit(i, 1);
   } else if (!key.adaptive && !key.cell_dda) {
     stopped = walk_leaps(span_y_, first);
   } else {

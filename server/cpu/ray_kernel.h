@@ -25,6 +25,18 @@ struct CpuFrame {
   glm::vec3 p0{0}, right{0}, up{0}, forward{0};
   float half_w = 0, half_h = 0, dist = 0;
   glm::vec3 box_half{0};
+  // Voxel coordinates of the resident voxels: (p + sample_half) * inv_spacing. box_half for a
+  // whole volume; a brick's (distributed rendering) is moved by its first voxel.
+  glm::vec3 sample_half{0};
+  // Distributed rendering: the resident voxels are one brick of the whole volume, whose box,
+  // camera and lattice the frame keeps. A ray takes only the lattice points inside the brick's
+  // own box [own_lo, own_hi) in the whole volume's voxel coordinates
+  // plus, for segment methods, the point after them that closes the last
+  // segment (a segment belongs to the rank owning its first point). No bound where the box
+  // meets the volume's own faces (at_start, at_end).
+  bool brick = false;
+  glm::vec3 own_lo{0}, own_hi{0};
+  bool at_start[3] = {false, false, false}, at_end[3] = {false, false, false};
   float step = 1;  // the uniform step
   glm::vec3 spacing{1}, inv_spacing{1};
   float stop = 1;  // early-termination opacity

@@ -1,0 +1,53 @@
+#include "dist/brick_frame.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace peakcast::dist {
+
+int brick_ghost(const ResolvedScene& s) {
+  const RenderSettings& r = s.scene.render;
+  int ghost = ghost_voxels(r.filter == Filter::Tricubic, r.shading);
+  if (r.classification != Classification::Post) ghost += int(std::ceil(s.step / s.min_spacing - 1e-9));
+  return ghost;
+}
+
+cpu::CpuRenderer::Brick cpu_brick(const Brick& b, const Index3& dims) {
+  cpu::CpuRenderer::Brick c;
+  for (int a = 0; a < 3; ++a) {
+    c.read_lo[a] = double(b.read_lo[a]);
+    c.own_lo[a] = double(b.lo[a]);
+    c.own_hi[a] = double(b.hi[a]);
+    c.at_start[a] = b.lo[a] == 0;
+    c.at_end[a] = b.hi[a] == dims[a] - 1;
+  }
+  return c;
+}
+
+std::vector<float> composite_over(const std::vector<std::vector<float>>& layers, const std::vector<int>& order) {
+  if (layers.empty() || order.size() != layers.size()) throw std::invalid_argument("composite_over: one order entry per layer");
+  std::vector<float> out(layers[0].size(), 0.f);
+  for (int k : order) {
+    const std::vector<float>& l = layers.at(size_t(k));
+    if (l.size() != out.size()) throw std::invalid_argument("composite_over: layers of different sizes");
+    for (size_t p = 0; p < out.size(); p += 4) {
+      const float t = 1.f - out[p + 3];
+      for (int c = 0; c < 4; ++c) out[p + c] += t * l[p + c];
+    }
+  }
+  return out;
+}
+
+Image finish_composite(const std::vector<float>& rgba, int width, int height, const glm::dvec3& background) {
+  if (rgba.size() != size_t(width) * size_t(height) * 4) throw std::invalid_argument("finish_composite: size mismatch");
+  Image img(width, height);
+  const glm::vec3 bg(background);
+  for (size_t p = 0; p < size_t(width) * size_t(height); ++p) {
+    const float a = rgba[p * 4 + 3];
+    for (int c = 0; c < 3; ++c) img.rgba[p * 4 + c] = rgba[p * 4 + c] + (1.f - a) * bg[c];
+    img.rgba[p * 4 + 3] = a;
+  }
+  return img;
+}
+
+}  // namespace peakcast::dist

@@ -1,0 +1,32 @@
+// Distributed rendering's glue between the k-d split and the CPU backend's brick frames: how
+// many ghost voxels a scene needs, the brick as the renderer takes it, and the display rank's
+// last step (the background under the composited layers). No MPI here: the tests composite
+// bricks in one process with the same functions.
+#pragma once
+
+#include <vector>
+
+#include "core/image.h"
+#include "core/scene.h"
+#include "cpu/cpu_renderer.h"
+#include "dist/kd_split.h"
+
+namespace peakcast::dist {
+
+// Ghost voxels for a scene: the filter's support and shading's gradient (ghost_voxels), plus,
+// for segment methods (preintegration, peak finding), one step: a rank closes its last segment
+// with the point one step past its box.
+int brick_ghost(const ResolvedScene& scene);
+
+// The brick as CpuRenderer::render_brick takes it; dims: the whole volume's.
+cpu::CpuRenderer::Brick cpu_brick(const Brick& brick, const Index3& dims);
+
+// The front-to-back "over" of premultiplied RGBA layers (each width*height*4), in `order`:
+// what IceT computes, for one process.
+std::vector<float> composite_over(const std::vector<std::vector<float>>& layers, const std::vector<int>& order);
+
+// The composited premultiplied layer over the scene's background: the image one process
+// renders (rgb + (1 - a) background, a).
+Image finish_composite(const std::vector<float>& rgba, int width, int height, const glm::dvec3& background);
+
+}  // namespace peakcast::dist

@@ -1,0 +1,154 @@
+// Distributed rendering without MPI: a volume split into k-d bricks (dist/kd_split), each brick
+// read as a region of the file and rendered by CpuRenderer::render_brick on the whole volume's
+// lattice, the layers composited "over" in visibility order, must give the image one process
+// renders of the whole volume (rays run until opaque in both), within 1/255 (issue 16). The MPI
+// tests (label mpi) run the same through mpirun and IceT.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "core/generators.h"
+#include "core/volume_io.h"
+#include "cpu/cpu_renderer.h"
+#include "dist/brick_frame.h"
+#include "dist/kd_split.h"
+
+using namespace peakcast;
+
+namespace {
+
+const std::string kData = std::string(PEAKCAST_SOURCE_DIR) + "/tests/data/";
+
+struct Case {
+  std::string file;  // in tests/data, or generated into the build tree
+  std::string render;  // render settings JSON
+  std::string tf;      // tf points JSON in the volume's units, or "" (grey ramp)
+  std::string camera;  // camera JSON, or "" (the default)
+};
+
+std::string generated(GeneratorKind kind, const Dims& dims, SourceType type, glm::dvec3 spacing) {
+  const std::string path = std::string(PEAKCAST_SOURCE_DIR) + "/build/test-tmp-brick-" + to_string(kind) + "_" +
+                           std::to_string(dims[0]) + ".nrrd";
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path());
+  GeneratorSpec g;
+  g.kind = kind;
+  g.dims = dims;
+  g.type = type;
+  g.spacing = spacing;
+  generate_to_file(g, path);
+  return path;
+}
+
+// Largest absolute difference of the RGB channels and the opacity.
+double max_abs(const Image& a, const Image& b) {
+  double m = 0.0;
+  for (size_t k = 0; k < a.rgba.size(); ++k) m = std::max(m, double(std::abs(a.rgba[k] - b.rgba[k])));
+  return m;
+}
+
+double split_error(const Case& c, int ranks, const std::string& file) {
+  const Volume whole = load_volume(file);
+  const std::string text = std::string(R"({"volume": "v", "image": {"width": 96, "height": 80}, "render": )") +
+                           c.render + (c.tf.empty() ? "" : R"(, "tf": {"points": )" + c.tf + "}") +
+                           (c.camera.empty() ? "" : R"(, "camera": )" + c.camera) + R"(, "background": [0.1, 0.2, 0.3]})";
+  Scene scene = parse_scene_text(text);
+  scene.render.early_termination = 1.0;  // the ranks run until opaque: so does the one-process image
+  const ResolvedScene rs = resolve_scene(scene, whole);
+
+  cpu::CpuRenderer renderer(2);
+  auto whole_resident = renderer.make_resident(std::make_shared<Volume>(load_volume(file)));
+  const Image one = renderer.render(*whole_resident, rs);
+
+  const dist::Index3 dims{whole.dims()[0], whole.dims()[1], whole.dims()[2]};
+  const dist::KdSplit split = dist::kd_split(dims, ranks, dist::brick_ghost(rs));
+  std::vector<std::vector<float>> layers;
+  int64_t voxels = 0;
+  for (const dist::Brick& b : split.bricks) {
+    LoadOptions o;
+    o.region = VoxelRegion{b.read_lo, b.read_hi};
+    auto brick = std::make_shared<Volume>(load_volume(file, o));
+    EXPECT_EQ(brick->voxel_count(), b.voxels_read());
+    voxels += brick->voxel_count();
+    brick->min_value = whole.min_value;  // the global range (MPI: an Allreduce)
+    brick->max_value = whole.max_value;
+    auto resident = renderer.make_resident(brick);
+    layers.push_back(renderer.render_brick(*resident, rs, dist::cpu_brick(b, dims)).rgba);
+  }
+  EXPECT_GE(voxels, whole.voxel_count());
+  const glm::dvec3 eye = (rs.camera.eye - whole.origin) / whole.spacing;
+  const glm::dvec3 dir = glm::normalize((rs.camera.center - rs.camera.eye) / whole.spacing);
+  const auto order = dist::visibility_order(split, eye, dir, rs.camera.orthographic);
+  const Image composed = dist::finish_composite(dist::composite_over(layers, order), 96, 80, rs.scene.background);
+  return max_abs(one, composed);
+}
+
+// Measured over every case below: at most 2.4e-6 without peaks (float rounding: a brick's
+// positions are computed from its own first voxel, and the layers composite in another order),
+// 3.4e-4 with heptane's Dirac peak (the root solver starts from those positions). Without the
+// point that closes a brick's last segment the error is 0.8. The issue's bound, 1/255, is what
+// the test holds.
+constexpr double kBound = 1.0 / 255.0;
+
+void check_all_splits(const Case& c, const std::string& file) {
+  for (int ranks : {1, 2, 3, 4}) {  // 1: the brick path on the whole volume
+    const double e = split_error(c, ranks, file);
+    EXPECT_LE(e, kBound) << c.render << " " << ranks << " ranks";
+    std::printf("  %s, %d bricks: max abs %.3g\n", c.render.c_str(), ranks, e);
+  }
+}
+
+TEST(Bricks, MarschnerLobbEqualsOneProcess) {
+  const std::string file = generated(GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32, {1, 1, 1});
+  const std::string tf = R"([[0, 0.2, 0.4, 1, 0], [0.45, 0.2, 0.4, 1, 0], [0.5, 1, 0.8, 0.3, 0.8], [0.55, 0.2, 0.4, 1, 0], [1, 0.2, 0.4, 1, 0.05]])";
+  const std::string cam = R"({"eye": [90, 70, 110], "center": [20, 20, 20], "up": [0, 1, 0], "fov_y": 30})";
+  for (const char* r : {R"({"step": 0.7})", R"({"step": 1.5, "classification": "preint"})",
+                        R"({"step": 1, "classification": "peaks"})", R"({"step": 0.5, "filter": "tricubic", "shading": true})",
+                        R"({"step": 2, "classification": "peaks", "peak_mode": "peaks_only", "space_skipping": false})"})
+    check_all_splits({"", r, tf, cam}, file);
+}
+
+TEST(Bricks, AnisotropicBlobsEqualOneProcess) {
+  const std::string file = generated(GeneratorKind::Blobs, {48, 40, 36}, SourceType::U8, {0.8, 1.0, 1.7});
+  const std::string cam = R"({"eye": [-40, 90, -30], "center": [19, 19, 30], "up": [0, 0, 1], "fov_y": 35})";
+  const std::string tf = R"([[0, 0, 0, 0, 0], [60, 0.9, 0.5, 0.2, 0], [120, 0.9, 0.5, 0.2, 0.4], [255, 1, 1, 1, 0.9]])";
+  for (const char* r : {R"({"step": 1})", R"({"step": 1.7, "classification": "preint"})", R"({"step": 1.7, "classification": "preint", "space_skipping": false})", R"({"step": 1, "classification": "preint"})",
+                        R"({"sampling": "differential", "s_k": 2})"})
+    check_all_splits({"", r, tf, cam}, file);
+  check_all_splits({"", R"({"step": 1})", tf, R"({"eye": [19, 19, 200], "center": [19, 19, 30], "up": [0, 1, 0], "projection": "orthographic", "height": 60})"}, file);
+}
+
+TEST(Bricks, RealSamplesEqualOneProcess) {
+  // heptane (a combustion simulation) with a Dirac-like peak for peak finding, and a CT of a
+  // nucleon: real data, default cameras.
+  check_all_splits({"", R"({"step": 1, "classification": "peaks"})",
+                    R"([[0, 0, 0, 0, 0], [100, 0, 0, 0, 0], [100.5, 1, 0.6, 0.2, 1], [101, 0, 0, 0, 0], [255, 0, 0, 0, 0]])", ""},
+                   kData + "heptane_151.nrrd");
+  check_all_splits({"", R"({"step": 1, "classification": "preint"})", "", ""}, kData + "nucleon.nhdr");
+}
+
+TEST(Bricks, RefuseWhatBricksCannotDrawYet) {
+  const std::string file = kData + "nucleon.nhdr";
+  auto v = std::make_shared<Volume>(load_volume(file));
+  cpu::CpuRenderer renderer(1);
+  auto resident = renderer.make_resident(v);
+  const dist::Index3 dims{v->dims()[0], v->dims()[1], v->dims()[2]};
+  const auto split = dist::kd_split(dims, 2, 3);
+  for (const char* r : {R"({"virtual_samples": 3})", R"({"adaptive": true})",
+                        R"({"sampling": "differential", "classification": "preint"})"}) {
+    const ResolvedScene rs = resolve_scene(parse_scene_text(std::string(R"({"volume": "v", "render": )") + r + "}"), *v);
+    try {
+      renderer.render_brick(*resident, rs, dist::cpu_brick(split.bricks[0], dims));
+      ADD_FAILURE() << r << " was drawn";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("distributed rendering"), std::string::npos) << e.what();
+    }
+  }
+  cpu::CpuRenderer::Brick outside = dist::cpu_brick(split.bricks[0], dims);
+  outside.own_hi[0] = double(dims[0]) + 5;
+  EXPECT_THROW(renderer.render_brick(*resident, resolve_scene(parse_scene_text(R"({"volume": "v"})"), *v), outside),
+               std::invalid_argument);
+}
+
+}  // namespace
