@@ -9,6 +9,8 @@
 #include <cmath>
 #include <string>
 
+#include <unistd.h>
+
 #include "core/generators.h"
 #include "core/volume_io.h"
 #include "cpu/cpu_renderer.h"
@@ -29,9 +31,9 @@ struct Case {
 };
 
 std::string generated(GeneratorKind kind, const Dims& dims, SourceType type, glm::dvec3 spacing) {
-  const std::string path = std::string(PEAKCAST_SOURCE_DIR) + "/build/test-tmp-brick-" + to_string(kind) + "_" +
-                           std::to_string(dims[0]) + ".nrrd";
-  std::filesystem::create_directories(std::filesystem::path(path).parent_path());
+  // gtest's temp directory, a name per process: ctest runs tests of this binary side by side.
+  const std::string path = ::testing::TempDir() + "peakcast-brick-" + std::to_string(::getpid()) + "-" +
+                           to_string(kind) + ".nrrd";
   GeneratorSpec g;
   g.kind = kind;
   g.dims = dims;
@@ -107,6 +109,7 @@ TEST(Bricks, MarschnerLobbEqualsOneProcess) {
                         R"({"step": 1, "classification": "peaks"})", R"({"step": 0.5, "filter": "tricubic", "shading": true})",
                         R"({"step": 2, "classification": "peaks", "peak_mode": "peaks_only", "space_skipping": false})"})
     check_all_splits({"", r, tf, cam}, file);
+  std::filesystem::remove(file);
 }
 
 TEST(Bricks, AnisotropicBlobsEqualOneProcess) {
@@ -117,6 +120,7 @@ TEST(Bricks, AnisotropicBlobsEqualOneProcess) {
                         R"({"sampling": "differential", "s_k": 2})"})
     check_all_splits({"", r, tf, cam}, file);
   check_all_splits({"", R"({"step": 1})", tf, R"({"eye": [19, 19, 200], "center": [19, 19, 30], "up": [0, 1, 0], "projection": "orthographic", "height": 60})"}, file);
+  std::filesystem::remove(file);
 }
 
 TEST(Bricks, RealSamplesEqualOneProcess) {
