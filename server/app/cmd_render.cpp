@@ -1,10 +1,12 @@
 // `render`, `reference` and `compare`.
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
 
+#include "app/cmd_render_mpi.h"
 #include "app/commands.h"
 #include "app/scene_file.h"
 #include "encode/png.h"
@@ -32,6 +34,12 @@ struct CompareArgs {
 
 }  // namespace
 
+int mpi_world_size_hint() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"})
+    if (const char* s = std::getenv(v)) return std::atoi(s);
+  return 1;
+}
+
 void add_render_commands(CLI::App& app, Runner& run) {
   auto ra = std::make_shared<RenderArgs>();
   auto* render = app.add_subcommand("render", "Render a scene file to a PNG (GL through EGL, or the CPU backend)");
@@ -43,6 +51,14 @@ void add_render_commands(CLI::App& app, Runner& run) {
       ->check(CLI::IsMember({"auto", "gl", "cpu"}));
   render->callback([ra, &run] {
     run = [ra] {
+      if (mpi_world_size_hint() > 1) {  // under mpirun -np N (N > 1): one brick per rank
+#ifdef PEAKCAST_HAVE_MPI
+        return mpi_render(MpiRenderArgs{ra->scene, ra->out, ra->stats, ra->backend});
+#else
+        throw std::invalid_argument("launched by mpirun with several ranks, but this peakcast was built without MPI "
+                                    "(install libopenmpi-dev and paraview-dev, rebuild with PEAKCAST_WITH_MPI=ON)");
+#endif
+      }
       LoadedScene ls = load_scene_file(ra->scene);
       render::RenderBackend b = render::open_backend(render::requested_backend(ra->backend));
       auto gv = b.renderer->make_resident(ls.volume);

@@ -11,7 +11,7 @@ namespace fs = std::filesystem;
 
 namespace peakcast::app {
 
-LoadedScene load_scene_file(const fs::path& path) {
+ParsedSceneFile parse_scene_file(const fs::path& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error(path.string() + ": cannot open scene file");
   std::stringstream text;
@@ -34,10 +34,15 @@ LoadedScene load_scene_file(const fs::path& path) {
   }
   fs::path vol = scene.volume;
   if (vol.is_relative()) vol = path.parent_path() / vol;
+  return {std::move(scene), vol};
+}
+
+LoadedScene load_scene_file(const fs::path& path) {
+  ParsedSceneFile parsed = parse_scene_file(path);
   LoadedScene out;
-  out.volume = std::make_shared<Volume>(load_volume(vol));
+  out.volume = std::make_shared<Volume>(load_volume(parsed.volume));
   try {
-    out.scene = resolve_scene(scene, *out.volume);
+    out.scene = resolve_scene(parsed.scene, *out.volume);
   } catch (const SceneError& e) {
     throw SceneError(path.string() + ": " + e.what());
   }

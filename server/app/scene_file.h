@@ -17,4 +17,12 @@ struct LoadedScene {
 // Errors name the scene file: "scene.json: render.step: must be > 0".
 LoadedScene load_scene_file(const std::filesystem::path& path);
 
+// The scene file parsed (its ray-texture PNG read), and its volume's path resolved against the
+// file's folder, without loading the volume: distributed ranks read only their bricks.
+struct ParsedSceneFile {
+  Scene scene;
+  std::filesystem::path volume;
+};
+ParsedSceneFile parse_scene_file(const std::filesystem::path& path);
+
 }  // namespace peakcast::app

@@ -1,0 +1,178 @@
+// `mpirun -np N peakcast render SCENE -o out.png [--stats s.json]` (issue 16, docs/distributed.md):
+// the volume cut into N k-d bricks with ghosts, each rank reading only its brick (a region of
+// the file), rendering it on the whole volume's lattice (CpuRenderer::render_brick), IceT
+// compositing the ranks' layers in visibility order, rank 0 writing the image and the stats.
+// Any rank's error ends the whole job (MPI_Abort) with the rank and the reason, never a hang.
+#include <mpi.h>
+
+#include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "app/cmd_render_mpi.h"
+#include "app/scene_file.h"
+#include "core/parallel.h"
+#include "core/volume_io.h"
+#include "cpu/cpu_renderer.h"
+#include "dist/brick_frame.h"
+#include "dist/icet_compositor.h"
+#include "dist/kd_split.h"
+#include "encode/png.h"
+#include "render/backend.h"
+
+namespace peakcast::app {
+namespace {
+
+double ms_between(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+// Peak resident memory of this process (VmHWM), MiB; 0 where /proc is not there.
+double peak_rss_mib() {
+  std::ifstream in("/proc/self/status");
+  std::string key;
+  while (in >> key) {
+    if (key == "VmHWM:") {
+      double kib = 0;
+      in >> kib;
+      return kib / 1024.0;
+    }
+    std::getline(in, key);
+  }
+  return 0.0;
+}
+
+struct RankFigures {  // gathered on rank 0, one row per rank
+  double lo[3], hi[3], read_lo[3], read_hi[3];
+  double voxels_read, load_ms, render_ms, composite_ms, rss_mib, samples_mean;
+};
+
+int run(const MpiRenderArgs& a, int rank, int size) {
+  const auto t_start = std::chrono::steady_clock::now();
+  if (render::requested_backend(a.backend) == render::Backend::Gl)
+    throw std::invalid_argument("mpirun peakcast render: the GL ray caster does not draw bricks yet; use --backend cpu (or auto)");
+  ParsedSceneFile parsed = parse_scene_file(a.scene);
+  // The file's header: every rank reads one voxel of it, which tells the whole volume's box.
+  LoadOptions one;
+  one.region = VoxelRegion{{0, 0, 0}, {1, 1, 1}};
+  const Volume head = load_volume(parsed.volume, one);
+  VolumeBox box{head.source_dims, head.spacing, head.origin, 0.0, 1.0};
+  const dist::Index3 dims{box.dims[0], box.dims[1], box.dims[2]};
+  // Ghosts depend on the step, filter and shading, not on the value range.
+  const int ghost = dist::brick_ghost(resolve_scene(parsed.scene, box));
+  const dist::KdSplit split = dist::kd_split(dims, size, ghost);
+  const dist::Brick& mine = split.bricks[size_t(rank)];
+
+  const auto t_load = std::chrono::steady_clock::now();
+  LoadOptions region;
+  region.region = VoxelRegion{mine.read_lo, mine.read_hi};
+  auto brick = std::make_shared<Volume>(load_volume(parsed.volume, region));
+  const double load_ms = ms_between(t_load, std::chrono::steady_clock::now());
+  // The TF's domain is the whole volume's value range.
+  double lo = brick->min_value, hi = brick->max_value;
+  MPI_Allreduce(MPI_IN_PLACE, &lo, 1, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+  MPI_Allreduce(MPI_IN_PLACE, &hi, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+  brick->min_value = lo;
+  brick->max_value = hi;
+  box.min_value = lo;
+  box.max_value = hi;
+  ResolvedScene scene = resolve_scene(parsed.scene, box);
+
+  // Fault injection for the tests (label mpi): this rank dies as a crashed process would.
+  if (const char* kill = std::getenv("PEAKCAST_TEST_KILL_RANK"); kill && std::atoi(kill) == rank) std::raise(SIGKILL);
+
+  // The node's cores shared among its ranks (one GPU or core set per rank, docs/distributed.md).
+  int local_ranks = 1;
+  if (const char* l = std::getenv("OMPI_COMM_WORLD_LOCAL_SIZE")) local_ranks = std::max(1, std::atoi(l));
+  cpu::CpuRenderer renderer(std::max(1, hardware_threads() / local_ranks));
+  auto resident = renderer.make_resident(brick);
+  render::RenderStats st;
+  const Image layer = renderer.render_brick(*resident, scene, dist::cpu_brick(mine, dims), &st);
+
+  const glm::dvec3 eye = (scene.camera.eye - box.origin) / box.spacing;
+  const glm::dvec3 dir = glm::normalize((scene.camera.center - scene.camera.eye) / box.spacing);
+  const std::vector<int> order = dist::visibility_order(split, eye, dir, scene.camera.orthographic);
+  dist::IceTCompositor compositor(MPI_COMM_WORLD, 0);
+  dist::CompositeTiming timing;
+  const std::vector<float> composed = compositor.composite(layer.rgba, layer.width, layer.height, order, &timing);
+
+  RankFigures mine_fig{};
+  for (int k = 0; k < 3; ++k) {
+    mine_fig.lo[k] = double(mine.lo[k]);
+    mine_fig.hi[k] = double(mine.hi[k]);
+    mine_fig.read_lo[k] = double(mine.read_lo[k]);
+    mine_fig.read_hi[k] = double(mine.read_hi[k]);
+  }
+  mine_fig.voxels_read = double(brick->voxel_count());
+  mine_fig.load_ms = load_ms;
+  mine_fig.render_ms = st.render_ms;
+  mine_fig.composite_ms = timing.ms;
+  mine_fig.rss_mib = peak_rss_mib();
+  mine_fig.samples_mean = st.samples_mean;
+  constexpr int kFields = int(sizeof(RankFigures) / sizeof(double));
+  std::vector<RankFigures> all(rank == 0 ? size_t(size) : 0);
+  MPI_Gather(&mine_fig, kFields, MPI_DOUBLE, all.data(), kFields, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  if (rank != 0) return 0;
+
+  const Image img = dist::finish_composite(composed, layer.width, layer.height, scene.scene.background);
+  encode::write_png(img, a.out);
+  const double wall_ms = ms_between(t_start, std::chrono::steady_clock::now());
+  double render_max = 0, composite_max = 0;
+  nlohmann::json ranks = nlohmann::json::array();
+  for (int r = 0; r < size; ++r) {
+    const RankFigures& f = all[size_t(r)];
+    render_max = std::max(render_max, f.render_ms);
+    composite_max = std::max(composite_max, f.composite_ms);
+    auto ivec = [](const double* v) { return nlohmann::json::array({int64_t(v[0]), int64_t(v[1]), int64_t(v[2])}); };
+    ranks.push_back({{"rank", r}, {"brick", {{"lo", ivec(f.lo)}, {"hi", ivec(f.hi)}}},
+                     {"read", {{"lo", ivec(f.read_lo)}, {"hi", ivec(f.read_hi)}}}, {"voxels", int64_t(f.voxels_read)},
+                     {"voxel_bytes", int64_t(f.voxels_read) * int64_t(voxel_bytes(brick->type()))},
+                     {"load_ms", f.load_ms}, {"render_ms", f.render_ms}, {"composite_ms", f.composite_ms},
+                     {"peak_rss_mib", f.rss_mib}, {"samples_per_ray", f.samples_mean}});
+  }
+  std::printf("wrote %s: %dx%d, %d ranks (k-d bricks, ghost %d), render %.1f ms (slowest rank), composite %.1f ms "
+              "(IceT), %.0f ms in all, %s\n",
+              a.out.c_str(), img.width, img.height, size, ghost, render_max, composite_max, wall_ms,
+              renderer.description().c_str());
+  if (!a.stats.empty()) {
+    nlohmann::json j = {{"ranks", size},          {"ghost", ghost},
+                        {"render_ms", render_max}, {"composite_ms", composite_max},
+                        {"wall_ms", wall_ms},      {"variant", st.variant},
+                        {"backend", "cpu"},        {"renderer", renderer.description()},
+                        {"volume_dims", {dims[0], dims[1], dims[2]}},
+                        {"per_rank", ranks}};
+    std::ofstream(a.stats) << j.dump(2) << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+int mpi_render(const MpiRenderArgs& a) {
+  MPI_Init(nullptr, nullptr);
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  int code = 0;
+  try {
+    code = run(a, rank, size);
+  } catch (const std::exception& e) {
+    // One rank's error ends every rank: the others may wait in a collective for it.
+    std::fprintf(stderr, "peakcast: error on rank %d of %d: %s\n", rank, size, e.what());
+    std::fflush(stderr);
+    const bool bad_input = dynamic_cast<const VolumeError*>(&e) || dynamic_cast<const SceneError*>(&e) ||
+                           dynamic_cast<const std::invalid_argument*>(&e);
+    MPI_Abort(MPI_COMM_WORLD, bad_input ? kExitBadInput : kExitFailure);
+  }
+  MPI_Finalize();
+  return code;
+}
+
+}  // namespace peakcast::app
