@@ -24,6 +24,7 @@
 #include "dist/brick_frame.h"
 #include "dist/icet_compositor.h"
 #include "dist/kd_split.h"
+#include "dist/mpi_renderer.h"
 #include "encode/png.h"
 #include "render/backend.h"
 
@@ -47,6 +48,13 @@ double peak_rss_mib() {
     std::getline(in, key);
   }
   return 0.0;
+}
+
+// The node's cores shared among its ranks (one GPU or core set per rank, docs/distributed.md).
+int rank_threads() {
+  int local_ranks = 1;
+  if (const char* l = std::getenv("OMPI_COMM_WORLD_LOCAL_SIZE")) local_ranks = std::max(1, std::atoi(l));
+  return std::max(1, hardware_threads() / local_ranks);
 }
 
 struct RankFigures {  // gathered on rank 0, one row per rank
@@ -88,10 +96,7 @@ int run(const MpiRenderArgs& a, int rank, int size) {
   // Fault injection for the tests (label mpi): this rank dies as a crashed process would.
   if (const char* kill = std::getenv("PEAKCAST_TEST_KILL_RANK"); kill && std::atoi(kill) == rank) std::raise(SIGKILL);
 
-  // The node's cores shared among its ranks (one GPU or core set per rank, docs/distributed.md).
-  int local_ranks = 1;
-  if (const char* l = std::getenv("OMPI_COMM_WORLD_LOCAL_SIZE")) local_ranks = std::max(1, std::atoi(l));
-  cpu::CpuRenderer renderer(std::max(1, hardware_threads() / local_ranks));
+  cpu::CpuRenderer renderer(rank_threads());
   auto resident = renderer.make_resident(brick);
   render::RenderStats st;
   const Image layer = renderer.render_brick(*resident, scene, dist::cpu_brick(mine, dims), &st);
@@ -154,6 +159,38 @@ int run(const MpiRenderArgs& a, int rank, int size) {
 }
 
 }  // namespace
+
+int mpi_serve(const std::function<int(RendererWrap, int)>& serve) {
+  int provided = 0;
+  MPI_Init_thread(nullptr, nullptr, MPI_THREAD_SERIALIZED, &provided);
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  int code = 0;
+  try {
+    if (provided < MPI_THREAD_SERIALIZED)
+      throw std::runtime_error("this MPI cannot be called from the render thread (MPI_THREAD_SERIALIZED)");
+    const int threads = rank_threads();
+    if (rank == 0) {
+      code = serve(
+          [size, threads](std::unique_ptr<render::Renderer> local) -> std::unique_ptr<render::Renderer> {
+            if (std::string(local->backend()) != "cpu")
+              throw std::invalid_argument(
+                  "mpirun peakcast serve: the GL ray caster does not draw bricks yet; use --backend cpu (or auto)");
+            return std::make_unique<dist::MpiRenderer>(size, threads);
+          },
+          size);
+    } else {
+      dist::serve_worker(threads);
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "peakcast: error on rank %d of %d: %s\n", rank, size, e.what());
+    std::fflush(stderr);
+    MPI_Abort(MPI_COMM_WORLD, dynamic_cast<const std::invalid_argument*>(&e) ? kExitBadInput : kExitFailure);
+  }
+  MPI_Finalize();
+  return code;
+}
 
 int mpi_render(const MpiRenderArgs& a) {
   MPI_Init(nullptr, nullptr);

@@ -2,9 +2,12 @@
 // mpi_world_size_hint is in cmd_render.cpp, built always).
 #pragma once
 
+#include <functional>
+#include <memory>
 #include <string>
 
 #include "app/commands.h"
+#include "render/renderer.h"
 
 namespace peakcast::app {
 
@@ -17,5 +20,11 @@ int mpi_world_size_hint();
 // Every rank: initialises MPI, renders its brick, composites; rank 0 writes `out` (and the
 // stats). Returns the exit code; a failing rank aborts the job with its reason.
 int mpi_render(const MpiRenderArgs& a);
+
+// mpirun peakcast serve: initialises MPI (serialized threads); rank 0 calls `serve` with the
+// wrap that puts dist::MpiRenderer over its CPU backend and the rank count, the others render
+// what it asks (dist::serve_worker). An error on rank 0 before it serves ends the job.
+using RendererWrap = std::function<std::unique_ptr<render::Renderer>(std::unique_ptr<render::Renderer>)>;
+int mpi_serve(const std::function<int(RendererWrap, int)>& serve);
 
 }  // namespace peakcast::app

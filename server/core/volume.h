@@ -94,6 +94,7 @@ class Volume {
   double load_ms = 0.0;        // the whole load_volume call
   double statistics_ms = 0.0;  // of it: range and histogram (finalize_statistics)
   std::string name;
+  std::string source_path;  // the file or folder it was read from (load_volume); empty if made
 
   static constexpr int kHistogramBins = 1024;
 

@@ -314,6 +314,7 @@ Volume load_volume(const fs::path& path, const LoadOptions& options) {
                                 "directory of TIFF slices)");
   }
   v.name = path.filename().string();
+  v.source_path = path.string();
   v.load_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return v;
 }

@@ -262,8 +262,7 @@ RenderResult CpuRenderer::render(const render::ResidentVolume& v, const Resolved
   return res;
 }
 
-Image CpuRenderer::render_brick(const render::ResidentVolume& v, const ResolvedScene& s, const Brick& brick,
-                                RenderStats* stats) {
+void CpuRenderer::check_brick_scene(const ResolvedScene& s) {
   const RenderSettings& r = s.scene.render;
   const bool segments = r.classification != Classification::Post;
   if (r.virtual_samples > 0) throw std::invalid_argument("distributed rendering: virtual samples are not supported yet");
@@ -272,6 +271,11 @@ Image CpuRenderer::render_brick(const render::ResidentVolume& v, const ResolvedS
   if (r.sampling == Sampling::Differential && segments)
     throw std::invalid_argument(std::string("distributed rendering: differential sampling with ") +
                                 to_string(r.classification) + " is not supported yet (its segments' length has no bound for the ghosts)");
+}
+
+Image CpuRenderer::render_brick(const render::ResidentVolume& v, const ResolvedScene& s, const Brick& brick,
+                                RenderStats* stats, std::optional<PixelRect> tile) {
+  check_brick_scene(s);
   const CpuVolume& cv = cpu_volume(v);
   const glm::dvec3 spacing = cv.volume().spacing;
   for (int a = 0; a < 3; ++a) {
@@ -279,7 +283,9 @@ Image CpuRenderer::render_brick(const render::ResidentVolume& v, const ResolvedS
     if (!(brick.own_lo[a] >= 0 && brick.own_lo[a] < brick.own_hi[a] && brick.own_hi[a] <= whole + 1e-9))
       throw std::invalid_argument("render_brick: the brick's box is not inside the scene's volume box");
   }
-  const int w = s.scene.width, h = s.scene.height;
+  const PixelRect rect = tile.value_or(PixelRect{0, 0, s.scene.width, s.scene.height});
+  render::check_rect(rect, s.scene.width, s.scene.height);
+  const int w = rect.w, h = rect.h;
   if (stats) *stats = RenderStats{};
   CpuFrame f = prepare(cv, s, render::GpuPath::Fragment, stats);
   f.brick = true;
@@ -293,12 +299,12 @@ Image CpuRenderer::render_brick(const render::ResidentVolume& v, const ResolvedS
   f.stop = 1.f;  // until opaque
   Image img(w, h);
   const auto t0 = Clock::now();
-  for_each_row(PixelRect{0, 0, w, h}, [&](int x0, int x1, int y) {
-    float px[kTile], py[kTile];
+  for_each_row(rect, [&](int x0, int x1, int y) {
+    float px[kTile] = {}, py[kTile] = {};
     RayResult rays[kTile];
     for (int x = x0; x < x1; ++x) {
-      px[x - x0] = float(x) + 0.5f;
-      py[x - x0] = float(y) + 0.5f;
+      px[x - x0] = float(rect.x + x) + 0.5f;
+      py[x - x0] = float(rect.y + y) + 0.5f;
     }
     cast_rays(f, px, py, x1 - x0, rays);
     for (int x = x0; x < x1; ++x) {

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -51,8 +52,11 @@ class CpuRenderer : public render::Renderer {
   // Throws std::invalid_argument for what bricks cannot draw yet (virtual samples, adaptive
   // sampling, ray textures, differential sampling with a segment method) and for a scene
   // whose box the brick does not lie in.
+  // `rect`: a tile of the image (default: all of it); the layer is the tile's size.
   Image render_brick(const render::ResidentVolume& volume, const ResolvedScene& scene, const Brick& brick,
-                     render::RenderStats* stats = nullptr);
+                     render::RenderStats* stats = nullptr, std::optional<render::PixelRect> rect = std::nullopt);
+  // render_brick's refusals of a scene, for callers that must refuse before asking other ranks.
+  static void check_brick_scene(const ResolvedScene& scene);
   // Off: every ray alone (cast_ray), without the packet leaps of cast_rays. Tests show both
   // give the same pixels and sample counts.
   void set_ray_packets(bool on) { packets_ = on; }

@@ -4,6 +4,8 @@
 #include <atomic>
 #include <chrono>
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -39,6 +41,9 @@ struct ServerConfig {
   std::filesystem::path web_dir, shader_dir;
   std::string egl_device;  // "auto" | "surfaceless" | a device index; empty: PEAKCAST_EGL_DEVICE, else auto
   std::string backend;     // "auto" | "gl" | "cpu" (render/backend.h); empty: PEAKCAST_BACKEND, else auto
+  // mpirun peakcast serve: RenderServiceOptions::wrap_renderer and ranks.
+  std::function<std::unique_ptr<render::Renderer>(std::unique_ptr<render::Renderer>)> wrap_renderer;
+  int ranks = 1;
 };
 
 struct AppContext {

@@ -226,6 +226,7 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
                               nlohmann::json{{"status", stopping ? "stopping" : "ok"},
                                              {"gl_renderer", app.render.gl_renderer()},
                                              {"backend", app.render.backend()},
+                                             {"ranks", app.render.ranks()},
                                              {"sessions", app.ws_sessions.count()},
                                              {"max_sessions", app.config.max_sessions},
                                              {"volumes", app.volumes.list().size()},

@@ -22,6 +22,7 @@ RenderService::~RenderService() { stop(); }
 
 void RenderService::start() {
   pool_ = std::make_unique<encode::EncodePool>(options_.encode_threads);
+  metrics_.set("peakcast_ranks", "", double(options_.ranks));
   std::promise<std::pair<std::string, std::string>> ready;
   auto started = ready.get_future();
   thread_ = std::thread([this, &ready] {
@@ -29,6 +30,7 @@ void RenderService::start() {
     try {
       impl->backend = render::open_backend(render::requested_backend(options_.backend), options_.egl_device,
                                            options_.shader_dir);
+      if (options_.wrap_renderer) impl->backend.renderer = options_.wrap_renderer(std::move(impl->backend.renderer));
       ready.set_value({impl->backend.description(), render::to_string(impl->backend.backend)});
     } catch (...) {
       ready.set_exception(std::current_exception());

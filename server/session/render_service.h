@@ -5,12 +5,14 @@
 // deliver to the session's connection or answer the still.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <thread>
 
 #include "core/metrics.h"
 #include "encode/encode_pool.h"
+#include "render/renderer.h"
 #include "session/gpu_residency.h"
 #include "session/scheduler.h"
 
@@ -22,6 +24,10 @@ struct RenderServiceOptions {
   SchedulerOptions scheduling;
   std::string egl_device;  // gpu::EglContext::create's choice; empty: PEAKCAST_EGL_DEVICE, else auto
   std::string backend;     // auto | gl | cpu (render/backend.h); empty: PEAKCAST_BACKEND, else auto
+  // Distributed rendering (mpirun peakcast serve): the opened backend's renderer handed to this,
+  // on the render thread, which returns the renderer frames go through (dist::MpiRenderer).
+  std::function<std::unique_ptr<render::Renderer>(std::unique_ptr<render::Renderer>)> wrap_renderer;
+  int ranks = 1;  // the processes that render each frame (health, metrics)
 };
 
 class RenderService {
@@ -36,6 +42,7 @@ class RenderService {
   void stop();
   std::string gl_renderer() const;  // the backend's description (render/backend.h)
   std::string backend() const { return backend_; }  // "gl" or "cpu"
+  int ranks() const { return options_.ranks; }
 
   void add_session(const std::shared_ptr<Session>& s) { scheduler_.add_session(s); }
   void remove_session(const std::string& id) { scheduler_.remove_session(id); }

@@ -38,12 +38,13 @@ def check_server_message(text):
 
 
 class Server:
-    def __init__(self, *args, volumes=("heptane_151.nrrd",)):
-        cmd = [PEAKCAST, "serve", "--port", "0", "--data", str(DATA)]
+    def __init__(self, *args, volumes=("heptane_151.nrrd",), launcher=(), env=None):
+        # launcher: a command the server runs under (mpirun -np N for the mpi label's tests).
+        cmd = [*launcher, PEAKCAST, "serve", "--port", "0", "--data", str(DATA)]
         for v in volumes:
             cmd += ["--volume", str(DATA / v)]
         cmd += list(args)
-        self.proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        self.proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
         self.log = []
         deadline = time.time() + 60
         while time.time() < deadline:

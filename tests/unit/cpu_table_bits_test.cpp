@@ -51,7 +51,9 @@ TEST(TableBits, PreintegrationCellClearOnlyWhereItsFourTexelsAreZero) {
       }
     EXPECT_GT(set, 0);  // the TF draws something
     // The narrow TF: segments between values on one side of both peaks add nothing.
-    if (tf.points.size() > 4) EXPECT_GT(clear, m * m / 8);
+    if (tf.points.size() > 4) {
+      EXPECT_GT(clear, m * m / 8);
+    }
   }
 }
 
@@ -86,7 +88,9 @@ TEST(TableBits, TfCellClearOnlyWhereBothTexelsAreTransparent) {
       EXPECT_EQ(cpu::test_bit(bits.data(), size_t(i)), any) << i;
       clear += !any;
     }
-    if (tf.points.size() > 4) EXPECT_GT(clear, n / 2);
+    if (tf.points.size() > 4) {
+      EXPECT_GT(clear, n / 2);
+    }
   }
 }
 

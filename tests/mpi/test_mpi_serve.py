@@ -1,0 +1,111 @@
+#!/usr/bin/env python3
+"""Issue 16, label mpi: `mpirun -np 2 peakcast serve` (rank 0 serves, both ranks render their
+bricks, IceT composites) against the one-process server: health and /metrics show the ranks, a
+REST still equals `peakcast render`, a viewer's stream (interactive frames, then a lossless
+final frame) equals the one-process server's, a scene bricks cannot draw is refused and the
+job goes on, and SIGTERM stops every rank."""
+import asyncio, json, os, pathlib, shutil, subprocess, sys, time
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "net"))
+from harness import Client, Server, http, decode_image  # noqa: E402
+
+PEAKCAST = os.environ["PEAKCAST_BIN"]
+MPIRUN = os.environ.get("MPIEXEC", shutil.which("mpirun") or "mpirun")
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+           OMPI_MCA_rmaps_base_oversubscribe="1")
+ENV.pop("PEAKCAST_BACKEND", None)
+CAMERA = {"eye": [75, -160, 230], "center": [75, 75, 75], "up": [0, 0, 1], "fov_y": 30}
+TF = {"points": [[0, 0.1, 0.3, 1, 0], [80, 0.2, 0.5, 1, 0.05], [150, 1, 0.6, 0.2, 0.6], [255, 1, 1, 1, 0.9]]}
+# Rays run until opaque on bricks; the one-process server is asked the same.
+RENDER = {"classification": "preint", "step": 1, "early_termination": 1.0}
+
+
+def max_level_diff(a, b):
+    a, b = a.convert("RGB").tobytes(), b.convert("RGB").tobytes()
+    assert len(a) == len(b)
+    return max(abs(x - y) for x, y in zip(a, b))
+
+
+async def stream(server):
+    """hello, a lossless final, a drag (interactive frames), the final after it."""
+    c = await Client.connect(server)
+    await c.hello(200, 150, state={"camera": CAMERA, "tf": TF, "render": RENDER})
+    await c.send({"type": "quality", "final_format": "png"})
+    await c.next_frame(final=True)
+    interactive = 0
+    cam = dict(CAMERA)
+    for i in range(6):
+        cam = dict(cam, eye=[75 + 15 * i, -160, 230])
+        await c.send({"type": "camera", "camera": cam})
+        f = await c.next_frame()
+        interactive += not f["final"]
+    final = await c.next_frame(final=True)
+    while not final["png"] or final["camera_version"] < 7:
+        final = await c.next_frame(final=True)
+    await c.close()
+    return interactive, decode_image(final["image"])
+
+
+def main():
+    failed = 0
+    one = Server("--backend", "cpu", env=ENV)
+    try:
+        _, one_final = asyncio.run(stream(one))
+    finally:
+        one.stop()
+    srv = Server(launcher=[MPIRUN, "--oversubscribe", "-np", "2"], env=ENV)
+    try:
+        checks = []
+        status, _, body = http(srv, "/api/health")
+        health = json.loads(body)
+        checks.append(("health shows 2 ranks", status == 200 and health["ranks"] == 2 and "2 ranks" in health["gl_renderer"],
+                       health))
+        _, _, metrics = http(srv, "/metrics")
+        checks.append(("/metrics shows the ranks", "peakcast_ranks 2" in metrics.decode(), ""))
+
+        scene = {"volume": "heptane_151.nrrd", "image": {"width": 160, "height": 120}, "camera": CAMERA, "tf": TF,
+                 "render": RENDER, "background": [0.1, 0.1, 0.2]}
+        status, headers, png = http(srv, "/api/render", "POST", json.dumps(scene).encode())
+        tmp = pathlib.Path(os.environ.get("TMPDIR", "/tmp")) / f"peakcast-mpi-serve-{os.getpid()}"
+        tmp.mkdir(exist_ok=True)
+        (tmp / "mpi.png").write_bytes(png)
+        data = pathlib.Path(__file__).resolve().parents[1] / "data"
+        (tmp / "scene.json").write_text(json.dumps(dict(scene, volume=str(data / "heptane_151.nrrd"))))
+        subprocess.run([PEAKCAST, "render", tmp / "scene.json", "-o", tmp / "one.png", "--backend", "cpu"], check=True,
+                       capture_output=True, env=ENV)
+        cmp = json.loads(subprocess.run([PEAKCAST, "compare", tmp / "one.png", tmp / "mpi.png"], check=True,
+                                        capture_output=True, text=True).stdout)
+        checks.append(("REST still equals peakcast render within 1/255",
+                       status == 200 and "2ranks" in headers.get("X-Variant", "") and cmp["max_abs"] <= 1 / 255 + 1e-6,
+                       (status, headers.get("X-Variant"), cmp)))
+
+        interactive, mpi_final = asyncio.run(stream(srv))
+        diff = max_level_diff(one_final, mpi_final)
+        checks.append(("the stream: interactive frames, then a final equal to the one-process server's (<= 1 level)",
+                       interactive > 0 and diff <= 1, (interactive, diff)))
+
+        bad = dict(scene, render=dict(RENDER, virtual_samples=3))
+        status, _, body = http(srv, "/api/render", "POST", json.dumps(bad).encode())
+        status2, _, _ = http(srv, "/api/render", "POST", json.dumps(scene).encode())
+        checks.append(("bricks refuse virtual samples by name, and the job goes on",
+                       status >= 400 and b"virtual samples" in body and status2 == 200 and srv.alive(), (status, body[:200])))
+        shutil.rmtree(tmp, ignore_errors=True)
+        for name, ok, detail in checks:
+            print(f"{'ok  ' if ok else 'FAIL'} {name}" + ("" if ok else f": {detail}"), flush=True)
+            failed += not ok
+    finally:
+        t0 = time.time()
+        code = srv.stop()
+        stopped = time.time() - t0
+    # mpirun forwards SIGTERM to every rank: rank 0 shuts the server down ("peakcast: stopped")
+    # and tells the workers to stop; mpirun returns once all have exited (its own status is 1
+    # after a SIGTERM on OpenMPI 4 even when every rank exited 0).
+    ok = code is not None and stopped < 10 and "peakcast: stopped" in "".join(srv.log)
+    print(f"{'ok  ' if ok else 'FAIL'} SIGTERM stops every rank: mpirun exited {code} after {stopped:.1f} s", flush=True)
+    failed += not ok
+    print(f"{6 - failed} passed, {failed} failed")
+    sys.exit(1 if failed else 0)
+
+
+if __name__ == "__main__":
+    main()
