@@ -40,13 +40,14 @@ host_mirror() {
 }
 
 make_debootstrap_base() {
-  local mirror=${PEAKCAST_DEBIAN_MIRROR:-$(host_mirror)} work
+  local mirror=${PEAKCAST_DEBIAN_MIRROR:-$(host_mirror)}
   command -v debootstrap >/dev/null || {
     echo "build-image: $base cannot be pulled and debootstrap is missing (apt-get install debootstrap)" >&2
     exit 1
   }
+  # Global, not local: the EXIT trap runs after this function has returned (set -u).
   work=$(mktemp -d)
-  trap 'rm -rf "$work"' EXIT
+  trap 'rm -rf "${work:-}"' EXIT
   echo "build-image: no registry base; debootstrap --variant=minbase bookworm from $mirror"
   debootstrap --variant=minbase bookworm "$work/rootfs" "$mirror" >"$work/debootstrap.log" 2>&1 || {
     tail -20 "$work/debootstrap.log" >&2

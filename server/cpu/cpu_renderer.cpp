@@ -268,6 +268,9 @@ void CpuRenderer::check_brick_scene(const ResolvedScene& s) {
   if (r.virtual_samples > 0) throw std::invalid_argument("distributed rendering: virtual samples are not supported yet");
   if (r.adaptive) throw std::invalid_argument("distributed rendering: adaptive sampling is not supported yet");
   if (s.ray_texture) throw std::invalid_argument("distributed rendering: ray textures are not supported yet");
+  if (r.classification == Classification::Peaks && r.peak_mode == PeakMode::Xor)
+    throw std::invalid_argument("distributed rendering: peak mode xor is not supported yet (a brick's first sample "
+                                "cannot see a peak in the segment before it)");
   if (r.sampling == Sampling::Differential && segments)
     throw std::invalid_argument(std::string("distributed rendering: differential sampling with ") +
                                 to_string(r.classification) + " is not supported yet (its segments' length has no bound for the ghosts)");
@@ -288,6 +291,9 @@ Image CpuRenderer::render_brick(const render::ResidentVolume& v, const ResolvedS
   const int w = rect.w, h = rect.h;
   if (stats) *stats = RenderStats{};
   CpuFrame f = prepare(cv, s, render::GpuPath::Fragment, stats);
+  if (f.key.cell_dda || f.key.adaptive || f.key.virtual_samples || f.key.ray_texture)
+    throw std::invalid_argument("distributed rendering: this frame's variant (" + f.key.name() +
+                                ") walks cells or sample windows that bricks do not bound yet");
   f.brick = true;
   f.sample_half = f.box_half - glm::vec3(brick.read_lo * spacing);
   f.own_lo = glm::vec3(brick.own_lo);

@@ -327,26 +327,32 @@ bool RayCaster::setup(float px, float py) {
 }
 
 bool RayCaster::clip_to_brick() {
-  // The ray's parameter interval in the own box, widened by a point on each side, then the
-  // exact test at both ends: the owned points are consecutive (the box is convex and the
-  // points' coordinates are monotone along the ray).
+  // A first guess from the ray's parameter interval in the own box (world coordinates), then
+  // owns() decides at both ends, moving them until they agree with it: the owned points are
+  // consecutive (the box is convex and the points' coordinates are monotone along the ray),
+  // and the guess may be off by more than a point where the ray is nearly parallel to a face.
+  // Axes the ray does not move along, and faces on the volume's own faces, do not bound it.
+  if (last_ < 0) return false;
   const vec3 lo = f_.own_lo * f_.spacing - f_.box_half, hi = f_.own_hi * f_.spacing - f_.box_half;
   float t_in = -kHuge, t_out = kHuge;
   for (int a = 0; a < 3; ++a) {
-    const float d = std::abs(r_.d[a]) < 1e-20f ? 1e-20f : r_.d[a];
-    const float t0 = (lo[a] - r_.o[a]) / d, t1 = (hi[a] - r_.o[a]) / d;
-    t_in = std::max(t_in, std::min(t0, t1));
-    t_out = std::min(t_out, std::max(t0, t1));
+    if (std::abs(r_.d[a]) < 1e-20f) continue;
+    const float t_lo = f_.at_start[a] ? (r_.d[a] > 0.f ? -kHuge : kHuge) : (lo[a] - r_.o[a]) / r_.d[a];
+    const float t_hi = f_.at_end[a] ? (r_.d[a] > 0.f ? kHuge : -kHuge) : (hi[a] - r_.o[a]) / r_.d[a];
+    t_in = std::max(t_in, std::min(t_lo, t_hi));
+    t_out = std::min(t_out, std::max(t_lo, t_hi));
   }
-  if (!(t_in <= t_out) || last_ < 0) return false;
-  const float i_in = std::floor(lattice_index(L_, std::max(t_in, span_x_))) - 1.f;
-  const float i_out = std::ceil(lattice_index(L_, std::min(t_out, span_y_))) + 1.f;
-  if (!(i_in <= i_out)) return false;
-  int first = i_in <= 0.f ? 0 : index_floor_cap(i_in, last_ + 1);
-  int last = i_out >= float(last_) ? last_ : std::max(int(i_out), -1);
+  if (!(t_in <= t_out)) t_in = t_out = 0.5f * (std::max(t_in, span_x_) + std::min(t_out, span_y_));
+  auto index_near = [&](float t) {
+    const float i = std::round(lattice_index(L_, std::clamp(t, span_x_, span_y_)));
+    return i <= 0.f || !(i == i) ? 0 : index_floor_cap(i, last_);
+  };
+  int first = index_near(t_in), last = std::max(first, index_near(t_out));
   while (first <= last && !owns(first)) ++first;
   while (last >= first && !owns(last)) --last;
   if (first > last) return false;
+  while (first > 0 && owns(first - 1)) --first;
+  while (last < last_ && owns(last + 1)) ++last;
   own_first_ = first;
   own_last_ = last;
   last_ = segments_ ? std::min(last + 1, last_) : last;  // the point closing the last segment

@@ -178,6 +178,17 @@ std::unique_ptr<render::ResidentVolume> MpiRenderer::make_resident(std::shared_p
   // Ghosts for the widest filter, shading and an interactive frame's doubled step; a scene
   // that needs more re-reads the bricks (render).
   const int ghost = ghost_voxels(true, true) + 2;
+  // What would fail on a rank fails here first, before any rank is asked (a failure after the
+  // broadcast ends the job): a file whose regions cannot be read (TIFF stacks), one changed
+  // since the server read it, a volume with fewer cells than ranks.
+  {
+    LoadOptions one;
+    one.region = VoxelRegion{{0, 0, 0}, {1, 1, 1}};
+    const Volume head = load_volume(volume->source_path, one);
+    if (head.source_dims != volume->dims())
+      throw std::runtime_error(volume->source_path + ": the file changed since it was read (its dims differ)");
+    kd_split({head.source_dims[0], head.source_dims[1], head.source_dims[2]}, ranks_, ghost);
+  }
   int64_t cmd = kLoad, id = impl_->next_id++;
   std::string payload =
       nlohmann::json{{"path", volume->source_path}, {"lo", volume->min_value}, {"hi", volume->max_value}, {"ghost", ghost}}

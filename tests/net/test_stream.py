@@ -37,14 +37,25 @@ async def test_interactive_frames_shrink_to_hold_their_budget():
     await c.hello(240, 180)
     await c.next_frame(final=True)
     await c.send({"type": "quality", "interactive_ms": 0.001})
-    cam, widths = dict(SCENE_CAMERA), []
-    for i in range(12):
-        cam = dict(cam, eye=[75 + 10 * i, -160, 230])
-        await c.send({"type": "camera", "camera": cam})
-        f = await c.next_frame()
-        if f["final"]:
-            continue
-        widths.append((f["width"], f["height"]))
+    await c.next_frame(final=True)  # a quality change re-sends the still
+    widths, moving = [], True
+
+    async def move():  # input every 20 ms until four interactive frames came (slow builds: TSan)
+        cam, i = dict(SCENE_CAMERA), 0
+        while moving:
+            i += 1
+            cam = dict(cam, eye=[75 + 10 * (i % 20), -160, 230])
+            await c.send({"type": "camera", "camera": cam})
+            await asyncio.sleep(0.02)
+
+    mover = asyncio.create_task(move())
+    deadline = time.time() + 60
+    while len(widths) < 4 and time.time() < deadline:
+        f = await c.next_frame(timeout=60)
+        if not f["final"]:
+            widths.append((f["width"], f["height"]))
+    moving = False
+    await mover
     assert widths and widths[0][0] <= 120, widths
     assert widths[-1] == (60, 45), widths
     assert all(w >= 60 for w, _ in widths), widths

@@ -130,6 +130,11 @@ TEST(Bricks, RealSamplesEqualOneProcess) {
                     R"([[0, 0, 0, 0, 0], [100, 0, 0, 0, 0], [100.5, 1, 0.6, 0.2, 1], [101, 0, 0, 0, 0], [255, 0, 0, 0, 0]])", ""},
                    kData + "heptane_151.nrrd");
   check_all_splits({"", R"({"step": 1, "classification": "preint"})", "", ""}, kData + "nucleon.nhdr");
+  // Axis-parallel rays lying exactly on the split planes (pixel centres on integer voxel
+  // coordinates): each plane's rays belong to one brick, not to none.
+  for (const char* axis : {R"({"eye": [20.5, 20, 200], "center": [20.5, 20, 20], "up": [0, 1, 0], "projection": "orthographic", "height": 80})",
+                           R"({"eye": [200, 20.5, 20], "center": [20, 20.5, 20], "up": [0, 0, 1], "projection": "orthographic", "height": 80})"})
+    check_all_splits({"", R"({"step": 1, "classification": "preint"})", "", axis}, kData + "nucleon.nhdr");
 }
 
 TEST(Bricks, RefuseWhatBricksCannotDrawYet) {
