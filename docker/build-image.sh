@@ -35,7 +35,7 @@ have_image() { "${buildah[@]}" inspect --type image "$1" >/dev/null 2>&1; }
 host_mirror() {
   local uri
   uri=$(grep -hE '^(URIs:|deb )' /etc/apt/sources.list.d/*.sources /etc/apt/sources.list 2>/dev/null |
-    grep -vE 'security' | head -1 | sed -E 's/^URIs: *//; s/^deb +(\[[^]]*\] +)?//; s/ .*//')
+    grep -vE 'security' | head -1 | sed -E 's/^URIs: *//; s/^deb +(\[[^]]*\] +)?//; s/ .*//' || true)
   echo "${uri:-http://deb.debian.org/debian}"
 }
 
@@ -56,8 +56,9 @@ make_debootstrap_base() {
   # The same suites as a Debian image: the release, its updates and security fixes (the host's
   # security source when it has one).
   local security
+  # (|| true: grep fails on a missing sources.list, which a deb822-only host does not have.)
   security=$(grep -hE '^(URIs:|deb )' /etc/apt/sources.list.d/*.sources /etc/apt/sources.list 2>/dev/null |
-    grep -E 'security' | head -1 | sed -E 's/^URIs: *//; s/^deb +(\[[^]]*\] +)?//; s/ .*//')
+    grep -E 'security' | head -1 | sed -E 's/^URIs: *//; s/^deb +(\[[^]]*\] +)?//; s/ .*//' || true)
   security=${security:-http://deb.debian.org/debian-security}
   cat >"$work/rootfs/etc/apt/sources.list" <<SOURCES
 deb $mirror bookworm main
