@@ -2,7 +2,8 @@
 // preintegration, ray_texture .glsl) for one ray on the CPU. Function and variable names follow
 // the shaders so the two can be read side by side; where they differ, the comment says why.
 // The caster's class is in ray_caster-inl.h, its peak finding in ray_peaks-inl.h, its virtual
-// samples in ray_virtual_samples-inl.h, the geometry in ray_geometry-inl.h and the 16-ray leaps
+// samples in ray_virtual_samples-inl.h, its table lookups in ray_tables-inl.h, a brick's clipping
+// (distributed rendering) in ray_brick-inl.h, the geometry in ray_geometry-inl.h and the 16-ray leaps
 // in leap_packets-inl.h; this file holds the traversal, sampling and compositing, and the entry
 // points. Compiled once per x86 SIMD target (Highway's foreach_target) and chosen at run time: the
 // scalar code gains the target's instructions (SSE4's floor, AVX's three-operand forms) and
@@ -15,7 +16,6 @@
 #include <glm/geometric.hpp>
 
 #include "core/ray_texture_mapping.h"
-#include "cpu/table_bits.h"
 #include "render/shader_interface.h"
 
 #undef HWY_TARGET_INCLUDE
@@ -29,6 +29,8 @@
 #include "cpu/ray_caster-inl.h"
 #include "cpu/ray_peaks-inl.h"
 #include "cpu/ray_virtual_samples-inl.h"
+#include "cpu/ray_tables-inl.h"
+#include "cpu/ray_brick-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace peakcast::cpu {
@@ -63,47 +65,6 @@ float RayCaster::field_at(int i, int m) {
   run_stride_ = m;
   run_count_ = run.count;
   return run_[0];
-}
-
-
-bool RayCaster::tf_lookup(float s, vec4& out) const {
-  // GL_LINEAR between texel centres of an n-entry table, clamped: texel space u = s (n - 1).
-  const float u = std::clamp(s, 0.f, 1.f) * float(f_.tf_size - 1);
-  const int i = std::min(int(u), f_.tf_size - 2);
-  if (!test_bit(f_.tf_alpha_any, size_t(i))) return false;  // both texels transparent
-  const float* a = f_.tf + 4 * i;
-  out = to_vec4(lerp4(load4(a), load4(a + 4), u - float(i)));
-  return true;
-}
-
-vec4 RayCaster::tf_exact(float v) const {
-  const int n = f_.tf_point_count;
-  int lo = 0, hi = n;  // first point with value > v
-  while (lo < hi) {
-    const int mid = (lo + hi) / 2;
-    if (f_.tf_points[2 * mid].x > v)
-      hi = mid;
-    else
-      lo = mid + 1;
-  }
-  if (lo == 0) return f_.tf_points[1];
-  if (lo == n) return f_.tf_points[2 * n - 1];
-  const float va = f_.tf_points[2 * (lo - 1)].x, vb = f_.tf_points[2 * lo].x;
-  return glm::mix(f_.tf_points[2 * (lo - 1) + 1], f_.tf_points[2 * lo + 1], (v - va) / (vb - va));
-}
-
-bool RayCaster::preint_lookup(float s_front, float s_back, vec4& out) const {
-  const int n = f_.preint_size;
-  const float u = std::clamp(s_front, 0.f, 1.f) * float(n - 1), v = std::clamp(s_back, 0.f, 1.f) * float(n - 1);
-  const int i = std::min(int(u), n - 2), j = std::min(int(v), n - 2);
-  if (!test_bit(f_.preint_any, size_t(j) * size_t(n - 1) + size_t(i))) return false;  // zeros only
-  const float wu = u - float(i), wv = v - float(j);
-  const float* row0 = f_.preint + (size_t(j) * size_t(n) + size_t(i)) * 4;
-  const float* row1 = row0 + size_t(n) * 4;
-  const auto c0 = lerp4(load4(row0), load4(row0 + 4), wu);
-  const auto c1 = lerp4(load4(row1), load4(row1 + 4), wu);
-  out = to_vec4(lerp4(c0, c1, wv));
-  return true;
 }
 
 
@@ -323,39 +284,6 @@ bool RayCaster::setup(float px, float py) {
     res_.samples = -1.f;
     return false;
   }
-  return true;
-}
-
-bool RayCaster::clip_to_brick() {
-  // A first guess from the ray's parameter interval in the own box (world coordinates), then
-  // owns() decides at both ends, moving them until they agree with it: the owned points are
-  // consecutive (the box is convex and the points' coordinates are monotone along the ray),
-  // and the guess may be off by more than a point where the ray is nearly parallel to a face.
-  // Axes the ray does not move along, and faces on the volume's own faces, do not bound it.
-  if (last_ < 0) return false;
-  const vec3 lo = f_.own_lo * f_.spacing - f_.box_half, hi = f_.own_hi * f_.spacing - f_.box_half;
-  float t_in = -kHuge, t_out = kHuge;
-  for (int a = 0; a < 3; ++a) {
-    if (std::abs(r_.d[a]) < 1e-20f) continue;
-    const float t_lo = f_.at_start[a] ? (r_.d[a] > 0.f ? -kHuge : kHuge) : (lo[a] - r_.o[a]) / r_.d[a];
-    const float t_hi = f_.at_end[a] ? (r_.d[a] > 0.f ? kHuge : -kHuge) : (hi[a] - r_.o[a]) / r_.d[a];
-    t_in = std::max(t_in, std::min(t_lo, t_hi));
-    t_out = std::min(t_out, std::max(t_lo, t_hi));
-  }
-  if (!(t_in <= t_out)) t_in = t_out = 0.5f * (std::max(t_in, span_x_) + std::min(t_out, span_y_));
-  auto index_near = [&](float t) {
-    const float i = std::round(lattice_index(L_, std::clamp(t, span_x_, span_y_)));
-    return i <= 0.f || !(i == i) ? 0 : index_floor_cap(i, last_);
-  };
-  int first = index_near(t_in), last = std::max(first, index_near(t_out));
-  while (first <= last && !owns(first)) ++first;
-  while (last >= first && !owns(last)) --last;
-  if (first > last) return false;
-  while (first > 0 && owns(first - 1)) --first;
-  while (last < last_ && owns(last + 1)) ++last;
-  own_first_ = first;
-  own_last_ = last;
-  last_ = segments_ ? std::min(last + 1, last_) : last;  // the point closing the last segment
   return true;
 }
 

@@ -145,7 +145,8 @@ TEST(Bricks, RefuseWhatBricksCannotDrawYet) {
   const dist::Index3 dims{v->dims()[0], v->dims()[1], v->dims()[2]};
   const auto split = dist::kd_split(dims, 2, 3);
   for (const char* r : {R"({"virtual_samples": 3})", R"({"adaptive": true})",
-                        R"({"sampling": "differential", "classification": "preint"})"}) {
+                        R"({"sampling": "differential", "classification": "preint"})",
+                        R"({"classification": "peaks", "peak_mode": "xor"})"}) {
     const ResolvedScene rs = resolve_scene(parse_scene_text(std::string(R"({"volume": "v", "render": )") + r + "}"), *v);
     try {
       renderer.render_brick(*resident, rs, dist::cpu_brick(split.bricks[0], dims));
