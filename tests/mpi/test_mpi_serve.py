@@ -8,6 +8,7 @@ import asyncio, json, os, pathlib, shutil, subprocess, sys, time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "net"))
 from harness import Client, Server, http, decode_image  # noqa: E402
+from PIL import Image as PILImage  # noqa: E402
 
 PEAKCAST = os.environ["PEAKCAST_BIN"]
 MPIRUN = os.environ.get("MPIEXEC", shutil.which("mpirun") or "mpirun")
@@ -53,7 +54,12 @@ def main():
         _, one_final = asyncio.run(stream(one))
     finally:
         one.stop()
-    srv = Server(launcher=[MPIRUN, "--oversubscribe", "-np", "2"], env=ENV)
+    # A multi-page TIFF: one process serves it, bricks cannot read a region of it.
+    tiff_dir = pathlib.Path(os.environ.get("TMPDIR", "/tmp")) / f"peakcast-mpi-tiff-{os.getpid()}"
+    tiff_dir.mkdir(exist_ok=True)
+    pages = [PILImage.new("L", (8, 8), 40 * k) for k in range(4)]
+    pages[0].save(tiff_dir / "stack.tif", save_all=True, append_images=pages[1:])
+    srv = Server("--data", str(tiff_dir), launcher=[MPIRUN, "--oversubscribe", "-np", "2"], env=ENV)
     try:
         checks = []
         status, _, body = http(srv, "/api/health")
@@ -89,7 +95,14 @@ def main():
         status2, _, _ = http(srv, "/api/render", "POST", json.dumps(scene).encode())
         checks.append(("bricks refuse virtual samples by name, and the job goes on",
                        status >= 400 and b"virtual samples" in body and status2 == 200 and srv.alive(), (status, body[:200])))
+        tiff = dict(scene, volume="stack.tif", camera=None)
+        tiff.pop("camera")
+        status, _, body = http(srv, "/api/render", "POST", json.dumps(tiff).encode())
+        status2, _, _ = http(srv, "/api/render", "POST", json.dumps(scene).encode())
+        checks.append(("a TIFF stack is refused before any rank is asked, and the job goes on",
+                       status >= 400 and b"TIFF" in body and status2 == 200 and srv.alive(), (status, body[:300])))
         shutil.rmtree(tmp, ignore_errors=True)
+        shutil.rmtree(tiff_dir, ignore_errors=True)
         for name, ok, detail in checks:
             print(f"{'ok  ' if ok else 'FAIL'} {name}" + ("" if ok else f": {detail}"), flush=True)
             failed += not ok
@@ -103,7 +116,7 @@ def main():
     ok = code is not None and stopped < 10 and "peakcast: stopped" in "".join(srv.log)
     print(f"{'ok  ' if ok else 'FAIL'} SIGTERM stops every rank: mpirun exited {code} after {stopped:.1f} s", flush=True)
     failed += not ok
-    print(f"{6 - failed} passed, {failed} failed")
+    print(f"{7 - failed} passed, {failed} failed")
     sys.exit(1 if failed else 0)
 
 
