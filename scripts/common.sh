@@ -61,10 +61,14 @@ install_node_modules() {
 }
 
 # ccache when present: rebuilds on the same machine (CI after a session, sanitizer and fuzz build
-# directories sharing sources) reuse objects.
+# directories sharing sources, a second checkout of the same commit) reuse objects. The settings
+# are exported when this file is sourced, so the builds see them (an export inside $(...) is lost).
+# CCACHE_NOHASHDIR: debug builds (-g) would otherwise hash the build folder into every key.
+# Exported whether or not ccache is there yet: the install step may bring it later.
+export CCACHE_BASEDIR=$PEAKCAST_ROOT CCACHE_NOHASHDIR=1 CCACHE_DIR=${CCACHE_DIR:-$HOME/.cache/ccache} \
+  CCACHE_MAXSIZE=${CCACHE_MAXSIZE:-10G}
 peakcast_ccache_flags() {
   if command -v ccache >/dev/null; then
-    export CCACHE_BASEDIR=$PEAKCAST_ROOT CCACHE_DIR=${CCACHE_DIR:-$HOME/.cache/ccache} CCACHE_MAXSIZE=${CCACHE_MAXSIZE:-10G}
     echo "-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache"
   fi
 }
