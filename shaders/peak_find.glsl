@@ -81,11 +81,15 @@ bool find_peaks(Ray r, float t0, float f0, float t1, float f1, inout RayResult r
   int count = min(n, max_peaks);
   for (int k = 0; k < count; ++k) {
     float v = reverse ? found[n - 1 - k] : found[k];
-    float t = solve_root(r, t0, f0, t1, f1, v, res.samples);
     vec4 c = tf_exact(v);
     vec3 rgb = c.rgb;
 #ifdef SHADING
+    float t = solve_root(r, t0, f0, t1, f1, v, res.samples);
     rgb = shade(rgb, field_gradient(voxel_coords(r.o + t * r.d)), r.d);
+#else
+    // Only shading uses the root's position: count what solve_root would evaluate. The bracket's
+    // ends keep opposite signs, so it takes every step unless they start equal.
+    res.samples += (f0 - v == f1 - v) ? 0.0 : u_peaks.w;
 #endif
     composite(res.acc, rgb, c.a * PEAK_WEIGHT);  // unscaled opacity at the peak (Knoll §4.2)
     if (res.acc.a >= STOP) break;

@@ -36,8 +36,12 @@ glm::vec3 finish_pixel(const glm::vec4& acc, const glm::vec3& background) {
 }
 
 // encode::to_rgb8 for one channel: non-finite -> 0, clamp, times 255 in float, round half up.
-uint8_t quantise(float v) {
-  return uint8_t(std::lround(std::clamp(std::isfinite(v) ? v : 0.f, 0.f, 1.f) * 255.f));
+// Without lround's library call (three a pixel): y - int(y) is exact for y in [0, 255], so
+// adding one where it is >= 0.5 rounds half up exactly as lround does for y >= 0.
+inline uint8_t quantise(float v) {
+  const float y = std::clamp(std::isfinite(v) ? v : 0.f, 0.f, 1.f) * 255.f;
+  const int i = int(y);
+  return uint8_t(i + (y - float(i) >= 0.5f ? 1 : 0));
 }
 
 }  // namespace

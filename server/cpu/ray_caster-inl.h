@@ -88,6 +88,7 @@ class RayCaster {
   }
 
   float solve_root(float t0, float f0, float t1, float f1, float v);
+  float root_evaluations(float f0, float f1, float v) const;
   bool find_peaks(float t0, float f0, float t1, float f1);
   bool consume(float t, float fv, vec3 g, float dt);
   bool visit(int i, int m);

@@ -38,6 +38,13 @@ float RayCaster::solve_root(float t0, float f0, float t1, float f1, float v) {
   return gb == ga ? 0.5f * (ta + tb) : std::clamp(ta - ga * (tb - ta) / (gb - ga), std::min(ta, tb), std::max(ta, tb));
 }
 
+// What solve_root would count, without sampling: only shading uses the root's position. The
+// bracket's ends keep opposite signs (each step replaces the end of its own sign), so g_a never
+// equals g_b after the start and regula falsi takes every step.
+float RayCaster::root_evaluations(float f0, float f1, float v) const {
+  return f0 - v == f1 - v ? 0.f : float(f_.secant_iterations);
+}
+
 // Knoll et al. 2009 Algorithm 1 with the errata (peak_find.glsl).
 bool RayCaster::find_peaks(float t0, float f0, float t1, float f1) {
   const int bins = f_.peak_bins;
@@ -78,10 +85,14 @@ bool RayCaster::find_peaks(float t0, float f0, float t1, float f1) {
   const int count = std::min(n, max_peaks);
   for (int k = 0; k < count; ++k) {
     const float v = reverse ? found[n - 1 - k] : found[k];
-    const float t = solve_root(t0, f0, t1, f1, v);
     const vec4 c = tf_exact(v);
     vec3 rgb(c);
-    if (f_.key.shading) rgb = shade(rgb, field_gradient(voxel_coords(r_.o + t * r_.d)));
+    if (f_.key.shading) {
+      const float t = solve_root(t0, f0, t1, f1, v);
+      rgb = shade(rgb, field_gradient(voxel_coords(r_.o + t * r_.d)));
+    } else {
+      res_.samples += root_evaluations(f0, f1, v);
+    }
     composite(rgb, c.a * peak_weight_);  // unscaled opacity at the peak (Knoll §4.2)
     if (res_.acc.a >= stop_) break;
   }

@@ -27,26 +27,28 @@ using VF = hn::Vec<DF>;
 using VI = hn::Vec<DI>;
 
 // Trilinear in stored units at (x, y, z), positions in voxel coordinates (sampler.h).
-template <VoxelType kType>
-HWY_INLINE VF Trilinear(const VoxelGrid& g, VF x, VF y, VF z) {
-  const DF df;
-  const DI di;
-  VF f[3];
-  VI i[3];
-  const VF p[3] = {x, y, z};
+template <VoxelType kType, class D = DF, class V = hn::Vec<D>>
+HWY_INLINE V Trilinear(const VoxelGrid& g, V x, V y, V z) {
+  using DIx = hn::RebindToSigned<D>;
+  using VIx = hn::Vec<DIx>;
+  const D df;
+  const DIx di;
+  V f[3];
+  VIx i[3];
+  const V p[3] = {x, y, z};
   for (int a = 0; a < 3; ++a) {
     // max first: NaN lanes become 0, as fmax does in the scalar sampler.
-    const VF c = hn::Min(hn::Max(p[a], hn::Zero(df)), hn::Set(df, g.hi[a]));
+    const V c = hn::Min(hn::Max(p[a], hn::Zero(df)), hn::Set(df, g.hi[a]));
     i[a] = hn::Min(hn::ConvertTo(di, c), hn::Set(di, g.base_max[a]));
     f[a] = hn::Sub(c, hn::ConvertTo(df, i[a]));
   }
-  const VI o = hn::Add(i[0], hn::Add(hn::Mul(i[1], hn::Set(di, int32_t(g.stride_y))),
-                                     hn::Mul(i[2], hn::Set(di, int32_t(g.stride_z)))));
-  const VI oy = hn::Set(di, int32_t(g.next_y)), oz = hn::Set(di, int32_t(g.next_z));
-  const VI offs[4] = {o, hn::Add(o, oy), hn::Add(o, oz), hn::Add(o, hn::Add(oy, oz))};
-  VF rows[4];
+  const VIx o = hn::Add(i[0], hn::Add(hn::Mul(i[1], hn::Set(di, int32_t(g.stride_y))),
+                                      hn::Mul(i[2], hn::Set(di, int32_t(g.stride_z)))));
+  const VIx oy = hn::Set(di, int32_t(g.next_y)), oz = hn::Set(di, int32_t(g.next_z));
+  const VIx offs[4] = {o, hn::Add(o, oy), hn::Add(o, oz), hn::Add(o, hn::Add(oy, oz))};
+  V rows[4];
   for (int k = 0; k < 4; ++k) {
-    VF a, b;
+    V a, b;
     if constexpr (kType == VoxelType::F32) {
       const float* base = reinterpret_cast<const float*>(g.data);
       a = hn::GatherIndex(df, base, offs[k]);
@@ -56,11 +58,11 @@ HWY_INLINE VF Trilinear(const VoxelGrid& g, VF x, VF y, VF z) {
       // volume's last voxel are Volume::kTailPadding).
       const int32_t* base = reinterpret_cast<const int32_t*>(g.data);
       if constexpr (kType == VoxelType::U8) {
-        const VI w = hn::GatherOffset(di, base, offs[k]);
+        const VIx w = hn::GatherOffset(di, base, offs[k]);
         a = hn::ConvertTo(df, hn::And(w, hn::Set(di, 0xFF)));
         b = hn::ConvertTo(df, hn::And(hn::ShiftRight<8>(w), hn::Set(di, 0xFF)));
       } else {
-        const VI w = hn::GatherOffset(di, base, hn::Add(offs[k], offs[k]));
+        const VIx w = hn::GatherOffset(di, base, hn::Add(offs[k], offs[k]));
         a = hn::ConvertTo(df, hn::And(w, hn::Set(di, 0xFFFF)));
         b = hn::ConvertTo(df, hn::And(hn::ShiftRight<16>(w), hn::Set(di, 0xFFFF)));
       }
@@ -68,8 +70,8 @@ HWY_INLINE VF Trilinear(const VoxelGrid& g, VF x, VF y, VF z) {
     }
     rows[k] = hn::Add(a, hn::Mul(f[0], hn::Sub(b, a)));
   }
-  const VF c0 = hn::Add(rows[0], hn::Mul(f[1], hn::Sub(rows[1], rows[0])));
-  const VF c1 = hn::Add(rows[2], hn::Mul(f[1], hn::Sub(rows[3], rows[2])));
+  const V c0 = hn::Add(rows[0], hn::Mul(f[1], hn::Sub(rows[1], rows[0])));
+  const V c1 = hn::Add(rows[2], hn::Mul(f[1], hn::Sub(rows[3], rows[2])));
   return hn::Add(c0, hn::Mul(f[2], hn::Sub(c1, c0)));
 }
 
@@ -102,9 +104,10 @@ HWY_INLINE VF Tricubic(const VoxelGrid& g, VF x, VF y, VF z) {
   return pair(g0[2], z0, g1[2], z1);
 }
 
-template <VoxelType kType, bool kTricubic>
+template <VoxelType kType, bool kTricubic, class D = DF>
 void RunT(const VoxelGrid& g, const SampleRun& r, float* HWY_RESTRICT out) {
-  const DF df;
+  using VF = hn::Vec<D>;
+  const D df;
   const size_t N = hn::Lanes(df);
   alignas(64) float tail[kMaxRun + 64];
   for (int k = 0; k < r.count; k += int(N)) {
@@ -118,7 +121,12 @@ void RunT(const VoxelGrid& g, const SampleRun& r, float* HWY_RESTRICT out) {
     for (int a = 0; a < 3; ++a)
       p[a] = hn::Mul(hn::Add(hn::Add(hn::Set(df, r.o[a]), hn::Mul(t, hn::Set(df, r.d[a]))), hn::Set(df, r.half[a])),
                      hn::Set(df, r.inv_spacing[a]));
-    VF v = kTricubic ? Tricubic<kType>(g, p[0], p[1], p[2]) : Trilinear<kType>(g, p[0], p[1], p[2]);
+    VF v;
+    if constexpr (kTricubic) {
+      v = Tricubic<kType>(g, p[0], p[1], p[2]);
+    } else {
+      v = Trilinear<kType, D>(g, p[0], p[1], p[2]);
+    }
     v = hn::Add(hn::Mul(v, hn::Set(df, g.scale)), hn::Set(df, g.bias));
     if (k + int(N) <= r.count) {
       hn::StoreU(v, df, out + k);
@@ -138,6 +146,17 @@ HWY_INLINE void Run(const VoxelGrid& g, const SampleRun& r, float* HWY_RESTRICT 
     }
     return;
   }
+#if HWY_TARGET != HWY_SCALAR
+  // A short run on a target wider than 8 lanes: 8-lane vectors (gathers cost per lane).
+  using D8 = hn::CappedTag<float, 8>;
+  if (!g.tricubic && r.count <= 8 && hn::Lanes(DF()) > 8) {
+    switch (g.type) {
+      case VoxelType::U8: return RunT<VoxelType::U8, false, D8>(g, r, out);
+      case VoxelType::U16: return RunT<VoxelType::U16, false, D8>(g, r, out);
+      case VoxelType::F32: return RunT<VoxelType::F32, false, D8>(g, r, out);
+    }
+  }
+#endif
   switch (g.type) {
     case VoxelType::U8: return g.tricubic ? RunT<VoxelType::U8, true>(g, r, out) : RunT<VoxelType::U8, false>(g, r, out);
     case VoxelType::U16:

@@ -283,3 +283,33 @@ TEST(Preintegration, AgreesWithTheConvergedDvrReferenceOnASmoothTf) {
 }
 
 }  // namespace
+
+// Without shading the root's position is unused, so the ray casters count the secant steps
+// regula falsi would take instead of taking them (issue 13). The count, and every sample the
+// traversal takes, must not change: shading alters colour only, so a shaded render of the same
+// scene (which does solve every root) counts exactly the same samples and the same opacity.
+TEST(PeakModes, UnshadedPeaksCountTheRootStepsTheyNoLongerTake) {
+  for (auto vol : {marschner_lobb(), heptane()}) {
+    test::TestVolume gv(vol);
+    for (int secant : {0, 3, 5})
+      for (const char* mode : {"dvr+peaks", "peaks_only"}) {
+        json over = {{"tf", fig3_tf(*vol, 0.62, 1e-4)},
+                     {"camera", view_of(*vol, {1.0, -0.8, 0.6})},
+                     {"image", {{"width", 64}, {"height", 48}}},
+                     {"render",
+                      {{"classification", "peaks"}, {"peak_mode", mode}, {"secant_iterations", secant},
+                       {"space_skipping", false}}}};
+        render::RenderStats flat_st, shaded_st;
+        Image flat = test::render_gpu(gv, test::make_scene(*vol, over), render::GpuPath::Fragment, &flat_st);
+        over["render"]["shading"] = true;
+        Image shaded = test::render_gpu(gv, test::make_scene(*vol, over), render::GpuPath::Fragment, &shaded_st);
+        ASSERT_GT(flat_st.samples_total, 0.0);
+        EXPECT_EQ(flat_st.samples_total, shaded_st.samples_total) << vol->name << " " << mode << " secant " << secant;
+        double alpha_diff = 0;
+        for (int y = 0; y < flat.height; ++y)
+          for (int x = 0; x < flat.width; ++x)
+            alpha_diff = std::max(alpha_diff, double(std::abs(flat.pixel(x, y)[3] - shaded.pixel(x, y)[3])));
+        EXPECT_EQ(alpha_diff, 0.0) << vol->name << " " << mode;
+      }
+  }
+}
