@@ -81,7 +81,14 @@ int run(const MpiRenderArgs& a, int rank, int size) {
   const auto t_load = std::chrono::steady_clock::now();
   LoadOptions region;
   region.region = VoxelRegion{mine.read_lo, mine.read_hi};
+  region.nonfinite = NonFinitePolicy::Keep;  // replaced below with the whole volume's extremes
   auto brick = std::make_shared<Volume>(load_volume(parsed.volume, region));
+  if (brick->type() == VoxelType::F32) {  // NaN/Inf voxels: as one process replaces them
+    auto [f_lo, f_hi] = finite_extremes(*brick);
+    MPI_Allreduce(MPI_IN_PLACE, &f_lo, 1, MPI_FLOAT, MPI_MIN, MPI_COMM_WORLD);
+    MPI_Allreduce(MPI_IN_PLACE, &f_hi, 1, MPI_FLOAT, MPI_MAX, MPI_COMM_WORLD);
+    replace_nonfinite(*brick, f_lo <= f_hi ? f_lo : 0.f, f_lo <= f_hi ? f_hi : 0.f);
+  }
   const double load_ms = ms_between(t_load, std::chrono::steady_clock::now());
   // The TF's domain is the whole volume's value range.
   double lo = brick->min_value, hi = brick->max_value;

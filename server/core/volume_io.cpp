@@ -221,11 +221,11 @@ void finish_volume(const fs::path& file, Volume& v, bool big_endian, const LoadO
     auto* p = reinterpret_cast<uint16_t*>(v.data());
     for (size_t i = 0; i < n; ++i) p[i] ^= 0x8000;  // int16 + 32768 as uint16
   }
-  if (v.type() == VoxelType::F32) {
-    auto* p = reinterpret_cast<float*>(v.data());
+  if (v.type() == VoxelType::F32 && options.nonfinite != NonFinitePolicy::Keep) {
+    const auto* p = reinterpret_cast<const float*>(v.data());
     float lo = std::numeric_limits<float>::infinity(), hi = -lo;
     int64_t bad = 0;
-    for (size_t i = 0; i < n; ++i) {
+    for (size_t i = 0; i < n; ++i) {  // finite_extremes and the count in one pass
       if (std::isfinite(p[i])) {
         lo = std::min(lo, p[i]);
         hi = std::max(hi, p[i]);
@@ -236,10 +236,8 @@ void finish_volume(const fs::path& file, Volume& v, bool big_endian, const LoadO
     if (bad > 0) {
       if (options.nonfinite == NonFinitePolicy::Refuse)
         throw VolumeError(file, std::to_string(bad) + " NaN/Inf voxels (policy: refuse)");
-      if (!std::isfinite(lo)) lo = hi = 0.0f;  // nothing finite at all
-      for (size_t i = 0; i < n; ++i)
-        if (!std::isfinite(p[i])) p[i] = (p[i] > 0) ? hi : lo;  // NaN compares false: lo
-      v.nonfinite_replaced = bad;
+      replace_nonfinite(v, lo <= hi ? lo : 0.f, lo <= hi ? hi : 0.f);  // nothing finite at all: 0
+      return;  // statistics done
     }
   }
   v.finalize_statistics();
@@ -340,6 +338,32 @@ fs::path resolve_in_roots(const fs::path& requested, const std::vector<fs::path>
     if (inside(c, r)) throw VolumeError(requested, "no such file in the data directories");
   }
   throw VolumeError(requested, "path is outside the configured data directories");
+}
+
+std::pair<float, float> finite_extremes(const Volume& v) {
+  if (v.type() != VoxelType::F32) return {float(v.min_value), float(v.max_value)};
+  const auto* p = reinterpret_cast<const float*>(v.data());
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+  for (size_t i = 0, n = size_t(v.voxel_count()); i < n; ++i)
+    if (std::isfinite(p[i])) {
+      lo = std::min(lo, p[i]);
+      hi = std::max(hi, p[i]);
+    }
+  return {lo, hi};
+}
+
+void replace_nonfinite(Volume& v, float lo, float hi) {
+  if (v.type() != VoxelType::F32) return;
+  auto* p = reinterpret_cast<float*>(v.data());
+  int64_t bad = 0;
+  for (size_t i = 0, n = size_t(v.voxel_count()); i < n; ++i)
+    if (!std::isfinite(p[i])) {
+      p[i] = (p[i] > 0) ? hi : lo;  // NaN compares false: lo
+      ++bad;
+    }
+  if (bad == 0) return;  // the statistics stand
+  v.nonfinite_replaced += bad;
+  v.finalize_statistics();
 }
 
 }  // namespace peakcast

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <utility>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
@@ -23,7 +24,9 @@ class VolumeError : public std::runtime_error {
 // What to do with NaN/Inf voxels in float volumes. Default: replace (NaN -> the finite minimum,
 // +Inf -> finite maximum, -Inf -> finite minimum) and report the count, as ParaView users expect
 // a volume with a few masked voxels to open; `refuse` for pipelines that want to stop instead.
-enum class NonFinitePolicy { Replace, Refuse };
+// `keep` leaves them for a caller that knows better extremes: a brick of a distributed volume
+// replaces them with the whole volume's (replace_nonfinite), as one process would.
+enum class NonFinitePolicy { Replace, Refuse, Keep };
 
 // A box of voxels [lo, hi) to read instead of the whole volume (a brick of a distributed
 // render). The volume read holds hi - lo voxels per axis, its origin moved to voxel lo.
@@ -42,6 +45,12 @@ struct LoadOptions {
 // Format by name: .nrrd/.nhdr, .mhd/.mha, .json (sidecar) or .raw with a sidecar,
 // .tif/.tiff (multi-page), or a directory of numbered 2D TIFFs.
 Volume load_volume(const std::filesystem::path& path, const LoadOptions& options = {});
+
+// A float volume's finite extremes (lo > hi when no voxel is finite; other types: their range).
+std::pair<float, float> finite_extremes(const Volume& v);
+// Replaces a float volume's NaN and -Inf voxels by lo and +Inf by hi, counts them in
+// nonfinite_replaced and computes the statistics anew. Nothing for other types.
+void replace_nonfinite(Volume& v, float lo, float hi);
 
 // Resolves `requested` inside one of `roots` (the server's data directories). Relative paths
 // are tried against each root in order; absolute ones must lie inside a root. Throws

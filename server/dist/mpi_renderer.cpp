@@ -77,7 +77,11 @@ BrickSet load_bricks(const nlohmann::json& j, cpu::CpuRenderer& renderer) {
   b.mine = b.split.bricks[size_t(rank)];
   LoadOptions region;
   region.region = VoxelRegion{b.mine.read_lo, b.mine.read_hi};
+  // NaN/Inf voxels take the whole volume's finite extremes, as in one process: its value range
+  // (rank 0 read it whole, replacing them with those extremes, which therefore bound it).
+  region.nonfinite = NonFinitePolicy::Keep;
   auto v = std::make_shared<Volume>(load_volume(path, region));
+  replace_nonfinite(*v, float(b.box.min_value - v->value_offset), float(b.box.max_value - v->value_offset));
   v->min_value = b.box.min_value;
   v->max_value = b.box.max_value;
   b.brick = renderer.make_resident(std::move(v));

@@ -7,6 +7,8 @@ voxels are its brick plus ghosts; a rank that dies or fails ends the job with a 
 a hang; what bricks cannot draw yet is refused by name."""
 import json, os, pathlib, shutil, subprocess, sys, tempfile, time
 
+import nonfinite_volume
+
 PEAKCAST = os.environ["PEAKCAST_BIN"]
 MPIRUN = os.environ.get("MPIEXEC", shutil.which("mpirun") or "mpirun")
 DATA = pathlib.Path(__file__).resolve().parents[1] / "data"
@@ -144,10 +146,29 @@ def test_refusals_name_what_bricks_cannot_draw():
     assert r.returncode == 2 and "GL ray caster does not draw bricks" in r.stderr, r.stderr
 
 
+def test_nonfinite_voxels_take_the_whole_volumes_extremes():
+    # NaN and +Inf voxels are replaced by the whole volume's finite extremes, as one process
+    # does, not by their brick's (nonfinite_volume.py).
+    vol = nonfinite_volume.write(TMP / "nonfinite.nrrd")
+    s = scene("nonfinite", vol, {"step": 1}, nonfinite_volume.TF, nonfinite_volume.CAMERA)
+    one, two = TMP / "nonfinite_1.png", TMP / "nonfinite_2.png"
+    run([PEAKCAST, "render", s, "-o", one, "--backend", "cpu"])
+    stats = TMP / "nonfinite_2.json"
+    mpi(2, "render", s, "-o", two, "--stats", stats)
+    st = json.loads(stats.read_text())
+    xs = sorted((r["brick"]["lo"][0], r["brick"]["hi"][0]) for r in st["per_rank"])
+    assert xs[0][1] <= nonfinite_volume.NAN_X[0] and xs[1][0] > nonfinite_volume.INF_X[1], \
+        f"the split no longer separates the slabs: {xs}"
+    e = max_abs(one, two)
+    assert e <= BOUND, f"max abs {e}"
+    print(f"  NaN/Inf slabs in different bricks: max abs {e:.4f}")
+
+
 def main():
     failed = 0
     tests = [test_ranks_equal_one_process, test_each_rank_holds_its_brick_and_ghosts, test_a_rank_that_dies_ends_the_job,
-             test_a_rank_that_fails_to_read_ends_the_job, test_refusals_name_what_bricks_cannot_draw]
+             test_a_rank_that_fails_to_read_ends_the_job, test_refusals_name_what_bricks_cannot_draw,
+             test_nonfinite_voxels_take_the_whole_volumes_extremes]
     for t in tests:
         try:
             t()

@@ -7,8 +7,10 @@ job goes on, and SIGTERM stops every rank."""
 import asyncio, json, os, pathlib, shutil, subprocess, sys, time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "net"))
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 from harness import Client, Server, http, decode_image  # noqa: E402
 from PIL import Image as PILImage  # noqa: E402
+import nonfinite_volume  # noqa: E402
 
 PEAKCAST = os.environ["PEAKCAST_BIN"]
 MPIRUN = os.environ.get("MPIEXEC", shutil.which("mpirun") or "mpirun")
@@ -59,6 +61,7 @@ def main():
     tiff_dir.mkdir(exist_ok=True)
     pages = [PILImage.new("L", (8, 8), 40 * k) for k in range(4)]
     pages[0].save(tiff_dir / "stack.tif", save_all=True, append_images=pages[1:])
+    nonfinite_volume.write(tiff_dir / "nonfinite.nrrd")
     srv = Server("--data", str(tiff_dir), launcher=[MPIRUN, "--oversubscribe", "-np", "2"], env=ENV)
     try:
         checks = []
@@ -84,6 +87,18 @@ def main():
         checks.append(("REST still equals peakcast render within 1/255",
                        status == 200 and "2ranks" in headers.get("X-Variant", "") and cmp["max_abs"] <= 1 / 255 + 1e-6,
                        (status, headers.get("X-Variant"), cmp)))
+
+        nf = {"volume": "nonfinite.nrrd", "image": {"width": 96, "height": 80}, "camera": nonfinite_volume.CAMERA,
+              "tf": {"points": nonfinite_volume.TF}, "render": {"step": 1}}
+        status, headers, png = http(srv, "/api/render", "POST", json.dumps(nf).encode())
+        (tmp / "nf_mpi.png").write_bytes(png)
+        (tmp / "nf.json").write_text(json.dumps(dict(nf, volume=str(tiff_dir / "nonfinite.nrrd"))))
+        subprocess.run([PEAKCAST, "render", tmp / "nf.json", "-o", tmp / "nf_one.png", "--backend", "cpu"], check=True,
+                       capture_output=True, env=ENV)
+        cmp = json.loads(subprocess.run([PEAKCAST, "compare", tmp / "nf_one.png", tmp / "nf_mpi.png"], check=True,
+                                        capture_output=True, text=True).stdout)
+        checks.append(("NaN/Inf voxels take the whole volume's extremes on every rank (REST still = one process)",
+                       status == 200 and cmp["max_abs"] <= 1 / 255 + 1e-6, (status, cmp)))
 
         interactive, mpi_final = asyncio.run(stream(srv))
         diff = max_level_diff(one_final, mpi_final)
@@ -116,7 +131,7 @@ def main():
     ok = code is not None and stopped < 10 and "peakcast: stopped" in "".join(srv.log)
     print(f"{'ok  ' if ok else 'FAIL'} SIGTERM stops every rank: mpirun exited {code} after {stopped:.1f} s", flush=True)
     failed += not ok
-    print(f"{7 - failed} passed, {failed} failed")
+    print(f"{8 - failed} passed, {failed} failed")
     sys.exit(1 if failed else 0)
 
 
