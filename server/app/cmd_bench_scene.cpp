@@ -1,6 +1,7 @@
 // `bench scene SCENE.json`: frame time of any user scene over an orbit, after warm-up, as a
-// viewer pays it (8-bit frame read back, what the stream encodes), with samples per ray and
-// the variant. --json prints one object for scripts (scripts/bench_peers.py reads it).
+// viewer pays it (8-bit frame read back, what the stream encodes, without sample counts), with
+// samples per ray (one more frame at the start pose) and the variant. --json prints one object for
+// scripts (scripts/bench_peers.py reads it).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -46,9 +47,8 @@ int run_scene_bench(const SceneBenchArgs& a) {
   double first_frame_ms = 0;
   render::RenderRequest req;
   req.path = a.path == "compute" ? render::GpuPath::Compute : render::GpuPath::Fragment;
-  req.output = render::RenderOutput::Rgb8;
-  req.sample_stats = true;
-  std::vector<double> frame_ms, render_ms, spr;
+  req.output = render::RenderOutput::Rgb8;  // what a viewer's stream renders: no sample counts
+  std::vector<double> frame_ms, render_ms;
   render::RenderStats st;
   const int n = std::max(1, a.frames);
   for (int f = -a.warmup; f < n; ++f) {
@@ -62,8 +62,12 @@ int run_scene_bench(const SceneBenchArgs& a) {
     if (f < 0) continue;
     frame_ms.push_back(ms);
     render_ms.push_back(st.render_ms);
-    spr.push_back(st.samples_mean);
   }
+  // Samples per ray: one more frame at the start pose that reads the counts back.
+  render::RenderRequest counted = req;
+  counted.sample_stats = true;
+  caster.render(gv, ls.scene, counted, &st);
+  const double samples_per_ray = st.samples_mean;
   // The ceiling: the bare sampling loop (same rays, same per-ray sample counts, reconstruction
   // only) at the start pose, against the full ray caster's render_ms there.
   std::vector<double> bare_ms, full_ms;
@@ -88,7 +92,7 @@ int run_scene_bench(const SceneBenchArgs& a) {
                       {"frame_ms_min", *mn},
                       {"frame_ms_max", *mx},
                       {"render_ms_median", median(render_ms)},
-                      {"samples_per_ray", median(spr)},
+                      {"samples_per_ray", samples_per_ray},
                       {"variant", st.variant},
                       {"load_ms", load_ms},
                       {"upload_ms", gv.upload_ms()},
@@ -112,7 +116,7 @@ int run_scene_bench(const SceneBenchArgs& a) {
               load_ms, gv.upload_ms(), gv.macrocell_ms(), first_frame_ms, load_ms + upload_total_ms + first_frame_ms);
   std::printf("%d frames over a %.0f-degree orbit after %d warm-up: frame ms median %.1f min %.1f max %.1f; "
               "render ms median %.1f; samples per ray %.1f\n",
-              n, a.orbit, a.warmup, median(frame_ms), *mn, *mx, median(render_ms), median(spr));
+              n, a.orbit, a.warmup, median(frame_ms), *mn, *mx, median(render_ms), samples_per_ray);
   if (a.bare)
     std::printf("bare sampling loop (same rays and samples, no TF, no compositing, no traversal): %.1f ms against "
                 "%.1f ms for the full ray caster (float output): ratio %.2f\n",

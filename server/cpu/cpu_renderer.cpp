@@ -154,10 +154,12 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
     CellBytes* d = cache_find(distances_, fs.occupancy_key);
     if (!d) {
       std::vector<uint8_t> distance = render::traversal_distances(*fs.occupancy, leaps_);
+      const bool any = std::find(distance.begin(), distance.end(), uint8_t(0)) != distance.end();
       distance.resize(distance.size() + 4, 0);  // the packet leaps read 4 bytes at a cell's index
-      d = &cache_insert(distances_, CellBytes{fs.occupancy_key, std::move(distance)}, kCacheEntries);
+      d = &cache_insert(distances_, CellBytes{fs.occupancy_key, std::move(distance), any}, kCacheEntries);
     }
     f.cell_distance = d->bytes.data();
+    f.nothing_visible = !d->any_occupied;
   }
   if (f.key.adaptive) {  // data only (no TF): built once per grid
     const std::string mkey = std::to_string(cv.serial()) + " " + cells.to_string();
@@ -197,26 +199,8 @@ void CpuRenderer::for_each_row(const PixelRect& rect, const PerRow& fn) const {
       threads_);
 }
 
-RenderResult CpuRenderer::render(const render::ResidentVolume& v, const ResolvedScene& s,
-                                 const render::RenderRequest& req, RenderStats* stats) {
-  const CpuVolume& cv = cpu_volume(v);
-  const PixelRect rect = req.tile.value_or(PixelRect{0, 0, s.scene.width, s.scene.height});
-  render::check_rect(rect, s.scene.width, s.scene.height);
-  if (stats) *stats = RenderStats{};
-  CpuFrame f = prepare(cv, s, req.path, stats);
-  const bool rgb8 = req.output == render::RenderOutput::Rgb8;
-  f.key.rgb8 = rgb8;
-  const bool read_samples = !rgb8 || req.sample_stats;
-  const glm::vec3 background(s.scene.background);
-
-  RenderResult res;
-  res.rect = rect;
-  std::vector<float> samples(read_samples ? size_t(rect.w) * size_t(rect.h) : 0);
-  if (rgb8)
-    res.rgb8 = render::Rgb8Image(rect.w, rect.h);
-  else
-    res.image = Image(rect.w, rect.h);
-  const auto t0 = Clock::now();
+void CpuRenderer::cast_rows(const CpuFrame& f, const PixelRect& rect, bool rgb8, bool read_samples,
+                            const glm::vec3& background, RenderResult& res, std::vector<float>& samples) const {
   for_each_row(rect, [&](int x0, int x1, int y) {
     float px[kTile], py[kTile];
     RayResult rays[kTile];
@@ -245,6 +229,35 @@ RenderResult CpuRenderer::render(const render::ResidentVolume& v, const Resolved
       if (read_samples) samples[p] = r.samples;
     }
   });
+}
+
+RenderResult CpuRenderer::render(const render::ResidentVolume& v, const ResolvedScene& s,
+                                 const render::RenderRequest& req, RenderStats* stats) {
+  const CpuVolume& cv = cpu_volume(v);
+  const PixelRect rect = req.tile.value_or(PixelRect{0, 0, s.scene.width, s.scene.height});
+  render::check_rect(rect, s.scene.width, s.scene.height);
+  if (stats) *stats = RenderStats{};
+  CpuFrame f = prepare(cv, s, req.path, stats);
+  const bool rgb8 = req.output == render::RenderOutput::Rgb8;
+  f.key.rgb8 = rgb8;
+  const bool read_samples = !rgb8 || req.sample_stats;
+  const glm::vec3 background(s.scene.background);
+
+  RenderResult res;
+  res.rect = rect;
+  std::vector<float> samples(read_samples ? size_t(rect.w) * size_t(rect.h) : 0);
+  if (rgb8)
+    res.rgb8 = render::Rgb8Image(rect.w, rect.h);
+  else
+    res.image = Image(rect.w, rect.h);
+  const auto t0 = Clock::now();
+  if (f.nothing_visible && rgb8 && !read_samples) {  // a frame with nothing to draw costs nothing
+    uint8_t bg[3];
+    for (int k = 0; k < 3; ++k) bg[k] = quantise(background[k]);
+    for (size_t p = 0; p < size_t(rect.w) * size_t(rect.h); ++p) std::copy(bg, bg + 3, &res.rgb8.rgb[p * 3]);
+  } else {
+    cast_rows(f, rect, rgb8, read_samples, background, res, samples);
+  }
   const double render_ms = ms_since(t0);
   if (!rgb8) res.image.samples = samples;
   if (stats) {

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
 #include "cpu/cpu_volume.h"
@@ -67,6 +68,9 @@ class CpuRenderer : public render::Renderer {
                    render::RenderStats* stats);
   // Calls fn(x0, x1, y) for the rows of every tile of `rect` (rect-relative pixels), tiles
   // spread over the threads.
+  // Casts the rect's rays into res (rgb8 or float) and, when asked, their sample counts.
+  void cast_rows(const CpuFrame& f, const render::PixelRect& rect, bool rgb8, bool read_samples,
+                 const glm::vec3& background, render::RenderResult& res, std::vector<float>& samples) const;
   template <class PerRow>
   void for_each_row(const render::PixelRect& rect, const PerRow& fn) const;
 
@@ -89,6 +93,7 @@ class CpuRenderer : public render::Renderer {
   struct CellBytes {  // empty-space distances of one occupancy, or adaptive multipliers of one grid
     std::string key;
     std::vector<uint8_t> bytes;
+    bool any_occupied = true;  // distances: some cell has distance 0 (something to sample)
   };
   static constexpr size_t kCacheEntries = 4;
   std::vector<TfTable> tf_tables_;

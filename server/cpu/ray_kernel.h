@@ -46,6 +46,8 @@ struct CpuFrame {
   int grid[3] = {1, 1, 1};
   float cell_edge = 8;
   const uint8_t* cell_distance = nullptr;  // space skipping
+  // Space skipping found no occupied cell: no ray samples anything, every pixel is background.
+  bool nothing_visible = false;
   const uint8_t* cell_stride = nullptr;    // adaptive multipliers
   // Per-TF tables.
   const float* tf = nullptr;  // TransferFunction::kTableSize RGBA, opacity for `step`

@@ -9,6 +9,7 @@
 
 #include "core/occupancy.h"
 #include "cpu/cpu_renderer.h"
+#include "encode/png.h"
 #include "gpu/gpu_fixture.h"
 
 namespace peakcast {
@@ -131,6 +132,43 @@ TEST_P(Leaps, CpuRayPacketsEqualSingleRays) {
 
 INSTANTIATE_TEST_SUITE_P(Scenes, Leaps, ::testing::ValuesIn(kCases),
                          [](const ::testing::TestParamInfo<LeapCase>& i) { return std::string(i.param.name); });
+
+// A frame with nothing visible (issue 13): when no cell is occupied, the CPU backend fills the
+// background without casting a ray. Every method must still give exactly the background, and
+// the float output (which reads the sample counts) the same pixels.
+TEST(NothingVisible, EveryMethodGivesExactlyTheBackground) {
+  auto vol = test::make_volume(GeneratorKind::Blobs, {40, 36, 32}, SourceType::U8);
+  test::TestVolume gv(vol);
+  const double lo = vol->min_value, hi = vol->max_value;
+  // Opacity zero everywhere; the peak-finding scene's peak lies beyond the data's range.
+  const json zero = {{"points", {{lo, 1, 0.5, 0.2, 0.0}, {hi, 0.2, 0.5, 1, 0.0}}}};
+  const json beyond = {{"points", {{lo, 0, 0, 0, 0}, {hi + 10, 0, 0, 0, 0}, {hi + 11, 1, 0, 0, 0.9}, {hi + 12, 0, 0, 0, 0}}}};
+  const std::vector<json> renders = {
+      {{"classification", "post"}},
+      {{"classification", "preint"}},
+      {{"classification", "peaks"}, {"shading", true}},
+      {{"filter", "tricubic"}, {"virtual_samples", 3}},
+      {{"adaptive", true}},
+  };
+  for (const json& r : renders) {
+    const json tf = r.value("classification", "") == "peaks" ? beyond : zero;
+    ResolvedScene s = test::make_scene(*vol, {{"tf", tf}, {"render", r}, {"background", {0.1, 0.4, 0.7}},
+                                             {"image", {{"width", 61}, {"height", 47}}}});
+    render::RenderRequest req;
+    req.output = render::RenderOutput::Rgb8;
+    const render::Rgb8Image img = test::gpu().caster->render(gv, s, req, nullptr).rgb8;
+    const uint8_t want[3] = {26, 102, 179};  // round(255 * background)
+    size_t off = 0;
+    for (size_t p = 0; p < img.rgb.size(); ++p) off += img.rgb[p] != want[p % 3];
+    EXPECT_EQ(off, 0u) << r.dump();
+    render::RenderStats st;
+    req.output = render::RenderOutput::Float;
+    const Image f = test::gpu().caster->render(gv, s, req, &st).image;
+    EXPECT_EQ(encode::to_rgb8(f), img.rgb) << r.dump();
+    EXPECT_EQ(st.samples_total, 0.0) << r.dump();
+    EXPECT_GT(st.rays_hit, 0) << r.dump();
+  }
+}
 
 }  // namespace
 }  // namespace peakcast
