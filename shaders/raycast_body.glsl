@@ -18,7 +18,13 @@ struct RayResult {
   float samples;  // filter evaluations (root-solving steps included); -1: missed the box
 };
 
+#ifdef BRICK
+// Distributed rendering: the texture holds one brick (and ghosts) of the volume whose box the
+// ray, its lattice and the macrocell walk live in; only where voxels are read moves.
+vec3 voxel_coords(vec3 p) { return (p + u_brick_half.xyz) * (1.0 / u_spacing.xyz); }
+#else
 vec3 voxel_coords(vec3 p) { return (p + u_box_half.xyz) * (1.0 / u_spacing.xyz); }
+#endif
 
 #if defined(PEAKS) || defined(PREINTEGRATION) || defined(VIRTUAL_SAMPLES)
 #define SEGMENTS  // methods that look at the segment between consecutive samples
@@ -49,6 +55,68 @@ vec3 voxel_coords(vec3 p) { return (p + u_box_half.xyz) * (1.0 / u_spacing.xyz);
 float g_prev_t, g_prev_f;
 bool g_have_prev, g_gap;
 int g_expect;
+// The lattice points the ray composites (BRICK: those it owns; else all of them), and whether
+// the point being consumed is owned (a brick's closing point adds its segment only).
+int g_own_first, g_own_last;
+bool g_own_point;
+
+#ifdef BRICK
+// Lattice point i lies in this brick's own box (whole-volume voxel coordinates, computed alike
+// on every rank, so exactly one rank owns each point). u_own_lo.w / u_own_hi.w: the axes whose
+// bound is the volume's own face (none there: rounding may put a point a hair outside).
+bool owns(Ray r, Lattice L, int i) {
+  vec3 x = (r.o + lattice_t(L, float(i)) * r.d + u_box_half.xyz) * (1.0 / u_spacing.xyz);
+  int open_lo = int(u_own_lo.w), open_hi = int(u_own_hi.w);
+  for (int a = 0; a < 3; ++a) {
+    bool lo_ok = ((open_lo >> a) & 1) != 0 || x[a] >= u_own_lo[a];
+    bool hi_ok = ((open_hi >> a) & 1) != 0 || x[a] < u_own_hi[a];
+    if (!(lo_ok && hi_ok)) return false;
+  }
+  return true;
+}
+
+int index_near(Lattice L, float t, vec2 span, int last) {
+  float i = floor(lattice_index(L, clamp(t, span.x, span.y)) + 0.5);
+  return (i <= 0.0 || isnan(i)) ? 0 : (i >= float(last) ? last : int(i));
+}
+
+// Restricts the ray to the points it owns (cpu/ray_brick-inl.h clip_to_brick, the same steps):
+// a first guess from the ray's interval in the own box, then owns() decides at both ends.
+// False when it owns none; else g_own_first/g_own_last, and `last` becomes the point closing
+// the last owned segment (segment methods) or the last owned point.
+bool clip_to_brick(Ray r, Lattice L, vec2 span, inout int last) {
+  if (last < 0) return false;
+  vec3 lo = u_own_lo.xyz * u_spacing.xyz - u_box_half.xyz, hi = u_own_hi.xyz * u_spacing.xyz - u_box_half.xyz;
+  int open_lo = int(u_own_lo.w), open_hi = int(u_own_hi.w);
+  float t_in = -3.0e38, t_out = 3.0e38;
+  for (int a = 0; a < 3; ++a) {
+    if (abs(r.d[a]) < 1e-20) continue;
+    float t_lo = ((open_lo >> a) & 1) != 0 ? (r.d[a] > 0.0 ? -3.0e38 : 3.0e38) : (lo[a] - r.o[a]) / r.d[a];
+    float t_hi = ((open_hi >> a) & 1) != 0 ? (r.d[a] > 0.0 ? 3.0e38 : -3.0e38) : (hi[a] - r.o[a]) / r.d[a];
+    t_in = max(t_in, min(t_lo, t_hi));
+    t_out = min(t_out, max(t_lo, t_hi));
+  }
+  if (!(t_in <= t_out)) {
+    t_in = 0.5 * (max(t_in, span.x) + min(t_out, span.y));
+    t_out = t_in;
+  }
+  int first = index_near(L, t_in, span, last);
+  int own_last = max(first, index_near(L, t_out, span, last));
+  while (first <= own_last && !owns(r, L, first)) ++first;
+  while (own_last >= first && !owns(r, L, own_last)) --own_last;
+  if (first > own_last) return false;
+  while (first > 0 && owns(r, L, first - 1)) --first;
+  while (own_last < last && owns(r, L, own_last + 1)) ++own_last;
+  g_own_first = first;
+  g_own_last = own_last;
+#ifdef SEGMENTS
+  last = min(own_last + 1, last);  // the point closing the last segment
+#else
+  last = own_last;
+#endif
+  return true;
+}
+#endif
 
 #ifdef VIRTUAL_SAMPLES
 #define SAMPLE_GRADIENT(x, g) (g)  // interpolated like the value (Lee §4)
@@ -87,6 +155,9 @@ bool consume(Ray r, float t, float f, vec3 x, vec3 g, float dt, inout RayResult 
 #endif
   }
 #elif !defined(PEAKS_ONLY)
+#ifdef BRICK
+  if (g_own_point)  // a brick's closing point: its segment only
+#endif
 #ifdef PEAK_XOR
   if (!peak_hit)
 #endif
@@ -214,6 +285,7 @@ bool visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
   vec3 x = voxel_coords(r.o + t * r.d);
   float f = sample_field(x);
   res.samples += 1.0;
+  g_own_point = i <= g_own_last;
   bool gap = i != g_expect;  // lattice points between the last visit and this one were skipped
   g_expect = i + m;
   if (gap) g_gap = true;  // until the next sample is consumed: no segment across the gap
@@ -241,6 +313,9 @@ RayResult cast_ray(vec2 pixel) {
   g_have_prev = false;
   g_gap = false;
   g_expect = 0;
+  g_own_first = 0;
+  g_own_last = 2147483647;
+  g_own_point = true;
 #ifdef VIRTUAL_SAMPLES
   w_n = 0;
 #endif
@@ -257,11 +332,17 @@ RayResult cast_ray(vec2 pixel) {
   L.B *= step_mult;
 #endif
   int last = int(min(floor(lattice_index(L, span.y)), u_value_map.w - 1.0));
+#ifdef BRICK
+  if (!clip_to_brick(r, L, span, last)) {  // none of its points in this brick: nothing to draw here
+    res.samples = -1.0;
+    return res;
+  }
+#endif
 #if !defined(CELL_TRAVERSAL)
   // Nested: llvmpipe stops any single loop after 65535 iterations (LP_MAX_TGSI_LOOP_ITERATIONS),
   // far below the per-ray cap; chunks of CHUNK keep every loop under it.
   bool stop = false;
-  for (int c = 0; c <= last && !stop; c += CHUNK)
+  for (int c = g_own_first; c <= last && !stop; c += CHUNK)
     for (int i = c; i <= min(last, c + CHUNK - 1); ++i)
       if (visit(r, L, i, 1, res)) {
         stop = true;
@@ -283,7 +364,7 @@ RayResult cast_ray(vec2 pixel) {
   bvec3 moves = greaterThanEqual(abs(dv), vec3(1e-20));
   vec3 inv_dv = mix(vec3(0.0), 1.0 / mix(vec3(1.0), dv, moves), moves);
   vec3 ahead = vec3(greaterThan(dv, vec3(0.0)));
-  int i = 0;
+  int i = g_own_first;
   int visited = -2;  // the last lattice index visited
   bool stop = false;
   int rounds = (last + 2 + 8 * (grid.x + grid.y + grid.z)) / CHUNK + 1;
@@ -295,7 +376,7 @@ RayResult cast_ray(vec2 pixel) {
       uint empty_distance = cell_byte(u_cell_distance, c);
       if (empty_distance == 0u) {
 #ifdef SEGMENTS
-        if (i >= 1 && visited != i - 1 && visit(r, L, i - 1, 1, res)) {  // the segment into the run
+        if (i - 1 >= g_own_first && visited != i - 1 && visit(r, L, i - 1, 1, res)) {  // the segment into the run
           stop = true;
           break;
         }

@@ -106,7 +106,7 @@ int run(const MpiRenderArgs& a, int rank, int size) {
   cpu::CpuRenderer renderer(rank_threads());
   auto resident = renderer.make_resident(brick);
   render::RenderStats st;
-  const Image layer = renderer.render_brick(*resident, scene, dist::cpu_brick(mine, dims), &st);
+  const Image layer = renderer.render_brick(*resident, scene, dist::frame_brick(mine, dims), &st);
 
   const glm::dvec3 eye = (scene.camera.eye - box.origin) / box.spacing;
   const glm::dvec3 dir = glm::normalize((scene.camera.center - scene.camera.eye) / box.spacing);

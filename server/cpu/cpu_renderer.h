@@ -38,26 +38,9 @@ class CpuRenderer : public render::Renderer {
                     const Image& full, render::RenderStats* stats = nullptr) override;
   int sample_cap(const render::VariantKey&) const override;
 
-  // Distributed rendering (issue 16, docs/distributed.md): `volume` holds one brick of a larger
-  // volume, `scene` is resolved against the whole volume (its box, camera and lattice). Renders
-  // the brick's part of every ray: premultiplied RGBA, transparent where the ray owns nothing
-  // here, no background (the compositor puts it under the ranks' layers), rays run until
-  // opaque (no rank sees the opacity in front of its brick).
-  struct Brick {
-    glm::dvec3 read_lo{0};              // the resident voxel 0 in the whole volume's voxels
-    glm::dvec3 own_lo{0}, own_hi{0};    // the owned box, whole-volume voxel coordinates
-    // own_lo is the volume's first voxel, own_hi its last, on that axis: no bound there (every
-    // lattice point lies in the volume's box; rounding may put the first or last a hair outside).
-    bool at_start[3] = {false, false, false}, at_end[3] = {false, false, false};
-  };
-  // Throws std::invalid_argument for what bricks cannot draw yet (virtual samples, adaptive
-  // sampling, ray textures, differential sampling with a segment method) and for a scene
-  // whose box the brick does not lie in.
-  // `rect`: a tile of the image (default: all of it); the layer is the tile's size.
+  using Brick = render::Brick;
   Image render_brick(const render::ResidentVolume& volume, const ResolvedScene& scene, const Brick& brick,
-                     render::RenderStats* stats = nullptr, std::optional<render::PixelRect> rect = std::nullopt);
-  // render_brick's refusals of a scene, for callers that must refuse before asking other ranks.
-  static void check_brick_scene(const ResolvedScene& scene);
+                     render::RenderStats* stats = nullptr, std::optional<render::PixelRect> rect = std::nullopt) override;
   // Off: every ray alone (cast_ray), without the packet leaps of cast_rays. Tests show both
   // give the same pixels and sample counts.
   void set_ray_packets(bool on) { packets_ = on; }

@@ -12,8 +12,8 @@ int brick_ghost(const ResolvedScene& s) {
   return ghost;
 }
 
-cpu::CpuRenderer::Brick cpu_brick(const Brick& b, const Index3& dims) {
-  cpu::CpuRenderer::Brick c;
+render::Brick frame_brick(const Brick& b, const Index3& dims) {
+  render::Brick c;
   for (int a = 0; a < 3; ++a) {
     c.read_lo[a] = double(b.read_lo[a]);
     c.own_lo[a] = double(b.lo[a]);

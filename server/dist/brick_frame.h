@@ -1,4 +1,4 @@
-// Distributed rendering's glue between the k-d split and the CPU backend's brick frames: how
+// Distributed rendering's glue between the k-d split and the renderers' brick frames: how
 // many ghost voxels a scene needs, the brick as the renderer takes it, and the display rank's
 // last step (the background under the composited layers). No MPI here: the tests composite
 // bricks in one process with the same functions.
@@ -8,7 +8,7 @@
 
 #include "core/image.h"
 #include "core/scene.h"
-#include "cpu/cpu_renderer.h"
+#include "render/brick.h"
 #include "dist/kd_split.h"
 
 namespace peakcast::dist {
@@ -18,8 +18,8 @@ namespace peakcast::dist {
 // with the point one step past its box.
 int brick_ghost(const ResolvedScene& scene);
 
-// The brick as CpuRenderer::render_brick takes it; dims: the whole volume's.
-cpu::CpuRenderer::Brick cpu_brick(const Brick& brick, const Index3& dims);
+// The brick as Renderer::render_brick takes it; dims: the whole volume's.
+render::Brick frame_brick(const Brick& brick, const Index3& dims);
 
 // The front-to-back "over" of premultiplied RGBA layers (each width*height*4), in `order`:
 // what IceT computes, for one process.

@@ -99,7 +99,7 @@ struct Composited {
 Composited render_composite(BrickSet& b, const ResolvedScene& rs, const render::PixelRect& rect, bool samples,
                             cpu::CpuRenderer& renderer, IceTCompositor& icet) {
   Composited c;
-  const Image layer = renderer.render_brick(*b.brick, rs, cpu_brick(b.mine, b.dims), &c.stats, rect);
+  const Image layer = renderer.render_brick(*b.brick, rs, frame_brick(b.mine, b.dims), &c.stats, rect);
   const glm::dvec3 eye = (rs.camera.eye - b.box.origin) / b.box.spacing;
   const glm::dvec3 dir = glm::normalize((rs.camera.center - rs.camera.eye) / b.box.spacing);
   CompositeTiming t;
@@ -212,7 +212,7 @@ render::RenderResult MpiRenderer::render(const render::ResidentVolume& v, const 
                                          const render::RenderRequest& req, render::RenderStats* stats) {
   auto* res = dynamic_cast<const Resident*>(&v);
   if (!res) throw std::invalid_argument("the MPI renderer draws its own volumes only");
-  cpu::CpuRenderer::check_brick_scene(s);  // before any rank is asked
+  render::check_brick_scene(s);  // before any rank is asked
   const render::PixelRect rect = req.tile.value_or(render::PixelRect{0, 0, s.scene.width, s.scene.height});
   render::check_rect(rect, s.scene.width, s.scene.height);
   auto& bricks = const_cast<Resident*>(res)->bricks;
@@ -269,6 +269,11 @@ render::RenderResult MpiRenderer::render(const render::ResidentVolume& v, const 
 Image MpiRenderer::render_bare(const render::ResidentVolume&, const ResolvedScene&, render::GpuPath, const Image&,
                                render::RenderStats*) {
   throw std::invalid_argument("the bare sampling loop is not measured under MPI");
+}
+
+Image MpiRenderer::render_brick(const render::ResidentVolume&, const ResolvedScene&, const render::Brick&,
+                                render::RenderStats*, std::optional<render::PixelRect>) {
+  throw std::invalid_argument("an MPI renderer draws whole frames: its ranks render the bricks");
 }
 
 int MpiRenderer::sample_cap(const render::VariantKey& key) const { return impl_->renderer.sample_cap(key); }

@@ -33,6 +33,8 @@ class MpiRenderer : public render::Renderer {
                               const render::RenderRequest& request, render::RenderStats* stats = nullptr) override;
   Image render_bare(const render::ResidentVolume&, const ResolvedScene&, render::GpuPath, const Image&,
                     render::RenderStats* = nullptr) override;
+  Image render_brick(const render::ResidentVolume&, const ResolvedScene&, const render::Brick&,
+                     render::RenderStats* = nullptr, std::optional<render::PixelRect> = std::nullopt) override;
   int sample_cap(const render::VariantKey& key) const override;
   int ranks() const { return ranks_; }
 

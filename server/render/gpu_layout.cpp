@@ -9,7 +9,9 @@ std::map<std::string, size_t> host_uniform_offsets() {
           {"u_dims", offsetof(RayUniforms, dims)},       {"u_value_map", offsetof(RayUniforms, value_map)},
           {"u_background", offsetof(RayUniforms, background)}, {"u_cells", offsetof(RayUniforms, cells)},
           {"u_image", offsetof(RayUniforms, image)},
-          {"u_peaks", offsetof(RayUniforms, peaks)},           {"u_tables", offsetof(RayUniforms, tables)}};
+          {"u_peaks", offsetof(RayUniforms, peaks)},           {"u_tables", offsetof(RayUniforms, tables)},
+          {"u_brick_half", offsetof(RayUniforms, brick_half)}, {"u_own_lo", offsetof(RayUniforms, own_lo)},
+          {"u_own_hi", offsetof(RayUniforms, own_hi)}};
 }
 
 std::map<std::string, size_t> gl_uniform_offsets(const gpu::Program& program) {

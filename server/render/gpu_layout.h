@@ -27,9 +27,15 @@ struct RayUniforms {
   glm::ivec4 image;
   glm::vec4 peaks;
   glm::vec4 tables;
+  // Bricks (render/brick.h), whole-volume voxel coordinates: xyz of brick_half: the offset
+  // voxel_coords adds (box_half - read_lo * spacing); own_lo/own_hi: the owned box, w: the
+  // axes (bits 0-2) on which it has no bound (the volume's own faces).
+  glm::vec4 brick_half;
+  glm::vec4 own_lo;
+  glm::vec4 own_hi;
 };
 
-static_assert(sizeof(RayUniforms) == 13 * 16, "std140 block size");
+static_assert(sizeof(RayUniforms) == 16 * 16, "std140 block size");
 static_assert(offsetof(RayUniforms, value_map) == 7 * 16, "std140 offset");
 static_assert(offsetof(RayUniforms, image) == 10 * 16, "std140 offset");
 

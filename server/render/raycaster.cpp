@@ -15,7 +15,7 @@ namespace peakcast::render {
 namespace {
 
 RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const MacrocellGrid& cells,
-                          const RayTables& t, const PixelRect& rect, int sample_cap) {
+                          const RayTables& t, const PixelRect& rect, int sample_cap, const Brick* brick) {
   const SamplingPlan plan = plan_sampling(s);
   const Volume& v = gv.volume();
   const glm::dvec3 center = (s.box_min + s.box_max) * 0.5;
@@ -34,6 +34,17 @@ RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const Mac
   u.image = glm::ivec4(s.scene.width, s.scene.height, rect.x, rect.y);
   u.peaks = glm::vec4(float(t.peak_bins), float(t.peak_layers), float(t.max_peaks), float(t.secant_iterations));
   u.tables = glm::vec4(float(t.preint_size), float(t.tf_points), float(plan.k), float(plan.min_step));
+  if (brick) {  // as cpu_renderer.cpp's render_brick sets its frame
+    u.brick_half = glm::vec4(glm::vec3(u.box_half) - glm::vec3(brick->read_lo * v.spacing), 0.f);
+    float open_lo = 0.f, open_hi = 0.f;
+    for (int a = 0; a < 3; ++a) {
+      open_lo += brick->at_start[a] ? float(1 << a) : 0.f;
+      open_hi += brick->at_end[a] ? float(1 << a) : 0.f;
+    }
+    u.own_lo = glm::vec4(glm::vec3(brick->own_lo), open_lo);
+    u.own_hi = glm::vec4(glm::vec3(brick->own_hi), open_hi);
+    u.dims.w = 1.f;  // until opaque: no rank sees the opacity in front of its brick
+  }
   return u;
 }
 
@@ -119,6 +130,23 @@ RenderResult Raycaster::render(const ResidentVolume& v, const ResolvedScene& s, 
   return draw(gv, s, key, rect, req.output == RenderOutput::Float || req.sample_stats, stats);
 }
 
+Image Raycaster::render_brick(const ResidentVolume& v, const ResolvedScene& s, const Brick& brick, RenderStats* stats,
+                             std::optional<PixelRect> tile) {
+  check_brick_scene(s);
+  const GpuVolume& gv = gpu_volume(v);
+  check_brick_box(s, brick, gv.volume().spacing);
+  const PixelRect rect = tile.value_or(PixelRect{0, 0, s.scene.width, s.scene.height});
+  check_rect(rect, s.scene.width, s.scene.height);
+  if (stats) *stats = RenderStats{};
+  VariantKey key = prepare(gv, s, GpuPath::Fragment, stats);
+  if (key.cell_dda || key.adaptive || key.virtual_samples || key.ray_texture)
+    throw std::invalid_argument("distributed rendering: this frame's variant (" + key.name() +
+                                ") walks cells or sample windows that bricks do not bound yet");
+  key.brick = true;
+  key.rgb8 = false;
+  return std::move(draw(gv, s, key, rect, true, stats, &brick).image);
+}
+
 // The TF table for the scene's step (render/frame_setup.h), linearly filtered like a texture.
 void Raycaster::bind_tf_table(const GpuVolume& gv, const ResolvedScene& s, const std::string& tf_sig) {
   const std::string sig = step_tf_key(s, tf_sig);
@@ -188,14 +216,14 @@ Image Raycaster::render_bare(const ResidentVolume& v, const ResolvedScene& s, Gp
 }
 
 RenderResult Raycaster::draw(const GpuVolume& gv, const ResolvedScene& s, const VariantKey& key,
-                           const PixelRect& rect, bool read_samples, RenderStats* stats) {
+                           const PixelRect& rect, bool read_samples, RenderStats* stats, const Brick* brick) {
   const int w = rect.w, h = rect.h;
   const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
   const GpuPath path = key.path;
   const RenderOutput output = key.rgb8 ? RenderOutput::Rgb8 : RenderOutput::Float;
   const gpu::Program& prog = program(key);
   const int cap = sample_cap(key);
-  const RayUniforms u = make_uniforms(gv, s, cells, tables_, rect, cap);
+  const RayUniforms u = make_uniforms(gv, s, cells, tables_, rect, cap, brick);
   glNamedBufferSubData(ubo_.id(), 0, sizeof u, &u);
   glBindBufferBase(GL_UNIFORM_BUFFER, kUboRay, ubo_.id());
   gv.bind(kUnitVolume);  // the TF table and the other per-TF tables were bound by prepare()

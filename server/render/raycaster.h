@@ -46,6 +46,9 @@ class Raycaster : public Renderer {
                       RenderStats* stats = nullptr) override;
   Image render_bare(const ResidentVolume& volume, const ResolvedScene& scene, GpuPath path, const Image& full,
                     RenderStats* stats = nullptr) override;
+  // The fragment path with BRICK: ownership and the closing point as the CPU backend's.
+  Image render_brick(const ResidentVolume& volume, const ResolvedScene& scene, const Brick& brick,
+                     RenderStats* stats = nullptr, std::optional<PixelRect> rect = std::nullopt) override;
   int sample_cap(const VariantKey& key) const override;
   // For the layout test: the linked program of a variant.
   const gpu::Program& program(const VariantKey& key);
@@ -67,7 +70,7 @@ class Raycaster : public Renderer {
   void bind_tf_table(const GpuVolume& volume, const ResolvedScene& scene, const std::string& tf_sig);
   void bind_multipliers(const GpuVolume& volume, const MacrocellGrid& cells);
   RenderResult draw(const GpuVolume& volume, const ResolvedScene& scene, const VariantKey& key, const PixelRect& rect,
-                    bool read_samples, RenderStats* stats);
+                    bool read_samples, RenderStats* stats, const Brick* brick = nullptr);
 
   gpu::ShaderCache& shaders_;
   gpu::Buffer ubo_;

@@ -5,10 +5,12 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "core/image.h"
 #include "core/scene.h"
+#include "render/brick.h"
 #include "render/frame.h"
 #include "render/render_stats.h"
 #include "render/resident_volume.h"
@@ -41,6 +43,11 @@ class Renderer {
   }
   // Benchmark baseline: the rays of `full` (an image this renderer made of the same scene)
   // with its per-pixel sample counts, reconstruction only.
+  // Distributed rendering: the brick's layer of the frame (render/brick.h), whole image or a
+  // tile of it; `volume` holds the brick's region of the whole volume. Float RGBA,
+  // premultiplied, no background; samples -1 where the ray owns no lattice point here.
+  virtual Image render_brick(const ResidentVolume& volume, const ResolvedScene& scene, const Brick& brick,
+                             RenderStats* stats = nullptr, std::optional<PixelRect> rect = std::nullopt) = 0;
   virtual Image render_bare(const ResidentVolume& volume, const ResolvedScene& scene, GpuPath path, const Image& full,
                             RenderStats* stats = nullptr) = 0;
   // The most samples a ray of this variant takes (kMaxSamplesPerRay, or less where a driver

@@ -33,6 +33,9 @@ struct VariantKey {
   // Tests only: space skipping by the 3D-DDA over macrocells instead of lattice-driven leaps
   // (the two must visit the same points; adaptive sampling always uses the DDA).
   bool cell_dda = false;
+  // Distributed rendering (render/brick.h): one brick's part of each ray, premultiplied, no
+  // background. Set by render_brick, never chosen from a scene.
+  bool brick = false;
 
   std::vector<std::string> defines() const;
   std::string name() const;  // e.g. "frag+tricubic+skip", "cpu+trilinear+preint"

@@ -1,6 +1,6 @@
 // Distributed rendering without MPI: a volume split into k-d bricks (dist/kd_split), each brick
-// read as a region of the file and rendered by CpuRenderer::render_brick on the whole volume's
-// lattice, the layers composited "over" in visibility order, must give the image one process
+// read as a region of the file and rendered by the backend's render_brick (the GL ray caster's
+// BRICK variant, or the CPU backend's, as every test here) on the whole volume's lattice, the layers composited "over" in visibility order, must give the image one process
 // renders of the whole volume (rays run until opaque in both), within 1/255 (issue 16). The MPI
 // tests (label mpi) run the same through mpirun and IceT.
 #include <gtest/gtest.h>
@@ -13,7 +13,8 @@
 
 #include "core/generators.h"
 #include "core/volume_io.h"
-#include "cpu/cpu_renderer.h"
+#include "gpu/gpu_fixture.h"
+#include "unit/test_util.h"
 #include "dist/brick_frame.h"
 #include "dist/kd_split.h"
 
@@ -21,7 +22,7 @@ using namespace peakcast;
 
 namespace {
 
-const std::string kData = std::string(PEAKCAST_SOURCE_DIR) + "/tests/data/";
+const std::string kData = test::data_dir().string() + "/";
 
 struct Case {
   std::string file;  // in tests/data, or generated into the build tree
@@ -59,7 +60,7 @@ double split_error(const Case& c, int ranks, const std::string& file) {
   scene.render.early_termination = 1.0;  // the ranks run until opaque: so does the one-process image
   const ResolvedScene rs = resolve_scene(scene, whole);
 
-  cpu::CpuRenderer renderer(2);
+  render::Renderer& renderer = *test::gpu().caster;
   auto whole_resident = renderer.make_resident(std::make_shared<Volume>(load_volume(file)));
   const Image one = renderer.render(*whole_resident, rs);
 
@@ -76,7 +77,7 @@ double split_error(const Case& c, int ranks, const std::string& file) {
     brick->min_value = whole.min_value;  // the global range (MPI: an Allreduce)
     brick->max_value = whole.max_value;
     auto resident = renderer.make_resident(brick);
-    layers.push_back(renderer.render_brick(*resident, rs, dist::cpu_brick(b, dims)).rgba);
+    layers.push_back(renderer.render_brick(*resident, rs, dist::frame_brick(b, dims)).rgba);
   }
   EXPECT_GE(voxels, whole.voxel_count());
   const glm::dvec3 eye = (rs.camera.eye - whole.origin) / whole.spacing;
@@ -86,11 +87,14 @@ double split_error(const Case& c, int ranks, const std::string& file) {
   return max_abs(one, composed);
 }
 
-// Measured over every case below: at most 2.4e-6 without peaks (float rounding: a brick's
+// Measured over every case below, CPU backend: at most 2.4e-6 without peaks (float rounding: a brick's
 // positions are computed from its own first voxel, and the layers composite in another order),
-// 3.4e-4 with heptane's Dirac peak (the root solver starts from those positions). Without the
-// point that closes a brick's last segment the error is 0.8. The issue's bound, 1/255, is what
-// the test holds.
+// 3.4e-4 with heptane's Dirac peak (the root solver starts from those positions). The GL ray
+// caster on llvmpipe: at most 2.1e-3 (anisotropic blobs, 3-4 bricks: the texture unit's filter
+// weights are quantised, and a brick's texel coordinates differ from the whole volume's in the
+// last bits), 2.5e-5 on Marschner-Lobb. Without the point that closes a brick's last segment
+// the error is 0.8 (CPU; the GL test fails likewise). The issue's bound, 1/255, is what the
+// test holds.
 constexpr double kBound = 1.0 / 255.0;
 
 void check_all_splits(const Case& c, const std::string& file) {
@@ -140,7 +144,7 @@ TEST(Bricks, RealSamplesEqualOneProcess) {
 TEST(Bricks, RefuseWhatBricksCannotDrawYet) {
   const std::string file = kData + "nucleon.nhdr";
   auto v = std::make_shared<Volume>(load_volume(file));
-  cpu::CpuRenderer renderer(1);
+  render::Renderer& renderer = *test::gpu().caster;
   auto resident = renderer.make_resident(v);
   const dist::Index3 dims{v->dims()[0], v->dims()[1], v->dims()[2]};
   const auto split = dist::kd_split(dims, 2, 3);
@@ -149,13 +153,13 @@ TEST(Bricks, RefuseWhatBricksCannotDrawYet) {
                         R"({"classification": "peaks", "peak_mode": "xor"})"}) {
     const ResolvedScene rs = resolve_scene(parse_scene_text(std::string(R"({"volume": "v", "render": )") + r + "}"), *v);
     try {
-      renderer.render_brick(*resident, rs, dist::cpu_brick(split.bricks[0], dims));
+      renderer.render_brick(*resident, rs, dist::frame_brick(split.bricks[0], dims));
       ADD_FAILURE() << r << " was drawn";
     } catch (const std::invalid_argument& e) {
       EXPECT_NE(std::string(e.what()).find("distributed rendering"), std::string::npos) << e.what();
     }
   }
-  cpu::CpuRenderer::Brick outside = dist::cpu_brick(split.bricks[0], dims);
+  render::Brick outside = dist::frame_brick(split.bricks[0], dims);
   outside.own_hi[0] = double(dims[0]) + 5;
   EXPECT_THROW(renderer.render_brick(*resident, resolve_scene(parse_scene_text(R"({"volume": "v"})"), *v), outside),
                std::invalid_argument);

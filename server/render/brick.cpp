@@ -1,0 +1,30 @@
+#include "render/brick.h"
+
+#include <stdexcept>
+#include <string>
+
+namespace peakcast::render {
+
+void check_brick_scene(const ResolvedScene& s) {
+  const RenderSettings& r = s.scene.render;
+  const bool segments = r.classification != Classification::Post;
+  if (r.virtual_samples > 0) throw std::invalid_argument("distributed rendering: virtual samples are not supported yet");
+  if (r.adaptive) throw std::invalid_argument("distributed rendering: adaptive sampling is not supported yet");
+  if (s.ray_texture) throw std::invalid_argument("distributed rendering: ray textures are not supported yet");
+  if (r.classification == Classification::Peaks && r.peak_mode == PeakMode::Xor)
+    throw std::invalid_argument("distributed rendering: peak mode xor is not supported yet (a brick's first sample "
+                                "cannot see a peak in the segment before it)");
+  if (r.sampling == Sampling::Differential && segments)
+    throw std::invalid_argument(std::string("distributed rendering: differential sampling with ") +
+                                to_string(r.classification) + " is not supported yet (its segments' length has no bound for the ghosts)");
+}
+
+void check_brick_box(const ResolvedScene& s, const Brick& brick, const glm::dvec3& spacing) {
+  for (int a = 0; a < 3; ++a) {
+    const double whole = (s.box_max[a] - s.box_min[a]) / spacing[a];
+    if (!(brick.own_lo[a] >= 0 && brick.own_lo[a] < brick.own_hi[a] && brick.own_hi[a] <= whole + 1e-9))
+      throw std::invalid_argument("render_brick: the brick's box is not inside the scene's volume box");
+  }
+}
+
+}  // namespace peakcast::render

@@ -1,0 +1,31 @@
+// Distributed rendering (issue 16, docs/distributed.md): what one rank draws of a frame. The
+// rank's resident volume holds one brick of a larger volume (read as a region, with ghosts);
+// the scene is resolved against the whole volume (its box, camera and sample lattice). Every
+// backend renders the brick's part of each ray: premultiplied RGBA, transparent where the ray
+// owns no lattice point here, no background (the compositor puts it under the ranks' layers),
+// rays running until opaque (no rank sees the opacity in front of its brick).
+#pragma once
+
+#include <glm/vec3.hpp>
+
+#include "core/scene.h"
+#include "core/volume.h"
+
+namespace peakcast::render {
+
+struct Brick {
+  glm::dvec3 read_lo{0};            // the resident voxel 0 in the whole volume's voxels
+  glm::dvec3 own_lo{0}, own_hi{0};  // the owned box, whole-volume voxel coordinates
+  // own_lo is the volume's first voxel, own_hi its last, on that axis: no bound there (every
+  // lattice point lies in the volume's box; rounding may put the first or last a hair outside).
+  bool at_start[3] = {false, false, false}, at_end[3] = {false, false, false};
+};
+
+// What bricks cannot draw yet (virtual samples, adaptive sampling, ray textures, peak mode xor,
+// differential sampling with a segment method): std::invalid_argument naming it. Callers that
+// must refuse before asking other ranks call it first; render_brick calls it too.
+void check_brick_scene(const ResolvedScene& scene);
+// The brick's own box must lie in the scene's volume box (std::invalid_argument otherwise).
+void check_brick_box(const ResolvedScene& scene, const Brick& brick, const glm::dvec3& spacing);
+
+}  // namespace peakcast::render
