@@ -57,6 +57,26 @@ int rank_threads() {
   return std::max(1, hardware_threads() / local_ranks);
 }
 
+// This rank's renderer: the CPU backend with the rank's share of the node's cores, or the GL ray
+// caster on the rank's own GPU (EglContext's "auto" starts at the device of the local rank).
+struct RankRenderer {
+  render::RenderBackend gl;  // the GL ray caster with its context and shaders
+  std::unique_ptr<render::Renderer> cpu;
+  render::Renderer& get() { return cpu ? *cpu : *gl.renderer; }
+};
+
+RankRenderer open_rank_renderer(const std::string& backend, const std::string& egl_device = "") {
+  RankRenderer r;
+  const render::Backend want = render::requested_backend(backend);
+  if (want != render::Backend::Cpu) {
+    r.gl = render::open_backend(want, egl_device);
+    if (r.gl.backend == render::Backend::Gl) return r;
+    r.gl = render::RenderBackend{};  // auto chose the CPU backend (a software rasteriser only)
+  }
+  r.cpu = std::make_unique<cpu::CpuRenderer>(rank_threads());
+  return r;
+}
+
 struct RankFigures {  // gathered on rank 0, one row per rank
   double lo[3], hi[3], read_lo[3], read_hi[3];
   double voxels_read, load_ms, render_ms, composite_ms, rss_mib, samples_mean;
@@ -64,8 +84,6 @@ struct RankFigures {  // gathered on rank 0, one row per rank
 
 int run(const MpiRenderArgs& a, int rank, int size) {
   const auto t_start = std::chrono::steady_clock::now();
-  if (render::requested_backend(a.backend) == render::Backend::Gl)
-    throw std::invalid_argument("mpirun peakcast render: the GL ray caster does not draw bricks yet; use --backend cpu (or auto)");
   ParsedSceneFile parsed = parse_scene_file(a.scene);
   // The file's header: every rank reads one voxel of it, which tells the whole volume's box.
   LoadOptions one;
@@ -103,7 +121,8 @@ int run(const MpiRenderArgs& a, int rank, int size) {
   // Fault injection for the tests (label mpi): this rank dies as a crashed process would.
   if (const char* kill = std::getenv("PEAKCAST_TEST_KILL_RANK"); kill && std::atoi(kill) == rank) std::raise(SIGKILL);
 
-  cpu::CpuRenderer renderer(rank_threads());
+  RankRenderer rank_renderer = open_rank_renderer(a.backend);
+  render::Renderer& renderer = rank_renderer.get();
   auto resident = renderer.make_resident(brick);
   render::RenderStats st;
   const Image layer = renderer.render_brick(*resident, scene, dist::frame_brick(mine, dims), &st);
@@ -157,7 +176,7 @@ int run(const MpiRenderArgs& a, int rank, int size) {
     nlohmann::json j = {{"ranks", size},          {"ghost", ghost},
                         {"render_ms", render_max}, {"composite_ms", composite_max},
                         {"wall_ms", wall_ms},      {"variant", st.variant},
-                        {"backend", "cpu"},        {"renderer", renderer.description()},
+                        {"backend", renderer.backend()}, {"renderer", renderer.description()},
                         {"volume_dims", {dims[0], dims[1], dims[2]}},
                         {"per_rank", ranks}};
     std::ofstream(a.stats) << j.dump(2) << "\n";
@@ -167,7 +186,8 @@ int run(const MpiRenderArgs& a, int rank, int size) {
 
 }  // namespace
 
-int mpi_serve(const std::function<int(RendererWrap, int)>& serve) {
+int mpi_serve(const std::string& backend, const std::string& egl_device,
+              const std::function<int(RendererWrap, int)>& serve) {
   int provided = 0;
   MPI_Init_thread(nullptr, nullptr, MPI_THREAD_SERIALIZED, &provided);
   int rank = 0, size = 1;
@@ -177,18 +197,17 @@ int mpi_serve(const std::function<int(RendererWrap, int)>& serve) {
   try {
     if (provided < MPI_THREAD_SERIALIZED)
       throw std::runtime_error("this MPI cannot be called from the render thread (MPI_THREAD_SERIALIZED)");
-    const int threads = rank_threads();
     if (rank == 0) {
       code = serve(
-          [size, threads](std::unique_ptr<render::Renderer> local) -> std::unique_ptr<render::Renderer> {
-            if (std::string(local->backend()) != "cpu")
-              throw std::invalid_argument(
-                  "mpirun peakcast serve: the GL ray caster does not draw bricks yet; use --backend cpu (or auto)");
-            return std::make_unique<dist::MpiRenderer>(size, threads);
+          [size](std::unique_ptr<render::Renderer> local) -> std::unique_ptr<render::Renderer> {
+            // The server's own renderer draws rank 0's brick; on the CPU, with the rank's cores.
+            if (std::string(local->backend()) == "cpu") local = std::make_unique<cpu::CpuRenderer>(rank_threads());
+            return std::make_unique<dist::MpiRenderer>(size, std::move(local));
           },
           size);
     } else {
-      dist::serve_worker(threads);
+      RankRenderer r = open_rank_renderer(backend, egl_device);
+      dist::serve_worker(r.get());
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "peakcast: error on rank %d of %d: %s\n", rank, size, e.what());

@@ -25,6 +25,8 @@ int mpi_render(const MpiRenderArgs& a);
 // wrap that puts dist::MpiRenderer over its CPU backend and the rank count, the others render
 // what it asks (dist::serve_worker). An error on rank 0 before it serves ends the job.
 using RendererWrap = std::function<std::unique_ptr<render::Renderer>(std::unique_ptr<render::Renderer>)>;
-int mpi_serve(const std::function<int(RendererWrap, int)>& serve);
+// backend, egl_device: the server's options, for the other ranks' renderers.
+int mpi_serve(const std::string& backend, const std::string& egl_device,
+              const std::function<int(RendererWrap, int)>& serve);
 
 }  // namespace peakcast::app

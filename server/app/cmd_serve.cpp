@@ -46,7 +46,7 @@ void add_serve_command(CLI::App& app, Runner& run) {
       net::ServerConfig config = o->resolved();
       if (mpi_world_size_hint() > 1) {  // mpirun -np N peakcast serve: rank 0 serves, every rank renders
 #ifdef PEAKCAST_HAVE_MPI
-        return mpi_serve([&](RendererWrap wrap, int ranks) {
+        return mpi_serve(config.backend, config.egl_device, [&](RendererWrap wrap, int ranks) {
           config.wrap_renderer = std::move(wrap);
           config.ranks = ranks;
           return serve(config, *o);

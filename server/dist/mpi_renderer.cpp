@@ -12,7 +12,6 @@
 #include <nlohmann/json.hpp>
 
 #include "core/volume_io.h"
-#include "cpu/cpu_renderer.h"
 #include "dist/brick_frame.h"
 #include "dist/icet_compositor.h"
 #include "dist/kd_split.h"
@@ -61,7 +60,7 @@ void broadcast(int64_t& cmd, int64_t& id, std::string& payload, std::vector<int6
 }
 
 // Every rank: its brick of the file, with the whole volume's value range.
-BrickSet load_bricks(const nlohmann::json& j, cpu::CpuRenderer& renderer) {
+BrickSet load_bricks(const nlohmann::json& j, render::Renderer& renderer) {
   int rank = 0, size = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
@@ -97,7 +96,7 @@ struct Composited {
 
 // Every rank: its brick's layer of `rect`, composited by IceT onto rank 0.
 Composited render_composite(BrickSet& b, const ResolvedScene& rs, const render::PixelRect& rect, bool samples,
-                            cpu::CpuRenderer& renderer, IceTCompositor& icet) {
+                            render::Renderer& renderer, IceTCompositor& icet) {
   Composited c;
   const Image layer = renderer.render_brick(*b.brick, rs, frame_brick(b.mine, b.dims), &c.stats, rect);
   const glm::dvec3 eye = (rs.camera.eye - b.box.origin) / b.box.spacing;
@@ -128,8 +127,9 @@ render::PixelRect rect_of(const nlohmann::json& j) {
 }  // namespace
 
 struct MpiRenderer::Impl {
-  explicit Impl(int threads) : renderer(threads), icet(MPI_COMM_WORLD, 0) {}
-  cpu::CpuRenderer renderer;
+  explicit Impl(std::unique_ptr<render::Renderer> local) : local(std::move(local)), renderer(*this->local), icet(MPI_COMM_WORLD, 0) {}
+  std::unique_ptr<render::Renderer> local;
+  render::Renderer& renderer;
   IceTCompositor icet;
   int64_t next_id = 1;
 };
@@ -152,7 +152,10 @@ class MpiRenderer::Resident : public render::ResidentVolume {
   BrickSet bricks;
 };
 
-MpiRenderer::MpiRenderer(int ranks, int threads) : ranks_(ranks), impl_(std::make_unique<Impl>(threads)) {}
+MpiRenderer::MpiRenderer(int ranks, std::unique_ptr<render::Renderer> local)
+    : ranks_(ranks), impl_(std::make_unique<Impl>(std::move(local))) {}
+
+const char* MpiRenderer::backend() const { return impl_->renderer.backend(); }
 
 MpiRenderer::~MpiRenderer() {
   int64_t cmd = kQuit, id = 0;
@@ -278,13 +281,12 @@ Image MpiRenderer::render_brick(const render::ResidentVolume&, const ResolvedSce
 
 int MpiRenderer::sample_cap(const render::VariantKey& key) const { return impl_->renderer.sample_cap(key); }
 
-void serve_worker(int threads) {
+void serve_worker(render::Renderer& renderer) {
   // mpirun passes SIGTERM/SIGINT to every rank: rank 0 shuts the server down and then tells the
   // workers to stop, so they wait for that rather than die mid-frame.
   std::signal(SIGTERM, SIG_IGN);
   std::signal(SIGINT, SIG_IGN);
   try {
-    cpu::CpuRenderer renderer(threads);
     IceTCompositor icet(MPI_COMM_WORLD, 0);
     std::map<int64_t, BrickSet> volumes;
     for (;;) {

@@ -1,7 +1,7 @@
 // `mpirun -np N peakcast serve` (issue 16, docs/distributed.md): rank 0 runs the server, whose
 // render thread draws through MpiRenderer; ranks 1..N-1 run serve_worker. For every volume the
 // server makes resident, each rank reads its k-d brick of the volume's file; for every frame,
-// rank 0 broadcasts the scene, every rank renders its brick on the CPU backend, IceT composites
+// rank 0 broadcasts the scene, every rank renders its brick (CPU backend or GL), IceT composites
 // the layers in visibility order and rank 0 gets the image, which the server encodes and sends
 // as it would its own. All MPI calls come from rank 0's render thread (MPI_THREAD_SERIALIZED).
 #pragma once
@@ -17,10 +17,11 @@ namespace peakcast::dist {
 
 class MpiRenderer : public render::Renderer {
  public:
-  // MPI is initialised; this is rank 0 of `ranks`. `threads`: this rank's CPU threads.
-  MpiRenderer(int ranks, int threads);
+  // MPI is initialised; this is rank 0 of `ranks`. `local`: what draws this rank's brick (the
+  // CPU backend or the GL ray caster, whose context is current on the calling thread).
+  MpiRenderer(int ranks, std::unique_ptr<render::Renderer> local);
   ~MpiRenderer() override;  // tells the workers to stop
-  const char* backend() const override { return "cpu"; }
+  const char* backend() const override;  // the local renderer's
   std::string description() const override;
   // Every rank reads its brick of volume->source_path; the whole volume's voxels on this rank
   // may then go (drop_host_voxels). Throws std::invalid_argument for a volume not read from a
@@ -54,6 +55,6 @@ class MpiRenderer : public render::Renderer {
 
 // Ranks 1..N-1 of `mpirun peakcast serve`: load, render and composite what rank 0 asks, until
 // it stops. Errors end the job (MPI_Abort) with this rank's reason.
-void serve_worker(int threads);
+void serve_worker(render::Renderer& renderer);
 
 }  // namespace peakcast::dist

@@ -3,6 +3,7 @@
 #include <epoxy/egl.h>
 #include <epoxy/gl.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <sstream>
@@ -64,6 +65,14 @@ std::string GlInfo::to_string() const {
   return s.str();
 }
 
+// The process's rank on its node under an MPI launcher (Open MPI, Slurm, MPICH/Hydra, PMIx), or
+// -1 outside one.
+static int launcher_local_rank() {
+  for (const char* name : {"OMPI_COMM_WORLD_LOCAL_RANK", "SLURM_LOCALID", "MPI_LOCALRANKID", "PMIX_LOCAL_RANK"})
+    if (const char* v = std::getenv(name); v && *v) return std::atoi(v);
+  return -1;
+}
+
 std::unique_ptr<EglContext> EglContext::create(const std::string& device) {
   std::unique_ptr<EglContext> self(new EglContext());
   const char* env = std::getenv("PEAKCAST_EGL_DEVICE");
@@ -83,6 +92,14 @@ std::unique_ptr<EglContext> EglContext::create(const std::string& device) {
         const bool soft = has_extension(eglQueryDeviceStringEXT(devices[i], EGL_EXTENSIONS), "EGL_MESA_device_software");
         if (soft == (pass == 1)) order.push_back(i);
       }
+    // Distributed rendering (docs/distributed.md): with "auto", each rank of a node starts at its
+    // own GPU (local rank modulo the hardware devices), the others left as fallbacks.
+    const int local = launcher_local_rank();
+    int hardware = 0;
+    for (int i : order)
+      hardware += !has_extension(eglQueryDeviceStringEXT(devices[i], EGL_EXTENSIONS), "EGL_MESA_device_software");
+    if (choice == "auto" && local > 0 && hardware > 1)
+      std::rotate(order.begin(), order.begin() + local % hardware, order.begin() + hardware);
     for (int i : order) {
       if (choice != "auto" && choice != std::to_string(i)) continue;
       EGLDisplay d = eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);

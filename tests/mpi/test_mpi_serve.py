@@ -49,6 +49,29 @@ async def stream(server):
     return interactive, decode_image(final["image"])
 
 
+def gl_ranks_check(tmp):
+    """mpirun serve --backend gl: every rank draws its brick with the GL ray caster (one GPU per
+    rank; llvmpipe here); a REST still equals `peakcast render --backend gl` within 1/255."""
+    srv = Server("--backend", "gl", launcher=[MPIRUN, "--oversubscribe", "-np", "2"], env=ENV)
+    try:
+        scene = {"volume": "heptane_151.nrrd", "image": {"width": 120, "height": 90}, "camera": CAMERA, "tf": TF,
+                 "render": RENDER, "background": [0.1, 0.1, 0.2]}
+        status, headers, png = http(srv, "/api/render", "POST", json.dumps(scene).encode())
+        (tmp / "gl_mpi.png").write_bytes(png)
+        data = pathlib.Path(__file__).resolve().parents[1] / "data"
+        (tmp / "gl_scene.json").write_text(json.dumps(dict(scene, volume=str(data / "heptane_151.nrrd"))))
+        subprocess.run([PEAKCAST, "render", tmp / "gl_scene.json", "-o", tmp / "gl_one.png", "--backend", "gl"],
+                       check=True, capture_output=True, env=ENV)
+        cmp = json.loads(subprocess.run([PEAKCAST, "compare", tmp / "gl_one.png", tmp / "gl_mpi.png"], check=True,
+                                        capture_output=True, text=True).stdout)
+        variant = headers.get("X-Variant", "")
+        return ("GL ranks: a REST still equals peakcast render --backend gl within 1/255",
+                status == 200 and "brick" in variant and "2ranks" in variant and cmp["max_abs"] <= 1 / 255 + 1e-6,
+                (status, variant, cmp))
+    finally:
+        srv.stop()
+
+
 def main():
     failed = 0
     one = Server("--backend", "cpu", env=ENV)
@@ -116,6 +139,7 @@ def main():
         status2, _, _ = http(srv, "/api/render", "POST", json.dumps(scene).encode())
         checks.append(("a TIFF stack is refused before any rank is asked, and the job goes on",
                        status >= 400 and b"TIFF" in body and status2 == 200 and srv.alive(), (status, body[:300])))
+        checks.append(gl_ranks_check(tmp))
         shutil.rmtree(tmp, ignore_errors=True)
         shutil.rmtree(tiff_dir, ignore_errors=True)
         for name, ok, detail in checks:
@@ -131,7 +155,7 @@ def main():
     ok = code is not None and stopped < 10 and "peakcast: stopped" in "".join(srv.log)
     print(f"{'ok  ' if ok else 'FAIL'} SIGTERM stops every rank: mpirun exited {code} after {stopped:.1f} s", flush=True)
     failed += not ok
-    print(f"{8 - failed} passed, {failed} failed")
+    print(f"{9 - failed} passed, {failed} failed")
     sys.exit(1 if failed else 0)
 
 
