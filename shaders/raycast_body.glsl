@@ -42,6 +42,9 @@ vec3 voxel_coords(vec3 p) { return (p + u_box_half.xyz) * (1.0 / u_spacing.xyz);
 #endif
 
 #include "ray_texture.glsl"
+// Peak mode xor on a brick: the next segment is the one into the brick's first point, drawn by
+// the brick before; only whether it holds a peak counts here (see cast_ray).
+bool g_peek;
 #ifdef PEAKS
 #include "peak_find.glsl"
 #endif
@@ -176,6 +179,7 @@ bool consume(Ray r, float t, float f, vec3 x, vec3 g, float dt, inout RayResult 
   g_prev_f = f;
   g_have_prev = true;
   g_gap = false;
+  g_peek = false;
   return res.acc.a >= STOP;
 }
 
@@ -316,6 +320,7 @@ RayResult cast_ray(vec2 pixel) {
   g_own_first = 0;
   g_own_last = 2147483647;
   g_own_point = true;
+  g_peek = false;
 #ifdef VIRTUAL_SAMPLES
   w_n = 0;
 #endif
@@ -337,6 +342,16 @@ RayResult cast_ray(vec2 pixel) {
     res.samples = -1.0;
     return res;
   }
+#ifdef PEAK_XOR
+  if (g_own_first > 0) {  // look behind (cpu/ray_brick-inl.h look_behind): sampled, not drawn or counted
+    g_prev_t = lattice_t(L, float(g_own_first - 1));
+    g_prev_f = sample_field(voxel_coords(r.o + g_prev_t * r.d));
+    g_have_prev = true;
+    g_gap = false;
+    g_expect = g_own_first;
+    g_peek = true;
+  }
+#endif
 #endif
 #if !defined(CELL_TRAVERSAL)
   // Nested: llvmpipe stops any single loop after 65535 iterations (LP_MAX_TGSI_LOOP_ITERATIONS),

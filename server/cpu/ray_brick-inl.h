@@ -53,6 +53,19 @@ bool RayCaster::clip_to_brick() {
   return true;
 }
 
+// Peak mode xor drops a point's DVR term when the segment into it holds a peak. For a brick's
+// first point that segment belongs to the brick before, which draws its peaks; here the point
+// before is sampled as the segment's start (not drawn, not counted), so the first point's
+// DVR term is dropped exactly when one process drops it.
+void RayCaster::look_behind() {
+  prev_t_ = lattice_t(L_, float(own_first_ - 1));
+  prev_f_ = sample_field(voxel_coords(r_.o + prev_t_ * r_.d));
+  have_prev_ = true;
+  gap_ = false;
+  expect_ = own_first_;
+  peek_ = true;
+}
+
 }  // namespace
 }  // namespace HWY_NAMESPACE
 }  // namespace peakcast::cpu

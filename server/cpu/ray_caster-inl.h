@@ -53,6 +53,7 @@ class RayCaster {
   }
   // Restricts the ray to the points it owns (setup, brick frames); false when it owns none.
   bool clip_to_brick();
+  void look_behind();
   float sample_field(vec3 x) const { return SamplePoint(f_.voxels, x); }
   vec3 field_gradient(vec3 x) const {
     vec3 g;
@@ -112,6 +113,9 @@ class RayCaster {
   // The lattice points the ray composites (bricks: those it owns; else all of them).
   int own_first_ = 0, own_last_ = std::numeric_limits<int>::max();
   bool own_point_ = true;  // the point being consumed is owned (its own DVR term counts)
+  // Peak mode xor on a brick: the next segment is the one into the brick's first point, which
+  // the brick before draws; only whether it holds a peak counts here (look_behind).
+  bool peek_ = false;
   float stop_ = 1, dvr_weight_ = 1, peak_weight_ = 1;
   // The previous sample, for segment methods (see raycast_body.glsl).
   float prev_t_ = 0, prev_f_ = 0;

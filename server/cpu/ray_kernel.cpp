@@ -102,6 +102,7 @@ bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
   prev_f_ = fv;
   have_prev_ = true;
   gap_ = false;
+  peek_ = false;
   return res_.acc.a >= stop_;
 }
 
@@ -291,6 +292,7 @@ RayResult RayCaster::walk(int first) {
   const render::VariantKey& key = f_.key;
   bool stopped = false;
   first = std::max(first, own_first_);
+  if (f_.brick && key.peaks && key.peak_mode == PeakMode::Xor && own_first_ > 0) look_behind();
   if (!key.space_skipping && !key.adaptive) {
     for (int i = own_first_; i <= last_ && !stopped; ++i) stopped = visit(i, 1);
   } else if (!key.adaptive && !key.cell_dda) {

@@ -11,9 +11,6 @@ void check_brick_scene(const ResolvedScene& s) {
   if (r.virtual_samples > 0) throw std::invalid_argument("distributed rendering: virtual samples are not supported yet");
   if (r.adaptive) throw std::invalid_argument("distributed rendering: adaptive sampling is not supported yet");
   if (s.ray_texture) throw std::invalid_argument("distributed rendering: ray textures are not supported yet");
-  if (r.classification == Classification::Peaks && r.peak_mode == PeakMode::Xor)
-    throw std::invalid_argument("distributed rendering: peak mode xor is not supported yet (a brick's first sample "
-                                "cannot see a peak in the segment before it)");
   if (r.sampling == Sampling::Differential && segments)
     throw std::invalid_argument(std::string("distributed rendering: differential sampling with ") +
                                 to_string(r.classification) + " is not supported yet (its segments' length has no bound for the ghosts)");

@@ -111,7 +111,9 @@ TEST(Bricks, MarschnerLobbEqualsOneProcess) {
   const std::string cam = R"({"eye": [90, 70, 110], "center": [20, 20, 20], "up": [0, 1, 0], "fov_y": 30})";
   for (const char* r : {R"({"step": 0.7})", R"({"step": 1.5, "classification": "preint"})",
                         R"({"step": 1, "classification": "peaks"})", R"({"step": 0.5, "filter": "tricubic", "shading": true})",
-                        R"({"step": 2, "classification": "peaks", "peak_mode": "peaks_only", "space_skipping": false})"})
+                        R"({"step": 2, "classification": "peaks", "peak_mode": "peaks_only", "space_skipping": false})",
+                        R"({"step": 1, "classification": "peaks", "peak_mode": "xor"})",
+                        R"({"step": 1.3, "classification": "peaks", "peak_mode": "xor", "space_skipping": false})"})
     check_all_splits({"", r, tf, cam}, file);
   std::filesystem::remove(file);
 }
@@ -149,8 +151,7 @@ TEST(Bricks, RefuseWhatBricksCannotDrawYet) {
   const dist::Index3 dims{v->dims()[0], v->dims()[1], v->dims()[2]};
   const auto split = dist::kd_split(dims, 2, 3);
   for (const char* r : {R"({"virtual_samples": 3})", R"({"adaptive": true})",
-                        R"({"sampling": "differential", "classification": "preint"})",
-                        R"({"classification": "peaks", "peak_mode": "xor"})"}) {
+                        R"({"sampling": "differential", "classification": "preint"})"}) {
     const ResolvedScene rs = resolve_scene(parse_scene_text(std::string(R"({"volume": "v", "render": )") + r + "}"), *v);
     try {
       renderer.render_brick(*resident, rs, dist::frame_brick(split.bricks[0], dims));

@@ -64,6 +64,7 @@ SCENES = [
     scene("heptane_dirac_post", HEPTANE, {"step": 1}, HEPTANE_TF, HEPTANE_CAM),
     scene("heptane_dirac_peaks", HEPTANE, {"step": 1, "classification": "peaks"}, HEPTANE_TF, HEPTANE_CAM),
     scene("heptane_preint", HEPTANE, {"step": 2, "classification": "preint"}),
+    scene("ml_peaks_xor", ML, {"step": 1, "classification": "peaks", "peak_mode": "xor"}, ML_TF, ML_CAM),
 ]
 
 
@@ -150,7 +151,8 @@ def test_refusals_name_what_bricks_cannot_draw():
 def test_gl_ranks_equal_one_process():
     # The GL ray caster's BRICK variant (one GPU per rank; llvmpipe here) against one process.
     worst = 0.0
-    for s, ranks in ((SCENES[0], (2, 3)), (SCENES[1], (2,)), (SCENES[2], (2, 3)), (SCENES[3], (2,)), (SCENES[5], (2,))):
+    for s, ranks in ((SCENES[0], (2, 3)), (SCENES[1], (2,)), (SCENES[2], (2, 3)), (SCENES[3], (2,)), (SCENES[5], (2,)),
+                     (SCENES[7], (2,))):
         one = TMP / f"{s.stem}_gl1.png"  # one process on the same backend
         run([PEAKCAST, "render", s, "-o", one, "--backend", "gl"])
         for n in ranks:
