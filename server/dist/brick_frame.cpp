@@ -3,12 +3,18 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/sampling.h"
+
 namespace peakcast::dist {
 
 int brick_ghost(const ResolvedScene& s) {
   const RenderSettings& r = s.scene.render;
   int ghost = ghost_voxels(r.filter == Filter::Tricubic, r.shading);
-  if (r.classification != Classification::Post) ghost += int(std::ceil(s.step / s.min_spacing - 1e-9));
+  // Segment methods close a brick's last segment with the point one step past its box: the
+  // longest step any ray of the scene takes (the uniform step, or a differential lattice's at
+  // the box corner farthest from the eye).
+  if (r.classification != Classification::Post)
+    ghost += int(std::ceil(longest_step(plan_sampling(s), s) / s.min_spacing - 1e-9));
   return ghost;
 }
 

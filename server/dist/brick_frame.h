@@ -14,8 +14,9 @@
 namespace peakcast::dist {
 
 // Ghost voxels for a scene: the filter's support and shading's gradient (ghost_voxels), plus,
-// for segment methods (preintegration, peak finding), one step: a rank closes its last segment
-// with the point one step past its box.
+// for segment methods (preintegration, peak finding), the longest step (longest_step: a
+// differential lattice's grows with depth): a rank closes its last segment with the point one
+// step past its box.
 int brick_ghost(const ResolvedScene& scene);
 
 // The brick as Renderer::render_brick takes it; dims: the whole volume's.

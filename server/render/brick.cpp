@@ -7,13 +7,9 @@ namespace peakcast::render {
 
 void check_brick_scene(const ResolvedScene& s) {
   const RenderSettings& r = s.scene.render;
-  const bool segments = r.classification != Classification::Post;
   if (r.virtual_samples > 0) throw std::invalid_argument("distributed rendering: virtual samples are not supported yet");
   if (r.adaptive) throw std::invalid_argument("distributed rendering: adaptive sampling is not supported yet");
   if (s.ray_texture) throw std::invalid_argument("distributed rendering: ray textures are not supported yet");
-  if (r.sampling == Sampling::Differential && segments)
-    throw std::invalid_argument(std::string("distributed rendering: differential sampling with ") +
-                                to_string(r.classification) + " is not supported yet (its segments' length has no bound for the ghosts)");
 }
 
 void check_brick_box(const ResolvedScene& s, const Brick& brick, const glm::dvec3& spacing) {

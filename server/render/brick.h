@@ -21,8 +21,7 @@ struct Brick {
   bool at_start[3] = {false, false, false}, at_end[3] = {false, false, false};
 };
 
-// What bricks cannot draw yet (virtual samples, adaptive sampling, ray textures, differential
-// sampling with a segment method): std::invalid_argument naming it. Callers that
+// What bricks cannot draw yet (virtual samples, adaptive sampling, ray textures): std::invalid_argument naming it. Callers that
 // must refuse before asking other ranks call it first; render_brick calls it too.
 void check_brick_scene(const ResolvedScene& scene);
 // The brick's own box must lie in the scene's volume box (std::invalid_argument otherwise).

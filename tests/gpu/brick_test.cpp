@@ -97,10 +97,10 @@ double split_error(const Case& c, int ranks, const std::string& file) {
 // test holds.
 constexpr double kBound = 1.0 / 255.0;
 
-void check_all_splits(const Case& c, const std::string& file) {
+void check_all_splits(const Case& c, const std::string& file, double bound = kBound) {
   for (int ranks : {1, 2, 3, 4}) {  // 1: the brick path on the whole volume
     const double e = split_error(c, ranks, file);
-    EXPECT_LE(e, kBound) << c.render << " " << ranks << " ranks";
+    EXPECT_LE(e, bound) << c.render << " " << ranks << " ranks";
     std::printf("  %s, %d bricks: max abs %.3g\n", c.render.c_str(), ranks, e);
   }
 }
@@ -113,7 +113,9 @@ TEST(Bricks, MarschnerLobbEqualsOneProcess) {
                         R"({"step": 1, "classification": "peaks"})", R"({"step": 0.5, "filter": "tricubic", "shading": true})",
                         R"({"step": 2, "classification": "peaks", "peak_mode": "peaks_only", "space_skipping": false})",
                         R"({"step": 1, "classification": "peaks", "peak_mode": "xor"})",
-                        R"({"step": 1.3, "classification": "peaks", "peak_mode": "xor", "space_skipping": false})"})
+                        R"({"step": 1.3, "classification": "peaks", "peak_mode": "xor", "space_skipping": false})",
+                        R"({"sampling": "differential", "s_k": 1.5, "classification": "preint"})",
+                        R"({"sampling": "differential", "s_k": 3, "classification": "peaks"})"})
     check_all_splits({"", r, tf, cam}, file);
   std::filesystem::remove(file);
 }
@@ -125,6 +127,16 @@ TEST(Bricks, AnisotropicBlobsEqualOneProcess) {
   for (const char* r : {R"({"step": 1})", R"({"step": 1.7, "classification": "preint"})", R"({"step": 1.7, "classification": "preint", "space_skipping": false})", R"({"step": 1, "classification": "preint"})",
                         R"({"sampling": "differential", "s_k": 2})"})
     check_all_splits({"", r, tf, cam}, file);
+  // Differential steps with segment methods: the ghosts hold the longest step (brick_ghost). The
+  // GL ray caster on this 8-bit volume: at most 0.011 (measured; llvmpipe's texture unit
+  // quantises its filter weights, and a brick's texel coordinates round differently from the
+  // whole volume's: a few-sample ray's long steps make that visible; on the float volume above
+  // 3.2e-5). The CPU backend: 4.4e-6. With one uniform step of ghosts instead of the longest step,
+  // Marschner-Lobb's differential peaks (above) are 0.087 to 0.35 off on both backends.
+  const double gl_8bit_long_steps = test::gpu().gl ? 0.015 : kBound;
+  for (const char* r : {R"({"sampling": "differential", "s_k": 1.5, "classification": "preint"})",
+                        R"({"sampling": "differential", "s_k": 3, "classification": "peaks"})"})
+    check_all_splits({"", r, tf, cam}, file, gl_8bit_long_steps);
   check_all_splits({"", R"({"step": 1})", tf, R"({"eye": [19, 19, 200], "center": [19, 19, 30], "up": [0, 1, 0], "projection": "orthographic", "height": 60})"}, file);
   std::filesystem::remove(file);
 }
@@ -150,8 +162,7 @@ TEST(Bricks, RefuseWhatBricksCannotDrawYet) {
   auto resident = renderer.make_resident(v);
   const dist::Index3 dims{v->dims()[0], v->dims()[1], v->dims()[2]};
   const auto split = dist::kd_split(dims, 2, 3);
-  for (const char* r : {R"({"virtual_samples": 3})", R"({"adaptive": true})",
-                        R"({"sampling": "differential", "classification": "preint"})"}) {
+  for (const char* r : {R"({"virtual_samples": 3})", R"({"adaptive": true})"}) {
     const ResolvedScene rs = resolve_scene(parse_scene_text(std::string(R"({"volume": "v", "render": )") + r + "}"), *v);
     try {
       renderer.render_brick(*resident, rs, dist::frame_brick(split.bricks[0], dims));

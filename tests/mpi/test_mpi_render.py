@@ -65,6 +65,8 @@ SCENES = [
     scene("heptane_dirac_peaks", HEPTANE, {"step": 1, "classification": "peaks"}, HEPTANE_TF, HEPTANE_CAM),
     scene("heptane_preint", HEPTANE, {"step": 2, "classification": "preint"}),
     scene("ml_peaks_xor", ML, {"step": 1, "classification": "peaks", "peak_mode": "xor"}, ML_TF, ML_CAM),
+    scene("ml_differential_peaks", ML, {"sampling": "differential", "s_k": 2, "classification": "peaks"}, ML_TF,
+          ML_CAM),
 ]
 
 
@@ -139,8 +141,7 @@ def test_a_rank_that_fails_to_read_ends_the_job():
 
 
 def test_refusals_name_what_bricks_cannot_draw():
-    for render, words in (({"virtual_samples": 3}, "virtual samples"), ({"adaptive": True}, "adaptive"),
-                          ({"sampling": "differential", "classification": "peaks"}, "differential")):
+    for render, words in (({"virtual_samples": 3}, "virtual samples"), ({"adaptive": True}, "adaptive")):
         s = scene("refused", ML, render, ML_TF, ML_CAM)
         r = mpi(2, "render", s, "-o", TMP / "refused.png", timeout=120, check=False)
         assert r.returncode == 2 and words in r.stderr, (render, r.returncode, r.stderr)
@@ -152,7 +153,7 @@ def test_gl_ranks_equal_one_process():
     # The GL ray caster's BRICK variant (one GPU per rank; llvmpipe here) against one process.
     worst = 0.0
     for s, ranks in ((SCENES[0], (2, 3)), (SCENES[1], (2,)), (SCENES[2], (2, 3)), (SCENES[3], (2,)), (SCENES[5], (2,)),
-                     (SCENES[7], (2,))):
+                     (SCENES[7], (2,)), (SCENES[8], (2,))):
         one = TMP / f"{s.stem}_gl1.png"  # one process on the same backend
         run([PEAKCAST, "render", s, "-o", one, "--backend", "gl"])
         for n in ranks:
