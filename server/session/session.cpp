@@ -158,20 +158,43 @@ void Session::frame_dropped(uint32_t frame_id) { ack(frame_id); }
 void Session::interactive_rendered(int64_t pixels, double render_ms) {
   if (pixels <= 0 || !(render_ms >= 0.0) || !std::isfinite(render_ms)) return;
   std::lock_guard lock(m_);
-  const double per_pixel = render_ms / double(pixels);
-  // A running mean over the last few frames: one slow frame (a page fault, a neighbour's
-  // still band) moves the resolution a little, a heavier view moves it within a few frames.
-  interactive_ms_per_pixel_ = interactive_ms_per_pixel_ > 0.0 ? 0.6 * interactive_ms_per_pixel_ + 0.4 * per_pixel
-                                                              : per_pixel;
+  // Weighted over the last few frames: one slow frame (a page fault, a neighbour's still band)
+  // moves the resolution a little, a heavier view moves it within a few frames.
+  interactive_cost_.add(double(pixels), render_ms);
+}
+
+void Session::FrameCost::add(double pixels, double ms) {
+  const double old = w > 0 ? 0.6 : 0.0, now = w > 0 ? 0.4 : 1.0;
+  w = old * w + now;
+  x = old * x + now * pixels;
+  y = old * y + now * ms;
+  xx = old * xx + now * pixels * pixels;
+  xy = old * xy + now * pixels * ms;
+}
+
+void Session::FrameCost::fit(double& fixed, double& per_pixel) const {
+  const double mx = x / w, my = y / w;
+  const double var = xx / w - mx * mx, cov = xy / w - mx * my;
+  fixed = 0.0;
+  per_pixel = mx > 0 ? my / mx : 0.0;
+  if (!(var > 1e-3 * mx * mx)) return;  // sizes within about 3% of each other
+  const double slope = cov / var, intercept = my - slope * mx;
+  if (slope > 0 && intercept > 0) {
+    fixed = intercept;
+    per_pixel = slope;
+  }
 }
 
 double Session::interactive_scale(int width, int height) const {
   const double most = quality_.interactive_scale;
-  if (quality_.interactive_ms <= 0.0 || interactive_ms_per_pixel_ <= 0.0) return most;
-  const double pixels = double(width) * double(height) * most * most;
-  const double expected_ms = pixels * interactive_ms_per_pixel_;
-  if (expected_ms <= quality_.interactive_ms) return most;
-  const double fit = most * std::sqrt(quality_.interactive_ms / expected_ms);
+  if (quality_.interactive_ms <= 0.0 || interactive_cost_.w <= 0.0) return most;
+  double fixed = 0.0, per_pixel = 0.0;
+  interactive_cost_.fit(fixed, per_pixel);
+  const double view = double(width) * double(height);
+  if (!(per_pixel > 0.0) || fixed + view * most * most * per_pixel <= quality_.interactive_ms) return most;
+  // The pixels the budget leaves after the fixed part (none: the smallest frame).
+  const double affordable = std::max(0.0, quality_.interactive_ms - fixed) / per_pixel;
+  const double fit = std::sqrt(affordable / view);
   // In steps of 1/64 of the full size, rounded down: the resolution does not flicker with
   // every frame's noise.
   const double stepped = std::floor(fit * 64.0) / 64.0;

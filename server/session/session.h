@@ -113,7 +113,17 @@ class Session {
   // The resolution ratio of the next interactive frame of a width x height view (m_ held).
   double interactive_scale(int width, int height) const;
   Quality quality_;
-  double interactive_ms_per_pixel_ = 0.0;  // running mean of interactive frames; 0: none yet
+  // Interactive render ms as a fixed part plus a part per pixel (a distributed frame's broadcast
+  // and compositing, a tile's set-up): a least-squares line through the last frames, each
+  // weighted 0.4 and the older ones 0.6 as much at every new frame. w == 0: none yet.
+  struct FrameCost {
+    double w = 0, x = 0, y = 0, xx = 0, xy = 0;  // weighted sums of 1, pixels, ms, pixels², pixels·ms
+    void add(double pixels, double ms);
+    // ms = fixed + per_pixel * pixels; a line through the origin while the frames' sizes hardly
+    // differ (nothing tells the parts apart), and where the fit is not a rising line.
+    void fit(double& fixed, double& per_pixel) const;
+  };
+  FrameCost interactive_cost_;
   uint32_t camera_version_ = 0, tf_version_ = 0, render_version_ = 0;
   bool dirty_ = false, final_pending_ = false;
   Clock::time_point last_input_{}, last_frame_{};

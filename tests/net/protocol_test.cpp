@@ -161,6 +161,44 @@ TEST(SessionFlow, InteractiveFramesShrinkToHoldTheirBudgetAndRecover) {
   EXPECT_EQ(f->scene.scene.width, 400) << "final frames are never reduced";
 }
 
+// The budget's model keeps a fixed part apart from the part per pixel (a distributed frame's
+// broadcast and compositing): frames of two sizes costing 24 ms plus 1e-4 ms a pixel leave a
+// 200x200 frame within 30 ms, where a cost per pixel alone (1.06e-3 ms) would shrink it; a
+// fixed part above the budget gives the smallest frame.
+TEST(SessionFlow, InteractiveBudgetKeepsTheFixedPartApart) {
+  Session s("s4", {});
+  s.start(entry(), Viewport{400, 400, 1.0}, {});
+  const auto still = std::chrono::milliseconds(150);
+  const auto rate = std::chrono::duration<double>(0.0);
+  Clock::time_point wake;
+  Camera c;
+  auto next_interactive = [&]() {
+    c.eye.x += 1;
+    s.set_camera(c);
+    auto j = s.take_job(Clock::now(), still, rate, wake);
+    EXPECT_TRUE(j && !j->final);
+    if (j) s.ack(j->frame_id);
+    return j ? j->scene.scene.width : -1;
+  };
+  auto a = s.take_job(Clock::now(), still, rate, wake);
+  ASSERT_TRUE(a);
+  c = a->scene.camera;
+  s.ack(a->frame_id);
+  for (int k = 0; k < 10; ++k) {
+    const int64_t pixels = k % 2 ? 200 * 200 : 100 * 100;
+    s.interactive_rendered(pixels, 24.0 + 1e-4 * double(pixels));
+  }
+  EXPECT_EQ(next_interactive(), 200);
+  for (int k = 0; k < 10; ++k) {
+    const int64_t pixels = k % 2 ? 200 * 200 : 100 * 100;
+    s.interactive_rendered(pixels, 40.0 + 1e-4 * double(pixels));
+  }
+  EXPECT_EQ(next_interactive(), 100);
+  for (int k = 0; k < 20; ++k) s.interactive_rendered(150 * 150, 60.0);  // one size: per pixel only
+  // 30 ms of 60 ms at 150x150: sqrt(0.5) * 150 = 106 wide, down to a 64th of 400: 100.
+  EXPECT_EQ(next_interactive(), 100);
+}
+
 TEST(Protocol, QualityInteractiveMsIsANumberOfMilliseconds) {
   auto q = std::get<QualityMsg>(parse_client_message(R"({"type":"quality","interactive_ms":45})"));
   EXPECT_EQ(q.interactive_ms, 45.0);
