@@ -49,6 +49,22 @@ async def stream(server):
     return interactive, decode_image(final["image"])
 
 
+def still_against_one_process(srv, scene, volume_path, tmp, tag, backend="cpu"):
+    """POSTs `scene` to the distributed server and renders it with `peakcast render` in one
+    process (the volume at volume_path): (status, X-Variant, the comparison's JSON)."""
+    status, headers, png = http(srv, "/api/render", "POST", json.dumps(scene).encode())
+    (tmp / f"{tag}_mpi.png").write_bytes(png)
+    (tmp / f"{tag}.json").write_text(json.dumps(dict(scene, volume=str(volume_path))))
+    subprocess.run([PEAKCAST, "render", tmp / f"{tag}.json", "-o", tmp / f"{tag}_one.png", "--backend", backend],
+                   check=True, capture_output=True, env=ENV)
+    cmp = json.loads(subprocess.run([PEAKCAST, "compare", tmp / f"{tag}_one.png", tmp / f"{tag}_mpi.png"], check=True,
+                                    capture_output=True, text=True).stdout)
+    return status, headers.get("X-Variant", ""), cmp
+
+
+DATA = pathlib.Path(__file__).resolve().parents[1] / "data"
+
+
 def gl_ranks_check(tmp):
     """mpirun serve --backend gl: every rank draws its brick with the GL ray caster (one GPU per
     rank; llvmpipe here); a REST still equals `peakcast render --backend gl` within 1/255."""
@@ -56,15 +72,7 @@ def gl_ranks_check(tmp):
     try:
         scene = {"volume": "heptane_151.nrrd", "image": {"width": 120, "height": 90}, "camera": CAMERA, "tf": TF,
                  "render": RENDER, "background": [0.1, 0.1, 0.2]}
-        status, headers, png = http(srv, "/api/render", "POST", json.dumps(scene).encode())
-        (tmp / "gl_mpi.png").write_bytes(png)
-        data = pathlib.Path(__file__).resolve().parents[1] / "data"
-        (tmp / "gl_scene.json").write_text(json.dumps(dict(scene, volume=str(data / "heptane_151.nrrd"))))
-        subprocess.run([PEAKCAST, "render", tmp / "gl_scene.json", "-o", tmp / "gl_one.png", "--backend", "gl"],
-                       check=True, capture_output=True, env=ENV)
-        cmp = json.loads(subprocess.run([PEAKCAST, "compare", tmp / "gl_one.png", tmp / "gl_mpi.png"], check=True,
-                                        capture_output=True, text=True).stdout)
-        variant = headers.get("X-Variant", "")
+        status, variant, cmp = still_against_one_process(srv, scene, DATA / "heptane_151.nrrd", tmp, "gl", "gl")
         return ("GL ranks: a REST still equals peakcast render --backend gl within 1/255",
                 status == 200 and "brick" in variant and "2ranks" in variant and cmp["max_abs"] <= 1 / 255 + 1e-6,
                 (status, variant, cmp))
@@ -97,29 +105,16 @@ def main():
 
         scene = {"volume": "heptane_151.nrrd", "image": {"width": 160, "height": 120}, "camera": CAMERA, "tf": TF,
                  "render": RENDER, "background": [0.1, 0.1, 0.2]}
-        status, headers, png = http(srv, "/api/render", "POST", json.dumps(scene).encode())
         tmp = pathlib.Path(os.environ.get("TMPDIR", "/tmp")) / f"peakcast-mpi-serve-{os.getpid()}"
         tmp.mkdir(exist_ok=True)
-        (tmp / "mpi.png").write_bytes(png)
-        data = pathlib.Path(__file__).resolve().parents[1] / "data"
-        (tmp / "scene.json").write_text(json.dumps(dict(scene, volume=str(data / "heptane_151.nrrd"))))
-        subprocess.run([PEAKCAST, "render", tmp / "scene.json", "-o", tmp / "one.png", "--backend", "cpu"], check=True,
-                       capture_output=True, env=ENV)
-        cmp = json.loads(subprocess.run([PEAKCAST, "compare", tmp / "one.png", tmp / "mpi.png"], check=True,
-                                        capture_output=True, text=True).stdout)
+        status, variant, cmp = still_against_one_process(srv, scene, DATA / "heptane_151.nrrd", tmp, "still")
         checks.append(("REST still equals peakcast render within 1/255",
-                       status == 200 and "2ranks" in headers.get("X-Variant", "") and cmp["max_abs"] <= 1 / 255 + 1e-6,
-                       (status, headers.get("X-Variant"), cmp)))
+                       status == 200 and "2ranks" in variant and cmp["max_abs"] <= 1 / 255 + 1e-6,
+                       (status, variant, cmp)))
 
         nf = {"volume": "nonfinite.nrrd", "image": {"width": 96, "height": 80}, "camera": nonfinite_volume.CAMERA,
               "tf": {"points": nonfinite_volume.TF}, "render": {"step": 1}}
-        status, headers, png = http(srv, "/api/render", "POST", json.dumps(nf).encode())
-        (tmp / "nf_mpi.png").write_bytes(png)
-        (tmp / "nf.json").write_text(json.dumps(dict(nf, volume=str(tiff_dir / "nonfinite.nrrd"))))
-        subprocess.run([PEAKCAST, "render", tmp / "nf.json", "-o", tmp / "nf_one.png", "--backend", "cpu"], check=True,
-                       capture_output=True, env=ENV)
-        cmp = json.loads(subprocess.run([PEAKCAST, "compare", tmp / "nf_one.png", tmp / "nf_mpi.png"], check=True,
-                                        capture_output=True, text=True).stdout)
+        status, _, cmp = still_against_one_process(srv, nf, tiff_dir / "nonfinite.nrrd", tmp, "nf")
         checks.append(("NaN/Inf voxels take the whole volume's extremes on every rank (REST still = one process)",
                        status == 200 and cmp["max_abs"] <= 1 / 255 + 1e-6, (status, cmp)))
 

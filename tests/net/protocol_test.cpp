@@ -119,28 +119,39 @@ TEST(SessionFlow, FinalFollowsInteractiveAfterTheStillDelay) {
   EXPECT_TRUE(b->final);
 }
 
-TEST(SessionFlow, InteractiveFramesShrinkToHoldTheirBudgetAndRecover) {
-  Session s("s3", {});
-  s.start(entry(), Viewport{400, 400, 1.0}, {});
-  const auto still = std::chrono::milliseconds(150);
-  const auto rate = std::chrono::duration<double>(0.0);
-  Clock::time_point wake;
+// A 400x400 view whose camera moves: each call takes the next interactive frame and returns its
+// width (the budget tests).
+struct MovingView {
+  Session s{"budget", {}};
   Camera c;
-  auto next_interactive = [&]() {
+  Clock::time_point wake;
+  const std::chrono::milliseconds still{150};
+  const std::chrono::duration<double> rate{0.0};
+  int first_width = -1;
+  MovingView() {
+    s.start(entry(), Viewport{400, 400, 1.0}, {});
+    auto a = s.take_job(Clock::now(), still, rate, wake);
+    EXPECT_TRUE(a && !a->final);
+    if (!a) return;
+    c = a->scene.camera;
+    first_width = a->scene.scene.width;
+    s.ack(a->frame_id);
+  }
+  int next_interactive() {
     c.eye.x += 1;
     s.set_camera(c);
     auto j = s.take_job(Clock::now(), still, rate, wake);
     EXPECT_TRUE(j && !j->final);
     if (j) s.ack(j->frame_id);
     return j ? j->scene.scene.width : -1;
-  };
-  {
-    auto a = s.take_job(Clock::now(), still, rate, wake);
-    ASSERT_TRUE(a && !a->final);
-    c = a->scene.camera;
-    s.ack(a->frame_id);
-    EXPECT_EQ(a->scene.scene.width, 200) << "nothing measured yet: interactive_scale";
   }
+};
+
+TEST(SessionFlow, InteractiveFramesShrinkToHoldTheirBudgetAndRecover) {
+  MovingView v;
+  Session& s = v.s;
+  auto next_interactive = [&] { return v.next_interactive(); };
+  EXPECT_EQ(v.first_width, 200) << "nothing measured yet: interactive_scale";
   s.interactive_rendered(200 * 200, 60.0);  // twice the 30 ms budget
   // 0.5 * sqrt(30 / 60) = 0.354, down to a 64th: 22/64 of 400 pixels.
   EXPECT_EQ(next_interactive(), 137);
@@ -156,7 +167,7 @@ TEST(SessionFlow, InteractiveFramesShrinkToHoldTheirBudgetAndRecover) {
   q.interactive_ms = 0.0;  // a fixed scale
   s.set_quality(q);
   EXPECT_EQ(next_interactive(), 200);
-  auto f = s.take_job(Clock::now() + std::chrono::seconds(1), still, rate, wake);
+  auto f = s.take_job(Clock::now() + std::chrono::seconds(1), v.still, v.rate, v.wake);
   ASSERT_TRUE(f && f->final);
   EXPECT_EQ(f->scene.scene.width, 400) << "final frames are never reduced";
 }
@@ -166,24 +177,9 @@ TEST(SessionFlow, InteractiveFramesShrinkToHoldTheirBudgetAndRecover) {
 // 200x200 frame within 30 ms, where a cost per pixel alone (1.06e-3 ms) would shrink it; a
 // fixed part above the budget gives the smallest frame.
 TEST(SessionFlow, InteractiveBudgetKeepsTheFixedPartApart) {
-  Session s("s4", {});
-  s.start(entry(), Viewport{400, 400, 1.0}, {});
-  const auto still = std::chrono::milliseconds(150);
-  const auto rate = std::chrono::duration<double>(0.0);
-  Clock::time_point wake;
-  Camera c;
-  auto next_interactive = [&]() {
-    c.eye.x += 1;
-    s.set_camera(c);
-    auto j = s.take_job(Clock::now(), still, rate, wake);
-    EXPECT_TRUE(j && !j->final);
-    if (j) s.ack(j->frame_id);
-    return j ? j->scene.scene.width : -1;
-  };
-  auto a = s.take_job(Clock::now(), still, rate, wake);
-  ASSERT_TRUE(a);
-  c = a->scene.camera;
-  s.ack(a->frame_id);
+  MovingView v;
+  Session& s = v.s;
+  auto next_interactive = [&] { return v.next_interactive(); };
   for (int k = 0; k < 10; ++k) {
     const int64_t pixels = k % 2 ? 200 * 200 : 100 * 100;
     s.interactive_rendered(pixels, 24.0 + 1e-4 * double(pixels));
