@@ -65,7 +65,7 @@ install_node_modules() {
 # are exported when this file is sourced, so the builds see them (an export inside $(...) is lost).
 # CCACHE_NOHASHDIR: debug builds (-g) would otherwise hash the build folder into every key.
 # Exported whether or not ccache is there yet: the install step may bring it later.
-export CCACHE_BASEDIR=$PEAKCAST_ROOT CCACHE_NOHASHDIR=1 CCACHE_DIR=${CCACHE_DIR:-$HOME/.cache/ccache} \
+export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$PEAKCAST_ROOT} CCACHE_NOHASHDIR=1 CCACHE_DIR=${CCACHE_DIR:-$HOME/.cache/ccache} \
   CCACHE_MAXSIZE=${CCACHE_MAXSIZE:-10G}
 peakcast_ccache_flags() {
   if command -v ccache >/dev/null; then

@@ -90,7 +90,8 @@ bool find_peaks(Ray r, float t0, float f0, float t1, float f1, inout RayResult r
 #else
     // Only shading uses the root's position: count what solve_root would evaluate. The bracket's
     // ends keep opposite signs, so it takes every step unless they start equal.
-    res.samples += (f0 - v == f1 - v) ? 0.0 : u_peaks.w;
+    precise float ga = f0 - v, gb = f1 - v;  // as solve_root's start, not rewritten as f0 == f1
+    res.samples += (ga == gb) ? 0.0 : u_peaks.w;
 #endif
     composite(res.acc, rgb, c.a * PEAK_WEIGHT);  // unscaled opacity at the peak (Knoll §4.2)
     if (res.acc.a >= STOP) break;

@@ -68,7 +68,11 @@ bool g_own_point;
 // on every rank, so exactly one rank owns each point). u_own_lo.w / u_own_hi.w: the axes whose
 // bound is the volume's own face (none there: rounding may put a point a hair outside).
 bool owns(Ray r, Lattice L, int i) {
-  vec3 x = (r.o + lattice_t(L, float(i)) * r.d + u_box_half.xyz) * (1.0 / u_spacing.xyz);
+  // precise: no contraction, so every call site (and every rank) computes the same x; the two
+  // ranks at a face decide a shared point at different call sites of clip_to_brick.
+  float j = float(i);
+  precise float t = L.t0 + j * (L.B + L.A * j * 0.5);  // lattice_t
+  precise vec3 x = (r.o + t * r.d + u_box_half.xyz) * (1.0 / u_spacing.xyz);
   int open_lo = int(u_own_lo.w), open_hi = int(u_own_hi.w);
   for (int a = 0; a < 3; ++a) {
     bool lo_ok = ((open_lo >> a) & 1) != 0 || x[a] >= u_own_lo[a];
@@ -79,7 +83,9 @@ bool owns(Ray r, Lattice L, int i) {
 }
 
 int index_near(Lattice L, float t, vec2 span, int last) {
-  float i = floor(lattice_index(L, clamp(t, span.x, span.y)) + 0.5);
+  float x = lattice_index(L, clamp(t, span.x, span.y));
+  float i = floor(x);
+  if (x - i >= 0.5) i += 1.0;  // std::round's halves, as the CPU's guess
   return (i <= 0.0 || isnan(i)) ? 0 : (i >= float(last) ? last : int(i));
 }
 

@@ -123,6 +123,16 @@ int run(const MpiRenderArgs& a, int rank, int size) {
 
   RankRenderer rank_renderer = open_rank_renderer(a.backend);
   render::Renderer& renderer = rank_renderer.get();
+  // Every rank must draw with the same backend (auto may pick the GL one on a node with a GPU
+  // and the CPU one on another): the two round a point's position differently at brick faces.
+  {
+    int gl = std::string(renderer.backend()) == "gl", all_gl = 0, any_gl = 0;
+    MPI_Allreduce(&gl, &all_gl, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+    MPI_Allreduce(&gl, &any_gl, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    if (all_gl != any_gl)
+      throw std::invalid_argument("the ranks chose different backends (gl on some, cpu on others): pass --backend gl or "
+                                  "--backend cpu");
+  }
   auto resident = renderer.make_resident(brick);
   render::RenderStats st;
   const Image layer = renderer.render_brick(*resident, scene, dist::frame_brick(mine, dims), &st);

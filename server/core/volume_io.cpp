@@ -221,6 +221,13 @@ void finish_volume(const fs::path& file, Volume& v, bool big_endian, const LoadO
     auto* p = reinterpret_cast<uint16_t*>(v.data());
     for (size_t i = 0; i < n; ++i) p[i] ^= 0x8000;  // int16 + 32768 as uint16
   }
+  if (v.type() == VoxelType::F32 && options.nonfinite == NonFinitePolicy::Keep) {
+    // The caller replaces them (replace_nonfinite, which computes the statistics); none over
+    // NaN here (a NaN's histogram bin is undefined behaviour).
+    const auto* p = reinterpret_cast<const float*>(v.data());
+    for (size_t i = 0; i < n; ++i)
+      if (!std::isfinite(p[i])) return;
+  }
   if (v.type() == VoxelType::F32 && options.nonfinite != NonFinitePolicy::Keep) {
     const auto* p = reinterpret_cast<const float*>(v.data());
     float lo = std::numeric_limits<float>::infinity(), hi = -lo;

@@ -25,7 +25,8 @@ class VolumeError : public std::runtime_error {
 // +Inf -> finite maximum, -Inf -> finite minimum) and report the count, as ParaView users expect
 // a volume with a few masked voxels to open; `refuse` for pipelines that want to stop instead.
 // `keep` leaves them for a caller that knows better extremes: a brick of a distributed volume
-// replaces them with the whole volume's (replace_nonfinite), as one process would.
+// replaces them with the whole volume's (replace_nonfinite, which then computes the range and
+// histogram: a volume read with `keep` and non-finite voxels has none until then).
 enum class NonFinitePolicy { Replace, Refuse, Keep };
 
 // A box of voxels [lo, hi) to read instead of the whole volume (a brick of a distributed

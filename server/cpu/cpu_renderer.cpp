@@ -251,7 +251,8 @@ RenderResult CpuRenderer::render(const render::ResidentVolume& v, const Resolved
   else
     res.image = Image(rect.w, rect.h);
   const auto t0 = Clock::now();
-  if (f.nothing_visible && rgb8 && !read_samples) {  // a frame with nothing to draw costs nothing
+  const bool empty_frame = f.nothing_visible && rgb8 && !read_samples;
+  if (empty_frame) {  // a frame with nothing to draw costs nothing
     uint8_t bg[3];
     for (int k = 0; k < 3; ++k) bg[k] = quantise(background[k]);
     for (size_t p = 0; p < size_t(rect.w) * size_t(rect.h); ++p) std::copy(bg, bg + 3, &res.rgb8.rgb[p * 3]);
@@ -262,7 +263,7 @@ RenderResult CpuRenderer::render(const render::ResidentVolume& v, const Resolved
   if (!rgb8) res.image.samples = samples;
   if (stats) {
     stats->render_ms = render_ms;
-    stats->variant = f.key.name();
+    stats->variant = f.key.name() + (empty_frame ? "+nothing-visible" : "");
     stats->has_samples = read_samples;
     stats->sample_cap = f.sample_cap;
     if (read_samples) {

@@ -20,7 +20,7 @@
 namespace peakcast::dist {
 namespace {
 
-enum Command : int64_t { kLoad = 1, kRender = 2, kQuit = 3 };
+enum Command : int64_t { kLoad = 1, kRender = 2, kQuit = 3, kBackend = 4 };
 
 // One rank's brick of one volume.
 struct BrickSet {
@@ -153,7 +153,14 @@ class MpiRenderer::Resident : public render::ResidentVolume {
 };
 
 MpiRenderer::MpiRenderer(int ranks, std::unique_ptr<render::Renderer> local)
-    : ranks_(ranks), impl_(std::make_unique<Impl>(std::move(local))) {}
+    : ranks_(ranks), impl_(std::make_unique<Impl>(std::move(local))) {
+  // Every rank must draw with the same backend: the CPU and GL ray casters round a point's
+  // position differently, so a face between their bricks could draw a point twice or never.
+  int64_t cmd = kBackend, id = 0;
+  std::string payload = impl_->renderer.backend();
+  std::vector<int64_t> drops;
+  broadcast(cmd, id, payload, drops);
+}
 
 const char* MpiRenderer::backend() const { return impl_->renderer.backend(); }
 
@@ -222,10 +229,13 @@ render::RenderResult MpiRenderer::render(const render::ResidentVolume& v, const 
   const auto t0 = std::chrono::steady_clock::now();
   const bool want_samples = req.output == render::RenderOutput::Float || req.sample_stats;
   try {
-    if (brick_ghost(s) > bricks.ghost) {  // a longer step than the bricks were read for
+    if (const int need = brick_ghost(s); need > bricks.ghost) {  // a longer step than the bricks were read for
+      // With headroom: a differential step grows as the camera backs away, and a re-read on
+      // every frame of a slow zoom-out would cost more than the wider ghosts.
+      const int ghost = need + std::max(4, need / 2);
       int64_t cmd = kLoad, id = res->id();
       std::string payload = nlohmann::json{{"path", res->volume().source_path}, {"lo", bricks.box.min_value},
-                                            {"hi", bricks.box.max_value}, {"ghost", brick_ghost(s)}}
+                                            {"hi", bricks.box.max_value}, {"ghost", ghost}}
                                 .dump();
       std::vector<int64_t> drops = take_forgotten();
       broadcast(cmd, id, payload, drops);
@@ -296,6 +306,13 @@ void serve_worker(render::Renderer& renderer) {
       broadcast(cmd, id, payload, drops);
       for (int64_t d : drops) volumes.erase(d);
       if (cmd == kQuit) return;
+      if (cmd == kBackend) {
+        if (payload != renderer.backend())
+          throw std::runtime_error("this rank renders with the " + std::string(renderer.backend()) +
+                                   " backend and rank 0 with " + payload +
+                                   ": every rank needs the same (pass --backend gl or --backend cpu)");
+        continue;
+      }
       const nlohmann::json j = nlohmann::json::parse(payload);
       if (cmd == kLoad) {
         volumes[id] = load_bricks(j, renderer);

@@ -65,10 +65,11 @@ std::string GlInfo::to_string() const {
   return s.str();
 }
 
-// The process's rank on its node under an MPI launcher (Open MPI, Slurm, MPICH/Hydra, PMIx), or
-// -1 outside one.
+// The process's rank on its node under an MPI launcher (Open MPI, Slurm, MPICH/Hydra, MVAPICH2,
+// a PMIx launcher that exports it), or -1 outside one.
 static int launcher_local_rank() {
-  for (const char* name : {"OMPI_COMM_WORLD_LOCAL_RANK", "SLURM_LOCALID", "MPI_LOCALRANKID", "PMIX_LOCAL_RANK"})
+  for (const char* name : {"OMPI_COMM_WORLD_LOCAL_RANK", "SLURM_LOCALID", "MPI_LOCALRANKID", "MV2_COMM_WORLD_LOCAL_RANK",
+                           "PMIX_LOCAL_RANK"})
     if (const char* v = std::getenv(name); v && *v) return std::atoi(v);
   return -1;
 }

@@ -177,7 +177,10 @@ void Session::FrameCost::fit(double& fixed, double& per_pixel) const {
   const double var = xx / w - mx * mx, cov = xy / w - mx * my;
   fixed = 0.0;
   per_pixel = mx > 0 ? my / mx : 0.0;
-  if (!(var > 1e-3 * mx * mx)) return;  // sizes within about 3% of each other
+  // Only sizes well apart tell a fixed part from a part per pixel (a standard deviation of 14%
+  // of the mean: frames a third apart); neighbouring 64ths and a few percent of jitter would make
+  // up an intercept.
+  if (!(var > 0.02 * mx * mx)) return;
   const double slope = cov / var, intercept = my - slope * mx;
   if (slope > 0 && intercept > 0) {
     fixed = intercept;

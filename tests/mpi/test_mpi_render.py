@@ -149,6 +149,17 @@ def test_refusals_name_what_bricks_cannot_draw():
         assert r.returncode == 2 and words in r.stderr, ("gl", render, r.returncode, r.stderr)
 
 
+def test_ranks_on_different_backends_are_refused():
+    # auto may pick the GL ray caster on a node with a GPU and the CPU backend on another; the two
+    # round positions differently at brick faces, so a mix is refused by name (MPMD: one rank each).
+    s = SCENES[0]
+    r = run([MPIRUN, "--oversubscribe", "-np", 1, "env", "PEAKCAST_BACKEND=gl", PEAKCAST, "render", s, "-o", TMP / "mix.png",
+             ":", "-np", 1, "env", "PEAKCAST_BACKEND=cpu", PEAKCAST, "render", s, "-o", TMP / "mix.png"],
+            timeout=120, check=False)
+    assert r.returncode == 2 and "different backends" in r.stderr, (r.returncode, r.stderr)
+    assert not (TMP / "mix.png").exists()
+
+
 def test_gl_ranks_equal_one_process():
     # The GL ray caster's BRICK variant (one GPU per rank; llvmpipe here) against one process.
     worst = 0.0
@@ -190,7 +201,8 @@ def main():
     failed = 0
     tests = [test_ranks_equal_one_process, test_each_rank_holds_its_brick_and_ghosts, test_a_rank_that_dies_ends_the_job,
              test_a_rank_that_fails_to_read_ends_the_job, test_refusals_name_what_bricks_cannot_draw,
-             test_nonfinite_voxels_take_the_whole_volumes_extremes, test_gl_ranks_equal_one_process]
+             test_nonfinite_voxels_take_the_whole_volumes_extremes, test_gl_ranks_equal_one_process,
+             test_ranks_on_different_backends_are_refused]
     for t in tests:
         try:
             t()
