@@ -21,6 +21,29 @@
 namespace fs = std::filesystem;
 
 namespace peakcast {
+namespace {
+
+// A float volume's finite extremes (lo > hi when none is finite) and its non-finite voxels.
+struct FiniteScan {
+  float lo = std::numeric_limits<float>::infinity(), hi = -std::numeric_limits<float>::infinity();
+  int64_t nonfinite = 0;
+};
+FiniteScan scan_finite(const Volume& v) {
+  FiniteScan s;
+  const auto* p = reinterpret_cast<const float*>(v.data());
+  for (size_t i = 0, n = size_t(v.voxel_count()); i < n; ++i) {
+    if (std::isfinite(p[i])) {
+      s.lo = std::min(s.lo, p[i]);
+      s.hi = std::max(s.hi, p[i]);
+    } else {
+      ++s.nonfinite;
+    }
+  }
+  return s;
+}
+
+}  // namespace
+
 namespace detail {
 
 std::string trim(const std::string& s) {
@@ -221,30 +244,18 @@ void finish_volume(const fs::path& file, Volume& v, bool big_endian, const LoadO
     auto* p = reinterpret_cast<uint16_t*>(v.data());
     for (size_t i = 0; i < n; ++i) p[i] ^= 0x8000;  // int16 + 32768 as uint16
   }
-  if (v.type() == VoxelType::F32 && options.nonfinite == NonFinitePolicy::Keep) {
-    // The caller replaces them (replace_nonfinite, which computes the statistics); none over
-    // NaN here (a NaN's histogram bin is undefined behaviour).
-    const auto* p = reinterpret_cast<const float*>(v.data());
-    for (size_t i = 0; i < n; ++i)
-      if (!std::isfinite(p[i])) return;
-  }
-  if (v.type() == VoxelType::F32 && options.nonfinite != NonFinitePolicy::Keep) {
-    const auto* p = reinterpret_cast<const float*>(v.data());
-    float lo = std::numeric_limits<float>::infinity(), hi = -lo;
-    int64_t bad = 0;
-    for (size_t i = 0; i < n; ++i) {  // finite_extremes and the count in one pass
-      if (std::isfinite(p[i])) {
-        lo = std::min(lo, p[i]);
-        hi = std::max(hi, p[i]);
-      } else {
-        ++bad;
+  if (v.type() == VoxelType::F32) {
+    const FiniteScan f = scan_finite(v);
+    if (f.nonfinite > 0) {
+      switch (options.nonfinite) {
+        case NonFinitePolicy::Refuse:
+          throw VolumeError(file, std::to_string(f.nonfinite) + " NaN/Inf voxels (policy: refuse)");
+        case NonFinitePolicy::Keep:  // the caller replaces them (replace_nonfinite computes the
+          return;                    // statistics): none over NaN (its histogram bin is undefined)
+        case NonFinitePolicy::Replace:
+          replace_nonfinite(v, f.lo <= f.hi ? f.lo : 0.f, f.lo <= f.hi ? f.hi : 0.f);  // nothing finite: 0
+          return;  // statistics done
       }
-    }
-    if (bad > 0) {
-      if (options.nonfinite == NonFinitePolicy::Refuse)
-        throw VolumeError(file, std::to_string(bad) + " NaN/Inf voxels (policy: refuse)");
-      replace_nonfinite(v, lo <= hi ? lo : 0.f, lo <= hi ? hi : 0.f);  // nothing finite at all: 0
-      return;  // statistics done
     }
   }
   v.finalize_statistics();
@@ -349,14 +360,8 @@ fs::path resolve_in_roots(const fs::path& requested, const std::vector<fs::path>
 
 std::pair<float, float> finite_extremes(const Volume& v) {
   if (v.type() != VoxelType::F32) return {float(v.min_value), float(v.max_value)};
-  const auto* p = reinterpret_cast<const float*>(v.data());
-  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
-  for (size_t i = 0, n = size_t(v.voxel_count()); i < n; ++i)
-    if (std::isfinite(p[i])) {
-      lo = std::min(lo, p[i]);
-      hi = std::max(hi, p[i]);
-    }
-  return {lo, hi};
+  const FiniteScan f = scan_finite(v);
+  return {f.lo, f.hi};
 }
 
 void replace_nonfinite(Volume& v, float lo, float hi) {

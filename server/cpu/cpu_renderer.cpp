@@ -282,18 +282,13 @@ RenderResult CpuRenderer::render(const render::ResidentVolume& v, const Resolved
 
 Image CpuRenderer::render_brick(const render::ResidentVolume& v, const ResolvedScene& s, const Brick& brick,
                                 RenderStats* stats, std::optional<PixelRect> tile) {
-  render::check_brick_scene(s);
   const CpuVolume& cv = cpu_volume(v);
   const glm::dvec3 spacing = cv.volume().spacing;
-  render::check_brick_box(s, brick, spacing);
-  const PixelRect rect = tile.value_or(PixelRect{0, 0, s.scene.width, s.scene.height});
-  render::check_rect(rect, s.scene.width, s.scene.height);
+  const PixelRect rect = render::check_brick_frame(s, brick, spacing, tile);
   const int w = rect.w, h = rect.h;
   if (stats) *stats = RenderStats{};
   CpuFrame f = prepare(cv, s, render::GpuPath::Fragment, stats);
-  if (f.key.cell_dda || f.key.adaptive || f.key.virtual_samples || f.key.ray_texture)
-    throw std::invalid_argument("distributed rendering: this frame's variant (" + f.key.name() +
-                                ") walks cells or sample windows that bricks do not bound yet");
+  render::check_brick_variant(f.key);
   f.brick = true;
   f.sample_half = f.box_half - glm::vec3(brick.read_lo * spacing);
   f.own_lo = glm::vec3(brick.own_lo);

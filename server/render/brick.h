@@ -8,8 +8,12 @@
 
 #include <glm/vec3.hpp>
 
+#include <optional>
+
 #include "core/scene.h"
 #include "core/volume.h"
+#include "render/frame.h"
+#include "render/variant.h"
 
 namespace peakcast::render {
 
@@ -24,7 +28,13 @@ struct Brick {
 // What bricks cannot draw yet (virtual samples, adaptive sampling, ray textures): std::invalid_argument naming it. Callers that
 // must refuse before asking other ranks call it first; render_brick calls it too.
 void check_brick_scene(const ResolvedScene& scene);
-// The brick's own box must lie in the scene's volume box (std::invalid_argument otherwise).
-void check_brick_box(const ResolvedScene& scene, const Brick& brick, const glm::dvec3& spacing);
+// render_brick's checks before anything is drawn (std::invalid_argument): check_brick_scene,
+// the brick's own box inside the scene's volume box, the tile inside the image. Returns the
+// pixels to draw (`tile`, or the whole image).
+PixelRect check_brick_frame(const ResolvedScene& scene, const Brick& brick, const glm::dvec3& spacing,
+                            std::optional<PixelRect> tile);
+// Once the frame's variant is chosen: those walking cells or sample windows, which bricks do
+// not bound yet (std::invalid_argument).
+void check_brick_variant(const VariantKey& key);
 
 }  // namespace peakcast::render

@@ -132,16 +132,11 @@ RenderResult Raycaster::render(const ResidentVolume& v, const ResolvedScene& s, 
 
 Image Raycaster::render_brick(const ResidentVolume& v, const ResolvedScene& s, const Brick& brick, RenderStats* stats,
                              std::optional<PixelRect> tile) {
-  check_brick_scene(s);
   const GpuVolume& gv = gpu_volume(v);
-  check_brick_box(s, brick, gv.volume().spacing);
-  const PixelRect rect = tile.value_or(PixelRect{0, 0, s.scene.width, s.scene.height});
-  check_rect(rect, s.scene.width, s.scene.height);
+  const PixelRect rect = check_brick_frame(s, brick, gv.volume().spacing, tile);
   if (stats) *stats = RenderStats{};
   VariantKey key = prepare(gv, s, GpuPath::Fragment, stats);
-  if (key.cell_dda || key.adaptive || key.virtual_samples || key.ray_texture)
-    throw std::invalid_argument("distributed rendering: this frame's variant (" + key.name() +
-                                ") walks cells or sample windows that bricks do not bound yet");
+  check_brick_variant(key);
   key.brick = true;
   key.rgb8 = false;
   return std::move(draw(gv, s, key, rect, true, stats, &brick).image);

@@ -80,6 +80,20 @@ def gl_ranks_check(tmp):
         srv.stop()
 
 
+def mixed_backends_check():
+    """Ranks on different backends (MPMD: rank 0 on the CPU backend, rank 1 on GL) are refused by
+    name and the job ends, rather than drawing seams at brick faces."""
+    data = str(DATA)
+    cmd = [MPIRUN, "--oversubscribe", "-np", "1", PEAKCAST, "serve", "--port", "0", "--data", data, "--backend", "cpu",
+           ":", "-np", "1", PEAKCAST, "serve", "--port", "0", "--data", data, "--backend", "gl"]
+    try:
+        r = subprocess.run(cmd, capture_output=True, text=True, timeout=60, env=ENV)
+    except subprocess.TimeoutExpired:
+        return ("ranks on different backends end the job", False, "still running after 60 s")
+    return ("ranks on different backends end the job, naming the mismatch",
+            r.returncode != 0 and "every rank needs the same" in r.stdout + r.stderr, (r.returncode, r.stderr[-400:]))
+
+
 def main():
     failed = 0
     one = Server("--backend", "cpu", env=ENV)
@@ -135,6 +149,7 @@ def main():
         checks.append(("a TIFF stack is refused before any rank is asked, and the job goes on",
                        status >= 400 and b"TIFF" in body and status2 == 200 and srv.alive(), (status, body[:300])))
         checks.append(gl_ranks_check(tmp))
+        checks.append(mixed_backends_check())
         shutil.rmtree(tmp, ignore_errors=True)
         shutil.rmtree(tiff_dir, ignore_errors=True)
         for name, ok, detail in checks:
@@ -150,7 +165,7 @@ def main():
     ok = code is not None and stopped < 10 and "peakcast: stopped" in "".join(srv.log)
     print(f"{'ok  ' if ok else 'FAIL'} SIGTERM stops every rank: mpirun exited {code} after {stopped:.1f} s", flush=True)
     failed += not ok
-    print(f"{9 - failed} passed, {failed} failed")
+    print(f"{10 - failed} passed, {failed} failed")
     sys.exit(1 if failed else 0)
 
 
