@@ -24,6 +24,7 @@
 #include "dist/brick_frame.h"
 #include "dist/icet_compositor.h"
 #include "dist/kd_split.h"
+#include "dist/coordinator.h"
 #include "dist/mpi_renderer.h"
 #include "encode/png.h"
 #include "render/backend.h"
@@ -197,7 +198,7 @@ int run(const MpiRenderArgs& a, int rank, int size) {
 }  // namespace
 
 int mpi_serve(const std::string& backend, const std::string& egl_device,
-              const std::function<int(RendererWrap, int)>& serve) {
+              const std::function<int(MpiServeHooks)>& serve) {
   int provided = 0;
   MPI_Init_thread(nullptr, nullptr, MPI_THREAD_SERIALIZED, &provided);
   int rank = 0, size = 1;
@@ -208,13 +209,18 @@ int mpi_serve(const std::string& backend, const std::string& egl_device,
     if (provided < MPI_THREAD_SERIALIZED)
       throw std::runtime_error("this MPI cannot be called from the render thread (MPI_THREAD_SERIALIZED)");
     if (rank == 0) {
-      code = serve(
-          [size](std::unique_ptr<render::Renderer> local) -> std::unique_ptr<render::Renderer> {
-            // The server's own renderer draws rank 0's brick; on the CPU, with the rank's cores.
-            if (std::string(local->backend()) == "cpu") local = std::make_unique<cpu::CpuRenderer>(rank_threads());
-            return std::make_unique<dist::MpiRenderer>(size, std::move(local));
-          },
-          size);
+      auto coord = std::make_shared<dist::Coordinator>(size);
+      MpiServeHooks hooks;
+      hooks.wrap = [coord](std::unique_ptr<render::Renderer> local) -> std::unique_ptr<render::Renderer> {
+        // The server's own renderer draws rank 0's brick; on the CPU, with the rank's cores.
+        if (std::string(local->backend()) == "cpu") local = std::make_unique<cpu::CpuRenderer>(rank_threads());
+        return std::make_unique<dist::MpiRenderer>(coord, std::move(local));
+      };
+      hooks.loader = [coord](const std::filesystem::path& path, const LoadOptions& options) {
+        return coord->load(path, options);
+      };
+      hooks.ranks = size;
+      code = serve(std::move(hooks));
     } else {
       RankRenderer r = open_rank_renderer(backend, egl_device);
       dist::serve_worker(r.get());

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "app/commands.h"
+#include "core/volume_io.h"
 #include "render/renderer.h"
 
 namespace peakcast::app {
@@ -22,11 +23,16 @@ int mpi_world_size_hint();
 int mpi_render(const MpiRenderArgs& a);
 
 // mpirun peakcast serve: initialises MPI (serialized threads); rank 0 calls `serve` with the
-// wrap that puts dist::MpiRenderer over its CPU backend and the rank count, the others render
-// what it asks (dist::serve_worker). An error on rank 0 before it serves ends the job.
+// hooks below, the others render what it asks (dist::serve_worker). An error on rank 0 before
+// it serves ends the job.
 using RendererWrap = std::function<std::unique_ptr<render::Renderer>(std::unique_ptr<render::Renderer>)>;
+struct MpiServeHooks {
+  RendererWrap wrap;    // puts dist::MpiRenderer over the server's own renderer
+  VolumeLoader loader;  // every rank reads its brick; rank 0 keeps no voxels (dist::Coordinator)
+  int ranks = 1;
+};
 // backend, egl_device: the server's options, for the other ranks' renderers.
 int mpi_serve(const std::string& backend, const std::string& egl_device,
-              const std::function<int(RendererWrap, int)>& serve);
+              const std::function<int(MpiServeHooks)>& serve);
 
 }  // namespace peakcast::app

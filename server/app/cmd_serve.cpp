@@ -46,9 +46,10 @@ void add_serve_command(CLI::App& app, Runner& run) {
       net::ServerConfig config = o->resolved();
       if (mpi_world_size_hint() > 1) {  // mpirun -np N peakcast serve: rank 0 serves, every rank renders
 #ifdef PEAKCAST_HAVE_MPI
-        return mpi_serve(config.backend, config.egl_device, [&](RendererWrap wrap, int ranks) {
-          config.wrap_renderer = std::move(wrap);
-          config.ranks = ranks;
+        return mpi_serve(config.backend, config.egl_device, [&](MpiServeHooks hooks) {
+          config.wrap_renderer = std::move(hooks.wrap);
+          config.volume_loader = std::move(hooks.loader);
+          config.ranks = hooks.ranks;
           return serve(config, *o);
         });
 #else

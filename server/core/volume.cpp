@@ -79,7 +79,23 @@ Volume::Volume(const VolumeHeader& h)
   std::fill_n(data_.get() + byte_size(), kTailPadding, uint8_t(0));
 }
 
+Volume Volume::header_only(const VolumeHeader& h) {
+  Volume v;
+  v.spacing = h.spacing;
+  v.origin = h.origin;
+  v.value_offset = storage_offset(h.source);
+  v.dims_ = h.dims;
+  v.type_ = storage_type(h.source);
+  v.source_ = h.source;
+  return v;
+}
+
 namespace {
+
+// The bin of a stored value (finalize_statistics, box_histogram): scale = bins / (hi - lo).
+inline int histogram_bin(double stored, double lo, double scale, int bins) {
+  return std::clamp(int((stored - lo) * scale), 0, bins - 1);
+}
 
 // Integer voxels: one pass counting every stored value (256 or 65536 bins per worker), from
 // which the range and the 1024-bin histogram follow exactly (the same bins as two passes over
@@ -108,7 +124,7 @@ void integer_statistics(const T* data, size_t n, double& lo_out, double& hi_out,
   const double span = double(hi) - double(lo);
   const double scale = span > 0 ? bins / span : 0.0;
   for (size_t v = lo; v <= hi && lo < kValues; ++v)
-    if (all[v]) histogram[size_t(std::clamp(int((double(v) - double(lo)) * scale), 0, bins - 1))] += all[v];
+    if (all[v]) histogram[size_t(histogram_bin(double(v), double(lo), scale, bins))] += all[v];
 }
 
 }  // namespace
@@ -158,14 +174,32 @@ void Volume::finalize_statistics() {
   const double scale = span > 0 ? kHistogramBins / span : 0.0;
   parallel_chunks(n, [&](size_t begin, size_t end, int worker) {
     auto& h = hist[worker];
-    for (size_t i = begin; i < end; ++i) {
-      int b = int((stored(i) - lo) * scale);
-      h[std::clamp(b, 0, kHistogramBins - 1)]++;
-    }
+    for (size_t i = begin; i < end; ++i) h[size_t(histogram_bin(stored(i), lo, scale, kHistogramBins))]++;
   });
   histogram.assign(kHistogramBins, 0);
   for (auto& h : hist)
     for (int b = 0; b < kHistogramBins; ++b) histogram[b] += h[b];
+}
+
+std::vector<uint64_t> Volume::box_histogram(const Dims& lo, const Dims& hi, double stored_lo, double stored_hi) const {
+  for (int a = 0; a < 3; ++a)
+    if (lo[a] < 0 || hi[a] > dims_[a] || lo[a] > hi[a]) throw std::invalid_argument("box_histogram: box outside the volume");
+  if (!has_voxels()) throw std::logic_error("box_histogram: the voxels were dropped");
+  const double span = stored_hi - stored_lo;
+  const double scale = span > 0 ? kHistogramBins / span : 0.0;
+  std::vector<std::vector<uint64_t>> parts(size_t(hardware_threads()), std::vector<uint64_t>(kHistogramBins, 0));
+  parallel_chunks(size_t(hi[2] - lo[2]), [&](size_t begin, size_t end, int worker) {
+    auto& h = parts[size_t(worker)];
+    for (int64_t k = lo[2] + int64_t(begin); k < lo[2] + int64_t(end); ++k)
+      for (int64_t j = lo[1]; j < hi[1]; ++j) {
+        const size_t row = size_t(dims_[0] * (j + dims_[1] * k));
+        for (int64_t i = lo[0]; i < hi[0]; ++i) h[size_t(histogram_bin(stored(row + size_t(i)), stored_lo, scale, kHistogramBins))]++;
+      }
+  });
+  std::vector<uint64_t> h(kHistogramBins, 0);
+  for (const auto& p : parts)
+    for (int b = 0; b < kHistogramBins; ++b) h[size_t(b)] += p[size_t(b)];
+  return h;
 }
 
 std::string Volume::to_string() const {

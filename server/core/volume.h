@@ -45,6 +45,9 @@ class Volume {
   // kTailPadding zero bytes after the last voxel.
   static constexpr size_t kTailPadding = 16;
   explicit Volume(const VolumeHeader& header);
+  // The header's dims, type, spacing and origin without voxels (has_voxels() is false): a
+  // distributed volume on the rank that serves it, whose voxels live in the ranks' bricks.
+  static Volume header_only(const VolumeHeader& header);
 
   const Dims& dims() const { return dims_; }
   int64_t voxel_count() const { return dims_[0] * dims_[1] * dims_[2]; }
@@ -100,6 +103,10 @@ class Volume {
 
   // Computes range and histogram (and nothing else); loaders call it once voxels are in.
   void finalize_statistics();
+  // The voxels of the box [lo, hi) of this volume's grid counted into kHistogramBins bins over
+  // the stored range [stored_lo, stored_hi], binned as finalize_statistics bins: a distributed
+  // volume's histogram is the sum of its bricks' own boxes (dist/).
+  std::vector<uint64_t> box_histogram(const Dims& lo, const Dims& hi, double stored_lo, double stored_hi) const;
   std::string to_string() const;
 
  private:

@@ -7,6 +7,8 @@
 #include <optional>
 #include <utility>
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -46,6 +48,15 @@ struct LoadOptions {
 // Format by name: .nrrd/.nhdr, .mhd/.mha, .json (sidecar) or .raw with a sidecar,
 // .tif/.tiff (multi-page), or a directory of numbered 2D TIFFs.
 Volume load_volume(const std::filesystem::path& path, const LoadOptions& options = {});
+
+// A volume as the server loads it (session/volume_store.h): the volume and the bytes of voxels
+// this process will hold for it: its own, or for a distributed volume (which holds none here)
+// the largest rank's brick, which the memory budget counts.
+struct LoadedVolume {
+  std::shared_ptr<Volume> volume;
+  int64_t resident_bytes = 0;
+};
+using VolumeLoader = std::function<LoadedVolume(const std::filesystem::path&, const LoadOptions&)>;
 
 // A float volume's finite extremes (lo > hi when no voxel is finite; other types: their range).
 std::pair<float, float> finite_extremes(const Volume& v);

@@ -84,4 +84,13 @@ std::vector<int> visibility_order(const KdSplit& split, const glm::dvec3& eye_vo
   return out;
 }
 
+std::pair<Index3, Index3> counted_box(const Brick& b, const Index3& dims) {
+  Index3 lo{}, hi{};
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = b.lo[a] - b.read_lo[a];
+    hi[a] = b.hi[a] - b.read_lo[a] + (b.hi[a] == dims[a] - 1 ? 1 : 0);
+  }
+  return {lo, hi};
+}
+
 }  // namespace peakcast::dist

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -52,6 +53,12 @@ int ghost_voxels(bool tricubic, bool shading);
 // each side getting a share of the voxel planes proportional to its share of ranks. Throws
 // std::invalid_argument when the volume has fewer cells than ranks along every axis it could cut.
 KdSplit kd_split(const Index3& dims, int ranks, int ghost);
+
+// The voxels `brick` alone counts when the bricks' statistics are summed: its box's half-open
+// [lo, hi), closed on the volume's upper faces (a plane two bricks share is counted by the brick
+// above it), in the coordinates of the brick's read voxels (from read_lo). The bricks' boxes
+// tile the volume's voxels exactly once.
+std::pair<Index3, Index3> counted_box(const Brick& brick, const Index3& dims);
 
 // The ranks front to back as seen from the camera, in voxel coordinates: the eye's position
 // for a perspective camera, the view direction for an orthographic one.

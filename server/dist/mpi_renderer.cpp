@@ -13,6 +13,7 @@
 
 #include "core/volume_io.h"
 #include "dist/brick_frame.h"
+#include "dist/coordinator.h"
 #include "dist/icet_compositor.h"
 #include "dist/kd_split.h"
 #include "encode/png.h"
@@ -20,9 +21,7 @@
 namespace peakcast::dist {
 namespace {
 
-enum Command : int64_t { kLoad = 1, kRender = 2, kQuit = 3, kBackend = 4 };
-
-// One rank's brick of one volume.
+// One rank's brick of one volume, made resident for its renderer.
 struct BrickSet {
   VolumeBox box;
   Index3 dims{};
@@ -38,53 +37,26 @@ int world_rank() {
   return r;
 }
 
-[[noreturn]] void abort_job(const char* what) {
-  int size = 1;
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
-  std::fprintf(stderr, "peakcast: error on rank %d of %d: %s\n", world_rank(), size, what);
-  std::fflush(stderr);
-  MPI_Abort(MPI_COMM_WORLD, 1);
-  std::abort();
-}
-
-// Rank 0 fills cmd, id, payload and drops; the others receive them.
-void broadcast(int64_t& cmd, int64_t& id, std::string& payload, std::vector<int64_t>& drops) {
-  int64_t head[4] = {cmd, id, int64_t(payload.size()), int64_t(drops.size())};
-  MPI_Bcast(head, 4, MPI_INT64_T, 0, MPI_COMM_WORLD);
-  cmd = head[0];
-  id = head[1];
-  payload.resize(size_t(head[2]));
-  drops.resize(size_t(head[3]));
-  if (!payload.empty()) MPI_Bcast(payload.data(), int(payload.size()), MPI_CHAR, 0, MPI_COMM_WORLD);
-  if (!drops.empty()) MPI_Bcast(drops.data(), int(drops.size()), MPI_INT64_T, 0, MPI_COMM_WORLD);
-}
-
-// Every rank: its brick of the file, with the whole volume's value range.
-BrickSet load_bricks(const nlohmann::json& j, render::Renderer& renderer) {
-  int rank = 0, size = 1;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
-  const std::string path = j.at("path");
-  LoadOptions one;
-  one.region = VoxelRegion{{0, 0, 0}, {1, 1, 1}};
-  const Volume head = load_volume(path, one);
+BrickSet make_set(BrickRead&& r, render::Renderer& renderer) {
   BrickSet b;
-  b.box = VolumeBox{head.source_dims, head.spacing, head.origin, j.at("lo"), j.at("hi")};
-  b.dims = {head.source_dims[0], head.source_dims[1], head.source_dims[2]};
-  b.ghost = j.at("ghost");
-  b.split = kd_split(b.dims, size, b.ghost);
-  b.mine = b.split.bricks[size_t(rank)];
-  LoadOptions region;
-  region.region = VoxelRegion{b.mine.read_lo, b.mine.read_hi};
-  // NaN/Inf voxels take the whole volume's finite extremes, as in one process: its value range
-  // (rank 0 read it whole, replacing them with those extremes, which therefore bound it).
-  region.nonfinite = NonFinitePolicy::Keep;
-  auto v = std::make_shared<Volume>(load_volume(path, region));
-  replace_nonfinite(*v, float(b.box.min_value - v->value_offset), float(b.box.max_value - v->value_offset));
-  v->min_value = b.box.min_value;
-  v->max_value = b.box.max_value;
-  b.brick = renderer.make_resident(std::move(v));
+  b.box = r.box;
+  b.dims = r.dims;
+  b.ghost = r.ghost;
+  b.split = std::move(r.split);
+  b.mine = r.mine;
+  b.brick = renderer.make_resident(std::move(r.voxels));
   return b;
+}
+
+// A re-read of every brick with the range already known (no statistics reduced).
+BrickLoadRequest reread(const std::string& path, const VolumeBox& box, int ghost) {
+  BrickLoadRequest r;
+  r.path = path;
+  r.ghost = ghost;
+  r.have_range = true;
+  r.lo = box.min_value;
+  r.hi = box.max_value;
+  return r;
 }
 
 struct Composited {
@@ -126,96 +98,87 @@ render::PixelRect rect_of(const nlohmann::json& j) {
 
 }  // namespace
 
+// IceT's context duplicates the communicator (a collective): every rank makes it on its first
+// render command, in the same place of the command sequence, not at start-up, where rank 0's
+// loader may already be in a volume load's collectives.
+static IceTCompositor& icet_of(std::unique_ptr<IceTCompositor>& icet) {
+  if (!icet) icet = std::make_unique<IceTCompositor>(MPI_COMM_WORLD, 0);
+  return *icet;
+}
+
 struct MpiRenderer::Impl {
-  explicit Impl(std::unique_ptr<render::Renderer> local) : local(std::move(local)), renderer(*this->local), icet(MPI_COMM_WORLD, 0) {}
+  Impl(std::shared_ptr<Coordinator> c, std::unique_ptr<render::Renderer> local)
+      : coord(std::move(c)), local(std::move(local)), renderer(*this->local) {}
+  std::shared_ptr<Coordinator> coord;
   std::unique_ptr<render::Renderer> local;
   render::Renderer& renderer;
-  IceTCompositor icet;
-  int64_t next_id = 1;
+  std::unique_ptr<IceTCompositor> icet;  // icet_of
 };
 
 class MpiRenderer::Resident : public render::ResidentVolume {
  public:
-  Resident(MpiRenderer& owner, int64_t id, std::shared_ptr<const Volume> whole, VolumeMacrocells cells, BrickSet b)
-      : ResidentVolume(std::move(whole), std::move(cells)), owner_(owner), id_(id), bricks(std::move(b)) {}
-  ~Resident() override { owner_.forget(id_); }
+  Resident(std::shared_ptr<Coordinator> coord, int64_t id, std::shared_ptr<const Volume> whole, BrickSet b)
+      : ResidentVolume(std::move(whole), {}, VoxelsElsewhere{}), coord_(std::move(coord)), id_(id), bricks(std::move(b)) {}
+  ~Resident() override { coord_->forget(id_); }
   size_t resident_bytes() const override { return bricks.brick->volume().byte_size(); }
   bool drop_host_voxels() override {  // the bricks are the copy; the whole volume need not stay
-    if (!has_both_grids() || !volume_->has_voxels()) return false;
+    if (!volume_->has_voxels()) return false;
     volume_->drop_voxels();
     return true;
   }
   int64_t id() const { return id_; }
 
-  MpiRenderer& owner_;
+  std::shared_ptr<Coordinator> coord_;
   int64_t id_;
   BrickSet bricks;
 };
 
-MpiRenderer::MpiRenderer(int ranks, std::unique_ptr<render::Renderer> local)
-    : ranks_(ranks), impl_(std::make_unique<Impl>(std::move(local))) {
+MpiRenderer::MpiRenderer(std::shared_ptr<Coordinator> coord, std::unique_ptr<render::Renderer> local)
+    : ranks_(coord->ranks()), impl_(std::make_unique<Impl>(std::move(coord), std::move(local))) {
   // Every rank must draw with the same backend: the CPU and GL ray casters round a point's
   // position differently, so a face between their bricks could draw a point twice or never.
-  int64_t cmd = kBackend, id = 0;
-  std::string payload = impl_->renderer.backend();
-  std::vector<int64_t> drops;
-  broadcast(cmd, id, payload, drops);
+  auto held = impl_->coord->lock();
+  impl_->coord->send(held, kBackend, 0, impl_->renderer.backend());
 }
 
 const char* MpiRenderer::backend() const { return impl_->renderer.backend(); }
 
 MpiRenderer::~MpiRenderer() {
-  int64_t cmd = kQuit, id = 0;
-  std::string payload;
-  std::vector<int64_t> drops;
-  broadcast(cmd, id, payload, drops);
+  auto held = impl_->coord->lock();
+  impl_->coord->send(held, kQuit, 0);
 }
 
 std::string MpiRenderer::description() const {
   return impl_->renderer.description() + " per rank, " + std::to_string(ranks_) + " ranks (MPI, IceT)";
 }
 
-void MpiRenderer::forget(int64_t id) {
-  std::lock_guard lock(forgotten_m_);
-  forgotten_.push_back(id);
-}
-
-std::vector<int64_t> MpiRenderer::take_forgotten() {
-  std::lock_guard lock(forgotten_m_);
-  return std::exchange(forgotten_, {});
-}
-
 std::unique_ptr<render::ResidentVolume> MpiRenderer::make_resident(std::shared_ptr<const Volume> volume,
-                                                                   VolumeMacrocells cells) {
+                                                                   VolumeMacrocells) {
   if (volume->source_path.empty())
     throw std::invalid_argument("distributed rendering reads each rank's brick from the volume's file; this volume has none");
-  // Ghosts for the widest filter, shading and an interactive frame's doubled step; a scene
-  // that needs more re-reads the bricks (render).
-  const int ghost = ghost_voxels(true, true) + 2;
-  // What would fail on a rank fails here first, before any rank is asked (a failure after the
-  // broadcast ends the job): a file whose regions cannot be read (TIFF stacks), one changed
-  // since the server read it, a volume with fewer cells than ranks.
-  {
-    LoadOptions one;
-    one.region = VoxelRegion{{0, 0, 0}, {1, 1, 1}};
-    const Volume head = load_volume(volume->source_path, one);
-    if (head.source_dims != volume->dims())
-      throw std::runtime_error(volume->source_path + ": the file changed since it was read (its dims differ)");
-    kd_split({head.source_dims[0], head.source_dims[1], head.source_dims[2]}, ranks_, ghost);
-  }
-  int64_t cmd = kLoad, id = impl_->next_id++;
-  std::string payload =
-      nlohmann::json{{"path", volume->source_path}, {"lo", volume->min_value}, {"hi", volume->max_value}, {"ghost", ghost}}
-          .dump();
-  std::vector<int64_t> drops = take_forgotten();
-  broadcast(cmd, id, payload, drops);
-  BrickSet b;
+  Coordinator& c = *impl_->coord;
+  auto held = c.lock();
+  if (auto loaded = c.take_loaded(held, volume.get()))  // the server's volumes: read by Coordinator::load
+    return std::make_unique<Resident>(impl_->coord, loaded->first, std::move(volume),
+                                      make_set(std::move(loaded->second), impl_->renderer));
+  // A volume read whole (the CLI, tests): every rank reads its brick with the range known.
+  // What would fail on a rank fails here first, before any rank is asked: a file whose regions
+  // cannot be read (TIFF stacks), one changed since it was read, fewer cells than ranks.
+  LoadOptions one;
+  one.region = VoxelRegion{{0, 0, 0}, {1, 1, 1}};
+  const Volume head = load_volume(volume->source_path, one);
+  if (head.source_dims != volume->dims())
+    throw std::runtime_error(volume->source_path + ": the file changed since it was read (its dims differ)");
+  kd_split({head.source_dims[0], head.source_dims[1], head.source_dims[2]}, ranks_, default_ghost());
+  const VolumeBox box{volume->dims(), volume->spacing, volume->origin, volume->min_value, volume->max_value};
+  const BrickLoadRequest req = reread(volume->source_path, box, default_ghost());
+  const int64_t id = c.new_id();
+  c.send(held, kLoad, id, req.to_json().dump());
   try {
-    b = load_bricks(nlohmann::json::parse(payload), impl_->renderer);
+    return std::make_unique<Resident>(impl_->coord, id, std::move(volume), make_set(read_brick(req), impl_->renderer));
   } catch (const std::exception& e) {
     abort_job(e.what());  // the other ranks are reading theirs: the job cannot go on without this one
   }
-  return std::make_unique<Resident>(*this, id, std::move(volume), std::move(cells), std::move(b));
 }
 
 render::RenderResult MpiRenderer::render(const render::ResidentVolume& v, const ResolvedScene& s,
@@ -226,38 +189,33 @@ render::RenderResult MpiRenderer::render(const render::ResidentVolume& v, const 
   const render::PixelRect rect = req.tile.value_or(render::PixelRect{0, 0, s.scene.width, s.scene.height});
   render::check_rect(rect, s.scene.width, s.scene.height);
   auto& bricks = const_cast<Resident*>(res)->bricks;
+  Coordinator& c = *impl_->coord;
+  auto held = c.lock();  // against a volume load on the loader pool
   const auto t0 = std::chrono::steady_clock::now();
   const bool want_samples = req.output == render::RenderOutput::Float || req.sample_stats;
   try {
     if (const int need = brick_ghost(s); need > bricks.ghost) {  // a longer step than the bricks were read for
       // With headroom: a differential step grows as the camera backs away, and a re-read on
       // every frame of a slow zoom-out would cost more than the wider ghosts.
-      const int ghost = need + std::max(4, need / 2);
-      int64_t cmd = kLoad, id = res->id();
-      std::string payload = nlohmann::json{{"path", res->volume().source_path}, {"lo", bricks.box.min_value},
-                                            {"hi", bricks.box.max_value}, {"ghost", ghost}}
-                                .dump();
-      std::vector<int64_t> drops = take_forgotten();
-      broadcast(cmd, id, payload, drops);
-      bricks = load_bricks(nlohmann::json::parse(payload), impl_->renderer);
+      const BrickLoadRequest r = reread(res->volume().source_path, bricks.box, need + std::max(4, need / 2));
+      c.send(held, kLoad, res->id(), r.to_json().dump());
+      bricks = make_set(read_brick(r), impl_->renderer);
     }
-    int64_t cmd = kRender, id = res->id();
-    std::string payload = nlohmann::json{{"scene", scene_to_json(s.scene)}, {"step", s.step},
-                                         {"rect", {rect.x, rect.y, rect.w, rect.h}}, {"samples", want_samples}}
-                              .dump();
-    std::vector<int64_t> drops = take_forgotten();
-    broadcast(cmd, id, payload, drops);
-    Composited c = render_composite(bricks, s, rect, want_samples, impl_->renderer, impl_->icet);
-    Image img = finish_composite(c.rgba, rect.w, rect.h, s.scene.background);
+    c.send(held, kRender, res->id(),
+           nlohmann::json{{"scene", scene_to_json(s.scene)}, {"step", s.step},
+                          {"rect", {rect.x, rect.y, rect.w, rect.h}}, {"samples", want_samples}}
+               .dump());
+    Composited comp = render_composite(bricks, s, rect, want_samples, impl_->renderer, icet_of(impl_->icet));
+    Image img = finish_composite(comp.rgba, rect.w, rect.h, s.scene.background);
     render::RenderResult out;
     out.rect = rect;
     if (stats) {
-      *stats = c.stats;
-      stats->variant = c.stats.variant + "+" + std::to_string(ranks_) + "ranks";
+      *stats = comp.stats;
+      stats->variant = comp.stats.variant + "+" + std::to_string(ranks_) + "ranks";
       stats->render_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       stats->samples_total = stats->samples_max = 0;
       stats->rays_hit = 0;
-      for (float n : c.samples) {
+      for (float n : comp.samples) {
         if (n <= 0) continue;
         stats->samples_total += n;
         stats->samples_max = std::max<double>(stats->samples_max, n);
@@ -270,7 +228,7 @@ render::RenderResult MpiRenderer::render(const render::ResidentVolume& v, const 
       out.rgb8 = render::Rgb8Image(rect.w, rect.h);
       out.rgb8.rgb = encode::to_rgb8(img);
     } else {
-      img.samples = std::move(c.samples);
+      img.samples = std::move(comp.samples);
       out.image = std::move(img);
     }
     return out;
@@ -297,30 +255,29 @@ void serve_worker(render::Renderer& renderer) {
   std::signal(SIGTERM, SIG_IGN);
   std::signal(SIGINT, SIG_IGN);
   try {
-    IceTCompositor icet(MPI_COMM_WORLD, 0);
+    std::unique_ptr<IceTCompositor> icet;  // icet_of
     std::map<int64_t, BrickSet> volumes;
     for (;;) {
-      int64_t cmd = 0, id = 0;
-      std::string payload;
-      std::vector<int64_t> drops;
-      broadcast(cmd, id, payload, drops);
-      for (int64_t d : drops) volumes.erase(d);
-      if (cmd == kQuit) return;
-      if (cmd == kBackend) {
-        if (payload != renderer.backend())
+      CommandMessage m;
+      broadcast(m);
+      for (int64_t d : m.drops) volumes.erase(d);
+      if (m.cmd == kQuit) return;
+      if (m.cmd == kBackend) {
+        if (m.payload != renderer.backend())
           throw std::runtime_error("this rank renders with the " + std::string(renderer.backend()) +
-                                   " backend and rank 0 with " + payload +
+                                   " backend and rank 0 with " + m.payload +
                                    ": every rank needs the same (pass --backend gl or --backend cpu)");
         continue;
       }
-      const nlohmann::json j = nlohmann::json::parse(payload);
-      if (cmd == kLoad) {
-        volumes[id] = load_bricks(j, renderer);
-      } else if (cmd == kRender) {
-        BrickSet& b = volumes.at(id);
-        render_composite(b, scene_of(j, b.box), rect_of(j), j.at("samples"), renderer, icet);
+      const nlohmann::json j = nlohmann::json::parse(m.payload);
+      if (m.cmd == kLoad) {
+        BrickRead r = read_brick(BrickLoadRequest::from_json(j));
+        if (!r.refused) volumes[m.id] = make_set(std::move(r), renderer);  // refused: rank 0 says why
+      } else if (m.cmd == kRender) {
+        BrickSet& b = volumes.at(m.id);
+        render_composite(b, scene_of(j, b.box), rect_of(j), j.at("samples"), renderer, icet_of(icet));
       } else {
-        throw std::runtime_error("unknown command " + std::to_string(cmd) + " from rank 0");
+        throw std::runtime_error("unknown command " + std::to_string(m.cmd) + " from rank 0");
       }
     }
   } catch (const std::exception& e) {

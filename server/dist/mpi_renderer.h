@@ -3,11 +3,11 @@
 // server makes resident, each rank reads its k-d brick of the volume's file; for every frame,
 // rank 0 broadcasts the scene, every rank renders its brick (CPU backend or GL), IceT composites
 // the layers in visibility order and rank 0 gets the image, which the server encodes and sends
-// as it would its own. All MPI calls come from rank 0's render thread (MPI_THREAD_SERIALIZED).
+// as it would its own. Rank 0's MPI calls come from the render thread and the volume loader,
+// one command at a time (dist/coordinator.h).
 #pragma once
 
 #include <memory>
-#include <mutex>
 #include <string>
 #include <vector>
 
@@ -15,17 +15,21 @@
 
 namespace peakcast::dist {
 
+class Coordinator;
+
 class MpiRenderer : public render::Renderer {
  public:
-  // MPI is initialised; this is rank 0 of `ranks`. `local`: what draws this rank's brick (the
-  // CPU backend or the GL ray caster, whose context is current on the calling thread).
-  MpiRenderer(int ranks, std::unique_ptr<render::Renderer> local);
+  // MPI is initialised; this is rank 0, sending through `coord` (shared with the server's
+  // volume loader). `local`: what draws this rank's brick (the CPU backend or the GL ray
+  // caster, whose context is current on the calling thread).
+  MpiRenderer(std::shared_ptr<Coordinator> coord, std::unique_ptr<render::Renderer> local);
   ~MpiRenderer() override;  // tells the workers to stop
   const char* backend() const override;  // the local renderer's
   std::string description() const override;
-  // Every rank reads its brick of volume->source_path; the whole volume's voxels on this rank
-  // may then go (drop_host_voxels). Throws std::invalid_argument for a volume not read from a
-  // file (bricks are read from it).
+  // A volume from Coordinator::load (the server's): its bricks, read then, made resident. Any
+  // other volume read from a file (the CLI, tests): every rank reads its brick of
+  // volume->source_path now, and the whole volume's voxels on this rank may then go
+  // (drop_host_voxels). Throws std::invalid_argument for a volume not read from a file.
   std::unique_ptr<render::ResidentVolume> make_resident(std::shared_ptr<const Volume> volume,
                                                         VolumeMacrocells cells = {}) override;
   // Refuses (std::invalid_argument, before any rank is asked) what bricks cannot draw; re-reads
@@ -42,15 +46,9 @@ class MpiRenderer : public render::Renderer {
   class Resident;
 
  private:
-  friend class Resident;
-  void forget(int64_t id);  // a resident volume gone: its bricks go with the next command
-  std::vector<int64_t> take_forgotten();
-
   int ranks_;
   struct Impl;
   std::unique_ptr<Impl> impl_;
-  std::mutex forgotten_m_;
-  std::vector<int64_t> forgotten_;
 };
 
 // Ranks 1..N-1 of `mpirun peakcast serve`: load, render and composite what rank 0 asks, until

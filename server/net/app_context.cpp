@@ -7,7 +7,7 @@ namespace peakcast::net {
 AppContext::AppContext(ServerConfig c)
     : config(std::move(c)),
       residency(config.gpu_budget_bytes),
-      volumes(config.data_dirs, residency),
+      volumes(config.data_dirs, residency, LoadOptions{}, config.volume_loader),
       render(residency, metrics,
              RenderServiceOptions{config.shader_dir, config.encode_threads,
                                   SchedulerOptions{config.max_queued_stills, config.still_band_samples,

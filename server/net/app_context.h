@@ -44,6 +44,8 @@ struct ServerConfig {
   // mpirun peakcast serve: RenderServiceOptions::wrap_renderer and ranks.
   std::function<std::unique_ptr<render::Renderer>(std::unique_ptr<render::Renderer>)> wrap_renderer;
   int ranks = 1;
+  // mpirun peakcast serve: reads volumes as bricks on every rank (VolumeStore); empty: whole.
+  VolumeLoader volume_loader;
 };
 
 struct AppContext {

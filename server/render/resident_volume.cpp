@@ -10,11 +10,15 @@
 namespace peakcast::render {
 
 ResidentVolume::ResidentVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells)
+    : ResidentVolume(std::move(volume), std::move(cells), VoxelsElsewhere{}) {
+  if (!volume_->has_voxels()) throw std::invalid_argument("ResidentVolume: the volume's voxels were dropped");
+}
+
+ResidentVolume::ResidentVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells, VoxelsElsewhere)
     : volume_(std::move(volume)), cells_trilinear_(std::move(cells.trilinear)), cells_tricubic_(std::move(cells.tricubic)) {
   if (!volume_) throw std::invalid_argument("ResidentVolume: no volume");
   if (cells_trilinear_) check_macrocells(*cells_trilinear_, *volume_, FilterSupport::Trilinear);
   if (cells_tricubic_) check_macrocells(*cells_tricubic_, *volume_, FilterSupport::Tricubic);
-  if (!volume_->has_voxels()) throw std::invalid_argument("ResidentVolume: the volume's voxels were dropped");
   static std::atomic<uint64_t> next_serial{1};
   serial_ = next_serial++;
   const ValueRange range = table_range(volume_->min_value, volume_->max_value);
@@ -30,7 +34,10 @@ void ResidentVolume::ensure_trilinear_grid() {
 }
 
 const MacrocellGrid& ResidentVolume::macrocells(Filter filter) const {
-  if (filter != Filter::Tricubic) return *cells_trilinear_;
+  if (filter != Filter::Tricubic) {
+    if (!cells_trilinear_) throw std::logic_error("ResidentVolume: no macrocell grid (the voxels live elsewhere)");
+    return *cells_trilinear_;
+  }
   if (!cells_tricubic_) {  // most views never ask for the wider filter support
     if (!volume_->has_voxels()) throw std::logic_error("ResidentVolume: no tricubic grid and no voxels to build it");
     const auto t1 = Clock::now();

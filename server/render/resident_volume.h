@@ -40,6 +40,10 @@ class ResidentVolume {
  protected:
   // Checks the grids against the volume (std::invalid_argument) and takes the value range.
   ResidentVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells);
+  // A copy whose voxels live elsewhere (the ranks' bricks of a distributed volume): the volume
+  // may have none, and there are no grids (macrocells() throws).
+  struct VoxelsElsewhere {};
+  ResidentVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells, VoxelsElsewhere);
   // Builds the trilinear grid when the loader did not: derived constructors call it once their
   // copy is made (it reads the voxels).
   void ensure_trilinear_grid();

@@ -17,12 +17,12 @@ int64_t GpuResidency::count_locked() const {
                   admitted_.end());
   int64_t total = 0;
   for (auto& w : admitted_)
-    if (auto e = w.lock()) total += int64_t(e->volume->byte_size());
+    if (auto e = w.lock()) total += e->resident_bytes;
   return total;
 }
 
 void GpuResidency::admit(const std::shared_ptr<VolumeEntry>& e, const std::function<void()>& release_unused) {
-  const int64_t bytes = int64_t(e->volume->byte_size());
+  const int64_t bytes = e->resident_bytes;
   if (bytes > budget_)
     throw VolumeError(e->path, "GPU memory budget: this volume needs " + std::to_string(bytes >> 20) +
                                    " MiB, more than the whole budget of " + std::to_string(budget_ >> 20) + " MiB");

@@ -16,6 +16,7 @@ nlohmann::json VolumeEntry::info(bool with_histogram) const {
                       {"origin", {v.origin.x, v.origin.y, v.origin.z}},
                       {"range", {v.min_value, v.max_value}},
                       {"bytes", v.byte_size()},
+                      {"resident_bytes", resident_bytes},
                       {"load_ms", v.load_ms},
                       // Where loading went (issue 13): reading the file (and converting), range and
                       // histogram, both macrocell grids, the GPU upload (once made).
@@ -29,8 +30,15 @@ nlohmann::json VolumeEntry::info(bool with_histogram) const {
   return j;
 }
 
-VolumeStore::VolumeStore(std::vector<fs::path> dirs, GpuResidency& residency, LoadOptions options)
-    : dirs_(std::move(dirs)), residency_(residency), options_(options) {}
+VolumeStore::VolumeStore(std::vector<fs::path> dirs, GpuResidency& residency, LoadOptions options, VolumeLoader loader)
+    : dirs_(std::move(dirs)), residency_(residency), options_(options), loader_(std::move(loader)) {
+  if (!loader_)
+    loader_ = [](const fs::path& path, const LoadOptions& o) {
+      auto v = std::make_shared<Volume>(load_volume(path, o));
+      const auto bytes = int64_t(v->byte_size());
+      return LoadedVolume{std::move(v), bytes};
+    };
+}
 
 std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::path& path, bool preloaded) {
   std::lock_guard load(load_m_);
@@ -38,7 +46,9 @@ std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::p
   auto e = std::make_shared<VolumeEntry>();
   e->id = id;
   e->path = path;
-  e->volume = std::make_shared<Volume>(load_volume(path, options_));
+  LoadedVolume loaded = loader_(path, options_);
+  e->volume = std::move(loaded.volume);
+  e->resident_bytes = loaded.resident_bytes;
   e->preloaded = preloaded;
   // The residency owns the budget; when the volume does not fit it lets the store drop volumes
   // no session views (the store holds the only reference), oldest id first.
@@ -49,7 +59,7 @@ std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::p
   });
   // Here, on the loader pool, not on the render thread at first use (GpuVolume takes them): the
   // em volume's two grids take ~0.6 s of CPU. After admission, so a refused volume costs none.
-  e->macrocells = build_volume_macrocells(*e->volume);
+  if (e->volume->has_voxels()) e->macrocells = build_volume_macrocells(*e->volume);
   std::lock_guard lock(m_);
   entries_[id] = e;
   if (default_.empty()) default_ = id;

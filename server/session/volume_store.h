@@ -25,7 +25,9 @@ struct VolumeEntry {
   std::filesystem::path path;
   std::shared_ptr<const Volume> volume;
   // Built with the volume on the loader pool; the render thread passes them to GpuVolume.
-  VolumeMacrocells macrocells;
+  VolumeMacrocells macrocells;  // none for a distributed volume (the ranks build their bricks')
+  // What the memory budget counts (GpuResidency): the voxels this process holds for the volume.
+  int64_t resident_bytes = 0;
   // The GPU upload's time, once the render thread made the copy (-1 before): the last load
   // phase, reported with the others in info().
   std::atomic<double> upload_ms{-1.0};
@@ -35,7 +37,10 @@ struct VolumeEntry {
 
 class VolumeStore {
  public:
-  VolumeStore(std::vector<std::filesystem::path> data_dirs, GpuResidency& residency, LoadOptions options = {});
+  // `loader`: how a file becomes a volume; empty: load_volume, whole (mpirun peakcast serve
+  // passes the ranks' brick loader, dist::Coordinator::load).
+  VolumeStore(std::vector<std::filesystem::path> data_dirs, GpuResidency& residency, LoadOptions options = {},
+              VolumeLoader loader = {});
 
   // Operator-given volumes (--volume): any readable path. Throws VolumeError.
   std::shared_ptr<VolumeEntry> preload(const std::filesystem::path& path);
@@ -51,6 +56,7 @@ class VolumeStore {
   std::vector<std::filesystem::path> dirs_;
   GpuResidency& residency_;
   LoadOptions options_;
+  VolumeLoader loader_;
   mutable std::mutex m_;
   std::mutex load_m_;  // one load at a time: a second request for the same file waits, then finds it
   std::map<std::string, std::shared_ptr<VolumeEntry>> entries_;

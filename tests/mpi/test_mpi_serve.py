@@ -3,7 +3,9 @@
 bricks, IceT composites) against the one-process server: health and /metrics show the ranks, a
 REST still equals `peakcast render`, a viewer's stream (interactive frames, then a lossless
 final frame) equals the one-process server's, a scene bricks cannot draw is refused and the
-job goes on, and SIGTERM stops every rank."""
+job goes on, and SIGTERM stops every rank. No rank holds a whole volume: the serving rank reads
+its brick like the others, and the volume's range, histogram and NaN/Inf count are reduced from the
+bricks (equal to one process's)."""
 import asyncio, json, os, pathlib, shutil, subprocess, sys, time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "net"))
@@ -80,6 +82,57 @@ def gl_ranks_check(tmp):
         srv.stop()
 
 
+# What /api/volumes/ID reports that must not depend on the rank count (load times may).
+INFO_KEYS = ("dims", "dtype", "spacing", "origin", "range", "bytes", "histogram", "nonfinite_replaced")
+
+
+def volume_infos(srv, volumes):
+    """Each (file, id) loaded by a small still, then its /api/volumes entry (with the histogram)."""
+    out = {}
+    for name, vid in volumes:
+        status, _, body = http(srv, "/api/render", "POST",
+                               json.dumps({"volume": name, "image": {"width": 32, "height": 32}}).encode())
+        assert status == 200, (name, status, body[:300])
+        status, _, body = http(srv, "/api/volumes/" + vid)
+        assert status == 200, (vid, status, body[:300])
+        out[vid] = json.loads(body)
+    return out
+
+
+def rank_peak_kib(srv):
+    """{rank: VmHWM in KiB} of the processes mpirun started for `srv`."""
+    children = {}
+    for d in pathlib.Path("/proc").iterdir():
+        if d.name.isdigit():
+            try:
+                ppid = int((d / "stat").read_text().rsplit(")", 1)[1].split()[1])
+            except (OSError, IndexError, ValueError):
+                continue
+            children.setdefault(ppid, []).append(int(d.name))
+    todo, peaks = [srv.proc.pid], {}
+    while todo:
+        pid = todo.pop()
+        todo += children.get(pid, [])
+        try:
+            env = dict(kv.split("=", 1) for kv in (pathlib.Path(f"/proc/{pid}/environ").read_bytes().decode(
+                errors="replace").split("\0")) if "=" in kv)
+            status = pathlib.Path(f"/proc/{pid}/status").read_text()
+        except OSError:
+            continue
+        if "OMPI_COMM_WORLD_RANK" in env and "peakcast" in pathlib.Path(f"/proc/{pid}/cmdline").read_bytes().decode(errors="replace"):
+            hwm = [int(l.split()[1]) for l in status.splitlines() if l.startswith("VmHWM:")]
+            peaks[int(env["OMPI_COMM_WORLD_RANK"])] = hwm[0] if hwm else 0
+    return peaks
+
+
+def write_big_u16(path, dims=(256, 256, 512)):
+    """Random uint16 voxels: 64 MiB, large next to a rank's own memory."""
+    nx, ny, nz = dims
+    path.write_bytes(f"NRRD0004\ntype: uint16\ndimension: 3\nsizes: {nx} {ny} {nz}\nencoding: raw\n"
+                     "endian: little\n\n".encode() + os.urandom(2 * nx * ny * nz))
+    return 2 * nx * ny * nz
+
+
 def mixed_backends_check():
     """Ranks on different backends (MPMD: rank 0 on the CPU backend, rank 1 on GL) are refused by
     name and the job ends, rather than drawing seams at brick faces."""
@@ -96,20 +149,38 @@ def mixed_backends_check():
 
 def main():
     failed = 0
-    one = Server("--backend", "cpu", env=ENV)
-    try:
-        _, one_final = asyncio.run(stream(one))
-    finally:
-        one.stop()
     # A multi-page TIFF: one process serves it, bricks cannot read a region of it.
     tiff_dir = pathlib.Path(os.environ.get("TMPDIR", "/tmp")) / f"peakcast-mpi-tiff-{os.getpid()}"
     tiff_dir.mkdir(exist_ok=True)
     pages = [PILImage.new("L", (8, 8), 40 * k) for k in range(4)]
     pages[0].save(tiff_dir / "stack.tif", save_all=True, append_images=pages[1:])
     nonfinite_volume.write(tiff_dir / "nonfinite.nrrd")
+    # uint8, uint16 (MetaImage), float with NaN/Inf in different bricks
+    volumes = [("heptane_151.nrrd", "heptane_151"), ("HeadMRVolume.mhd", "HeadMRVolume.mhd"),
+               ("nonfinite.nrrd", "nonfinite.nrrd")]
+    one = Server("--backend", "cpu", "--data", str(tiff_dir), env=ENV)
+    try:
+        _, one_final = asyncio.run(stream(one))
+        one_infos = volume_infos(one, volumes)
+    finally:
+        one.stop()
     srv = Server("--data", str(tiff_dir), launcher=[MPIRUN, "--oversubscribe", "-np", "2"], env=ENV)
     try:
         checks = []
+        infos = volume_infos(srv, volumes)
+        differ = {vid: [k for k in INFO_KEYS if infos[vid].get(k) != one_infos[vid].get(k)] for vid in infos}
+        checks.append(("each volume's range, histogram and NaN/Inf count, reduced from the bricks, equal one process's",
+                       not any(differ.values()), differ))
+        big_bytes = write_big_u16(tiff_dir / "big.nrrd")
+        big = volume_infos(srv, [("big.nrrd", "big.nrrd")])["big.nrrd"]
+        peaks = rank_peak_kib(srv)
+        extra = (peaks.get(0, 0) - peaks.get(1, 0)) * 1024 if len(peaks) == 2 else None
+        print(f"  64 MiB volume on 2 ranks: peak memory rank 0 {peaks.get(0, 0) / 1024:.0f} MiB, "
+              f"rank 1 {peaks.get(1, 0) / 1024:.0f} MiB; resident_bytes {big['resident_bytes'] / 2**20:.1f} MiB", flush=True)
+        checks.append(("the serving rank never holds the whole volume: its peak memory exceeds a worker's by less "
+                       "than half the volume, and the budget counts one brick",
+                       extra is not None and extra < big_bytes / 2
+                       and big_bytes * 0.5 <= big["resident_bytes"] < big_bytes * 0.6, (peaks, big["resident_bytes"])))
         status, _, body = http(srv, "/api/health")
         health = json.loads(body)
         checks.append(("health shows 2 ranks", status == 200 and health["ranks"] == 2 and "2 ranks" in health["gl_renderer"],
@@ -165,7 +236,7 @@ def main():
     ok = code is not None and stopped < 10 and "peakcast: stopped" in "".join(srv.log)
     print(f"{'ok  ' if ok else 'FAIL'} SIGTERM stops every rank: mpirun exited {code} after {stopped:.1f} s", flush=True)
     failed += not ok
-    print(f"{10 - failed} passed, {failed} failed")
+    print(f"{len(checks) + 1 - failed} passed, {failed} failed")
     sys.exit(1 if failed else 0)
 
 

@@ -4,11 +4,20 @@
 #include <algorithm>
 #include <random>
 
+#include "core/volume.h"
 #include "dist/kd_split.h"
 
 using namespace peakcast::dist;
 
 namespace {
+
+peakcast::Volume v_outside() {  // a box beyond the volume is refused
+  peakcast::VolumeHeader h;
+  h.dims = {4, 4, 4};
+  peakcast::Volume v(h);
+  v.box_histogram({0, 0, 0}, {5, 4, 4}, 0, 1);
+  return v;
+}
 
 bool owns_cell(const Brick& b, const Index3& c) {
   for (int a = 0; a < 3; ++a)
@@ -30,6 +39,65 @@ TEST(KdSplit, BricksTileTheVolumeOnceForAnyRankCount) {
         }
     for (int r = 0; r < ranks; ++r) EXPECT_EQ(s.bricks[r].rank, r);
   }
+}
+
+// A distributed volume's statistics are the sum of its bricks' (dist/brick_load.cpp): every
+// voxel, shared boundary planes and the volume's upper faces included, in one counted box.
+TEST(KdSplit, CountedBoxesTileTheVoxelsOnceForAnyRankCount) {
+  const Index3 dims{17, 9, 12};
+  for (int ranks = 1; ranks <= 9; ++ranks) {
+    const KdSplit s = kd_split(dims, ranks, 3);
+    std::vector<int> counted(size_t(dims[0] * dims[1] * dims[2]), 0);
+    for (const Brick& b : s.bricks) {
+      const auto [lo, hi] = counted_box(b, dims);
+      for (int a = 0; a < 3; ++a) {
+        ASSERT_GE(lo[a], 0) << b.to_string();
+        ASSERT_LE(hi[a], b.read_hi[a] - b.read_lo[a]) << "beyond the voxels read: " << b.to_string();
+      }
+      for (int64_t z = lo[2]; z < hi[2]; ++z)
+        for (int64_t y = lo[1]; y < hi[1]; ++y)
+          for (int64_t x = lo[0]; x < hi[0]; ++x)
+            ++counted[size_t((x + b.read_lo[0]) + dims[0] * ((y + b.read_lo[1]) + dims[1] * (z + b.read_lo[2])))];
+    }
+    for (size_t i = 0; i < counted.size(); ++i) ASSERT_EQ(counted[i], 1) << "voxel " << i << " with " << ranks << " ranks";
+  }
+}
+
+// The histogram a distributed server reports: its bricks' counted boxes, binned over the whole
+// volume's range and summed, give finalize_statistics' bins exactly (float and uint16 voxels).
+TEST(KdSplit, BrickHistogramsSumToTheWholeVolumesHistogram) {
+  std::mt19937 rng(5);
+  for (peakcast::SourceType t : {peakcast::SourceType::F32, peakcast::SourceType::I16}) {
+    peakcast::VolumeHeader h;
+    h.dims = {23, 14, 19};
+    h.source = t;
+    peakcast::Volume v(h);
+    std::uniform_real_distribution<float> pick(-3.f, 7.f);
+    for (size_t i = 0; i < size_t(v.voxel_count()); ++i) {
+      if (t == peakcast::SourceType::F32) reinterpret_cast<float*>(v.data())[i] = pick(rng);
+      else reinterpret_cast<uint16_t*>(v.data())[i] = uint16_t(30000 + 1000 * pick(rng));
+    }
+    v.finalize_statistics();
+    EXPECT_EQ(v.box_histogram({0, 0, 0}, v.dims(), v.min_value - v.value_offset, v.max_value - v.value_offset), v.histogram);
+    for (int ranks = 2; ranks <= 5; ++ranks) {
+      const KdSplit s = kd_split(v.dims(), ranks, 3);
+      std::vector<uint64_t> sum(v.histogram.size(), 0);
+      for (const Brick& b : s.bricks) {
+        auto [lo, hi] = counted_box(b, v.dims());
+        for (int a = 0; a < 3; ++a) lo[a] += b.read_lo[a], hi[a] += b.read_lo[a];
+        const auto part = v.box_histogram(lo, hi, v.min_value - v.value_offset, v.max_value - v.value_offset);
+        for (size_t k = 0; k < sum.size(); ++k) sum[k] += part[k];
+      }
+      EXPECT_EQ(sum, v.histogram) << peakcast::to_string(t) << ", " << ranks << " ranks";
+    }
+  }
+  peakcast::VolumeHeader h;
+  h.dims = {4, 4, 4};
+  const peakcast::Volume head = peakcast::Volume::header_only(h);
+  EXPECT_FALSE(head.has_voxels());
+  EXPECT_EQ(head.byte_size(), 64u);
+  EXPECT_THROW(head.box_histogram({0, 0, 0}, head.dims(), 0, 1), std::logic_error);
+  EXPECT_THROW(v_outside(), std::invalid_argument);
 }
 
 TEST(KdSplit, SharesFollowTheRankCountOnTheReferenceVolume) {

@@ -1,0 +1,104 @@
+#include "dist/brick_load.h"
+
+#include <mpi.h>
+
+#include <cmath>
+#include <limits>
+
+#include "core/volume_io.h"
+
+namespace peakcast::dist {
+namespace {
+
+// Non-finite voxels of a float brick inside [lo, hi) (brick coordinates).
+int64_t count_nonfinite(const Volume& v, const Dims& lo, const Dims& hi) {
+  if (v.type() != VoxelType::F32) return 0;
+  const auto* p = reinterpret_cast<const float*>(v.data());
+  int64_t n = 0;
+  for (int64_t k = lo[2]; k < hi[2]; ++k)
+    for (int64_t j = lo[1]; j < hi[1]; ++j) {
+      const float* row = p + v.dims()[0] * (j + v.dims()[1] * k);
+      for (int64_t i = lo[0]; i < hi[0]; ++i) n += !std::isfinite(row[i]);
+    }
+  return n;
+}
+
+}  // namespace
+
+nlohmann::json BrickLoadRequest::to_json() const {
+  nlohmann::json j = {{"path", path}, {"ghost", ghost}, {"refuse_nonfinite", refuse_nonfinite}};
+  if (have_range) {
+    j["lo"] = lo;
+    j["hi"] = hi;
+  }
+  return j;
+}
+
+BrickLoadRequest BrickLoadRequest::from_json(const nlohmann::json& j) {
+  BrickLoadRequest r;
+  r.path = j.at("path");
+  r.ghost = j.at("ghost");
+  r.refuse_nonfinite = j.value("refuse_nonfinite", false);
+  if (j.contains("lo")) {
+    r.have_range = true;
+    r.lo = j.at("lo");
+    r.hi = j.at("hi");
+  }
+  return r;
+}
+
+BrickRead read_brick(const BrickLoadRequest& req) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  LoadOptions one;
+  one.region = VoxelRegion{{0, 0, 0}, {1, 1, 1}};
+  const Volume head = load_volume(req.path, one);
+  BrickRead b;
+  b.dims = {head.source_dims[0], head.source_dims[1], head.source_dims[2]};
+  b.ghost = req.ghost;
+  b.split = kd_split(b.dims, size, b.ghost);
+  b.mine = b.split.bricks[size_t(rank)];
+  LoadOptions region;
+  region.region = VoxelRegion{b.mine.read_lo, b.mine.read_hi};
+  // NaN/Inf voxels take the whole volume's finite extremes, as in one process.
+  region.nonfinite = NonFinitePolicy::Keep;
+  auto v = std::make_shared<Volume>(load_volume(req.path, region));
+  double lo = req.lo, hi = req.hi;
+  if (!req.have_range) {
+    const auto [own_lo, own_hi] = counted_box(b.mine, b.dims);
+    int64_t nonfinite = count_nonfinite(*v, own_lo, own_hi);
+    MPI_Allreduce(MPI_IN_PLACE, &nonfinite, 1, MPI_INT64_T, MPI_SUM, MPI_COMM_WORLD);
+    b.nonfinite = nonfinite;
+    if (nonfinite > 0 && req.refuse_nonfinite) {
+      b.refused = true;
+      return b;
+    }
+    float f_lo = std::numeric_limits<float>::infinity(), f_hi = -f_lo;
+    if (v->type() == VoxelType::F32) std::tie(f_lo, f_hi) = finite_extremes(*v);
+    MPI_Allreduce(MPI_IN_PLACE, &f_lo, 1, MPI_FLOAT, MPI_MIN, MPI_COMM_WORLD);
+    MPI_Allreduce(MPI_IN_PLACE, &f_hi, 1, MPI_FLOAT, MPI_MAX, MPI_COMM_WORLD);
+    // Also where the rank's own box has none: its ghosts may (another brick counts them).
+    // Nothing finite anywhere: 0. A brick without any keeps the statistics the read computed.
+    replace_nonfinite(*v, f_lo <= f_hi ? f_lo : 0.f, f_lo <= f_hi ? f_hi : 0.f);
+    lo = v->min_value;
+    hi = v->max_value;
+    MPI_Allreduce(MPI_IN_PLACE, &lo, 1, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+    MPI_Allreduce(MPI_IN_PLACE, &hi, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+    const std::vector<uint64_t> mine = v->box_histogram(own_lo, own_hi, lo - v->value_offset, hi - v->value_offset);
+    if (rank == 0) b.histogram.assign(mine.size(), 0);
+    MPI_Reduce(mine.data(), b.histogram.data(), int(mine.size()), MPI_UINT64_T, MPI_SUM, 0, MPI_COMM_WORLD);
+    int64_t bytes = int64_t(v->byte_size());
+    MPI_Allreduce(MPI_IN_PLACE, &bytes, 1, MPI_INT64_T, MPI_MAX, MPI_COMM_WORLD);
+    b.max_brick_bytes = bytes;
+  } else {
+    replace_nonfinite(*v, float(lo - v->value_offset), float(hi - v->value_offset));
+  }
+  v->min_value = lo;
+  v->max_value = hi;
+  b.box = VolumeBox{b.dims, head.spacing, head.origin, lo, hi};
+  b.voxels = std::move(v);
+  return b;
+}
+
+}  // namespace peakcast::dist

@@ -1,0 +1,125 @@
+#include "dist/coordinator.h"
+
+#include <mpi.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
+
+namespace peakcast::dist {
+
+void broadcast(CommandMessage& m) {
+  int64_t head[4] = {m.cmd, m.id, int64_t(m.payload.size()), int64_t(m.drops.size())};
+  MPI_Bcast(head, 4, MPI_INT64_T, 0, MPI_COMM_WORLD);
+  m.cmd = head[0];
+  m.id = head[1];
+  m.payload.resize(size_t(head[2]));
+  m.drops.resize(size_t(head[3]));
+  if (!m.payload.empty()) MPI_Bcast(m.payload.data(), int(m.payload.size()), MPI_CHAR, 0, MPI_COMM_WORLD);
+  if (!m.drops.empty()) MPI_Bcast(m.drops.data(), int(m.drops.size()), MPI_INT64_T, 0, MPI_COMM_WORLD);
+}
+
+void abort_job(const char* what) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  std::fprintf(stderr, "peakcast: error on rank %d of %d: %s\n", rank, size, what);
+  std::fflush(stderr);
+  MPI_Abort(MPI_COMM_WORLD, 1);
+  std::abort();
+}
+
+int default_ghost() { return ghost_voxels(true, true) + 2; }
+
+void Coordinator::send(const std::unique_lock<std::mutex>& held, int64_t cmd, int64_t id, std::string payload) {
+  if (!held.owns_lock() || held.mutex() != &m_) throw std::logic_error("Coordinator::send without the lock");
+  CommandMessage m{cmd, id, std::move(payload), {}};
+  {
+    std::lock_guard lock(forgotten_m_);
+    m.drops = std::exchange(forgotten_, {});
+  }
+  broadcast(m);
+}
+
+void Coordinator::forget(int64_t id) {
+  std::lock_guard lock(forgotten_m_);
+  forgotten_.push_back(id);
+}
+
+void Coordinator::prune_locked() {
+  for (auto it = loaded_.begin(); it != loaded_.end();) {
+    if (it->second.whole.expired()) {
+      forget(it->first);
+      it = loaded_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
+LoadedVolume Coordinator::load(const std::filesystem::path& path, const LoadOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  // What would fail on a rank fails here first, before any rank is asked (a failure after the
+  // broadcast ends the job): a file whose regions cannot be read (TIFF stacks), too many voxels,
+  // fewer cells than ranks.
+  LoadOptions one;
+  one.region = VoxelRegion{{0, 0, 0}, {1, 1, 1}};
+  const Volume head = load_volume(path, one);
+  const Dims dims = head.source_dims;
+  if (dims[0] * dims[1] * dims[2] > options.max_voxels)
+    throw VolumeError(path, std::to_string(dims[0] * dims[1] * dims[2]) + " voxels exceeds the limit of " +
+                                std::to_string(options.max_voxels));
+  BrickLoadRequest req;
+  req.path = path.string();
+  req.ghost = default_ghost();
+  req.refuse_nonfinite = options.nonfinite == NonFinitePolicy::Refuse;
+  try {
+    kd_split({dims[0], dims[1], dims[2]}, ranks_, req.ghost);
+  } catch (const std::invalid_argument& e) {
+    throw VolumeError(path, e.what());
+  }
+  auto held = lock();
+  prune_locked();
+  const int64_t id = new_id();
+  send(held, kLoad, id, req.to_json().dump());
+  BrickRead b;
+  try {
+    b = read_brick(req);
+  } catch (const std::exception& e) {
+    abort_job(e.what());  // the other ranks are reading theirs: the job cannot go on without this one
+  }
+  if (b.refused)  // every rank knows and kept nothing
+    throw VolumeError(path, std::to_string(b.nonfinite) + " NaN/Inf voxels (policy: refuse)");
+  VolumeHeader h;
+  h.dims = dims;
+  h.spacing = head.spacing;
+  h.origin = head.origin;
+  h.source = head.source_type();
+  auto whole = std::make_shared<Volume>(Volume::header_only(h));
+  whole->min_value = b.box.min_value;
+  whole->max_value = b.box.max_value;
+  whole->histogram = std::move(b.histogram);
+  whole->nonfinite_replaced = b.nonfinite;
+  whole->name = head.name;
+  whole->source_path = head.source_path;
+  whole->load_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  const int64_t bytes = b.max_brick_bytes;
+  loaded_[id] = Loaded{whole, std::move(b)};
+  return LoadedVolume{whole, bytes};
+}
+
+std::optional<std::pair<int64_t, BrickRead>> Coordinator::take_loaded(const std::unique_lock<std::mutex>& held,
+                                                                      const Volume* whole) {
+  if (!held.owns_lock() || held.mutex() != &m_) throw std::logic_error("Coordinator::take_loaded without the lock");
+  prune_locked();
+  for (auto it = loaded_.begin(); it != loaded_.end(); ++it)
+    if (auto w = it->second.whole.lock(); w.get() == whole) {
+      std::pair<int64_t, BrickRead> out{it->first, std::move(it->second.read)};
+      loaded_.erase(it);
+      return out;
+    }
+  return std::nullopt;
+}
+
+}  // namespace peakcast::dist
