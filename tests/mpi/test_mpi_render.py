@@ -55,6 +55,12 @@ HEPTANE_TF = [[0, 0.1, 0.3, 1, 0], [38.25, 0.2, 0.5, 1, 0], [89.25, 0.2, 0.5, 1,
               [198.8745, 1, 0.1, 0, 0], [198.9, 1, 0.1, 0, 0.9], [198.9255, 1, 0.1, 0, 0], [255, 1, 1, 1, 0]]
 HEPTANE_CAM = {"eye": [75.0, -218.2683, 482.317], "center": [75, 75, 75], "up": [0, 0, 1], "fov_y": 30}
 
+# A real sample: an MR scan of a head (tests/data/PROVENANCE.md), 48x62x42 at 4 mm, camera framed
+# by default; a skin band and a brighter tissue peak.
+HEAD = DATA / "HeadMRVolume.mhd"
+HEAD_TF = [[0, 0, 0, 0, 0], [30, 0.9, 0.6, 0.5, 0], [60, 0.9, 0.6, 0.5, 0.15], [90, 0.9, 0.7, 0.6, 0],
+           [139.5, 0.2, 0.4, 1, 0], [140, 0.2, 0.4, 1, 0.8], [140.5, 0.2, 0.4, 1, 0], [255, 1, 1, 1, 0.3]]
+
 SCENES = [
     scene("ml_post", ML, {"step": 0.8}, ML_TF, ML_CAM),
     scene("ml_preint", ML, {"step": 1.5, "classification": "preint"}, ML_TF, ML_CAM),
@@ -67,6 +73,8 @@ SCENES = [
     scene("ml_peaks_xor", ML, {"step": 1, "classification": "peaks", "peak_mode": "xor"}, ML_TF, ML_CAM),
     scene("ml_differential_peaks", ML, {"sampling": "differential", "s_k": 2, "classification": "peaks"}, ML_TF,
           ML_CAM),
+    scene("head_mr_preint", HEAD, {"step": 0.5, "classification": "preint"}, HEAD_TF),
+    scene("head_mr_peaks_shaded", HEAD, {"step": 1, "classification": "peaks", "shading": True}, HEAD_TF),
 ]
 
 
@@ -164,7 +172,7 @@ def test_gl_ranks_equal_one_process():
     # The GL ray caster's BRICK variant (one GPU per rank; llvmpipe here) against one process.
     worst = 0.0
     for s, ranks in ((SCENES[0], (2, 3)), (SCENES[1], (2,)), (SCENES[2], (2, 3)), (SCENES[3], (2,)), (SCENES[5], (2,)),
-                     (SCENES[7], (2,)), (SCENES[8], (2,))):
+                     (SCENES[7], (2,)), (SCENES[8], (2,)), (SCENES[10], (2,))):
         one = TMP / f"{s.stem}_gl1.png"  # one process on the same backend
         run([PEAKCAST, "render", s, "-o", one, "--backend", "gl"])
         for n in ranks:
