@@ -2,7 +2,9 @@
 
 #include <mpi.h>
 
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "core/volume_io.h"
@@ -51,19 +53,42 @@ BrickRead read_brick(const BrickLoadRequest& req) {
   int rank = 0, size = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
-  LoadOptions one;
-  one.region = VoxelRegion{{0, 0, 0}, {1, 1, 1}};
-  const Volume head = load_volume(req.path, one);
   BrickRead b;
-  b.dims = {head.source_dims[0], head.source_dims[1], head.source_dims[2]};
   b.ghost = req.ghost;
-  b.split = kd_split(b.dims, size, b.ghost);
-  b.mine = b.split.bricks[size_t(rank)];
-  LoadOptions region;
-  region.region = VoxelRegion{b.mine.read_lo, b.mine.read_hi};
-  // NaN/Inf voxels take the whole volume's finite extremes, as in one process.
-  region.nonfinite = NonFinitePolicy::Keep;
-  auto v = std::make_shared<Volume>(load_volume(req.path, region));
+  std::shared_ptr<Volume> v;
+  glm::dvec3 spacing{1.0}, origin{0.0};
+  // A rank that cannot read its part (a damaged compressed stream past the header, a file its
+  // node does not see) says so in the first collective: every rank then returns `failed`
+  // alike, and the job goes on.
+  int failed_rank = 0;  // rank + 1 of a rank that failed; the highest such
+  try {
+    LoadOptions one;
+    one.region = VoxelRegion{{0, 0, 0}, {1, 1, 1}};
+    const Volume head = load_volume(req.path, one);
+    spacing = head.spacing;
+    origin = head.origin;
+    b.dims = {head.source_dims[0], head.source_dims[1], head.source_dims[2]};
+    b.split = kd_split(b.dims, size, b.ghost);
+    b.mine = b.split.bricks[size_t(rank)];
+    LoadOptions region;
+    region.region = VoxelRegion{b.mine.read_lo, b.mine.read_hi};
+    // NaN/Inf voxels take the whole volume's finite extremes, as in one process.
+    region.nonfinite = NonFinitePolicy::Keep;
+    v = std::make_shared<Volume>(load_volume(req.path, region));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "peakcast: rank %d of %d cannot read its brick: %s\n", rank, size, e.what());
+    std::fflush(stderr);
+    b.error = e.what();
+    failed_rank = rank + 1;
+  }
+  MPI_Allreduce(MPI_IN_PLACE, &failed_rank, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  if (failed_rank > 0) {
+    b.failed = true;
+    if (b.error.empty())
+      b.error = req.path + ": rank " + std::to_string(failed_rank - 1) + " cannot read its brick (its log says why)";
+    return b;
+  }
+  const auto t_stats = std::chrono::steady_clock::now();
   double lo = req.lo, hi = req.hi;
   if (!req.have_range) {
     const auto [own_lo, own_hi] = counted_box(b.mine, b.dims);
@@ -96,7 +121,8 @@ BrickRead read_brick(const BrickLoadRequest& req) {
   }
   v->min_value = lo;
   v->max_value = hi;
-  b.box = VolumeBox{b.dims, head.spacing, head.origin, lo, hi};
+  b.statistics_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_stats).count();
+  b.box = VolumeBox{b.dims, spacing, origin, lo, hi};
   b.voxels = std::move(v);
   return b;
 }

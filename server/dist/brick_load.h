@@ -44,10 +44,16 @@ struct BrickRead {
   int64_t nonfinite = 0;
   int64_t max_brick_bytes = 0;
   bool refused = false;
+  // A rank could not read its part: every rank returns this alike, with no voxels. error: this
+  // rank's reason, or on the others which rank failed.
+  bool failed = false;
+  std::string error;
+  double statistics_ms = 0.0;  // the reductions after the reads
 };
 
-// Every rank, collectively. Errors (a file that cannot be read) throw on the rank that met
-// them: the caller ends the job, since the others wait in a collective.
+// Every rank, collectively, in the same order whatever happens: a read that fails on any rank
+// makes every rank return `failed` (the job goes on); the statistics follow only for a first
+// read (no range in the request).
 BrickRead read_brick(const BrickLoadRequest& request);
 
 }  // namespace peakcast::dist

@@ -34,12 +34,20 @@ int default_ghost() { return ghost_voxels(true, true) + 2; }
 
 void Coordinator::send(const std::unique_lock<std::mutex>& held, int64_t cmd, int64_t id, std::string payload) {
   if (!held.owns_lock() || held.mutex() != &m_) throw std::logic_error("Coordinator::send without the lock");
+  if (closed_) throw std::runtime_error("the distributed renderer has stopped (the workers are gone)");
+  prune_locked();  // volumes loaded but dropped before they were drawn (a budget refusal)
   CommandMessage m{cmd, id, std::move(payload), {}};
   {
     std::lock_guard lock(forgotten_m_);
     m.drops = std::exchange(forgotten_, {});
   }
   broadcast(m);
+}
+
+void Coordinator::close(const std::unique_lock<std::mutex>& held) {
+  if (!held.owns_lock() || held.mutex() != &m_) throw std::logic_error("Coordinator::close without the lock");
+  closed_ = true;
+  loaded_.clear();
 }
 
 void Coordinator::forget(int64_t id) {
@@ -59,7 +67,6 @@ void Coordinator::prune_locked() {
 }
 
 LoadedVolume Coordinator::load(const std::filesystem::path& path, const LoadOptions& options) {
-  const auto t0 = std::chrono::steady_clock::now();
   // What would fail on a rank fails here first, before any rank is asked (a failure after the
   // broadcast ends the job): a file whose regions cannot be read (TIFF stacks), too many voxels,
   // fewer cells than ranks.
@@ -80,17 +87,27 @@ LoadedVolume Coordinator::load(const std::filesystem::path& path, const LoadOpti
     throw VolumeError(path, e.what());
   }
   auto held = lock();
-  prune_locked();
+  if (closed_) throw VolumeError(path, "the server is shutting down");
+  const auto t0 = std::chrono::steady_clock::now();
   const int64_t id = new_id();
   send(held, kLoad, id, req.to_json().dump());
   BrickRead b;
   try {
     b = read_brick(req);
   } catch (const std::exception& e) {
-    abort_job(e.what());  // the other ranks are reading theirs: the job cannot go on without this one
+    abort_job(e.what());  // not a read error (those the ranks agree on): the ranks are out of step
   }
-  if (b.refused)  // every rank knows and kept nothing
-    throw VolumeError(path, std::to_string(b.nonfinite) + " NaN/Inf voxels (policy: refuse)");
+  // Every rank knows and kept nothing:
+  if (b.failed) throw VolumeError(path, "cannot be read as bricks: " + b.error);
+  if (b.refused) throw VolumeError(path, std::to_string(b.nonfinite) + " NaN/Inf voxels (policy: refuse)");
+  struct ForgetUnlessKept {  // the workers hold bricks under `id` from here on
+    Coordinator& c;
+    int64_t id;
+    bool kept = false;
+    ~ForgetUnlessKept() {
+      if (!kept) c.forget(id);
+    }
+  } guard{*this, id};
   VolumeHeader h;
   h.dims = dims;
   h.spacing = head.spacing;
@@ -104,8 +121,10 @@ LoadedVolume Coordinator::load(const std::filesystem::path& path, const LoadOpti
   whole->name = head.name;
   whole->source_path = head.source_path;
   whole->load_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  whole->statistics_ms = b.statistics_ms;
   const int64_t bytes = b.max_brick_bytes;
   loaded_[id] = Loaded{whole, std::move(b)};
+  guard.kept = true;
   return LoadedVolume{whole, bytes};
 }
 

@@ -48,12 +48,15 @@ class Coordinator {
   void send(const std::unique_lock<std::mutex>& held, int64_t cmd, int64_t id, std::string payload = {});
   int64_t new_id() { return next_id_++; }  // under the lock
   void forget(int64_t id);  // any thread: that volume's bricks go with the next command
+  // After the last command (kQuit): send() and load() refuse from then on, so a load queued on
+  // the loader pool during shutdown cannot wait for workers that are gone. The lock must be held.
+  void close(const std::unique_lock<std::mutex>& held);
 
   // Loader pool (a VolumeLoader): every rank reads its brick and the whole volume's statistics
   // are reduced; rank 0 returns a volume without voxels (Volume::header_only) carrying them.
   // Refusals (a file bricks cannot read by region, non-finite voxels under Refuse, too many
-  // voxels, fewer cells than ranks) throw VolumeError before any rank is asked, or after the
-  // statistics, on every rank alike; the job goes on.
+  // voxels, fewer cells than ranks, a rank that cannot read its part, shutdown) throw
+  // VolumeError before any rank is asked, or after the ranks agreed; the job goes on.
   LoadedVolume load(const std::filesystem::path& path, const LoadOptions& options);
   // Render thread: the brick load() read for `whole`, with its command id; nothing when `whole`
   // did not come from load().
@@ -63,6 +66,7 @@ class Coordinator {
   void prune_locked();  // loaded volumes gone before they were drawn: forget their bricks
   const int ranks_;
   std::mutex m_;
+  bool closed_ = false;  // under m_
   int64_t next_id_ = 1;
   std::mutex forgotten_m_;
   std::vector<int64_t> forgotten_;

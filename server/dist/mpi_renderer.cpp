@@ -146,6 +146,8 @@ const char* MpiRenderer::backend() const { return impl_->renderer.backend(); }
 MpiRenderer::~MpiRenderer() {
   auto held = impl_->coord->lock();
   impl_->coord->send(held, kQuit, 0);
+  impl_->coord->close(held);  // a load queued during shutdown is refused, not sent to no one
+  impl_->icet.reset();        // frees its communicator: an MPI call, under the lock
 }
 
 std::string MpiRenderer::description() const {
@@ -158,9 +160,15 @@ std::unique_ptr<render::ResidentVolume> MpiRenderer::make_resident(std::shared_p
     throw std::invalid_argument("distributed rendering reads each rank's brick from the volume's file; this volume has none");
   Coordinator& c = *impl_->coord;
   auto held = c.lock();
-  if (auto loaded = c.take_loaded(held, volume.get()))  // the server's volumes: read by Coordinator::load
-    return std::make_unique<Resident>(impl_->coord, loaded->first, std::move(volume),
-                                      make_set(std::move(loaded->second), impl_->renderer));
+  if (auto loaded = c.take_loaded(held, volume.get())) {  // the server's volumes: read by Coordinator::load
+    try {
+      return std::make_unique<Resident>(impl_->coord, loaded->first, std::move(volume),
+                                        make_set(std::move(loaded->second), impl_->renderer));
+    } catch (...) {
+      c.forget(loaded->first);  // this rank's copy failed (an upload): the workers' bricks go too
+      throw;
+    }
+  }
   // A volume read whole (the CLI, tests): every rank reads its brick with the range known.
   // What would fail on a rank fails here first, before any rank is asked: a file whose regions
   // cannot be read (TIFF stacks), one changed since it was read, fewer cells than ranks.
@@ -174,10 +182,18 @@ std::unique_ptr<render::ResidentVolume> MpiRenderer::make_resident(std::shared_p
   const BrickLoadRequest req = reread(volume->source_path, box, default_ghost());
   const int64_t id = c.new_id();
   c.send(held, kLoad, id, req.to_json().dump());
+  BrickRead r;
   try {
-    return std::make_unique<Resident>(impl_->coord, id, std::move(volume), make_set(read_brick(req), impl_->renderer));
+    r = read_brick(req);
   } catch (const std::exception& e) {
-    abort_job(e.what());  // the other ranks are reading theirs: the job cannot go on without this one
+    abort_job(e.what());  // not a read error (those the ranks agree on): the ranks are out of step
+  }
+  if (r.failed) throw VolumeError(volume->source_path, "cannot be read as bricks: " + r.error);
+  try {
+    return std::make_unique<Resident>(impl_->coord, id, std::move(volume), make_set(std::move(r), impl_->renderer));
+  } catch (...) {
+    c.forget(id);
+    throw;
   }
 }
 
@@ -193,14 +209,26 @@ render::RenderResult MpiRenderer::render(const render::ResidentVolume& v, const 
   auto held = c.lock();  // against a volume load on the loader pool
   const auto t0 = std::chrono::steady_clock::now();
   const bool want_samples = req.output == render::RenderOutput::Float || req.sample_stats;
-  try {
-    if (const int need = brick_ghost(s); need > bricks.ghost) {  // a longer step than the bricks were read for
-      // With headroom: a differential step grows as the camera backs away, and a re-read on
-      // every frame of a slow zoom-out would cost more than the wider ghosts.
-      const BrickLoadRequest r = reread(res->volume().source_path, bricks.box, need + std::max(4, need / 2));
-      c.send(held, kLoad, res->id(), r.to_json().dump());
-      bricks = make_set(read_brick(r), impl_->renderer);
+  if (const int need = brick_ghost(s); need > bricks.ghost) {  // a longer step than the bricks were read for
+    // With headroom: a differential step grows as the camera backs away, and a re-read on
+    // every frame of a slow zoom-out would cost more than the wider ghosts.
+    const BrickLoadRequest r = reread(res->volume().source_path, bricks.box, need + std::max(4, need / 2));
+    c.send(held, kLoad, res->id(), r.to_json().dump());
+    BrickRead wider;
+    try {
+      wider = read_brick(r);
+    } catch (const std::exception& e) {
+      abort_job(e.what());  // not a read error (those the ranks agree on): the ranks are out of step
     }
+    // Every rank keeps its bricks as they were; this frame fails, the job goes on.
+    if (wider.failed) throw VolumeError(r.path, "cannot be read again with wider ghosts: " + wider.error);
+    try {
+      bricks = make_set(std::move(wider), impl_->renderer);
+    } catch (const std::exception& e) {
+      abort_job(e.what());  // the workers hold the wider bricks; this rank's copy failed
+    }
+  }
+  try {
     c.send(held, kRender, res->id(),
            nlohmann::json{{"scene", scene_to_json(s.scene)}, {"step", s.step},
                           {"rect", {rect.x, rect.y, rect.w, rect.h}}, {"samples", want_samples}}
@@ -272,7 +300,7 @@ void serve_worker(render::Renderer& renderer) {
       const nlohmann::json j = nlohmann::json::parse(m.payload);
       if (m.cmd == kLoad) {
         BrickRead r = read_brick(BrickLoadRequest::from_json(j));
-        if (!r.refused) volumes[m.id] = make_set(std::move(r), renderer);  // refused: rank 0 says why
+        if (!r.refused && !r.failed) volumes[m.id] = make_set(std::move(r), renderer);  // else rank 0 says why
       } else if (m.cmd == kRender) {
         BrickSet& b = volumes.at(m.id);
         render_composite(b, scene_of(j, b.box), rect_of(j), j.at("samples"), renderer, icet_of(icet));

@@ -6,7 +6,7 @@ final frame) equals the one-process server's, a scene bricks cannot draw is refu
 job goes on, and SIGTERM stops every rank. No rank holds a whole volume: the serving rank reads
 its brick like the others, and the volume's range, histogram and NaN/Inf count are reduced from the
 bricks (equal to one process's)."""
-import asyncio, json, os, pathlib, shutil, subprocess, sys, time
+import asyncio, gzip, json, os, pathlib, shutil, subprocess, sys, time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "net"))
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
@@ -82,6 +82,10 @@ def gl_ranks_check(tmp):
         srv.stop()
 
 
+def scene_small():
+    return {"volume": "heptane_151.nrrd", "image": {"width": 48, "height": 40}, "camera": CAMERA, "tf": TF}
+
+
 # What /api/volumes/ID reports that must not depend on the rank count (load times may).
 INFO_KEYS = ("dims", "dtype", "spacing", "origin", "range", "bytes", "histogram", "nonfinite_replaced")
 
@@ -133,6 +137,23 @@ def write_big_u16(path, dims=(256, 256, 512)):
     return 2 * nx * ny * nz
 
 
+def three_ranks_check(tmp, data_dir, one_infos, volumes):
+    """mpirun -np 3 serve (uneven split, oversubscribed): the volumes' info reduced over three
+    bricks equals one process's, and a REST still equals `peakcast render`."""
+    srv = Server("--data", str(data_dir), launcher=[MPIRUN, "--oversubscribe", "-np", "3"], env=ENV)
+    try:
+        infos = volume_infos(srv, volumes)
+        differ = {vid: [k for k in INFO_KEYS if infos[vid].get(k) != one_infos[vid].get(k)] for vid in infos}
+        scene = {"volume": "heptane_151.nrrd", "image": {"width": 120, "height": 90}, "camera": CAMERA, "tf": TF,
+                 "render": RENDER, "background": [0.1, 0.1, 0.2]}
+        status, variant, cmp = still_against_one_process(srv, scene, DATA / "heptane_151.nrrd", tmp, "three")
+        return ("3 ranks: volume info equals one process's, a REST still equals peakcast render within 1/255",
+                not any(differ.values()) and status == 200 and "3ranks" in variant and cmp["max_abs"] <= 1 / 255 + 1e-6,
+                (differ, status, variant, cmp))
+    finally:
+        srv.stop()
+
+
 def mixed_backends_check():
     """Ranks on different backends (MPMD: rank 0 on the CPU backend, rank 1 on GL) are refused by
     name and the job ends, rather than drawing seams at brick faces."""
@@ -171,16 +192,31 @@ def main():
         differ = {vid: [k for k in INFO_KEYS if infos[vid].get(k) != one_infos[vid].get(k)] for vid in infos}
         checks.append(("each volume's range, histogram and NaN/Inf count, reduced from the bricks, equal one process's",
                        not any(differ.values()), differ))
+        before = rank_peak_kib(srv)
         big_bytes = write_big_u16(tiff_dir / "big.nrrd")
         big = volume_infos(srv, [("big.nrrd", "big.nrrd")])["big.nrrd"]
         peaks = rank_peak_kib(srv)
-        extra = (peaks.get(0, 0) - peaks.get(1, 0)) * 1024 if len(peaks) == 2 else None
-        print(f"  64 MiB volume on 2 ranks: peak memory rank 0 {peaks.get(0, 0) / 1024:.0f} MiB, "
-              f"rank 1 {peaks.get(1, 0) / 1024:.0f} MiB; resident_bytes {big['resident_bytes'] / 2**20:.1f} MiB", flush=True)
-        checks.append(("the serving rank never holds the whole volume: its peak memory exceeds a worker's by less "
-                       "than half the volume, and the budget counts one brick",
-                       extra is not None and extra < big_bytes / 2
-                       and big_bytes * 0.5 <= big["resident_bytes"] < big_bytes * 0.6, (peaks, big["resident_bytes"])))
+        growth = {r: (peaks[r] - before.get(r, 0)) * 1024 for r in peaks}
+        print(f"  64 MiB volume on 2 ranks: peak memory grew by rank 0 {growth.get(0, 0) / 2**20:.0f} MiB, "
+              f"rank 1 {growth.get(1, 0) / 2**20:.0f} MiB; resident_bytes {big['resident_bytes'] / 2**20:.1f} MiB",
+              flush=True)
+        # A brick is half the volume plus ghosts; reading it whole anywhere adds the volume.
+        checks.append(("no rank, the serving one included, holds the whole volume: each rank's peak memory grows by "
+                       "less than 3/4 of it, and the budget counts one brick",
+                       sorted(growth) == [0, 1] and all(g < big_bytes * 0.75 for g in growth.values())
+                       and big_bytes * 0.5 <= big["resident_bytes"] < big_bytes * 0.6, (growth, big["resident_bytes"])))
+        # A gzip stream cut at 3/4: the header and the lower brick read, the upper brick's rank
+        # fails; every rank agrees, the request is refused, and the job goes on.
+        raw = os.urandom(16 * 16 * 64)
+        packed = gzip.compress(raw)
+        (tiff_dir / "cut.nrrd").write_bytes(b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 16 16 64\nencoding: gzip\n\n"
+                                            + packed[:len(packed) * 3 // 4])
+        status, _, body = http(srv, "/api/render", "POST",
+                               json.dumps({"volume": "cut.nrrd", "image": {"width": 32, "height": 32}}).encode())
+        status2, _, _ = http(srv, "/api/render", "POST", json.dumps(scene_small()).encode())
+        checks.append(("a file one rank cannot read (a cut gzip stream) is refused by name, and the job goes on",
+                       400 <= status < 500 and b"cannot be read as bricks" in body and status2 == 200 and srv.alive(),
+                       (status, body[:300], status2)))
         status, _, body = http(srv, "/api/health")
         health = json.loads(body)
         checks.append(("health shows 2 ranks", status == 200 and health["ranks"] == 2 and "2 ranks" in health["gl_renderer"],
@@ -220,6 +256,7 @@ def main():
         checks.append(("a TIFF stack is refused before any rank is asked, and the job goes on",
                        status >= 400 and b"TIFF" in body and status2 == 200 and srv.alive(), (status, body[:300])))
         checks.append(gl_ranks_check(tmp))
+        checks.append(three_ranks_check(tmp, tiff_dir, one_infos, volumes))
         checks.append(mixed_backends_check())
         shutil.rmtree(tmp, ignore_errors=True)
         shutil.rmtree(tiff_dir, ignore_errors=True)
