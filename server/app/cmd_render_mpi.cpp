@@ -87,9 +87,7 @@ int run(const MpiRenderArgs& a, int rank, int size) {
   const auto t_start = std::chrono::steady_clock::now();
   ParsedSceneFile parsed = parse_scene_file(a.scene);
   // The file's header: every rank reads one voxel of it, which tells the whole volume's box.
-  LoadOptions one;
-  one.region = VoxelRegion{{0, 0, 0}, {1, 1, 1}};
-  const Volume head = load_volume(parsed.volume, one);
+  const Volume head = dist::read_head(parsed.volume.string());
   VolumeBox box{head.source_dims, head.spacing, head.origin, 0.0, 1.0};
   const dist::Index3 dims{box.dims[0], box.dims[1], box.dims[2]};
   // Ghosts depend on the step, filter and shading, not on the value range.

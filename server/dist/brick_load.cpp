@@ -49,6 +49,12 @@ BrickLoadRequest BrickLoadRequest::from_json(const nlohmann::json& j) {
   return r;
 }
 
+Volume read_head(const std::string& path) {
+  LoadOptions one;
+  one.region = VoxelRegion{{0, 0, 0}, {1, 1, 1}};
+  return load_volume(path, one);
+}
+
 BrickRead read_brick(const BrickLoadRequest& req) {
   int rank = 0, size = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
@@ -62,9 +68,7 @@ BrickRead read_brick(const BrickLoadRequest& req) {
   // alike, and the job goes on.
   int failed_rank = 0;  // rank + 1 of a rank that failed; the highest such
   try {
-    LoadOptions one;
-    one.region = VoxelRegion{{0, 0, 0}, {1, 1, 1}};
-    const Volume head = load_volume(req.path, one);
+    const Volume head = read_head(req.path);
     spacing = head.spacing;
     origin = head.origin;
     b.dims = {head.source_dims[0], head.source_dims[1], head.source_dims[2]};

@@ -51,6 +51,10 @@ struct BrickRead {
   double statistics_ms = 0.0;  // the reductions after the reads
 };
 
+// The file's header without its voxels: a one-voxel region read, whose source_dims are the
+// whole volume's dims (throws VolumeError, e.g. for a TIFF stack, which has no regions).
+Volume read_head(const std::string& path);
+
 // Every rank, collectively, in the same order whatever happens: a read that fails on any rank
 // makes every rank return `failed` (the job goes on); the statistics follow only for a first
 // read (no range in the request).

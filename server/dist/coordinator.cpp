@@ -66,13 +66,31 @@ void Coordinator::prune_locked() {
   }
 }
 
+BrickRead Coordinator::read_bricks(const std::unique_lock<std::mutex>& held, int64_t id, const BrickLoadRequest& req) {
+  send(held, kLoad, id, req.to_json().dump());
+  BrickRead b;
+  try {
+    b = read_brick(req);
+  } catch (const std::exception& e) {
+    abort_job(e.what());  // not a read error (those the ranks agree on): the ranks are out of step
+  }
+  if (b.failed) throw VolumeError(req.path, "cannot be read as bricks: " + b.error);
+  return b;
+}
+
+void Coordinator::check_split(const std::filesystem::path& path, const Dims& dims, int ghost) const {
+  try {
+    kd_split({dims[0], dims[1], dims[2]}, ranks_, ghost);
+  } catch (const std::invalid_argument& e) {
+    throw VolumeError(path, e.what());
+  }
+}
+
 LoadedVolume Coordinator::load(const std::filesystem::path& path, const LoadOptions& options) {
   // What would fail on a rank fails here first, before any rank is asked (a failure after the
   // broadcast ends the job): a file whose regions cannot be read (TIFF stacks), too many voxels,
   // fewer cells than ranks.
-  LoadOptions one;
-  one.region = VoxelRegion{{0, 0, 0}, {1, 1, 1}};
-  const Volume head = load_volume(path, one);
+  const Volume head = read_head(path.string());
   const Dims dims = head.source_dims;
   if (dims[0] * dims[1] * dims[2] > options.max_voxels)
     throw VolumeError(path, std::to_string(dims[0] * dims[1] * dims[2]) + " voxels exceeds the limit of " +
@@ -81,25 +99,14 @@ LoadedVolume Coordinator::load(const std::filesystem::path& path, const LoadOpti
   req.path = path.string();
   req.ghost = default_ghost();
   req.refuse_nonfinite = options.nonfinite == NonFinitePolicy::Refuse;
-  try {
-    kd_split({dims[0], dims[1], dims[2]}, ranks_, req.ghost);
-  } catch (const std::invalid_argument& e) {
-    throw VolumeError(path, e.what());
-  }
+  check_split(path, dims, req.ghost);
   auto held = lock();
   if (closed_) throw VolumeError(path, "the server is shutting down");
   const auto t0 = std::chrono::steady_clock::now();
   const int64_t id = new_id();
-  send(held, kLoad, id, req.to_json().dump());
-  BrickRead b;
-  try {
-    b = read_brick(req);
-  } catch (const std::exception& e) {
-    abort_job(e.what());  // not a read error (those the ranks agree on): the ranks are out of step
-  }
-  // Every rank knows and kept nothing:
-  if (b.failed) throw VolumeError(path, "cannot be read as bricks: " + b.error);
-  if (b.refused) throw VolumeError(path, std::to_string(b.nonfinite) + " NaN/Inf voxels (policy: refuse)");
+  BrickRead b = read_bricks(held, id, req);
+  if (b.refused)  // every rank knows and kept nothing
+    throw VolumeError(path, std::to_string(b.nonfinite) + " NaN/Inf voxels (policy: refuse)");
   struct ForgetUnlessKept {  // the workers hold bricks under `id` from here on
     Coordinator& c;
     int64_t id;

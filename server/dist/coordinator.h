@@ -47,6 +47,13 @@ class Coordinator {
   // Broadcasts cmd with the volumes forgotten since the last command. The lock must be held.
   void send(const std::unique_lock<std::mutex>& held, int64_t cmd, int64_t id, std::string payload = {});
   int64_t new_id() { return next_id_++; }  // under the lock
+  // Sends kLoad for `id` and reads this rank's brick with the others. A read any rank failed
+  // throws VolumeError naming the file (every rank dropped it alike: the job goes on); any
+  // other error ends the job (the ranks would be out of step). The lock must be held.
+  BrickRead read_bricks(const std::unique_lock<std::mutex>& held, int64_t id, const BrickLoadRequest& request);
+  // Refuses (VolumeError), before any rank is asked, a volume of `dims` that cannot be cut
+  // into one brick per rank with `ghost` voxels.
+  void check_split(const std::filesystem::path& path, const Dims& dims, int ghost) const;
   void forget(int64_t id);  // any thread: that volume's bricks go with the next command
   // After the last command (kQuit): send() and load() refuse from then on, so a load queued on
   // the loader pool during shutdown cannot wait for workers that are gone. The lock must be held.

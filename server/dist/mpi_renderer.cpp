@@ -172,23 +172,13 @@ std::unique_ptr<render::ResidentVolume> MpiRenderer::make_resident(std::shared_p
   // A volume read whole (the CLI, tests): every rank reads its brick with the range known.
   // What would fail on a rank fails here first, before any rank is asked: a file whose regions
   // cannot be read (TIFF stacks), one changed since it was read, fewer cells than ranks.
-  LoadOptions one;
-  one.region = VoxelRegion{{0, 0, 0}, {1, 1, 1}};
-  const Volume head = load_volume(volume->source_path, one);
+  const Volume head = read_head(volume->source_path);
   if (head.source_dims != volume->dims())
     throw std::runtime_error(volume->source_path + ": the file changed since it was read (its dims differ)");
-  kd_split({head.source_dims[0], head.source_dims[1], head.source_dims[2]}, ranks_, default_ghost());
+  c.check_split(volume->source_path, head.source_dims, default_ghost());
   const VolumeBox box{volume->dims(), volume->spacing, volume->origin, volume->min_value, volume->max_value};
-  const BrickLoadRequest req = reread(volume->source_path, box, default_ghost());
   const int64_t id = c.new_id();
-  c.send(held, kLoad, id, req.to_json().dump());
-  BrickRead r;
-  try {
-    r = read_brick(req);
-  } catch (const std::exception& e) {
-    abort_job(e.what());  // not a read error (those the ranks agree on): the ranks are out of step
-  }
-  if (r.failed) throw VolumeError(volume->source_path, "cannot be read as bricks: " + r.error);
+  BrickRead r = c.read_bricks(held, id, reread(volume->source_path, box, default_ghost()));
   try {
     return std::make_unique<Resident>(impl_->coord, id, std::move(volume), make_set(std::move(r), impl_->renderer));
   } catch (...) {
@@ -212,16 +202,9 @@ render::RenderResult MpiRenderer::render(const render::ResidentVolume& v, const 
   if (const int need = brick_ghost(s); need > bricks.ghost) {  // a longer step than the bricks were read for
     // With headroom: a differential step grows as the camera backs away, and a re-read on
     // every frame of a slow zoom-out would cost more than the wider ghosts.
-    const BrickLoadRequest r = reread(res->volume().source_path, bricks.box, need + std::max(4, need / 2));
-    c.send(held, kLoad, res->id(), r.to_json().dump());
-    BrickRead wider;
-    try {
-      wider = read_brick(r);
-    } catch (const std::exception& e) {
-      abort_job(e.what());  // not a read error (those the ranks agree on): the ranks are out of step
-    }
-    // Every rank keeps its bricks as they were; this frame fails, the job goes on.
-    if (wider.failed) throw VolumeError(r.path, "cannot be read again with wider ghosts: " + wider.error);
+    // A read any rank failed throws: every rank keeps its bricks, this frame fails, the job goes on.
+    BrickRead wider = c.read_bricks(held, res->id(), reread(res->volume().source_path, bricks.box,
+                                                             need + std::max(4, need / 2)));
     try {
       bricks = make_set(std::move(wider), impl_->renderer);
     } catch (const std::exception& e) {

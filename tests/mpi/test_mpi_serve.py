@@ -13,6 +13,8 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 from harness import Client, Server, http, decode_image  # noqa: E402
 from PIL import Image as PILImage  # noqa: E402
 import nonfinite_volume  # noqa: E402
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "scripts"))
+import bench_memory  # noqa: E402  (each rank's memory under mpirun, as `bench memory --ranks` reads it)
 
 PEAKCAST = os.environ["PEAKCAST_BIN"]
 MPIRUN = os.environ.get("MPIEXEC", shutil.which("mpirun") or "mpirun")
@@ -105,28 +107,7 @@ def volume_infos(srv, volumes):
 
 def rank_peak_kib(srv):
     """{rank: VmHWM in KiB} of the processes mpirun started for `srv`."""
-    children = {}
-    for d in pathlib.Path("/proc").iterdir():
-        if d.name.isdigit():
-            try:
-                ppid = int((d / "stat").read_text().rsplit(")", 1)[1].split()[1])
-            except (OSError, IndexError, ValueError):
-                continue
-            children.setdefault(ppid, []).append(int(d.name))
-    todo, peaks = [srv.proc.pid], {}
-    while todo:
-        pid = todo.pop()
-        todo += children.get(pid, [])
-        try:
-            env = dict(kv.split("=", 1) for kv in (pathlib.Path(f"/proc/{pid}/environ").read_bytes().decode(
-                errors="replace").split("\0")) if "=" in kv)
-            status = pathlib.Path(f"/proc/{pid}/status").read_text()
-        except OSError:
-            continue
-        if "OMPI_COMM_WORLD_RANK" in env and "peakcast" in pathlib.Path(f"/proc/{pid}/cmdline").read_bytes().decode(errors="replace"):
-            hwm = [int(l.split()[1]) for l in status.splitlines() if l.startswith("VmHWM:")]
-            peaks[int(env["OMPI_COMM_WORLD_RANK"])] = hwm[0] if hwm else 0
-    return peaks
+    return {r: bench_memory.status(pid, "VmHWM") // 1024 for r, pid in bench_memory.rank_pids(srv.proc).items()}
 
 
 def write_big_u16(path, dims=(256, 256, 512)):
