@@ -25,6 +25,9 @@ vec3 voxel_coords(vec3 p) { return (p + u_brick_half.xyz) * (1.0 / u_spacing.xyz
 #else
 vec3 voxel_coords(vec3 p) { return (p + u_box_half.xyz) * (1.0 / u_spacing.xyz); }
 #endif
+// Where the macrocells are looked up: the whole volume's voxel coordinates (a brick's grids are
+// the whole volume's, core/macrocell_share.h).
+vec3 cell_coords(vec3 p) { return (p + u_box_half.xyz) * (1.0 / u_spacing.xyz); }
 
 #if defined(PEAKS) || defined(PREINTEGRATION) || defined(VIRTUAL_SAMPLES)
 #define SEGMENTS  // methods that look at the segment between consecutive samples
@@ -42,9 +45,20 @@ vec3 voxel_coords(vec3 p) { return (p + u_box_half.xyz) * (1.0 / u_spacing.xyz);
 #endif
 
 #include "ray_texture.glsl"
-// Peak mode xor on a brick: the next segment is the one into the brick's first point, drawn by
-// the brick before; only whether it holds a peak counts here (see cast_ray).
-bool g_peek;
+// Who draws what on a brick (cpu/ray_caster-inl.h draw_): a sample (true or virtual) belongs to
+// the segment it starts, a segment to the rank owning the lattice point it starts from.
+// g_draw: the sample being consumed is this ray's to draw (its DVR term and the segment out of
+// it); g_prev_draw: the previous one was (the segment into this one: peaks, preintegration). A
+// sample not drawn still ends a segment: peak mode xor asks whether the segment into the brick's
+// first point, which the brick before draws, holds a peak. One process draws everything.
+#ifdef BRICK
+bool g_draw, g_prev_draw;
+#define DRAWN g_draw
+#define PREV_DRAWN g_prev_draw
+#else
+#define DRAWN true
+#define PREV_DRAWN true
+#endif
 #ifdef PEAKS
 #include "peak_find.glsl"
 #endif
@@ -58,10 +72,8 @@ bool g_peek;
 float g_prev_t, g_prev_f;
 bool g_have_prev, g_gap;
 int g_expect;
-// The lattice points the ray composites (BRICK: those it owns; else all of them), and whether
-// the point being consumed is owned (a brick's closing point adds its segment only).
+// The lattice points the ray composites (BRICK: those it owns; else all of them).
 int g_own_first, g_own_last;
-bool g_own_point;
 
 #ifdef BRICK
 // Lattice point i lies in this brick's own box (whole-volume voxel coordinates, computed alike
@@ -118,13 +130,34 @@ bool clip_to_brick(Ray r, Lattice L, vec2 span, inout int last) {
   while (own_last < last && owns(r, L, own_last + 1)) ++own_last;
   g_own_first = first;
   g_own_last = own_last;
-#ifdef SEGMENTS
-  last = min(own_last + 1, last);  // the point closing the last segment
+  // Segment methods: the point closing the last owned segment. Virtual samples: the point after
+  // that too (the Catmull-Rom window of the last owned segment), and one more, so that whether
+  // that one is visited is decided as in one process (a run of occupied cells starting there
+  // visits the point before it). Adaptive sampling: each of those visits up to 8 points on, and
+  // the last owned visit's step (its multiplier, cut at its cell's last point) is decided as in
+  // one process only when the walk goes on past it.
+#ifdef ADAPTIVE
+  const int m = 8;  // kMaxAdaptiveMultiplier
 #else
-  last = own_last;
+  const int m = 1;
 #endif
+#if defined(VIRTUAL_SAMPLES)
+  int beyond = 2 * m + 1;
+#elif defined(SEGMENTS) || defined(ADAPTIVE)
+  int beyond = m;
+#else
+  int beyond = 0;
+#endif
+  last = min(own_last + beyond, last);
   return true;
 }
+
+// The last visits before the owned points, held back unsampled (index -1: none), newest in .x:
+// sampled only when they lead to the first owned visit without a gap (the look-behind xor's
+// segment into it needs, and with virtual samples the window of the segment before it, whose
+// last virtual sample starts that segment), so a walk from the ray's start samples nothing in
+// front. .xy: indices, .zw: their steps.
+ivec4 g_behind;
 #endif
 
 #ifdef VIRTUAL_SAMPLES
@@ -144,7 +177,7 @@ bool consume(Ray r, float t, float f, vec3 x, vec3 g, float dt, inout RayResult 
   if (segment) peak_hit = find_peaks(r, g_prev_t, g_prev_f, t, f, res);
 #endif
 #if defined(PREINTEGRATION)
-  if (segment) {
+  if (segment && PREV_DRAWN) {
     vec4 c = preint_lookup(g_prev_f, f);
 #ifdef VARYING_STEPS
     if (c.a > 0.0) {  // the table holds segments of the uniform step: correct for this one's length
@@ -165,7 +198,7 @@ bool consume(Ray r, float t, float f, vec3 x, vec3 g, float dt, inout RayResult 
   }
 #elif !defined(PEAKS_ONLY)
 #ifdef BRICK
-  if (g_own_point)  // a brick's closing point: its segment only
+  if (g_draw)
 #endif
 #ifdef PEAK_XOR
   if (!peak_hit)
@@ -185,7 +218,9 @@ bool consume(Ray r, float t, float f, vec3 x, vec3 g, float dt, inout RayResult 
   g_prev_f = f;
   g_have_prev = true;
   g_gap = false;
-  g_peek = false;
+#ifdef BRICK
+  g_prev_draw = g_draw;
+#endif
   return res.acc.a >= STOP;
 }
 
@@ -200,6 +235,12 @@ bool consume(Ray r, float t, float f, vec3 x, vec3 g, float dt, inout RayResult 
 vec4 w_t, w_f, w_dt;
 vec3 w_g0, w_g1, w_g2, w_g3;
 int w_n;  // true samples waiting (0..4), the newest w_n of the window
+#ifdef BRICK
+uint w_own;  // the window's samples owned: bit 0 the newest (.w) to bit 3 (.x)
+#define W_OWNS(bit) ((w_own & (bit)) != 0u)
+#else
+#define W_OWNS(bit) true
+#endif
 
 float catmull_rom(float p0, float p1, float p2, float p3, float s) {
   return 0.5 * (2.0 * p1 + (p2 - p0) * s + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * s * s +
@@ -213,7 +254,10 @@ vec3 catmull_rom3(vec3 p0, vec3 p1, vec3 p2, vec3 p3, float s) {
 // Sends out the true sample at t1 (value f1, step dt1) and the virtual samples between it and
 // the next one (t2) that lie before t_limit, on the spline through f0..f3 (g0..g3).
 bool vs_segment(Ray r, float t1, float t2, float dt1, vec4 f, vec3 g0, vec3 g1, vec3 g2, vec3 g3, float t_limit,
-                inout RayResult res) {
+                bool own, inout RayResult res) {
+#ifdef BRICK
+  g_draw = own;  // the segment's samples are the rank's that owns its first
+#endif
   const float k = float(VIRTUAL_SAMPLES);
   float sub = dt1 / (k + 1.0);
   if (consume(r, t1, f.y, vec3(0.0), g1, sub, res)) return true;
@@ -233,19 +277,27 @@ bool vs_segment(Ray r, float t1, float t2, float dt1, vec4 f, vec3 g0, vec3 g1, 
 bool vs_last_segment(Ray r, float t_limit, inout RayResult res) {
   bool prev = w_n >= 3;
   return vs_segment(r, w_t.z, w_t.w, w_dt.z, vec4(prev ? w_f.y : w_f.z, w_f.z, w_f.w, w_f.w), prev ? w_g1 : w_g2,
-                    w_g2, w_g3, w_g3, t_limit, res);
+                    w_g2, w_g3, w_g3, t_limit, W_OWNS(2u), res);
 }
 
 // Everything still waiting: the last true sample stands for its whole step.
 bool vs_flush(Ray r, inout RayResult res) {
   bool done = res.acc.a >= STOP;
   if (!done && w_n >= 2) done = vs_last_segment(r, 3.0e38, res);
-  if (!done && w_n >= 1) done = consume(r, w_t.w, w_f.w, vec3(0.0), w_g3, w_dt.w, res);
+  if (!done && w_n >= 1) {
+#ifdef BRICK
+    g_draw = W_OWNS(1u);
+#endif
+    done = consume(r, w_t.w, w_f.w, vec3(0.0), w_g3, w_dt.w, res);
+  }
   w_n = 0;
   return done;
 }
 
-bool vs_push(Ray r, float t, float f, vec3 g, float dt, inout RayResult res) {
+bool vs_push(Ray r, float t, float f, vec3 g, float dt, bool own, inout RayResult res) {
+#ifdef BRICK
+  w_own = ((w_own << 1) | (own ? 1u : 0u)) & 15u;
+#endif
   w_t = vec4(w_t.yzw, t);
   w_f = vec4(w_f.yzw, f);
   w_dt = vec4(w_dt.yzw, dt);
@@ -258,7 +310,7 @@ bool vs_push(Ray r, float t, float f, vec3 g, float dt, inout RayResult res) {
   if (w_n < 3) return false;
   bool prev = w_n == 4;
   return vs_segment(r, w_t.y, w_t.z, w_dt.y, vec4(prev ? w_f.x : w_f.y, w_f.yzw), prev ? w_g0 : w_g1, w_g1, w_g2,
-                    w_g3, 3.0e38, res);
+                    w_g3, 3.0e38, W_OWNS(4u), res);
 }
 
 // The ray's end. When its last lattice point was visited, one more true sample past the exit
@@ -280,7 +332,7 @@ void vs_finish(Ray r, Lattice L, int last, float t_exit, inout RayResult res) {
 #else
   vec3 g = vec3(0.0);
 #endif
-  if (vs_push(r, t, f, g, lattice_step(L, float(last + 1), 1.0), res)) return;
+  if (vs_push(r, t, f, g, lattice_step(L, float(last + 1), 1.0), last + 1 <= g_own_last, res)) return;
   // Pending now: [..., last, last + 1]; the extra sample itself is not composited.
   vs_last_segment(r, t_exit, res);
   w_n = 0;
@@ -289,13 +341,15 @@ void vs_finish(Ray r, Lattice L, int last, float t_exit, inout RayResult res) {
 
 // Visits lattice index i, standing for the step to index i + m. Returns true when the ray is
 // opaque enough to stop.
-bool visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
+bool sample_visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
   float dt = lattice_step(L, float(i), float(m));
   float t = lattice_t(L, float(i));
   vec3 x = voxel_coords(r.o + t * r.d);
   float f = sample_field(x);
   res.samples += 1.0;
-  g_own_point = i <= g_own_last;
+#ifdef BRICK
+  g_draw = i >= g_own_first && i <= g_own_last;
+#endif
   bool gap = i != g_expect;  // lattice points between the last visit and this one were skipped
   g_expect = i + m;
   if (gap) g_gap = true;  // until the next sample is consumed: no segment across the gap
@@ -310,10 +364,30 @@ bool visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
 #else
   vec3 g = vec3(0.0);
 #endif
-  return vs_push(r, t, f, g, dt, res);
+  return vs_push(r, t, f, g, dt, DRAWN, res);
 #else
   return consume(r, t, f, x, vec3(0.0), dt, res);
 #endif
+}
+
+bool visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
+#ifdef BRICK
+  if (i < g_own_first) {  // before the brick's points (see g_behind)
+    g_behind = ivec4(i, g_behind.x, m, g_behind.z);
+    return false;
+  }
+  if (g_behind.x >= 0) {
+    ivec4 b = g_behind;
+    g_behind = ivec4(-1, -1, 1, 1);
+    if (b.x + b.z == i) {
+#ifdef VIRTUAL_SAMPLES
+      if (b.y >= 0 && b.y + b.w == b.x && sample_visit(r, L, b.y, b.w, res)) return true;
+#endif
+      if (sample_visit(r, L, b.x, b.z, res)) return true;
+    }
+  }
+#endif
+  return sample_visit(r, L, i, m, res);
 }
 
 RayResult cast_ray(vec2 pixel) {
@@ -325,10 +399,16 @@ RayResult cast_ray(vec2 pixel) {
   g_expect = 0;
   g_own_first = 0;
   g_own_last = 2147483647;
-  g_own_point = true;
-  g_peek = false;
+#ifdef BRICK
+  g_draw = true;
+  g_prev_draw = true;
+  g_behind = ivec4(-1, -1, 1, 1);
+#endif
 #ifdef VIRTUAL_SAMPLES
   w_n = 0;
+#ifdef BRICK
+  w_own = 0u;
+#endif
 #endif
   Ray r = make_ray(pixel);
   vec2 span = intersect_box(r);
@@ -348,22 +428,21 @@ RayResult cast_ray(vec2 pixel) {
     res.samples = -1.0;
     return res;
   }
-#ifdef PEAK_XOR
-  if (g_own_first > 0) {  // look behind (cpu/ray_brick-inl.h look_behind): sampled, not drawn or counted
-    g_prev_t = lattice_t(L, float(g_own_first - 1));
-    g_prev_f = sample_field(voxel_coords(r.o + g_prev_t * r.d));
-    g_have_prev = true;
-    g_gap = false;
-    g_expect = g_own_first;
-    g_peek = true;
-  }
 #endif
+  // A brick starts where the points it samples before its own (g_behind: one, or two with
+  // virtual samples) are visited as in one process: at them (a walk over every point), one
+  // before them (leaps: whether a point is visited depends on its neighbours only), at the
+  // ray's start (the 3D-DDA: a cell's first point depends on the cells before it).
+#ifdef VIRTUAL_SAMPLES
+  const int behind = 2;
+#else
+  const int behind = 1;
 #endif
 #if !defined(CELL_TRAVERSAL)
   // Nested: llvmpipe stops any single loop after 65535 iterations (LP_MAX_TGSI_LOOP_ITERATIONS),
   // far below the per-ray cap; chunks of CHUNK keep every loop under it.
   bool stop = false;
-  for (int c = g_own_first; c <= last && !stop; c += CHUNK)
+  for (int c = max(g_own_first - behind, 0); c <= last && !stop; c += CHUNK)
     for (int i = c; i <= min(last, c + CHUNK - 1); ++i)
       if (visit(r, L, i, 1, res)) {
         stop = true;
@@ -378,14 +457,14 @@ RayResult cast_ray(vec2 pixel) {
   // llvmpipe the cell loop cost more than the samples (issue 13). Segment methods add the point
   // before a run of occupied cells and the one after it (EXTENSION 1), as the cell loop does.
   float edge = u_cells.w;
-  vec3 xo = voxel_coords(r.o);  // the ray in voxel coordinates: xo + t * dv
+  vec3 xo = cell_coords(r.o);  // the ray in the cells' voxel coordinates: xo + t * dv
   vec3 dv = r.d / u_spacing.xyz;
   ivec3 grid = ivec3(u_cells.xyz);
   ivec3 stp = ivec3(sign(dv));
   bvec3 moves = greaterThanEqual(abs(dv), vec3(1e-20));
   vec3 inv_dv = mix(vec3(0.0), 1.0 / mix(vec3(1.0), dv, moves), moves);
   vec3 ahead = vec3(greaterThan(dv, vec3(0.0)));
-  int i = g_own_first;
+  int i = max(g_own_first - behind - 1, 0);
   int visited = -2;  // the last lattice index visited
   bool stop = false;
   int rounds = (last + 2 + 8 * (grid.x + grid.y + grid.z)) / CHUNK + 1;
@@ -397,7 +476,7 @@ RayResult cast_ray(vec2 pixel) {
       uint empty_distance = cell_byte(u_cell_distance, c);
       if (empty_distance == 0u) {
 #ifdef SEGMENTS
-        if (i - 1 >= g_own_first && visited != i - 1 && visit(r, L, i - 1, 1, res)) {  // the segment into the run
+        if (i >= 1 && visited != i - 1 && visit(r, L, i - 1, 1, res)) {  // the segment into the run
           stop = true;
           break;
         }
@@ -431,7 +510,7 @@ RayResult cast_ray(vec2 pixel) {
   // segment methods also visit EXTENSION more on each side, so the segments that leave or enter the
   // cell are not lost.
   float edge = u_cells.w;
-  vec3 x0 = voxel_coords(r.o + span.x * r.d);
+  vec3 x0 = cell_coords(r.o + span.x * r.d);
   vec3 dv = r.d / u_spacing.xyz;
   ivec3 grid = ivec3(u_cells.xyz);
   ivec3 cell = clamp(ivec3(floor(x0 / edge)), ivec3(0), grid - 1);

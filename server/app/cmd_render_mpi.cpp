@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -92,29 +93,20 @@ int run(const MpiRenderArgs& a, int rank, int size) {
   const dist::Index3 dims{box.dims[0], box.dims[1], box.dims[2]};
   // Ghosts depend on the step, filter and shading, not on the value range.
   const int ghost = dist::brick_ghost(resolve_scene(parsed.scene, box));
-  const dist::KdSplit split = dist::kd_split(dims, size, ghost);
-  const dist::Brick& mine = split.bricks[size_t(rank)];
 
+  // Every rank reads its brick; the whole volume's range, histogram and macrocell grids are
+  // reduced from the bricks (dist/brick_load.h).
   const auto t_load = std::chrono::steady_clock::now();
-  LoadOptions region;
-  region.region = VoxelRegion{mine.read_lo, mine.read_hi};
-  region.nonfinite = NonFinitePolicy::Keep;  // replaced below with the whole volume's extremes
-  auto brick = std::make_shared<Volume>(load_volume(parsed.volume, region));
-  if (brick->type() == VoxelType::F32) {  // NaN/Inf voxels: as one process replaces them
-    auto [f_lo, f_hi] = finite_extremes(*brick);
-    MPI_Allreduce(MPI_IN_PLACE, &f_lo, 1, MPI_FLOAT, MPI_MIN, MPI_COMM_WORLD);
-    MPI_Allreduce(MPI_IN_PLACE, &f_hi, 1, MPI_FLOAT, MPI_MAX, MPI_COMM_WORLD);
-    replace_nonfinite(*brick, f_lo <= f_hi ? f_lo : 0.f, f_lo <= f_hi ? f_hi : 0.f);
-  }
+  dist::BrickLoadRequest request;
+  request.path = parsed.volume.string();
+  request.ghost = ghost;
+  dist::BrickRead read = dist::read_brick(request);
+  if (read.failed) throw std::runtime_error(read.error);  // names the file (and the rank that failed)
   const double load_ms = ms_between(t_load, std::chrono::steady_clock::now());
-  // The TF's domain is the whole volume's value range.
-  double lo = brick->min_value, hi = brick->max_value;
-  MPI_Allreduce(MPI_IN_PLACE, &lo, 1, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
-  MPI_Allreduce(MPI_IN_PLACE, &hi, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
-  brick->min_value = lo;
-  brick->max_value = hi;
-  box.min_value = lo;
-  box.max_value = hi;
+  const dist::KdSplit& split = read.split;
+  const dist::Brick& mine = read.mine;
+  std::shared_ptr<Volume> brick = read.voxels;
+  box = read.box;
   ResolvedScene scene = resolve_scene(parsed.scene, box);
 
   // Fault injection for the tests (label mpi): this rank dies as a crashed process would.
@@ -132,7 +124,7 @@ int run(const MpiRenderArgs& a, int rank, int size) {
       throw std::invalid_argument("the ranks chose different backends (gl on some, cpu on others): pass --backend gl or "
                                   "--backend cpu");
   }
-  auto resident = renderer.make_resident(brick);
+  auto resident = renderer.make_resident(brick, read.cells);
   render::RenderStats st;
   const Image layer = renderer.render_brick(*resident, scene, dist::frame_brick(mine, dims), &st);
 

@@ -115,15 +115,18 @@ VolumeMacrocells build_volume_macrocells(const Volume& v) {
   return m;
 }
 
+Dims grid_dims(const Volume& v) { return v.source_dims == Dims{0, 0, 0} ? v.dims() : v.source_dims; }
+
 void check_macrocells(const MacrocellGrid& g, const Volume& v, FilterSupport support) {
+  const Dims dims = grid_dims(v);
   MacrocellGrid want;
-  want.cell = default_cell_size(v.dims());
-  for (int a = 0; a < 3; ++a) want.grid[a] = cells_along(v.dims()[a], want.cell);
+  want.cell = default_cell_size(dims);
+  for (int a = 0; a < 3; ++a) want.grid[a] = cells_along(dims[a], want.cell);
   want.support = support;
   if (g.cell != want.cell || g.grid != want.grid || g.support != support ||
       g.size() != size_t(want.grid[0] * want.grid[1] * want.grid[2]))
-    throw std::invalid_argument("macrocells " + g.to_string() + " do not fit the " + std::to_string(v.dims()[0]) +
-                                "x" + std::to_string(v.dims()[1]) + "x" + std::to_string(v.dims()[2]) +
+    throw std::invalid_argument("macrocells " + g.to_string() + " do not fit the " + std::to_string(dims[0]) +
+                                "x" + std::to_string(dims[1]) + "x" + std::to_string(dims[2]) +
                                 " volume (want " + want.to_string() + ")");
 }
 

@@ -48,7 +48,10 @@ VolumeMacrocells build_volume_macrocells(const Volume& volume);
 // of 2 ring + 1 cells per axis): the values a Catmull-Rom window reaching `ring` cells away can
 // read (virtual samples, Lee §3.2). ring 0 returns the grid unchanged.
 MacrocellGrid dilate_ranges(const MacrocellGrid& g, int ring);
-// Throws std::invalid_argument unless `g` is a default-cell grid of `volume`'s dims with the
+// The dims a volume's grids cover: its own, or for a region read (a distributed rendering's
+// brick) the whole volume's (core/macrocell_share.h: a brick walks the whole volume's cells).
+Dims grid_dims(const Volume& volume);
+// Throws std::invalid_argument unless `g` is a default-cell grid of grid_dims(volume) with the
 // given support (a grid of another volume would skip visible cells).
 void check_macrocells(const MacrocellGrid& g, const Volume& volume, FilterSupport support);
 

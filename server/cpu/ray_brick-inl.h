@@ -13,6 +13,7 @@
 
 #include <hwy/highway.h>
 
+#include "core/sampling.h"
 #include "cpu/ray_caster-inl.h"
 
 HWY_BEFORE_NAMESPACE();
@@ -49,21 +50,17 @@ bool RayCaster::clip_to_brick() {
   while (last < last_ && owns(last + 1)) ++last;
   own_first_ = first;
   own_last_ = last;
-  last_ = segments_ ? std::min(last + 1, last_) : last;  // the point closing the last segment
+  // Segment methods: the point closing the last owned segment. Virtual samples: the point after
+  // that too (the Catmull-Rom window of the last owned segment), and one more, so that whether the
+  // second is visited is decided as in one process (a run of occupied cells starting there
+  // visits the point before it).
+  // Adaptive sampling: each of those visits up to kMaxAdaptiveMultiplier points on, and the last
+  // owned visit's step (its multiplier, cut at its cell's last point) is decided as in one
+  // process only when the walk goes on past it.
+  const int m = f_.key.adaptive ? kMaxAdaptiveMultiplier : 1;
+  const int beyond = f_.key.virtual_samples ? 2 * m + 1 : (segments_ || f_.key.adaptive ? m : 0);
+  last_ = int(std::min<int64_t>(int64_t(last) + beyond, last_));
   return true;
-}
-
-// Peak mode xor drops a point's DVR term when the segment into it holds a peak. For a brick's
-// first point that segment belongs to the brick before, which draws its peaks; here the point
-// before is sampled as the segment's start (not drawn, not counted), so the first point's
-// DVR term is dropped exactly when one process drops it.
-void RayCaster::look_behind() {
-  prev_t_ = lattice_t(L_, float(own_first_ - 1));
-  prev_f_ = sample_field(voxel_coords(r_.o + prev_t_ * r_.d));
-  have_prev_ = true;
-  gap_ = false;
-  expect_ = own_first_;
-  peek_ = true;
 }
 
 }  // namespace

@@ -38,11 +38,14 @@ class RayCaster {
   RayResult walk(int first);
   RayResult result() const { return res_; }
   LeapInputs leap_inputs() const {
-    return {voxel_coords(r_.o), r_.d / f_.spacing, L_.t0, L_.A, L_.B, span_y_ + f_.step, last_};
+    return {cell_coords(r_.o), r_.d / f_.spacing, L_.t0, L_.A, L_.B, span_y_ + f_.step, last_};
   }
 
  private:
   vec3 voxel_coords(vec3 p) const { return (p + f_.sample_half) * f_.inv_spacing; }
+  // Where the macrocells are looked up: the whole volume's voxel coordinates (a brick's grids
+  // are the whole volume's, core/macrocell_share.h), which are voxel_coords in one process.
+  vec3 cell_coords(vec3 p) const { return (p + f_.box_half) * f_.inv_spacing; }
   // Distributed rendering: lattice point i lies in this brick's own box (whole-volume voxel
   // coordinates, computed alike on every rank, so exactly one rank owns each point).
   bool owns(int i) const {
@@ -53,7 +56,6 @@ class RayCaster {
   }
   // Restricts the ray to the points it owns (setup, brick frames); false when it owns none.
   bool clip_to_brick();
-  void look_behind();
   float sample_field(vec3 x) const { return SamplePoint(f_.voxels, x); }
   vec3 field_gradient(vec3 x) const {
     vec3 g;
@@ -93,11 +95,12 @@ class RayCaster {
   bool find_peaks(float t0, float f0, float t1, float f1);
   bool consume(float t, float fv, vec3 g, float dt);
   bool visit(int i, int m);
+  bool sample_visit(int i, int m);
   // Virtual samples (Lee et al. 2010): the window of four true samples, newest last.
-  bool vs_segment(float t1, float t2, float dt1, vec4 fw, vec3 g0, vec3 g1, vec3 g2, vec3 g3, float t_limit);
+  bool vs_segment(float t1, float t2, float dt1, vec4 fw, vec3 g0, vec3 g1, vec3 g2, vec3 g3, float t_limit, bool own);
   bool vs_last_segment(float t_limit);
   bool vs_flush();
-  bool vs_push(float t, float fv, vec3 g, float dt);
+  bool vs_push(float t, float fv, vec3 g, float dt, bool own);
   void vs_finish(int last, float t_exit);
   bool walk_leaps(float span_y, int first);
   bool walk_cells(float span_x, float span_y);
@@ -112,10 +115,20 @@ class RayCaster {
   int last_ = 0;
   // The lattice points the ray composites (bricks: those it owns; else all of them).
   int own_first_ = 0, own_last_ = std::numeric_limits<int>::max();
-  bool own_point_ = true;  // the point being consumed is owned (its own DVR term counts)
-  // Peak mode xor on a brick: the next segment is the one into the brick's first point, which
-  // the brick before draws; only whether it holds a peak counts here (look_behind).
-  bool peek_ = false;
+  bool owned(int i) const { return i >= own_first_ && i <= own_last_; }
+  // Who draws what on a brick: a sample (true or virtual) belongs to the segment it starts, a
+  // segment to the rank owning the lattice point it starts from. draw_: the sample being
+  // consumed is this ray's to draw (its DVR term, and the segment out of it); prev_draw_: the
+  // previous one was (the segment into this sample: peaks, preintegration). A sample not drawn
+  // is still a segment's end: peak mode xor asks whether the segment into the brick's first
+  // point, which the brick before draws, holds a peak. Always true in one process.
+  bool draw_ = true, prev_draw_ = true;
+  // The last visits before the owned points, held back unsampled (index -1: none), newest
+  // first: sampled only when they lead to the first owned visit without a gap (the look-behind
+  // that xor's segment into it needs, and with virtual samples the window of the segment before
+  // it, whose last virtual sample starts that segment), so a walk from the ray's start costs no
+  // samples in front.
+  int behind_[2] = {-1, -1}, behind_m_[2] = {1, 1};
   float stop_ = 1, dvr_weight_ = 1, peak_weight_ = 1;
   // The previous sample, for segment methods (see raycast_body.glsl).
   float prev_t_ = 0, prev_f_ = 0;
@@ -124,6 +137,7 @@ class RayCaster {
   vec4 w_t_{0}, w_f_{0}, w_dt_{0};
   vec3 w_g0_{0}, w_g1_{0}, w_g2_{0}, w_g3_{0};
   int w_n_ = 0;
+  unsigned w_own_ = 0;  // the window's samples owned (bricks): bit 0 the newest (.w) to bit 3 (.x)
   // The current run of samples (sample_run): indices run_first_ + k * run_stride_, k < run_count_.
   float run_[kMaxRun];
   int run_first_ = 0, run_stride_ = 1, run_count_ = 0, run_batch_ = 0;

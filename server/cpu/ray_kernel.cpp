@@ -77,7 +77,7 @@ bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
   if (key.peaks && segment) peak_hit = find_peaks(prev_t_, prev_f_, t, fv);
   if (key.preintegration) {
     vec4 c;
-    if (segment && preint_lookup(prev_f_, fv, c)) {  // else the segment adds exactly nothing
+    if (segment && prev_draw_ && preint_lookup(prev_f_, fv, c)) {  // else the segment adds exactly nothing
       if (varying_steps_ && c.a > 0.f) {  // the table holds segments of the uniform step
         const float a = 1.f - std::pow(std::max(1.f - c.a, 0.f), (t - prev_t_) / f_.step);
         c = vec4(vec3(c) * (a / c.a), a);
@@ -88,7 +88,7 @@ bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
         res_.acc += (1.f - res_.acc.a) * dvr_weight_ * c;  // opacity-weighted already
       }
     }
-  } else if (own_point_ && !(key.peaks && key.peak_mode == PeakMode::PeaksOnly)) {  // (a brick's closing point: its segment only)
+  } else if (draw_ && !(key.peaks && key.peak_mode == PeakMode::PeaksOnly)) {
     if (!(key.peaks && key.peak_mode == PeakMode::Xor && peak_hit)) {
       vec4 c;
       if (tf_lookup(fv, c) && c.a > 0.f) {
@@ -102,18 +102,37 @@ bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
   prev_f_ = fv;
   have_prev_ = true;
   gap_ = false;
-  peek_ = false;
+  prev_draw_ = draw_;
   return res_.acc.a >= stop_;
 }
 
 
 // Visits lattice index i, standing for the step to index i + m.
 bool RayCaster::visit(int i, int m) {
+  if (i < own_first_) {  // a brick's: before its points (see behind_)
+    behind_[1] = behind_[0];
+    behind_m_[1] = behind_m_[0];
+    behind_[0] = i;
+    behind_m_[0] = m;
+    return false;
+  }
+  if (behind_[0] >= 0) {
+    const int b0 = behind_[0], b1 = behind_[1];
+    behind_[0] = behind_[1] = -1;
+    if (b0 + behind_m_[0] == i) {
+      if (f_.key.virtual_samples && b1 >= 0 && b1 + behind_m_[1] == b0 && sample_visit(b1, behind_m_[1])) return true;
+      if (sample_visit(b0, behind_m_[0])) return true;
+    }
+  }
+  return sample_visit(i, m);
+}
+
+bool RayCaster::sample_visit(int i, int m) {
   const float dt = lattice_step(L_, float(i), float(m));
   const float t = lattice_t(L_, float(i));
   const float fv = field_at(i, m);
   res_.samples += 1.f;
-  own_point_ = i <= own_last_;
+  draw_ = owned(i);
   const bool gap = i != expect_;  // lattice points between the last visit and this one were skipped
   expect_ = i + m;
   if (gap) gap_ = true;  // until the next sample is consumed: no segment across the gap
@@ -124,7 +143,7 @@ bool RayCaster::visit(int i, int m) {
       gap_ = true;
     }
     const vec3 g = f_.key.shading ? field_gradient(voxel_coords(r_.o + t * r_.d)) : vec3(0.f);
-    return vs_push(t, fv, g, dt);
+    return vs_push(t, fv, g, dt, draw_);
   }
   return consume(t, fv, vec3(0.f), dt);
 }
@@ -137,7 +156,7 @@ uint8_t cell_byte(const uint8_t* table, const CpuFrame& f, ivec3 c) {
 // (SAMPLE_LEAPS in raycast_body.glsl). True when the ray stopped early.
 bool RayCaster::walk_leaps(float span_y, int first) {
   const float edge = f_.cell_edge;
-  const vec3 xo = voxel_coords(r_.o);
+  const vec3 xo = cell_coords(r_.o);
   const vec3 dv = r_.d / f_.spacing;
   const ivec3 grid(f_.grid[0], f_.grid[1], f_.grid[2]);
   ivec3 stp;
@@ -157,7 +176,7 @@ bool RayCaster::walk_leaps(float span_y, int first) {
     for (int a = 0; a < 3; ++a) c[a] = cell_of(x[a] * (1.f / edge), grid[a] - 1);
     const uint8_t empty_distance = cell_byte(f_.cell_distance, f_, c);
     if (empty_distance == 0) {
-      if (segments_ && i - 1 >= own_first_ && visited != i - 1 && visit(i - 1, 1)) return true;  // the segment into the run
+      if (segments_ && i >= 1 && visited != i - 1 && visit(i - 1, 1)) return true;  // the segment into the run
       if (visit(i, 1)) return true;
       visited = i;
       ++i;
@@ -180,7 +199,7 @@ bool RayCaster::walk_leaps(float span_y, int first) {
 // The 3D-DDA over the macrocells (Amanatides & Woo): adaptive multipliers, or the tests' CELL_DDA.
 bool RayCaster::walk_cells(float span_x, float span_y) {
   const float edge = f_.cell_edge;
-  const vec3 x0 = voxel_coords(r_.o + span_x * r_.d);
+  const vec3 x0 = cell_coords(r_.o + span_x * r_.d);
   const vec3 dv = r_.d / f_.spacing;
   const ivec3 grid(f_.grid[0], f_.grid[1], f_.grid[2]);
   ivec3 cell, stp;
@@ -291,10 +310,14 @@ bool RayCaster::setup(float px, float py) {
 RayResult RayCaster::walk(int first) {
   const render::VariantKey& key = f_.key;
   bool stopped = false;
-  first = std::max(first, own_first_);
-  if (f_.brick && key.peaks && key.peak_mode == PeakMode::Xor && own_first_ > 0) look_behind();
+  // A brick starts where the points it samples before its own (see behind_: one, or two with
+  // virtual samples) are visited as in one process: at them (a walk over every point), one before
+  // them (leaps: whether a point is visited depends on its neighbours only), at the ray's start
+  // (the 3D-DDA: a cell's first point depends on the cells before it).
+  const int behind = key.virtual_samples ? 2 : 1;
+  first = std::max(first, own_first_ - behind - 1);
   if (!key.space_skipping && !key.adaptive) {
-    for (int i = own_first_; i <= last_ && !stopped; ++i) stopped = visit(i, 1);
+    for (int i = std::max(own_first_ - behind, 0); i <= last_ && !stopped; ++i) stopped = visit(i, 1);
   } else if (!key.adaptive && !key.cell_dda) {
     stopped = walk_leaps(span_y_, first);
   } else {

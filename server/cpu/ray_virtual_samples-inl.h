@@ -18,8 +18,9 @@ namespace HWY_NAMESPACE {
 namespace {
 
 bool RayCaster::vs_segment(float t1, float t2, float dt1, vec4 fw, vec3 g0, vec3 g1, vec3 g2, vec3 g3,
-                           float t_limit) {
+                           float t_limit, bool own) {
   const int vs = f_.key.virtual_samples;
+  draw_ = own;  // the segment's samples are the rank's that owns its first (see draw_)
   const float k = float(vs);
   const float sub = dt1 / (k + 1.f);
   if (consume(t1, fw.y, g1, sub)) return true;
@@ -37,18 +38,22 @@ bool RayCaster::vs_segment(float t1, float t2, float dt1, vec4 fw, vec3 g0, vec3
 bool RayCaster::vs_last_segment(float t_limit) {
   const bool prev = w_n_ >= 3;
   return vs_segment(w_t_.z, w_t_.w, w_dt_.z, vec4(prev ? w_f_.y : w_f_.z, w_f_.z, w_f_.w, w_f_.w), prev ? w_g1_ : w_g2_,
-                    w_g2_, w_g3_, w_g3_, t_limit);
+                    w_g2_, w_g3_, w_g3_, t_limit, (w_own_ & 2u) != 0);
 }
 
 bool RayCaster::vs_flush() {
   bool done = res_.acc.a >= stop_;
   if (!done && w_n_ >= 2) done = vs_last_segment(kHuge);
-  if (!done && w_n_ >= 1) done = consume(w_t_.w, w_f_.w, w_g3_, w_dt_.w);
+  if (!done && w_n_ >= 1) {
+    draw_ = (w_own_ & 1u) != 0;
+    done = consume(w_t_.w, w_f_.w, w_g3_, w_dt_.w);
+  }
   w_n_ = 0;
   return done;
 }
 
-bool RayCaster::vs_push(float t, float fv, vec3 g, float dt) {
+bool RayCaster::vs_push(float t, float fv, vec3 g, float dt, bool own) {
+  w_own_ = ((w_own_ << 1) | (own ? 1u : 0u)) & 15u;
   w_t_ = vec4(w_t_.y, w_t_.z, w_t_.w, t);
   w_f_ = vec4(w_f_.y, w_f_.z, w_f_.w, fv);
   w_dt_ = vec4(w_dt_.y, w_dt_.z, w_dt_.w, dt);
@@ -60,7 +65,7 @@ bool RayCaster::vs_push(float t, float fv, vec3 g, float dt) {
   if (w_n_ < 3) return false;
   const bool prev = w_n_ == 4;
   return vs_segment(w_t_.y, w_t_.z, w_dt_.y, vec4(prev ? w_f_.x : w_f_.y, w_f_.y, w_f_.z, w_f_.w), prev ? w_g0_ : w_g1_,
-                    w_g1_, w_g2_, w_g3_, kHuge);
+                    w_g1_, w_g2_, w_g3_, kHuge, (w_own_ & 4u) != 0);
 }
 
 void RayCaster::vs_finish(int last, float t_exit) {
@@ -73,7 +78,7 @@ void RayCaster::vs_finish(int last, float t_exit) {
   const float fv = field_at(last + 1, 1);
   res_.samples += 1.f;
   const vec3 g = f_.key.shading ? field_gradient(voxel_coords(r_.o + t * r_.d)) : vec3(0.f);
-  if (vs_push(t, fv, g, lattice_step(L_, float(last + 1), 1.f))) return;
+  if (vs_push(t, fv, g, lattice_step(L_, float(last + 1), 1.f), owned(last + 1))) return;
   vs_last_segment(t_exit);  // the extra sample itself is not composited
   w_n_ = 0;
 }

@@ -10,12 +10,23 @@ namespace peakcast::dist {
 int brick_ghost(const ResolvedScene& s) {
   const RenderSettings& r = s.scene.render;
   int ghost = ghost_voxels(r.filter == Filter::Tricubic, r.shading);
-  // Segment methods close a brick's last segment with the point one step past its box: the
-  // longest step any ray of the scene takes (the uniform step, or a differential lattice's at
-  // the box corner farthest from the eye).
-  if (r.classification != Classification::Post)
-    ghost += int(std::ceil(longest_step(plan_sampling(s), s) / s.min_spacing - 1e-9));
+  // Segment methods close a brick's last segment with the visit one step past its box; virtual
+  // samples read two visits past its last segment's start and one before its first (the
+  // Catmull-Rom window). A step is the longest any ray of the scene takes (the uniform step, or
+  // a differential lattice's at the box corner farthest from the eye), times the largest
+  // adaptive multiplier with adaptive sampling.
+  const int visits = r.virtual_samples > 0 ? 2 : (r.classification != Classification::Post ? 1 : 0);
+  const int multiplier = r.adaptive ? kMaxAdaptiveMultiplier : 1;
+  if (visits > 0)
+    ghost += int(std::ceil(visits * multiplier * longest_step(plan_sampling(s), s) / s.min_spacing - 1e-9));
   return ghost;
+}
+
+MacrocellShare brick_macrocell_share(const Volume& voxels, const Brick& brick, const Index3& dims,
+                                     FilterSupport support) {
+  const auto [lo, hi] = counted_box(brick, dims);
+  return macrocell_share(voxels, Dims{dims[0], dims[1], dims[2]}, Dims{lo[0], lo[1], lo[2]}, Dims{hi[0], hi[1], hi[2]},
+                         support);
 }
 
 render::Brick frame_brick(const Brick& b, const Index3& dims) {

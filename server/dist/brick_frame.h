@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/image.h"
+#include "core/macrocell_share.h"
 #include "core/scene.h"
 #include "render/brick.h"
 #include "dist/kd_split.h"
@@ -16,8 +17,14 @@ namespace peakcast::dist {
 // Ghost voxels for a scene: the filter's support and shading's gradient (ghost_voxels), plus,
 // for segment methods (preintegration, peak finding), the longest step (longest_step: a
 // differential lattice's grows with depth): a rank closes its last segment with the point one
-// step past its box.
+// step past its box; virtual samples two steps (the Catmull-Rom window); adaptive sampling
+// multiplies the step by the largest multiplier.
 int brick_ghost(const ResolvedScene& scene);
+
+// A brick's share of the whole volume's macrocell grid (core/macrocell_share.h) over the voxels
+// it counts (counted_box); `voxels` were read as the brick's region.
+MacrocellShare brick_macrocell_share(const Volume& voxels, const Brick& brick, const Index3& dims,
+                                     FilterSupport support);
 
 // The brick as Renderer::render_brick takes it; dims: the whole volume's.
 render::Brick frame_brick(const Brick& brick, const Index3& dims);

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "core/macrocell_share.h"
 #include "core/volume_io.h"
 
 namespace peakcast::dist {
@@ -23,6 +24,20 @@ int64_t count_nonfinite(const Volume& v, const Dims& lo, const Dims& hi) {
       for (int64_t i = lo[0]; i < hi[0]; ++i) n += !std::isfinite(row[i]);
     }
   return n;
+}
+
+// The whole volume's macrocell grid of a filter support, reduced from every rank's share
+// (core/macrocell_share.h): each rank then walks the cells one process walks.
+std::shared_ptr<const MacrocellGrid> reduce_grid(const Volume& v, const Brick& mine, const Index3& dims,
+                                                 FilterSupport support) {
+  const auto [lo, hi] = counted_box(mine, dims);
+  MacrocellShare s = macrocell_share(v, dims, lo, hi, support);
+  const int n = int(s.min.size());
+  MPI_Allreduce(MPI_IN_PLACE, s.min.data(), n, MPI_FLOAT, MPI_MIN, MPI_COMM_WORLD);
+  MPI_Allreduce(MPI_IN_PLACE, s.max.data(), n, MPI_FLOAT, MPI_MAX, MPI_COMM_WORLD);
+  for (std::vector<double>* sums : {&s.own, &s.sum, &s.sum2})
+    MPI_Allreduce(MPI_IN_PLACE, sums->data(), n, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+  return std::make_shared<const MacrocellGrid>(grid_from_share(s));
 }
 
 }  // namespace
@@ -114,9 +129,6 @@ BrickRead read_brick(const BrickLoadRequest& req) {
     hi = v->max_value;
     MPI_Allreduce(MPI_IN_PLACE, &lo, 1, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
     MPI_Allreduce(MPI_IN_PLACE, &hi, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
-    const std::vector<uint64_t> mine = v->box_histogram(own_lo, own_hi, lo - v->value_offset, hi - v->value_offset);
-    if (rank == 0) b.histogram.assign(mine.size(), 0);
-    MPI_Reduce(mine.data(), b.histogram.data(), int(mine.size()), MPI_UINT64_T, MPI_SUM, 0, MPI_COMM_WORLD);
     int64_t bytes = int64_t(v->byte_size());
     MPI_Allreduce(MPI_IN_PLACE, &bytes, 1, MPI_INT64_T, MPI_MAX, MPI_COMM_WORLD);
     b.max_brick_bytes = bytes;
@@ -125,6 +137,14 @@ BrickRead read_brick(const BrickLoadRequest& req) {
   }
   v->min_value = lo;
   v->max_value = hi;
+  // Every rank's brick carries the whole volume's histogram (adaptive sampling's volume
+  // standard deviation) and macrocell grids.
+  const auto [own_lo, own_hi] = counted_box(b.mine, b.dims);
+  v->histogram = v->box_histogram(own_lo, own_hi, lo - v->value_offset, hi - v->value_offset);
+  MPI_Allreduce(MPI_IN_PLACE, v->histogram.data(), int(v->histogram.size()), MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD);
+  if (!req.have_range) b.histogram = v->histogram;
+  b.cells.trilinear = reduce_grid(*v, b.mine, b.dims, FilterSupport::Trilinear);
+  b.cells.tricubic = reduce_grid(*v, b.mine, b.dims, FilterSupport::Tricubic);
   b.statistics_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_stats).count();
   b.box = VolumeBox{b.dims, spacing, origin, lo, hi};
   b.voxels = std::move(v);

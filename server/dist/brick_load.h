@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/macrocells.h"
 #include "core/scene.h"
 #include "core/volume.h"
 #include "dist/kd_split.h"
@@ -37,9 +38,10 @@ struct BrickRead {
   int ghost = 0;
   KdSplit split;
   Brick mine;
-  std::shared_ptr<Volume> voxels;  // the brick's; null when refused
-  // The whole volume's, on rank 0 (first reads only): histogram, non-finite count, the largest
-  // brick's bytes. refused: a NaN/Inf voxel under refuse_nonfinite (every rank knows).
+  std::shared_ptr<Volume> voxels;  // the brick's (with the whole volume's histogram); null when refused
+  VolumeMacrocells cells;          // the whole volume's grids, reduced from the bricks
+  // The whole volume's (first reads only): histogram, non-finite count, the largest brick's
+  // bytes. refused: a NaN/Inf voxel under refuse_nonfinite (every rank knows).
   std::vector<uint64_t> histogram;
   int64_t nonfinite = 0;
   int64_t max_brick_bytes = 0;

@@ -44,7 +44,7 @@ BrickSet make_set(BrickRead&& r, render::Renderer& renderer) {
   b.ghost = r.ghost;
   b.split = std::move(r.split);
   b.mine = r.mine;
-  b.brick = renderer.make_resident(std::move(r.voxels));
+  b.brick = renderer.make_resident(std::move(r.voxels), std::move(r.cells));
   return b;
 }
 

@@ -6,9 +6,6 @@
 namespace peakcast::render {
 
 void check_brick_scene(const ResolvedScene& s) {
-  const RenderSettings& r = s.scene.render;
-  if (r.virtual_samples > 0) throw std::invalid_argument("distributed rendering: virtual samples are not supported yet");
-  if (r.adaptive) throw std::invalid_argument("distributed rendering: adaptive sampling is not supported yet");
   if (s.ray_texture) throw std::invalid_argument("distributed rendering: ray textures are not supported yet");
 }
 
@@ -26,9 +23,9 @@ PixelRect check_brick_frame(const ResolvedScene& s, const Brick& brick, const gl
 }
 
 void check_brick_variant(const VariantKey& key) {
-  if (key.cell_dda || key.adaptive || key.virtual_samples || key.ray_texture)
+  if (key.ray_texture)
     throw std::invalid_argument("distributed rendering: this frame's variant (" + key.name() +
-                                ") walks cells or sample windows that bricks do not bound yet");
+                                ") reads a ray texture, which bricks do not draw yet");
 }
 
 }  // namespace peakcast::render

@@ -25,16 +25,18 @@ struct Brick {
   bool at_start[3] = {false, false, false}, at_end[3] = {false, false, false};
 };
 
-// What bricks cannot draw yet (virtual samples, adaptive sampling, ray textures): std::invalid_argument naming it. Callers that
-// must refuse before asking other ranks call it first; render_brick calls it too.
+// What bricks cannot draw yet (ray textures): std::invalid_argument naming it. Callers that
+// must refuse before asking other ranks call it first; render_brick calls it too. A brick's
+// resident volume carries the whole volume's macrocell grids (core/macrocell_share.h), so cell
+// walks (space skipping, adaptive multipliers, where a virtual-sample run ends) visit the
+// points one process visits.
 void check_brick_scene(const ResolvedScene& scene);
 // render_brick's checks before anything is drawn (std::invalid_argument): check_brick_scene,
 // the brick's own box inside the scene's volume box, the tile inside the image. Returns the
 // pixels to draw (`tile`, or the whole image).
 PixelRect check_brick_frame(const ResolvedScene& scene, const Brick& brick, const glm::dvec3& spacing,
                             std::optional<PixelRect> tile);
-// Once the frame's variant is chosen: those walking cells or sample windows, which bricks do
-// not bound yet (std::invalid_argument).
+// Once the frame's variant is chosen: one reading a ray texture (std::invalid_argument).
 void check_brick_variant(const VariantKey& key);
 
 }  // namespace peakcast::render

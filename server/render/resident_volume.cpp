@@ -28,9 +28,16 @@ ResidentVolume::ResidentVolume(std::shared_ptr<const Volume> volume, VolumeMacro
 
 void ResidentVolume::ensure_trilinear_grid() {
   if (cells_trilinear_) return;
+  no_brick_grid();
   const auto t1 = Clock::now();
   cells_trilinear_ = std::make_shared<const MacrocellGrid>(build_macrocells(*volume_, 0, FilterSupport::Trilinear));
   macrocell_ms_ += ms_since(t1);
+}
+
+void ResidentVolume::no_brick_grid() const {
+  if (grid_dims(*volume_) != volume_->dims())
+    throw std::invalid_argument("ResidentVolume: a brick walks the whole volume's macrocell grids, which its voxels "
+                                "cannot build: pass them (core/macrocell_share.h)");
 }
 
 const MacrocellGrid& ResidentVolume::macrocells(Filter filter) const {
@@ -40,6 +47,7 @@ const MacrocellGrid& ResidentVolume::macrocells(Filter filter) const {
   }
   if (!cells_tricubic_) {  // most views never ask for the wider filter support
     if (!volume_->has_voxels()) throw std::logic_error("ResidentVolume: no tricubic grid and no voxels to build it");
+    no_brick_grid();
     const auto t1 = Clock::now();
     cells_tricubic_ = std::make_shared<const MacrocellGrid>(build_macrocells(*volume_, 0, FilterSupport::Tricubic));
     macrocell_ms_ += ms_since(t1);

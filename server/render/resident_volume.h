@@ -20,7 +20,8 @@ class ResidentVolume {
 
   const Volume& volume() const { return *volume_; }
   std::shared_ptr<const Volume> shared() const { return volume_; }
-  // The grid of a filter's support. A missing grid is built here (trilinear: in the
+  // The grid of a filter's support: of grid_dims(volume()), the whole volume's for a brick
+  // (given, never built from the brick). A missing grid is built here (trilinear: in the
   // constructor; tricubic: at first use) on the calling thread: fine for the CLI and tests, a
   // stall for the server's render thread, which gets both from the loader.
   const MacrocellGrid& macrocells(Filter filter) const;
@@ -48,6 +49,8 @@ class ResidentVolume {
   // copy is made (it reads the voxels).
   void ensure_trilinear_grid();
   bool has_both_grids() const { return cells_trilinear_ && cells_tricubic_; }
+  // A brick (a region read) cannot build its grids from its voxels: std::invalid_argument.
+  void no_brick_grid() const;
 
   std::shared_ptr<const Volume> volume_;
   double upload_ms_ = 0.0;

@@ -51,6 +51,20 @@ double max_abs(const Image& a, const Image& b) {
   return m;
 }
 
+// The whole volume's grids from the bricks' shares (MPI: an Allreduce of the same shares).
+VolumeMacrocells global_cells(const std::vector<std::shared_ptr<Volume>>& bricks, const dist::KdSplit& split,
+                              const dist::Index3& dims) {
+  VolumeMacrocells cells;
+  for (FilterSupport support : {FilterSupport::Trilinear, FilterSupport::Tricubic}) {
+    MacrocellShare sum = dist::brick_macrocell_share(*bricks[0], split.bricks[0], dims, support);
+    for (size_t k = 1; k < bricks.size(); ++k)
+      add_share(sum, dist::brick_macrocell_share(*bricks[k], split.bricks[k], dims, support));
+    auto grid = std::make_shared<const MacrocellGrid>(grid_from_share(sum));
+    (support == FilterSupport::Trilinear ? cells.trilinear : cells.tricubic) = grid;
+  }
+  return cells;
+}
+
 double split_error(const Case& c, int ranks, const std::string& file) {
   const Volume whole = load_volume(file);
   const std::string text = std::string(R"({"volume": "v", "image": {"width": 96, "height": 80}, "render": )") +
@@ -66,7 +80,7 @@ double split_error(const Case& c, int ranks, const std::string& file) {
 
   const dist::Index3 dims{whole.dims()[0], whole.dims()[1], whole.dims()[2]};
   const dist::KdSplit split = dist::kd_split(dims, ranks, dist::brick_ghost(rs));
-  std::vector<std::vector<float>> layers;
+  std::vector<std::shared_ptr<Volume>> bricks;
   int64_t voxels = 0;
   for (const dist::Brick& b : split.bricks) {
     LoadOptions o;
@@ -74,10 +88,16 @@ double split_error(const Case& c, int ranks, const std::string& file) {
     auto brick = std::make_shared<Volume>(load_volume(file, o));
     EXPECT_EQ(brick->voxel_count(), b.voxels_read());
     voxels += brick->voxel_count();
-    brick->min_value = whole.min_value;  // the global range (MPI: an Allreduce)
+    brick->min_value = whole.min_value;  // the global range and histogram (MPI: an Allreduce)
     brick->max_value = whole.max_value;
-    auto resident = renderer.make_resident(brick);
-    layers.push_back(renderer.render_brick(*resident, rs, dist::frame_brick(b, dims)).rgba);
+    brick->histogram = whole.histogram;
+    bricks.push_back(brick);
+  }
+  const VolumeMacrocells cells = global_cells(bricks, split, dims);
+  std::vector<std::vector<float>> layers;
+  for (size_t k = 0; k < bricks.size(); ++k) {
+    auto resident = renderer.make_resident(bricks[k], cells);
+    layers.push_back(renderer.render_brick(*resident, rs, dist::frame_brick(split.bricks[k], dims)).rgba);
   }
   EXPECT_GE(voxels, whole.voxel_count());
   const glm::dvec3 eye = (rs.camera.eye - whole.origin) / whole.spacing;
@@ -155,6 +175,48 @@ TEST(Bricks, RealSamplesEqualOneProcess) {
     check_all_splits({"", R"({"step": 1, "classification": "preint"})", "", axis}, kData + "nucleon.nhdr");
 }
 
+// Virtual samples and adaptive sampling walk the whole volume's macrocells (the grids reduced
+// from the bricks' shares): the points visited, where a virtual-sample run ends (its end
+// sample repeated) and each cell's multiplier are one process's. A brick samples the visit
+// before its first owned one and two after its last (the Catmull-Rom window), and draws the
+// samples of the segments it owns. Blobs have empty space, so runs end inside the volume.
+TEST(Bricks, VirtualSamplesEqualOneProcess) {
+  const std::string ml = generated(GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32, {1, 1, 1});
+  const std::string ml_tf = R"([[0, 0.2, 0.4, 1, 0], [0.45, 0.2, 0.4, 1, 0], [0.5, 1, 0.8, 0.3, 0.8], [0.55, 0.2, 0.4, 1, 0], [1, 0.2, 0.4, 1, 0.05]])";
+  const std::string ml_cam = R"({"eye": [90, 70, 110], "center": [20, 20, 20], "up": [0, 1, 0], "fov_y": 30})";
+  for (const char* r : {R"({"step": 1.5, "virtual_samples": 3})", R"({"step": 2, "virtual_samples": 7, "classification": "preint"})",
+                        R"({"step": 2, "virtual_samples": 3, "classification": "peaks"})",
+                        R"({"step": 2, "virtual_samples": 3, "classification": "peaks", "peak_mode": "xor"})",
+                        R"({"step": 1.5, "virtual_samples": 3, "filter": "tricubic", "shading": true})",
+                        R"({"step": 2, "virtual_samples": 3, "space_skipping": false, "classification": "preint"})",
+                        R"({"sampling": "differential", "s_k": 2, "virtual_samples": 3, "classification": "peaks"})"})
+    check_all_splits({"", r, ml_tf, ml_cam}, ml);
+  std::filesystem::remove(ml);
+  const std::string blobs = generated(GeneratorKind::Blobs, {48, 40, 36}, SourceType::U8, {0.8, 1.0, 1.7});
+  const std::string blob_cam = R"({"eye": [-40, 90, -30], "center": [19, 19, 30], "up": [0, 0, 1], "fov_y": 35})";
+  const std::string blob_tf = R"([[0, 0, 0, 0, 0], [60, 0.9, 0.5, 0.2, 0], [120, 0.9, 0.5, 0.2, 0.4], [255, 1, 1, 1, 0.9]])";
+  for (const char* r : {R"({"step": 1, "virtual_samples": 3})", R"({"step": 1.7, "virtual_samples": 3, "classification": "preint"})",
+                        R"({"step": 1, "virtual_samples": 7, "shading": true})"})
+    check_all_splits({"", r, blob_tf, blob_cam}, blobs);
+  std::filesystem::remove(blobs);
+  check_all_splits({"", R"({"step": 1, "virtual_samples": 3, "classification": "peaks"})",
+                    R"([[0, 0, 0, 0, 0], [100, 0, 0, 0, 0], [100.5, 1, 0.6, 0.2, 1], [101, 0, 0, 0, 0], [255, 0, 0, 0, 0]])", ""},
+                   kData + "heptane_151.nrrd");
+}
+
+TEST(Bricks, AdaptiveSamplingEqualsOneProcess) {
+  const std::string blobs = generated(GeneratorKind::Blobs, {48, 40, 36}, SourceType::U8, {0.8, 1.0, 1.7});
+  const std::string blob_cam = R"({"eye": [-40, 90, -30], "center": [19, 19, 30], "up": [0, 0, 1], "fov_y": 35})";
+  const std::string blob_tf = R"([[0, 0, 0, 0, 0], [60, 0.9, 0.5, 0.2, 0], [120, 0.9, 0.5, 0.2, 0.4], [255, 1, 1, 1, 0.9]])";
+  for (const char* r : {R"({"step": 0.5, "adaptive": true})", R"({"step": 0.7, "adaptive": true, "classification": "preint"})",
+                        R"({"step": 0.5, "adaptive": true, "classification": "peaks"})",
+                        R"({"step": 0.7, "adaptive": true, "virtual_samples": 3, "shading": true})",
+                        R"({"step": 0.5, "adaptive": true, "space_skipping": false})"})
+    check_all_splits({"", r, blob_tf, blob_cam}, blobs);
+  std::filesystem::remove(blobs);
+  check_all_splits({"", R"({"step": 0.5, "adaptive": true, "classification": "preint"})", "", ""}, kData + "nucleon.nhdr");
+}
+
 TEST(Bricks, RefuseWhatBricksCannotDrawYet) {
   const std::string file = kData + "nucleon.nhdr";
   auto v = std::make_shared<Volume>(load_volume(file));
@@ -162,14 +224,22 @@ TEST(Bricks, RefuseWhatBricksCannotDrawYet) {
   auto resident = renderer.make_resident(v);
   const dist::Index3 dims{v->dims()[0], v->dims()[1], v->dims()[2]};
   const auto split = dist::kd_split(dims, 2, 3);
-  for (const char* r : {R"({"virtual_samples": 3})", R"({"adaptive": true})"}) {
-    const ResolvedScene rs = resolve_scene(parse_scene_text(std::string(R"({"volume": "v", "render": )") + r + "}"), *v);
-    try {
-      renderer.render_brick(*resident, rs, dist::frame_brick(split.bricks[0], dims));
-      ADD_FAILURE() << r << " was drawn";
-    } catch (const std::invalid_argument& e) {
-      EXPECT_NE(std::string(e.what()).find("distributed rendering"), std::string::npos) << e.what();
-    }
+  const ResolvedScene rs = resolve_scene(
+      parse_scene_text(R"({"volume": "v", "render": {"ray_texture": {"mapping": "view", "size": [16, 16]}}})"), *v);
+  try {
+    renderer.render_brick(*resident, rs, dist::frame_brick(split.bricks[0], dims));
+    ADD_FAILURE() << "a ray texture was drawn on a brick";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("distributed rendering: ray textures"), std::string::npos) << e.what();
+  }
+  // A brick cannot build its grids from its own voxels: they are the whole volume's (given).
+  LoadOptions o;
+  o.region = VoxelRegion{split.bricks[0].read_lo, split.bricks[0].read_hi};
+  try {
+    renderer.make_resident(std::make_shared<Volume>(load_volume(file, o)));
+    ADD_FAILURE() << "a brick was made resident without the whole volume's grids";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("whole volume's macrocell grids"), std::string::npos) << e.what();
   }
   render::Brick outside = dist::frame_brick(split.bricks[0], dims);
   outside.own_hi[0] = double(dims[0]) + 5;

@@ -75,6 +75,14 @@ SCENES = [
           ML_CAM),
     scene("head_mr_preint", HEAD, {"step": 0.5, "classification": "preint"}, HEAD_TF),
     scene("head_mr_peaks_shaded", HEAD, {"step": 1, "classification": "peaks", "shading": True}, HEAD_TF),
+    # Virtual samples and adaptive sampling: the ranks walk the whole volume's macrocells
+    # (reduced from the bricks), and a brick reads the Catmull-Rom window across its faces.
+    scene("ml_vs_preint", ML, {"step": 2, "virtual_samples": 3, "classification": "preint"}, ML_TF, ML_CAM),
+    scene("heptane_vs_dirac_peaks", HEPTANE, {"step": 2, "virtual_samples": 3, "classification": "peaks"}, HEPTANE_TF,
+          HEPTANE_CAM),
+    scene("ml_adaptive_peaks", ML, {"step": 0.5, "adaptive": True, "classification": "peaks"}, ML_TF, ML_CAM),
+    scene("head_mr_adaptive_vs_shaded", HEAD, {"step": 0.7, "adaptive": True, "virtual_samples": 3, "shading": True},
+          HEAD_TF),
 ]
 
 
@@ -149,7 +157,7 @@ def test_a_rank_that_fails_to_read_ends_the_job():
 
 
 def test_refusals_name_what_bricks_cannot_draw():
-    for render, words in (({"virtual_samples": 3}, "virtual samples"), ({"adaptive": True}, "adaptive")):
+    for render, words in (({"ray_texture": {"mapping": "view", "size": [16, 16]}}, "ray textures"),):
         s = scene("refused", ML, render, ML_TF, ML_CAM)
         r = mpi(2, "render", s, "-o", TMP / "refused.png", timeout=120, check=False)
         assert r.returncode == 2 and words in r.stderr, (render, r.returncode, r.stderr)
@@ -172,7 +180,7 @@ def test_gl_ranks_equal_one_process():
     # The GL ray caster's BRICK variant (one GPU per rank; llvmpipe here) against one process.
     worst = 0.0
     for s, ranks in ((SCENES[0], (2, 3)), (SCENES[1], (2,)), (SCENES[2], (2, 3)), (SCENES[3], (2,)), (SCENES[5], (2,)),
-                     (SCENES[7], (2,)), (SCENES[8], (2,)), (SCENES[10], (2,))):
+                     (SCENES[7], (2,)), (SCENES[8], (2,)), (SCENES[10], (2,)), (SCENES[11], (2,)), (SCENES[13], (2,))):
         one = TMP / f"{s.stem}_gl1.png"  # one process on the same backend
         run([PEAKCAST, "render", s, "-o", one, "--backend", "gl"])
         for n in ranks:

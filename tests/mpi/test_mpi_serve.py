@@ -225,11 +225,16 @@ def main():
         checks.append(("the stream: interactive frames, then a final equal to the one-process server's (<= 1 level)",
                        interactive > 0 and diff <= 1, (interactive, diff)))
 
-        bad = dict(scene, render=dict(RENDER, virtual_samples=3))
+        vs = dict(scene, render=dict(RENDER, virtual_samples=3, adaptive=True))
+        status, variant, cmp = still_against_one_process(srv, vs, DATA / "heptane_151.nrrd", tmp, "vs")
+        checks.append(("virtual samples with adaptive sampling: REST still equals peakcast render within 1/255",
+                       status == 200 and "2ranks" in variant and cmp["max_abs"] <= 1 / 255 + 1e-6,
+                       (status, variant, cmp)))
+        bad = dict(scene, render=dict(RENDER, ray_texture={"mapping": "view", "size": [16, 16]}))
         status, _, body = http(srv, "/api/render", "POST", json.dumps(bad).encode())
         status2, _, _ = http(srv, "/api/render", "POST", json.dumps(scene).encode())
-        checks.append(("bricks refuse virtual samples by name, and the job goes on",
-                       status >= 400 and b"virtual samples" in body and status2 == 200 and srv.alive(), (status, body[:200])))
+        checks.append(("bricks refuse ray textures by name, and the job goes on",
+                       status >= 400 and b"ray textures" in body and status2 == 200 and srv.alive(), (status, body[:200])))
         tiff = dict(scene, volume="stack.tif", camera=None)
         tiff.pop("camera")
         status, _, body = http(srv, "/api/render", "POST", json.dumps(tiff).encode())

@@ -1,0 +1,38 @@
+// Distributed rendering (docs/distributed.md): the whole volume's macrocell grids built from its
+// bricks, so that a rank holding one brick walks the same cells as one process holding the
+// volume (space skipping's leaps, adaptive multipliers, where a virtual-sample run ends). Each
+// brick adds what its counted voxels (dist::counted_box: every voxel counted by exactly one
+// brick) contribute to each cell's footprint; the shares combine by min, max and sums (an
+// MPI_Allreduce, or add_share in one process), and grid_from_share finishes the grid
+// build_macrocells would have built from the whole volume: the same min/max, the standard
+// deviation up to the order of its sums.
+#pragma once
+
+#include <vector>
+
+#include "core/macrocells.h"
+#include "core/volume.h"
+
+namespace peakcast {
+
+struct MacrocellShare {
+  int cell = 8;
+  Dims grid{0, 0, 0};
+  FilterSupport support = FilterSupport::Trilinear;
+  // Per cell (MacrocellGrid::index): the footprint's extremes over this share's voxels
+  // (+inf/-inf where it has none, physical values) and its own voxels' count, sum, sum of squares.
+  std::vector<float> min, max;
+  std::vector<double> own, sum, sum2;
+};
+
+// A brick's share. `brick` was read as a region of a volume of `whole` dims (region_lo: its
+// first voxel there); it counts the voxels [count_lo, count_hi) in its own coordinates.
+// std::invalid_argument when the counted box is not inside the brick or the whole volume.
+MacrocellShare macrocell_share(const Volume& brick, const Dims& whole, const Dims& count_lo, const Dims& count_hi,
+                               FilterSupport support);
+// Adds `other` (of the same grid) into `into`: min of the minima, max of the maxima, sums.
+void add_share(MacrocellShare& into, const MacrocellShare& other);
+// The grid once every brick's share has been added. std::invalid_argument when a cell got no voxels.
+MacrocellGrid grid_from_share(const MacrocellShare& share);
+
+}  // namespace peakcast
