@@ -152,6 +152,13 @@ bool clip_to_brick(Ray r, Lattice L, vec2 span, inout int last) {
   return true;
 }
 
+#ifdef RAY_TEXTURE
+// The opacity the bricks in front composited, per pixel of the drawn rect (rows of
+// u_brick_half.w pixels; 0: the front brick, none): a ray texture's termination is of the
+// opacity over them (render/brick.h Brick::front_opacity).
+layout(std430, binding = SSBO_FRONT_OPACITY) readonly buffer FrontOpacity { float u_front_opacity[]; };
+#endif
+
 // The last visits before the owned points, held back unsampled (index -1: none), newest in .x:
 // sampled only when they lead to the first owned visit without a gap (the look-behind xor's
 // segment into it needs, and with virtual samples the window of the segment before it, whose
@@ -428,6 +435,17 @@ RayResult cast_ray(vec2 pixel) {
     res.samples = -1.0;
     return res;
   }
+#ifdef RAY_TEXTURE
+  if (u_brick_half.w > 0.0) {
+    ivec2 p = ivec2(pixel) - u_image.zw;
+    float a = u_front_opacity[p.y * int(u_brick_half.w) + p.x];
+    if (a >= g_stop) {  // reached in front: one process stopped there
+      res.samples = -1.0;
+      return res;
+    }
+    g_stop = (g_stop - a) / (1.0 - a);  // a + (1 - a) * acc >= stop
+  }
+#endif
 #endif
   // A brick starts where the points it samples before its own (g_behind: one, or two with
   // virtual samples) are visited as in one process: at them (a walk over every point), one

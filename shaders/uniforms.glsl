@@ -15,7 +15,7 @@ layout(std140, binding = UBO_RAY) uniform RayUniforms {
   ivec4 u_image;     // x, y: full image size in pixels; z, w: first pixel of this draw (tile)
   vec4 u_peaks;      // x: peak-table bins; y: layers; z: max peaks per segment; w: secant iterations
   vec4 u_tables;     // x: preintegration table size; y: TF point count (exact TF at peaks); z: differential k; w: minimum step
-  vec4 u_brick_half; // BRICK: xyz: what voxel_coords adds (half the box less the brick's first voxel, world)
+  vec4 u_brick_half; // BRICK: xyz: what voxel_coords adds (half the box less the brick's first voxel, world); w: front opacity's row width (0: none)
   vec4 u_own_lo;     // BRICK: xyz: the owned box's low corner (whole-volume voxels); w: axes without that bound (bits)
   vec4 u_own_hi;     // BRICK: xyz: its high corner; w: likewise
 };

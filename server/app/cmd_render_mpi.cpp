@@ -27,6 +27,7 @@
 #include "dist/kd_split.h"
 #include "dist/coordinator.h"
 #include "dist/mpi_renderer.h"
+#include "dist/opacity_chain.h"
 #include "encode/png.h"
 #include "render/backend.h"
 
@@ -125,12 +126,16 @@ int run(const MpiRenderArgs& a, int rank, int size) {
                                   "--backend cpu");
   }
   auto resident = renderer.make_resident(brick, read.cells);
-  render::RenderStats st;
-  const Image layer = renderer.render_brick(*resident, scene, dist::frame_brick(mine, dims), &st);
-
   const glm::dvec3 eye = (scene.camera.eye - box.origin) / box.spacing;
   const glm::dvec3 dir = glm::normalize((scene.camera.center - scene.camera.eye) / box.spacing);
   const std::vector<int> order = dist::visibility_order(split, eye, dir, scene.camera.orthographic);
+  render::Brick frame = dist::frame_brick(mine, dims);
+  // A ray texture's termination: the ranks draw in turn, front to back (dist/opacity_chain.h).
+  const size_t pixels = size_t(scene.scene.width) * size_t(scene.scene.height);
+  if (scene.ray_texture) frame.front_opacity = dist::receive_front_opacity(order, pixels);
+  render::RenderStats st;
+  const Image layer = renderer.render_brick(*resident, scene, frame, &st);
+  if (scene.ray_texture) dist::send_opacity_behind(order, frame.front_opacity.get(), layer.rgba);
   dist::IceTCompositor compositor(MPI_COMM_WORLD, 0);
   dist::CompositeTiming timing;
   const std::vector<float> composed = compositor.composite(layer.rgba, layer.width, layer.height, order, &timing);

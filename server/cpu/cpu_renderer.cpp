@@ -288,8 +288,13 @@ Image CpuRenderer::render_brick(const render::ResidentVolume& v, const ResolvedS
   const int w = rect.w, h = rect.h;
   if (stats) *stats = RenderStats{};
   CpuFrame f = prepare(cv, s, render::GpuPath::Fragment, stats);
-  render::check_brick_variant(f.key);
   f.brick = true;
+  if (brick.front_opacity && f.ray_texture) {
+    f.front_opacity = brick.front_opacity->data();
+    f.rect_x = rect.x;
+    f.rect_y = rect.y;
+    f.rect_w = rect.w;
+  }
   f.sample_half = f.box_half - glm::vec3(brick.read_lo * spacing);
   f.own_lo = glm::vec3(brick.own_lo);
   f.own_hi = glm::vec3(brick.own_hi);
@@ -297,7 +302,7 @@ Image CpuRenderer::render_brick(const render::ResidentVolume& v, const ResolvedS
     f.at_start[a] = brick.at_start[a];
     f.at_end[a] = brick.at_end[a];
   }
-  f.stop = 1.f;  // until opaque
+  f.stop = 1.f;  // until opaque (a ray texture's termination is per ray: setup)
   Image img(w, h);
   const auto t0 = Clock::now();
   for_each_row(rect, [&](int x0, int x1, int y) {

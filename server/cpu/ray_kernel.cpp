@@ -304,6 +304,14 @@ bool RayCaster::setup(float px, float py) {
     res_.samples = -1.f;
     return false;
   }
+  if (f_.front_opacity) {  // a ray texture's termination, of the opacity over the bricks in front
+    const float a = f_.front_opacity[size_t(int(py) - f_.rect_y) * size_t(f_.rect_w) + size_t(int(px) - f_.rect_x)];
+    if (a >= stop_) {  // reached in front: one process stopped there
+      res_.samples = -1.f;
+      return false;
+    }
+    stop_ = (stop_ - a) / (1.f - a);  // a + (1 - a) * acc >= stop
+  }
   return true;
 }
 

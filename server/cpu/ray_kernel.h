@@ -37,6 +37,10 @@ struct CpuFrame {
   bool brick = false;
   glm::vec3 own_lo{0}, own_hi{0};
   bool at_start[3] = {false, false, false}, at_end[3] = {false, false, false};
+  // Ray textures on a brick: the opacity in front of it per pixel of the drawn rect (rect_x,
+  // rect_y: its first pixel; rect_w its width); null for the front brick (render/brick.h).
+  const float* front_opacity = nullptr;
+  int rect_x = 0, rect_y = 0, rect_w = 0;
   float step = 1;  // the uniform step
   glm::vec3 spacing{1}, inv_spacing{1};
   float stop = 1;  // early-termination opacity

@@ -16,10 +16,27 @@ int brick_ghost(const ResolvedScene& s) {
   // a differential lattice's at the box corner farthest from the eye), times the largest
   // adaptive multiplier with adaptive sampling.
   const int visits = r.virtual_samples > 0 ? 2 : (r.classification != Classification::Post ? 1 : 0);
-  const int multiplier = r.adaptive ? kMaxAdaptiveMultiplier : 1;
+  const double multiplier = (r.adaptive ? kMaxAdaptiveMultiplier : 1) * max_step_multiplier(s.ray_texture.get());
   if (visits > 0)
     ghost += int(std::ceil(visits * multiplier * longest_step(plan_sampling(s), s) / s.min_spacing - 1e-9));
   return ghost;
+}
+
+double max_step_multiplier(const RayTextureSpec* t) {
+  if (!t) return 1.0;
+  if (!t->png.empty()) return kMaxStepMultiplier;
+  for (const Stroke& st : t->strokes)
+    if (st.channel == RayChannel::Step) return kMaxStepMultiplier;
+  return 1.0;
+}
+
+std::vector<float> opacity_over(const std::vector<float>* front, const std::vector<float>& rgba) {
+  std::vector<float> out(rgba.size() / 4);
+  for (size_t p = 0; p < out.size(); ++p) {
+    const float a = front ? (*front)[p] : 0.f;
+    out[p] = a + (1.f - a) * rgba[p * 4 + 3];
+  }
+  return out;
 }
 
 MacrocellShare brick_macrocell_share(const Volume& voxels, const Brick& brick, const Index3& dims,

@@ -18,13 +18,22 @@ namespace peakcast::dist {
 // for segment methods (preintegration, peak finding), the longest step (longest_step: a
 // differential lattice's grows with depth): a rank closes its last segment with the point one
 // step past its box; virtual samples two steps (the Catmull-Rom window); adaptive sampling
-// multiplies the step by the largest multiplier.
+// and a ray texture's step channel multiply the step by their largest multipliers.
 int brick_ghost(const ResolvedScene& scene);
 
 // A brick's share of the whole volume's macrocell grid (core/macrocell_share.h) over the voxels
 // it counts (counted_box); `voxels` were read as the brick's region.
 MacrocellShare brick_macrocell_share(const Volume& voxels, const Brick& brick, const Index3& dims,
                                      FilterSupport support);
+
+// A ray texture's largest step multiplier: kMaxStepMultiplier when it has a PNG or a stroke on
+// the step channel, else 1 (the ghosts hold that many steps); 1 without a texture.
+double max_step_multiplier(const RayTextureSpec* texture);
+
+// Ray textures (render/brick.h Brick::front_opacity): the opacity over a brick's layer (RGBA,
+// premultiplied) of the bricks in front of it (null: none), per pixel: what the brick behind
+// it gets.
+std::vector<float> opacity_over(const std::vector<float>* front, const std::vector<float>& rgba);
 
 // The brick as Renderer::render_brick takes it; dims: the whole volume's.
 render::Brick frame_brick(const Brick& brick, const Index3& dims);

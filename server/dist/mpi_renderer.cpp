@@ -13,6 +13,8 @@
 
 #include "core/volume_io.h"
 #include "dist/brick_frame.h"
+#include "dist/opacity_chain.h"
+#include "dist/ray_texture_sync.h"
 #include "dist/coordinator.h"
 #include "dist/icet_compositor.h"
 #include "dist/kd_split.h"
@@ -70,11 +72,15 @@ struct Composited {
 Composited render_composite(BrickSet& b, const ResolvedScene& rs, const render::PixelRect& rect, bool samples,
                             render::Renderer& renderer, IceTCompositor& icet) {
   Composited c;
-  const Image layer = renderer.render_brick(*b.brick, rs, frame_brick(b.mine, b.dims), &c.stats, rect);
   const glm::dvec3 eye = (rs.camera.eye - b.box.origin) / b.box.spacing;
   const glm::dvec3 dir = glm::normalize((rs.camera.center - rs.camera.eye) / b.box.spacing);
+  const std::vector<int> order = visibility_order(b.split, eye, dir, rs.camera.orthographic);
+  render::Brick brick = frame_brick(b.mine, b.dims);
+  if (rs.ray_texture) brick.front_opacity = receive_front_opacity(order, size_t(rect.w) * size_t(rect.h));
+  const Image layer = renderer.render_brick(*b.brick, rs, brick, &c.stats, rect);
+  if (rs.ray_texture) send_opacity_behind(order, brick.front_opacity.get(), layer.rgba);
   CompositeTiming t;
-  c.rgba = icet.composite(layer.rgba, layer.width, layer.height, visibility_order(b.split, eye, dir, rs.camera.orthographic), &t);
+  c.rgba = icet.composite(layer.rgba, layer.width, layer.height, order, &t);
   c.composite_ms = t.ms;
   if (samples) {
     std::vector<float> mine(layer.samples.size());
@@ -85,8 +91,23 @@ Composited render_composite(BrickSet& b, const ResolvedScene& rs, const render::
   return c;
 }
 
-ResolvedScene scene_of(const nlohmann::json& j, const VolumeBox& box) {
-  ResolvedScene rs = resolve_scene(parse_scene(j.at("scene")), box);
+// A render command's payload (CBOR: a ray texture's PNG texels go as binary): the scene without
+// its ray texture, which goes as what the workers lack of it (dist/ray_texture_sync.h).
+std::string render_command(const ResolvedScene& s, const render::PixelRect& rect, bool samples,
+                           RayTextureSender& textures) {
+  nlohmann::json scene = scene_to_json(s.scene);
+  nlohmann::json j = {{"step", s.step}, {"rect", {rect.x, rect.y, rect.w, rect.h}}, {"samples", samples}};
+  if (scene.contains("render")) scene["render"].erase("ray_texture");
+  if (s.ray_texture) j["ray_texture"] = textures.message(*s.ray_texture);
+  j["scene"] = std::move(scene);
+  const std::vector<uint8_t> cbor = nlohmann::json::to_cbor(j);
+  return std::string(cbor.begin(), cbor.end());
+}
+
+ResolvedScene scene_of(const nlohmann::json& j, const VolumeBox& box, RayTextureReceiver& textures) {
+  Scene scene = parse_scene(j.at("scene"));
+  if (j.contains("ray_texture")) scene.render.ray_texture = textures.apply(j.at("ray_texture"));
+  ResolvedScene rs = resolve_scene(scene, box);
   rs.step = j.at("step");  // interactive frames take a longer step than the scene's
   return rs;
 }
@@ -113,6 +134,7 @@ struct MpiRenderer::Impl {
   std::unique_ptr<render::Renderer> local;
   render::Renderer& renderer;
   std::unique_ptr<IceTCompositor> icet;  // icet_of
+  RayTextureSender ray_textures;         // under the coordinator's lock, as every send
 };
 
 class MpiRenderer::Resident : public render::ResidentVolume {
@@ -191,7 +213,6 @@ render::RenderResult MpiRenderer::render(const render::ResidentVolume& v, const 
                                          const render::RenderRequest& req, render::RenderStats* stats) {
   auto* res = dynamic_cast<const Resident*>(&v);
   if (!res) throw std::invalid_argument("the MPI renderer draws its own volumes only");
-  render::check_brick_scene(s);  // before any rank is asked
   const render::PixelRect rect = req.tile.value_or(render::PixelRect{0, 0, s.scene.width, s.scene.height});
   render::check_rect(rect, s.scene.width, s.scene.height);
   auto& bricks = const_cast<Resident*>(res)->bricks;
@@ -212,10 +233,7 @@ render::RenderResult MpiRenderer::render(const render::ResidentVolume& v, const 
     }
   }
   try {
-    c.send(held, kRender, res->id(),
-           nlohmann::json{{"scene", scene_to_json(s.scene)}, {"step", s.step},
-                          {"rect", {rect.x, rect.y, rect.w, rect.h}}, {"samples", want_samples}}
-               .dump());
+    c.send(held, kRender, res->id(), render_command(s, rect, want_samples, impl_->ray_textures));
     Composited comp = render_composite(bricks, s, rect, want_samples, impl_->renderer, icet_of(impl_->icet));
     Image img = finish_composite(comp.rgba, rect.w, rect.h, s.scene.background);
     render::RenderResult out;
@@ -268,6 +286,7 @@ void serve_worker(render::Renderer& renderer) {
   try {
     std::unique_ptr<IceTCompositor> icet;  // icet_of
     std::map<int64_t, BrickSet> volumes;
+    RayTextureReceiver ray_textures;
     for (;;) {
       CommandMessage m;
       broadcast(m);
@@ -280,13 +299,13 @@ void serve_worker(render::Renderer& renderer) {
                                    ": every rank needs the same (pass --backend gl or --backend cpu)");
         continue;
       }
-      const nlohmann::json j = nlohmann::json::parse(m.payload);
+      const nlohmann::json j = m.cmd == kRender ? nlohmann::json::from_cbor(m.payload) : nlohmann::json::parse(m.payload);
       if (m.cmd == kLoad) {
         BrickRead r = read_brick(BrickLoadRequest::from_json(j));
         if (!r.refused && !r.failed) volumes[m.id] = make_set(std::move(r), renderer);  // else rank 0 says why
       } else if (m.cmd == kRender) {
         BrickSet& b = volumes.at(m.id);
-        render_composite(b, scene_of(j, b.box), rect_of(j), j.at("samples"), renderer, icet_of(icet));
+        render_composite(b, scene_of(j, b.box, ray_textures), rect_of(j), j.at("samples"), renderer, icet_of(icet));
       } else {
         throw std::runtime_error("unknown command " + std::to_string(m.cmd) + " from rank 0");
       }

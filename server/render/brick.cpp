@@ -5,13 +5,8 @@
 
 namespace peakcast::render {
 
-void check_brick_scene(const ResolvedScene& s) {
-  if (s.ray_texture) throw std::invalid_argument("distributed rendering: ray textures are not supported yet");
-}
-
 PixelRect check_brick_frame(const ResolvedScene& s, const Brick& brick, const glm::dvec3& spacing,
                             std::optional<PixelRect> tile) {
-  check_brick_scene(s);
   for (int a = 0; a < 3; ++a) {
     const double whole = (s.box_max[a] - s.box_min[a]) / spacing[a];
     if (!(brick.own_lo[a] >= 0 && brick.own_lo[a] < brick.own_hi[a] && brick.own_hi[a] <= whole + 1e-9))
@@ -19,13 +14,10 @@ PixelRect check_brick_frame(const ResolvedScene& s, const Brick& brick, const gl
   }
   const PixelRect rect = tile.value_or(PixelRect{0, 0, s.scene.width, s.scene.height});
   check_rect(rect, s.scene.width, s.scene.height);
+  if (brick.front_opacity && brick.front_opacity->size() != size_t(rect.w) * size_t(rect.h))
+    throw std::invalid_argument("render_brick: the front opacity holds " + std::to_string(brick.front_opacity->size()) +
+                                " values for " + std::to_string(rect.w) + "x" + std::to_string(rect.h) + " pixels");
   return rect;
-}
-
-void check_brick_variant(const VariantKey& key) {
-  if (key.ray_texture)
-    throw std::invalid_argument("distributed rendering: this frame's variant (" + key.name() +
-                                ") reads a ray texture, which bricks do not draw yet");
 }
 
 }  // namespace peakcast::render

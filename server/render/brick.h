@@ -3,12 +3,15 @@
 // the scene is resolved against the whole volume (its box, camera and sample lattice). Every
 // backend renders the brick's part of each ray: premultiplied RGBA, transparent where the ray
 // owns no lattice point here, no background (the compositor puts it under the ranks' layers),
-// rays running until opaque (no rank sees the opacity in front of its brick).
+// rays running until opaque: no rank sees the opacity in front of its brick, except with a ray
+// texture, whose per-ray early termination needs it (Brick::front_opacity).
 #pragma once
 
 #include <glm/vec3.hpp>
 
+#include <memory>
 #include <optional>
+#include <vector>
 
 #include "core/scene.h"
 #include "core/volume.h"
@@ -23,20 +26,19 @@ struct Brick {
   // own_lo is the volume's first voxel, own_hi its last, on that axis: no bound there (every
   // lattice point lies in the volume's box; rounding may put the first or last a hair outside).
   bool at_start[3] = {false, false, false}, at_end[3] = {false, false, false};
+  // Ray textures: the opacity the bricks in front of this one composited, per pixel of the
+  // drawn rect (row-major); null for the front brick. A ray whose front opacity reaches its
+  // termination draws nothing here, the others stop where their opacity over it reaches it.
+  std::shared_ptr<const std::vector<float>> front_opacity;
 };
 
-// What bricks cannot draw yet (ray textures): std::invalid_argument naming it. Callers that
-// must refuse before asking other ranks call it first; render_brick calls it too. A brick's
-// resident volume carries the whole volume's macrocell grids (core/macrocell_share.h), so cell
-// walks (space skipping, adaptive multipliers, where a virtual-sample run ends) visit the
-// points one process visits.
-void check_brick_scene(const ResolvedScene& scene);
-// render_brick's checks before anything is drawn (std::invalid_argument): check_brick_scene,
-// the brick's own box inside the scene's volume box, the tile inside the image. Returns the
-// pixels to draw (`tile`, or the whole image).
+// render_brick's checks before anything is drawn (std::invalid_argument): the brick's own box
+// inside the scene's volume box, the tile inside the image, the front opacity one value per
+// pixel of it. Returns the pixels to draw (`tile`, or the whole image). A brick's resident
+// volume carries the whole volume's macrocell grids (core/macrocell_share.h), so cell walks
+// (space skipping, adaptive multipliers, where a virtual-sample run ends) visit the points one
+// process visits: every scene one process draws, bricks draw.
 PixelRect check_brick_frame(const ResolvedScene& scene, const Brick& brick, const glm::dvec3& spacing,
                             std::optional<PixelRect> tile);
-// Once the frame's variant is chosen: one reading a ray texture (std::invalid_argument).
-void check_brick_variant(const VariantKey& key);
 
 }  // namespace peakcast::render

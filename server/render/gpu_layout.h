@@ -29,7 +29,8 @@ struct RayUniforms {
   glm::vec4 tables;
   // Bricks (render/brick.h), whole-volume voxel coordinates: xyz of brick_half: the offset
   // voxel_coords adds (box_half - read_lo * spacing); own_lo/own_hi: the owned box, w: the
-  // axes (bits 0-2) on which it has no bound (the volume's own faces).
+  // axes (bits 0-2) on which it has no bound (the volume's own faces). brick_half.w: the width
+  // of the front opacity's rows (ray textures; 0: none).
   glm::vec4 brick_half;
   glm::vec4 own_lo;
   glm::vec4 own_hi;

@@ -44,6 +44,8 @@ RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const Mac
     u.own_lo = glm::vec4(glm::vec3(brick->own_lo), open_lo);
     u.own_hi = glm::vec4(glm::vec3(brick->own_hi), open_hi);
     u.dims.w = 1.f;  // until opaque: no rank sees the opacity in front of its brick
+    // Ray textures: the width of the front opacity's rows (0: none, the front brick).
+    if (brick->front_opacity) u.brick_half.w = float(rect.w);
   }
   return u;
 }
@@ -54,6 +56,7 @@ Raycaster::Raycaster(gpu::ShaderCache& shaders) : shaders_(shaders) {
   const char* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
   llvmpipe_ = renderer && std::string(renderer).find("llvmpipe") != std::string::npos;
   ubo_ = gpu::make_buffer();
+  front_opacity_ = gpu::make_buffer();
   glNamedBufferStorage(ubo_.id(), sizeof(RayUniforms), nullptr, GL_DYNAMIC_STORAGE_BIT);
   vao_ = gpu::make_vertex_array();
 }
@@ -136,7 +139,6 @@ Image Raycaster::render_brick(const ResidentVolume& v, const ResolvedScene& s, c
   const PixelRect rect = check_brick_frame(s, brick, gv.volume().spacing, tile);
   if (stats) *stats = RenderStats{};
   VariantKey key = prepare(gv, s, GpuPath::Fragment, stats);
-  check_brick_variant(key);
   key.brick = true;
   key.rgb8 = false;
   return std::move(draw(gv, s, key, rect, true, stats, &brick).image);
@@ -222,6 +224,11 @@ RenderResult Raycaster::draw(const GpuVolume& gv, const ResolvedScene& s, const 
   glNamedBufferSubData(ubo_.id(), 0, sizeof u, &u);
   glBindBufferBase(GL_UNIFORM_BUFFER, kUboRay, ubo_.id());
   gv.bind(kUnitVolume);  // the TF table and the other per-TF tables were bound by prepare()
+  if (brick && brick->front_opacity) {
+    const std::vector<float>& front = *brick->front_opacity;
+    glNamedBufferData(front_opacity_.id(), GLsizeiptr(front.size() * sizeof(float)), front.data(), GL_STREAM_DRAW);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboFrontOpacity, front_opacity_.id());
+  }
   Targets& t = targets(w, h, output);
   glUseProgram(prog.id());
 

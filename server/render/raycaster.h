@@ -74,6 +74,7 @@ class Raycaster : public Renderer {
 
   gpu::ShaderCache& shaders_;
   gpu::Buffer ubo_;
+  gpu::Buffer front_opacity_;  // render_brick with a ray texture: Brick::front_opacity
   gpu::VertexArray vao_;
   gpu::Texture budget_texture_;
   // Per-TF state in small caches, most recent first: sessions with different TFs (and a still's

@@ -22,6 +22,7 @@ std::vector<std::string> interface_defines() {
           "SSBO_TF_POINTS " + std::to_string(kSsboTfPoints),
           "SSBO_CELL_DISTANCE " + std::to_string(kSsboCellDistance),
           "SSBO_CELL_STRIDE " + std::to_string(kSsboCellStride),
+          "SSBO_FRONT_OPACITY " + std::to_string(kSsboFrontOpacity),
           "NO_PEAK_TEXEL " + no_peak.str()};
 }
 

@@ -94,15 +94,21 @@ double split_error(const Case& c, int ranks, const std::string& file) {
     bricks.push_back(brick);
   }
   const VolumeMacrocells cells = global_cells(bricks, split, dims);
-  std::vector<std::vector<float>> layers;
-  for (size_t k = 0; k < bricks.size(); ++k) {
-    auto resident = renderer.make_resident(bricks[k], cells);
-    layers.push_back(renderer.render_brick(*resident, rs, dist::frame_brick(split.bricks[k], dims)).rgba);
-  }
-  EXPECT_GE(voxels, whole.voxel_count());
   const glm::dvec3 eye = (rs.camera.eye - whole.origin) / whole.spacing;
   const glm::dvec3 dir = glm::normalize((rs.camera.center - rs.camera.eye) / whole.spacing);
   const auto order = dist::visibility_order(split, eye, dir, rs.camera.orthographic);
+  // Front to back; with a ray texture each brick gets the opacity over the ones before it
+  // (MPI: dist/opacity_chain.h).
+  std::vector<std::vector<float>> layers(bricks.size());
+  std::shared_ptr<const std::vector<float>> front;
+  for (int k : order) {
+    auto resident = renderer.make_resident(bricks[size_t(k)], cells);
+    render::Brick b = dist::frame_brick(split.bricks[size_t(k)], dims);
+    if (rs.ray_texture) b.front_opacity = front;
+    layers[size_t(k)] = renderer.render_brick(*resident, rs, b).rgba;
+    front = std::make_shared<const std::vector<float>>(dist::opacity_over(front.get(), layers[size_t(k)]));
+  }
+  EXPECT_GE(voxels, whole.voxel_count());
   const Image composed = dist::finish_composite(dist::composite_over(layers, order), 96, 80, rs.scene.background);
   return max_abs(one, composed);
 }
@@ -217,20 +223,45 @@ TEST(Bricks, AdaptiveSamplingEqualsOneProcess) {
   check_all_splits({"", R"({"step": 0.5, "adaptive": true, "classification": "preint"})", "", ""}, kData + "nucleon.nhdr");
 }
 
-TEST(Bricks, RefuseWhatBricksCannotDrawYet) {
+// Ray textures (Raspe & Müller): a ray's termination is of the opacity over the bricks in front
+// (Brick::front_opacity), its step multiplier scales its lattice on every brick alike, its blend
+// weighs its samples. Strokes of each channel, view and volume mappings.
+TEST(Bricks, RayTexturesEqualOneProcess) {
+  const std::string blobs = generated(GeneratorKind::Blobs, {48, 40, 36}, SourceType::U8, {0.8, 1.0, 1.7});
+  const std::string cam = R"({"eye": [-40, 90, -30], "center": [19, 19, 30], "up": [0, 0, 1], "fov_y": 35})";
+  const std::string tf = R"([[0, 0, 0, 0, 0], [60, 0.9, 0.5, 0.2, 0], [120, 0.9, 0.5, 0.2, 0.4], [255, 1, 1, 1, 0.9]])";
+  const std::string terminate =
+      R"({"channel": "termination", "center": [0.45, 0.5], "radius": 0.3, "falloff": 0.5, "value": 0.25})";
+  const std::string step = R"({"channel": "step", "center": [0.6, 0.4], "radius": 0.25, "value": 2.5})";
+  const std::string blend = R"({"channel": "blend", "center": [0.3, 0.6], "radius": 0.2, "value": 0.6})";
+  for (const std::string& r :
+       {R"({"step": 1, "ray_texture": {"mapping": "view", "size": [32, 32], "strokes": [)" + terminate + "]}}",
+        R"({"step": 1, "classification": "preint", "ray_texture": {"mapping": "view", "size": [32, 32], "strokes": [)" +
+            terminate + ", " + step + "]}}",
+        R"({"step": 1, "virtual_samples": 3, "ray_texture": {"mapping": "volume", "size": [64, 32], "strokes": [)" +
+            terminate + ", " + step + ", " + blend + "]}}"})
+    check_all_splits({"", r, tf, cam}, blobs);
+  std::filesystem::remove(blobs);
+  check_all_splits({"", R"({"step": 1, "classification": "peaks", "ray_texture": {"mapping": "view", "size": [16, 16], "strokes": [)" +
+                            terminate + ", " + blend + "]}}",
+                    R"([[0, 0, 0, 0, 0], [100, 0, 0, 0, 0], [100.5, 1, 0.6, 0.2, 1], [101, 0, 0, 0, 0], [255, 0, 0, 0, 0.3]])", ""},
+                   kData + "heptane_151.nrrd");
+}
+
+TEST(Bricks, RefuseWhatBricksCannotDraw) {
   const std::string file = kData + "nucleon.nhdr";
   auto v = std::make_shared<Volume>(load_volume(file));
   render::Renderer& renderer = *test::gpu().caster;
   auto resident = renderer.make_resident(v);
   const dist::Index3 dims{v->dims()[0], v->dims()[1], v->dims()[2]};
   const auto split = dist::kd_split(dims, 2, 3);
-  const ResolvedScene rs = resolve_scene(
-      parse_scene_text(R"({"volume": "v", "render": {"ray_texture": {"mapping": "view", "size": [16, 16]}}})"), *v);
+  render::Brick short_front = dist::frame_brick(split.bricks[0], dims);
+  short_front.front_opacity = std::make_shared<const std::vector<float>>(7, 0.f);
   try {
-    renderer.render_brick(*resident, rs, dist::frame_brick(split.bricks[0], dims));
-    ADD_FAILURE() << "a ray texture was drawn on a brick";
+    renderer.render_brick(*resident, resolve_scene(parse_scene_text(R"({"volume": "v"})"), *v), short_front);
+    ADD_FAILURE() << "a front opacity of the wrong size was taken";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("distributed rendering: ray textures"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("front opacity"), std::string::npos) << e.what();
   }
   // A brick cannot build its grids from its own voxels: they are the whole volume's (given).
   LoadOptions o;

@@ -83,6 +83,13 @@ SCENES = [
     scene("ml_adaptive_peaks", ML, {"step": 0.5, "adaptive": True, "classification": "peaks"}, ML_TF, ML_CAM),
     scene("head_mr_adaptive_vs_shaded", HEAD, {"step": 0.7, "adaptive": True, "virtual_samples": 3, "shading": True},
           HEAD_TF),
+    # A ray texture: the ranks draw front to back, each ray's termination of the opacity over the
+    # bricks in front (dist/opacity_chain.h); step and blend strokes too.
+    scene("ml_ray_texture_preint", ML, {"step": 1, "classification": "preint", "ray_texture": {
+        "mapping": "view", "size": [32, 32], "strokes": [
+            {"channel": "termination", "center": [0.45, 0.5], "radius": 0.35, "falloff": 0.5, "value": 0.3},
+            {"channel": "step", "center": [0.6, 0.4], "radius": 0.25, "value": 2.5},
+            {"channel": "blend", "center": [0.35, 0.6], "radius": 0.2, "value": -0.5}]}}, ML_TF, ML_CAM),
 ]
 
 
@@ -156,15 +163,6 @@ def test_a_rank_that_fails_to_read_ends_the_job():
           f"{[l for l in r.stderr.splitlines() if 'error on rank' in l][0]}")
 
 
-def test_refusals_name_what_bricks_cannot_draw():
-    for render, words in (({"ray_texture": {"mapping": "view", "size": [16, 16]}}, "ray textures"),):
-        s = scene("refused", ML, render, ML_TF, ML_CAM)
-        r = mpi(2, "render", s, "-o", TMP / "refused.png", timeout=120, check=False)
-        assert r.returncode == 2 and words in r.stderr, (render, r.returncode, r.stderr)
-        r = mpi(2, "render", s, "-o", TMP / "refused.png", "--backend", "gl", timeout=120, check=False)
-        assert r.returncode == 2 and words in r.stderr, ("gl", render, r.returncode, r.stderr)
-
-
 def test_ranks_on_different_backends_are_refused():
     # auto may pick the GL ray caster on a node with a GPU and the CPU backend on another; the two
     # round positions differently at brick faces, so a mix is refused by name (MPMD: one rank each).
@@ -180,14 +178,14 @@ def test_gl_ranks_equal_one_process():
     # The GL ray caster's BRICK variant (one GPU per rank; llvmpipe here) against one process.
     worst = 0.0
     for s, ranks in ((SCENES[0], (2, 3)), (SCENES[1], (2,)), (SCENES[2], (2, 3)), (SCENES[3], (2,)), (SCENES[5], (2,)),
-                     (SCENES[7], (2,)), (SCENES[8], (2,)), (SCENES[10], (2,)), (SCENES[11], (2,)), (SCENES[13], (2,))):
+                     (SCENES[7], (2,)), (SCENES[8], (2,)), (SCENES[10], (2,)), (SCENES[11], (2,)), (SCENES[13], (2,)), (SCENES[15], (2, 3))):
         one = TMP / f"{s.stem}_gl1.png"  # one process on the same backend
         run([PEAKCAST, "render", s, "-o", one, "--backend", "gl"])
         for n in ranks:
             out, stats = TMP / f"{s.stem}_gl{n}.png", TMP / f"{s.stem}_gl{n}.json"
             mpi(n, "render", s, "-o", out, "--stats", stats, "--backend", "gl")
             st = json.loads(stats.read_text())
-            assert st["backend"] == "gl" and st["variant"].endswith("+brick"), st
+            assert st["backend"] == "gl" and "+brick" in st["variant"], st
             e = max_abs(one, out)
             worst = max(worst, e)
             assert e <= BOUND, f"{s.stem} on {n} GL ranks: max abs {e}"
@@ -216,7 +214,7 @@ def test_nonfinite_voxels_take_the_whole_volumes_extremes():
 def main():
     failed = 0
     tests = [test_ranks_equal_one_process, test_each_rank_holds_its_brick_and_ghosts, test_a_rank_that_dies_ends_the_job,
-             test_a_rank_that_fails_to_read_ends_the_job, test_refusals_name_what_bricks_cannot_draw,
+             test_a_rank_that_fails_to_read_ends_the_job,
              test_nonfinite_voxels_take_the_whole_volumes_extremes, test_gl_ranks_equal_one_process,
              test_ranks_on_different_backends_are_refused]
     for t in tests:
