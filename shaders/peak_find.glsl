@@ -79,7 +79,7 @@ bool find_peaks(Ray r, float t0, float f0, float t1, float f1, inout RayResult r
     }
   }
   int count = min(n, max_peaks);
-  if (!PREV_DRAWN) return count > 0;  // another brick's segment (raycast_body.glsl g_draw): whether it holds a peak only
+  if (!DRAWN) return count > 0;  // another brick's consume (raycast_body.glsl g_draw): whether it holds a peak only
   for (int k = 0; k < count; ++k) {
     float v = reverse ? found[n - 1 - k] : found[k];
     vec4 c = tf_exact(v);

@@ -45,19 +45,16 @@ vec3 cell_coords(vec3 p) { return (p + u_box_half.xyz) * (1.0 / u_spacing.xyz); 
 #endif
 
 #include "ray_texture.glsl"
-// Who draws what on a brick (cpu/ray_caster-inl.h draw_): a sample (true or virtual) belongs to
-// the segment it starts, a segment to the rank owning the lattice point it starts from.
-// g_draw: the sample being consumed is this ray's to draw (its DVR term and the segment out of
-// it); g_prev_draw: the previous one was (the segment into this one: peaks, preintegration). A
-// sample not drawn still ends a segment: peak mode xor asks whether the segment into the brick's
-// first point, which the brick before draws, holds a peak. One process draws everything.
+// Who draws what on a brick (cpu/ray_caster-inl.h draw_): a consume (a sample with the segment
+// into it, and the early-termination test after them) is the rank's that owns the sample; a
+// true sample is owned with its lattice point, a virtual one with the true sample starting its
+// segment. g_draw: the sample being consumed is this ray's to draw; one not drawn (look-behind,
+// look-ahead) is still a segment's start and never stops the ray. One process draws everything.
 #ifdef BRICK
-bool g_draw, g_prev_draw;
+bool g_draw;
 #define DRAWN g_draw
-#define PREV_DRAWN g_prev_draw
 #else
 #define DRAWN true
-#define PREV_DRAWN true
 #endif
 #ifdef PEAKS
 #include "peak_find.glsl"
@@ -130,12 +127,12 @@ bool clip_to_brick(Ray r, Lattice L, vec2 span, inout int last) {
   while (own_last < last && owns(r, L, own_last + 1)) ++own_last;
   g_own_first = first;
   g_own_last = own_last;
-  // Segment methods: the point closing the last owned segment. Virtual samples: the point after
-  // that too (the Catmull-Rom window of the last owned segment), and one more, so that whether
-  // that one is visited is decided as in one process (a run of occupied cells starting there
-  // visits the point before it). Adaptive sampling: each of those visits up to 8 points on, and
-  // the last owned visit's step (its multiplier, cut at its cell's last point) is decided as in
-  // one process only when the walk goes on past it.
+  // Virtual samples: the two visits after the last owned point (the Catmull-Rom window of its
+  // segment), and one more, so that whether the second is visited is decided as in one process
+  // (a run of occupied cells starting there visits the point before it). Adaptive sampling: each
+  // visit is up to 8 points on, and the last owned visit's step (its multiplier, cut at its
+  // cell's last point) is decided as in one process only when the walk goes on past it. (The
+  // segment out of the last owned point is drawn by the rank owning its end, see g_draw.)
 #ifdef ADAPTIVE
   const int m = 8;  // kMaxAdaptiveMultiplier
 #else
@@ -143,7 +140,7 @@ bool clip_to_brick(Ray r, Lattice L, vec2 span, inout int last) {
 #endif
 #if defined(VIRTUAL_SAMPLES)
   int beyond = 2 * m + 1;
-#elif defined(SEGMENTS) || defined(ADAPTIVE)
+#elif defined(ADAPTIVE)
   int beyond = m;
 #else
   int beyond = 0;
@@ -184,7 +181,7 @@ bool consume(Ray r, float t, float f, vec3 x, vec3 g, float dt, inout RayResult 
   if (segment) peak_hit = find_peaks(r, g_prev_t, g_prev_f, t, f, res);
 #endif
 #if defined(PREINTEGRATION)
-  if (segment && PREV_DRAWN) {
+  if (segment && DRAWN) {
     vec4 c = preint_lookup(g_prev_f, f);
 #ifdef VARYING_STEPS
     if (c.a > 0.0) {  // the table holds segments of the uniform step: correct for this one's length
@@ -225,10 +222,7 @@ bool consume(Ray r, float t, float f, vec3 x, vec3 g, float dt, inout RayResult 
   g_prev_f = f;
   g_have_prev = true;
   g_gap = false;
-#ifdef BRICK
-  g_prev_draw = g_draw;
-#endif
-  return res.acc.a >= STOP;
+  return DRAWN && res.acc.a >= STOP;
 }
 
 #ifdef VIRTUAL_SAMPLES
@@ -354,8 +348,9 @@ bool sample_visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
   vec3 x = voxel_coords(r.o + t * r.d);
   float f = sample_field(x);
   res.samples += 1.0;
+  bool own = i >= g_own_first && i <= g_own_last;
 #ifdef BRICK
-  g_draw = i >= g_own_first && i <= g_own_last;
+  g_draw = own;
 #endif
   bool gap = i != g_expect;  // lattice points between the last visit and this one were skipped
   g_expect = i + m;
@@ -371,7 +366,7 @@ bool sample_visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
 #else
   vec3 g = vec3(0.0);
 #endif
-  return vs_push(r, t, f, g, dt, DRAWN, res);
+  return vs_push(r, t, f, g, dt, own, res);  // (vs_flush may have drawn another's)
 #else
   return consume(r, t, f, x, vec3(0.0), dt, res);
 #endif
@@ -408,7 +403,6 @@ RayResult cast_ray(vec2 pixel) {
   g_own_last = 2147483647;
 #ifdef BRICK
   g_draw = true;
-  g_prev_draw = true;
   g_behind = ivec4(-1, -1, 1, 1);
 #endif
 #ifdef VIRTUAL_SAMPLES
@@ -439,11 +433,11 @@ RayResult cast_ray(vec2 pixel) {
   if (u_brick_half.w > 0.0) {
     ivec2 p = ivec2(pixel) - u_image.zw;
     float a = u_front_opacity[p.y * int(u_brick_half.w) + p.x];
-    if (a >= g_stop) {  // reached in front: one process stopped there
+    if (a >= 0.0 && a >= g_stop) {  // reached in front (after a consume there): one process stopped
       res.samples = -1.0;
       return res;
     }
-    g_stop = (g_stop - a) / (1.0 - a);  // a + (1 - a) * acc >= stop
+    if (a > 0.0) g_stop = (g_stop - a) / (1.0 - a);  // a + (1 - a) * acc >= stop; a < 0: none in front
   }
 #endif
 #endif
@@ -451,10 +445,12 @@ RayResult cast_ray(vec2 pixel) {
   // virtual samples) are visited as in one process: at them (a walk over every point), one
   // before them (leaps: whether a point is visited depends on its neighbours only), at the
   // ray's start (the 3D-DDA: a cell's first point depends on the cells before it).
-#ifdef VIRTUAL_SAMPLES
+#if defined(VIRTUAL_SAMPLES)
   const int behind = 2;
-#else
+#elif defined(SEGMENTS)
   const int behind = 1;
+#else
+  const int behind = 0;
 #endif
 #if !defined(CELL_TRAVERSAL)
   // Nested: llvmpipe stops any single loop after 65535 iterations (LP_MAX_TGSI_LOOP_ITERATIONS),

@@ -135,7 +135,7 @@ int run(const MpiRenderArgs& a, int rank, int size) {
   if (scene.ray_texture) frame.front_opacity = dist::receive_front_opacity(order, pixels);
   render::RenderStats st;
   const Image layer = renderer.render_brick(*resident, scene, frame, &st);
-  if (scene.ray_texture) dist::send_opacity_behind(order, frame.front_opacity.get(), layer.rgba);
+  if (scene.ray_texture) dist::send_opacity_behind(order, frame.front_opacity.get(), layer);
   dist::IceTCompositor compositor(MPI_COMM_WORLD, 0);
   dist::CompositeTiming timing;
   const std::vector<float> composed = compositor.composite(layer.rgba, layer.width, layer.height, order, &timing);

@@ -50,15 +50,15 @@ bool RayCaster::clip_to_brick() {
   while (last < last_ && owns(last + 1)) ++last;
   own_first_ = first;
   own_last_ = last;
-  // Segment methods: the point closing the last owned segment. Virtual samples: the point after
-  // that too (the Catmull-Rom window of the last owned segment), and one more, so that whether the
-  // second is visited is decided as in one process (a run of occupied cells starting there
-  // visits the point before it).
-  // Adaptive sampling: each of those visits up to kMaxAdaptiveMultiplier points on, and the last
-  // owned visit's step (its multiplier, cut at its cell's last point) is decided as in one
-  // process only when the walk goes on past it.
+  // Virtual samples: the two visits after the last owned point (the Catmull-Rom window of the
+  // last owned segment), and one more, so that whether the second is visited is decided as in
+  // one process (a run of occupied cells starting there visits the point before it). Adaptive
+  // sampling: each visit is up to kMaxAdaptiveMultiplier points on, and the last owned visit's
+  // step (its multiplier, cut at its cell's last point) is decided as in one process only when
+  // the walk goes on past it. (The segment out of the last owned point is drawn by the rank
+  // owning its end, see draw_.)
   const int m = f_.key.adaptive ? kMaxAdaptiveMultiplier : 1;
-  const int beyond = f_.key.virtual_samples ? 2 * m + 1 : (segments_ || f_.key.adaptive ? m : 0);
+  const int beyond = f_.key.virtual_samples ? 2 * m + 1 : (f_.key.adaptive ? m : 0);
   last_ = int(std::min<int64_t>(int64_t(last) + beyond, last_));
   return true;
 }

@@ -116,13 +116,15 @@ class RayCaster {
   // The lattice points the ray composites (bricks: those it owns; else all of them).
   int own_first_ = 0, own_last_ = std::numeric_limits<int>::max();
   bool owned(int i) const { return i >= own_first_ && i <= own_last_; }
-  // Who draws what on a brick: a sample (true or virtual) belongs to the segment it starts, a
-  // segment to the rank owning the lattice point it starts from. draw_: the sample being
-  // consumed is this ray's to draw (its DVR term, and the segment out of it); prev_draw_: the
-  // previous one was (the segment into this sample: peaks, preintegration). A sample not drawn
-  // is still a segment's end: peak mode xor asks whether the segment into the brick's first
-  // point, which the brick before draws, holds a peak. Always true in one process.
-  bool draw_ = true, prev_draw_ = true;
+  // Who draws what on a brick: a consume (a sample with the segment into it: its peaks, its
+  // preintegrated colour, its DVR term, and the test for early termination after them) is the
+  // rank's that owns the sample; a true sample is owned with its lattice point, a virtual one
+  // with the true sample starting its segment. So a ray's early termination falls between
+  // consumes, as in one process, and the opacity a rank hands on (ray textures) is one process's
+  // at that point. draw_: the sample being consumed is this ray's to draw; one not drawn (the
+  // look-behind, the Catmull-Rom look-ahead) is still a segment's start, and never stops the ray.
+  // Always true in one process.
+  bool draw_ = true;
   // The last visits before the owned points, held back unsampled (index -1: none), newest
   // first: sampled only when they lead to the first owned visit without a gap (the look-behind
   // that xor's segment into it needs, and with virtual samples the window of the segment before

@@ -77,7 +77,7 @@ bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
   if (key.peaks && segment) peak_hit = find_peaks(prev_t_, prev_f_, t, fv);
   if (key.preintegration) {
     vec4 c;
-    if (segment && prev_draw_ && preint_lookup(prev_f_, fv, c)) {  // else the segment adds exactly nothing
+    if (segment && draw_ && preint_lookup(prev_f_, fv, c)) {  // else the segment adds exactly nothing
       if (varying_steps_ && c.a > 0.f) {  // the table holds segments of the uniform step
         const float a = 1.f - std::pow(std::max(1.f - c.a, 0.f), (t - prev_t_) / f_.step);
         c = vec4(vec3(c) * (a / c.a), a);
@@ -102,8 +102,7 @@ bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
   prev_f_ = fv;
   have_prev_ = true;
   gap_ = false;
-  prev_draw_ = draw_;
-  return res_.acc.a >= stop_;
+  return draw_ && res_.acc.a >= stop_;
 }
 
 
@@ -132,7 +131,8 @@ bool RayCaster::sample_visit(int i, int m) {
   const float t = lattice_t(L_, float(i));
   const float fv = field_at(i, m);
   res_.samples += 1.f;
-  draw_ = owned(i);
+  const bool own = owned(i);
+  draw_ = own;
   const bool gap = i != expect_;  // lattice points between the last visit and this one were skipped
   expect_ = i + m;
   if (gap) gap_ = true;  // until the next sample is consumed: no segment across the gap
@@ -143,7 +143,7 @@ bool RayCaster::sample_visit(int i, int m) {
       gap_ = true;
     }
     const vec3 g = f_.key.shading ? field_gradient(voxel_coords(r_.o + t * r_.d)) : vec3(0.f);
-    return vs_push(t, fv, g, dt, draw_);
+    return vs_push(t, fv, g, dt, own);  // (vs_flush may have drawn another's)
   }
   return consume(t, fv, vec3(0.f), dt);
 }
@@ -306,11 +306,11 @@ bool RayCaster::setup(float px, float py) {
   }
   if (f_.front_opacity) {  // a ray texture's termination, of the opacity over the bricks in front
     const float a = f_.front_opacity[size_t(int(py) - f_.rect_y) * size_t(f_.rect_w) + size_t(int(px) - f_.rect_x)];
-    if (a >= stop_) {  // reached in front: one process stopped there
+    if (a >= 0.f && a >= stop_) {  // reached in front (after a consume there): one process stopped
       res_.samples = -1.f;
       return false;
     }
-    stop_ = (stop_ - a) / (1.f - a);  // a + (1 - a) * acc >= stop
+    if (a > 0.f) stop_ = (stop_ - a) / (1.f - a);  // a + (1 - a) * acc >= stop; a < 0: none in front
   }
   return true;
 }
@@ -322,7 +322,7 @@ RayResult RayCaster::walk(int first) {
   // virtual samples) are visited as in one process: at them (a walk over every point), one before
   // them (leaps: whether a point is visited depends on its neighbours only), at the ray's start
   // (the 3D-DDA: a cell's first point depends on the cells before it).
-  const int behind = key.virtual_samples ? 2 : 1;
+  const int behind = key.virtual_samples ? 2 : (segments_ ? 1 : 0);
   first = std::max(first, own_first_ - behind - 1);
   if (!key.space_skipping && !key.adaptive) {
     for (int i = std::max(own_first_ - behind, 0); i <= last_ && !stopped; ++i) stopped = visit(i, 1);

@@ -83,7 +83,7 @@ bool RayCaster::find_peaks(float t0, float f0, float t1, float f1) {
     }
   }
   const int count = std::min(n, max_peaks);
-  if (!prev_draw_) return count > 0;  // another brick's segment (see draw_): whether it holds a peak only
+  if (!draw_) return count > 0;  // another brick's consume (see draw_): whether it holds a peak only
   for (int k = 0; k < count; ++k) {
     const float v = reverse ? found[n - 1 - k] : found[k];
     const vec4 c = tf_exact(v);

@@ -20,7 +20,7 @@ namespace {
 bool RayCaster::vs_segment(float t1, float t2, float dt1, vec4 fw, vec3 g0, vec3 g1, vec3 g2, vec3 g3,
                            float t_limit, bool own) {
   const int vs = f_.key.virtual_samples;
-  draw_ = own;  // the segment's samples are the rank's that owns its first (see draw_)
+  draw_ = own;  // the segment's samples are the rank's that owns its first true one (see draw_)
   const float k = float(vs);
   const float sub = dt1 / (k + 1.f);
   if (consume(t1, fw.y, g1, sub)) return true;

@@ -1,5 +1,6 @@
 #include "dist/brick_frame.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -24,17 +25,28 @@ int brick_ghost(const ResolvedScene& s) {
 
 double max_step_multiplier(const RayTextureSpec* t) {
   if (!t) return 1.0;
-  if (!t->png.empty()) return kMaxStepMultiplier;
-  for (const Stroke& st : t->strokes)
-    if (st.channel == RayChannel::Step) return kMaxStepMultiplier;
-  return 1.0;
+  double most = 1.0;  // the default texel
+  if (t->image)
+    for (size_t k = 0; k < t->image->texels.size(); k += 3) most = std::max(most, double(t->image->texels[k]));
+  else if (!t->png.empty())
+    most = kMaxStepMultiplier;  // not read yet
+  // Each stroke raises the largest texel at most to its value (set), by it (add), by its factor
+  // (multiply): a bound, whatever the strokes overlap.
+  for (const Stroke& st : t->strokes) {
+    if (st.channel != RayChannel::Step) continue;
+    if (st.mode == StrokeMode::Set) most = std::max(most, st.value);
+    if (st.mode == StrokeMode::Add) most += std::max(st.value, 0.0);
+    if (st.mode == StrokeMode::Multiply) most *= std::max(st.value, 1.0);
+  }
+  return std::min(most, kMaxStepMultiplier);
 }
 
-std::vector<float> opacity_over(const std::vector<float>* front, const std::vector<float>& rgba) {
-  std::vector<float> out(rgba.size() / 4);
+std::vector<float> opacity_over(const std::vector<float>* front, const Image& layer) {
+  std::vector<float> out(layer.samples.size());
   for (size_t p = 0; p < out.size(); ++p) {
-    const float a = front ? (*front)[p] : 0.f;
-    out[p] = a + (1.f - a) * rgba[p * 4 + 3];
+    const float a = front ? (*front)[p] : -1.f;
+    // A ray this brick sampled consumed here: its opacity counts from now on (none before: -1).
+    out[p] = layer.samples[p] > 0.f ? std::max(a, 0.f) + (1.f - std::max(a, 0.f)) * layer.rgba[p * 4 + 3] : a;
   }
   return out;
 }

@@ -26,14 +26,15 @@ int brick_ghost(const ResolvedScene& scene);
 MacrocellShare brick_macrocell_share(const Volume& voxels, const Brick& brick, const Index3& dims,
                                      FilterSupport support);
 
-// A ray texture's largest step multiplier: kMaxStepMultiplier when it has a PNG or a stroke on
-// the step channel, else 1 (the ghosts hold that many steps); 1 without a texture.
+// A bound on a ray texture's largest step multiplier (the ghosts hold that many steps): its PNG's
+// largest, raised by its step strokes, at most kMaxStepMultiplier; 1 without a texture.
 double max_step_multiplier(const RayTextureSpec* texture);
 
-// Ray textures (render/brick.h Brick::front_opacity): the opacity over a brick's layer (RGBA,
-// premultiplied) of the bricks in front of it (null: none), per pixel: what the brick behind
-// it gets.
-std::vector<float> opacity_over(const std::vector<float>* front, const std::vector<float>& rgba);
+// Ray textures (render/brick.h Brick::front_opacity): the opacity over a brick's layer
+// (premultiplied RGBA and samples per pixel) of the bricks in front of it (null: none), per
+// pixel: what the brick behind it gets. -1 where no brick so far consumed a sample of the ray
+// (a termination of 0 stops a ray after its first consume, wherever that is).
+std::vector<float> opacity_over(const std::vector<float>* front, const Image& layer);
 
 // The brick as Renderer::render_brick takes it; dims: the whole volume's.
 render::Brick frame_brick(const Brick& brick, const Index3& dims);

@@ -78,7 +78,7 @@ Composited render_composite(BrickSet& b, const ResolvedScene& rs, const render::
   render::Brick brick = frame_brick(b.mine, b.dims);
   if (rs.ray_texture) brick.front_opacity = receive_front_opacity(order, size_t(rect.w) * size_t(rect.h));
   const Image layer = renderer.render_brick(*b.brick, rs, brick, &c.stats, rect);
-  if (rs.ray_texture) send_opacity_behind(order, brick.front_opacity.get(), layer.rgba);
+  if (rs.ray_texture) send_opacity_behind(order, brick.front_opacity.get(), layer);
   CompositeTiming t;
   c.rgba = icet.composite(layer.rgba, layer.width, layer.height, order, &t);
   c.composite_ms = t.ms;
@@ -95,11 +95,11 @@ Composited render_composite(BrickSet& b, const ResolvedScene& rs, const render::
 // its ray texture, which goes as what the workers lack of it (dist/ray_texture_sync.h).
 std::string render_command(const ResolvedScene& s, const render::PixelRect& rect, bool samples,
                            RayTextureSender& textures) {
-  nlohmann::json scene = scene_to_json(s.scene);
-  nlohmann::json j = {{"step", s.step}, {"rect", {rect.x, rect.y, rect.w, rect.h}}, {"samples", samples}};
-  if (scene.contains("render")) scene["render"].erase("ray_texture");
+  Scene bare = s.scene;
+  bare.render.ray_texture = nullptr;  // not its strokes every frame
+  nlohmann::json j = {{"scene", scene_to_json(bare)}, {"step", s.step}, {"rect", {rect.x, rect.y, rect.w, rect.h}},
+                      {"samples", samples}};
   if (s.ray_texture) j["ray_texture"] = textures.message(*s.ray_texture);
-  j["scene"] = std::move(scene);
   const std::vector<uint8_t> cbor = nlohmann::json::to_cbor(j);
   return std::string(cbor.begin(), cbor.end());
 }

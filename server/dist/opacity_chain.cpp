@@ -35,11 +35,10 @@ std::shared_ptr<const std::vector<float>> receive_front_opacity(const std::vecto
   return front;
 }
 
-void send_opacity_behind(const std::vector<int>& order, const std::vector<float>* front,
-                         const std::vector<float>& rgba) {
+void send_opacity_behind(const std::vector<int>& order, const std::vector<float>* front, const Image& layer) {
   const size_t k = place(order);
   if (k + 1 >= order.size()) return;
-  const std::vector<float> over = opacity_over(front, rgba);
+  const std::vector<float> over = opacity_over(front, layer);
   MPI_Send(over.data(), int(over.size()), MPI_FLOAT, order[k + 1], kOpacityTag, MPI_COMM_WORLD);
 }
 

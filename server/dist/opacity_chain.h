@@ -8,15 +8,16 @@
 #include <memory>
 #include <vector>
 
+#include "core/image.h"
+
 namespace peakcast::dist {
 
 // `order`: the ranks front to back. The opacity in front of this rank's brick, per pixel of the
 // drawn rect (`pixels` of them): null for the front rank, else received from the rank before it
 // in the order (blocks until that rank has drawn).
 std::shared_ptr<const std::vector<float>> receive_front_opacity(const std::vector<int>& order, size_t pixels);
-// Hands the opacity over this rank's layer (RGBA, premultiplied; `front` as received) to the
-// rank behind it; nothing for the back rank.
-void send_opacity_behind(const std::vector<int>& order, const std::vector<float>* front,
-                         const std::vector<float>& rgba);
+// Hands the opacity over this rank's layer (`front` as received; dist/brick_frame.h
+// opacity_over) to the rank behind it; nothing for the back rank.
+void send_opacity_behind(const std::vector<int>& order, const std::vector<float>* front, const Image& layer);
 
 }  // namespace peakcast::dist

@@ -105,8 +105,9 @@ double split_error(const Case& c, int ranks, const std::string& file) {
     auto resident = renderer.make_resident(bricks[size_t(k)], cells);
     render::Brick b = dist::frame_brick(split.bricks[size_t(k)], dims);
     if (rs.ray_texture) b.front_opacity = front;
-    layers[size_t(k)] = renderer.render_brick(*resident, rs, b).rgba;
-    front = std::make_shared<const std::vector<float>>(dist::opacity_over(front.get(), layers[size_t(k)]));
+    const Image layer = renderer.render_brick(*resident, rs, b);
+    layers[size_t(k)] = layer.rgba;
+    front = std::make_shared<const std::vector<float>>(dist::opacity_over(front.get(), layer));
   }
   EXPECT_GE(voxels, whole.voxel_count());
   const Image composed = dist::finish_composite(dist::composite_over(layers, order), 96, 80, rs.scene.background);
@@ -204,6 +205,17 @@ TEST(Bricks, VirtualSamplesEqualOneProcess) {
   for (const char* r : {R"({"step": 1, "virtual_samples": 3})", R"({"step": 1.7, "virtual_samples": 3, "classification": "preint"})",
                         R"({"step": 1, "virtual_samples": 7, "shading": true})"})
     check_all_splits({"", r, blob_tf, blob_cam}, blobs);
+  // Without the grid's widening for the spline's overshoot, runs end closer to the surfaces,
+  // longer steps put fewer points between a run's end and the next: more runs end near a face.
+  // (A visit after a gap within the look-ahead once took the flushed run's owner; these scenes
+  // did not show it, measured by undoing the fix: the fix is by review.)
+  test::gpu().caster->set_virtual_sample_widening(0.0);
+  // GL on these 8-bit blobs with long steps: up to 0.0040 (measured; the texture unit's 8-bit
+  // filter weights, as for the differential steps above). CPU: 2.0e-6.
+  const double gl_8bit_long_steps = test::gpu().gl ? 0.015 : kBound;
+  for (const char* r : {R"({"step": 1, "virtual_samples": 3})", R"({"step": 3, "virtual_samples": 3})", R"({"step": 4.5, "virtual_samples": 3, "classification": "preint"})"})
+    check_all_splits({"", r, blob_tf, blob_cam}, blobs, gl_8bit_long_steps);
+  test::gpu().caster->set_virtual_sample_widening(0.125);
   std::filesystem::remove(blobs);
   check_all_splits({"", R"({"step": 1, "virtual_samples": 3, "classification": "peaks"})",
                     R"([[0, 0, 0, 0, 0], [100, 0, 0, 0, 0], [100.5, 1, 0.6, 0.2, 1], [101, 0, 0, 0, 0], [255, 0, 0, 0, 0]])", ""},
@@ -227,6 +239,10 @@ TEST(Bricks, AdaptiveSamplingEqualsOneProcess) {
 // (Brick::front_opacity), its step multiplier scales its lattice on every brick alike, its blend
 // weighs its samples. Strokes of each channel, view and volume mappings.
 TEST(Bricks, RayTexturesEqualOneProcess) {
+  // The GL ray caster on the 8-bit blobs with a stroke's 2.5-fold steps: up to 0.0051 (measured,
+  // 3-4 bricks; the texture unit's 8-bit filter weights, as for differential steps above: the
+  // error moves with the brick's size, 6.6e-7 with ghosts for 8-fold steps). CPU: 1.2e-6.
+  const double gl_8bit_long_steps = test::gpu().gl ? 0.015 : kBound;
   const std::string blobs = generated(GeneratorKind::Blobs, {48, 40, 36}, SourceType::U8, {0.8, 1.0, 1.7});
   const std::string cam = R"({"eye": [-40, 90, -30], "center": [19, 19, 30], "up": [0, 0, 1], "fov_y": 35})";
   const std::string tf = R"([[0, 0, 0, 0, 0], [60, 0.9, 0.5, 0.2, 0], [120, 0.9, 0.5, 0.2, 0.4], [255, 1, 1, 1, 0.9]])";
@@ -240,8 +256,22 @@ TEST(Bricks, RayTexturesEqualOneProcess) {
             terminate + ", " + step + "]}}",
         R"({"step": 1, "virtual_samples": 3, "ray_texture": {"mapping": "volume", "size": [64, 32], "strokes": [)" +
             terminate + ", " + step + ", " + blend + "]}}"})
-    check_all_splits({"", r, tf, cam}, blobs);
+    check_all_splits({"", r, tf, cam}, blobs, gl_8bit_long_steps);
   std::filesystem::remove(blobs);
+  // Peaks (with the DVR term) where the peak surface crosses brick faces: a consume's peaks, its
+  // sample and the termination test after them are one rank's, so a ray stopping on a peak at a
+  // face draws that sample as one process does. A termination of 0 stops after the first consume.
+  const std::string ml = generated(GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32, {1, 1, 1});
+  const std::string ml_tf = R"([[0, 0.2, 0.4, 1, 0], [0.45, 0.2, 0.4, 1, 0.2], [0.5, 1, 0.8, 0.3, 0.9], [0.55, 0.2, 0.4, 1, 0.2], [1, 0.2, 0.4, 1, 0.3]])";
+  const std::string ml_cam = R"({"eye": [90, 70, 110], "center": [20, 20, 20], "up": [0, 1, 0], "fov_y": 30})";
+  const std::string zero = R"({"channel": "termination", "center": [0.7, 0.7], "radius": 0.1, "value": 0})";
+  for (const char* mode : {"dvr+peaks", "xor"})
+    check_all_splits({"", std::string(R"({"step": 1, "classification": "peaks", "peak_mode": ")") + mode +
+                              R"(", "ray_texture": {"mapping": "view", "size": [32, 32], "strokes": [)" + terminate + ", " +
+                              zero + "]}}",
+                      ml_tf, ml_cam},
+                     ml);
+  std::filesystem::remove(ml);
   check_all_splits({"", R"({"step": 1, "classification": "peaks", "ray_texture": {"mapping": "view", "size": [16, 16], "strokes": [)" +
                             terminate + ", " + blend + "]}}",
                     R"([[0, 0, 0, 0, 0], [100, 0, 0, 0, 0], [100.5, 1, 0.6, 0.2, 1], [101, 0, 0, 0, 0], [255, 0, 0, 0, 0.3]])", ""},
