@@ -94,7 +94,12 @@ class RayCaster {
   float root_evaluations(float f0, float f1, float v) const;
   bool find_peaks(float t0, float f0, float t1, float f1);
   bool consume(float t, float fv, vec3 g, float dt);
-  bool visit(int i, int m);
+  // Visits lattice index i (a brick's held-back visits first, see behind_).
+  bool visit(int i, int m) {
+    if (f_.brick && (i < own_first_ || behind_[0] >= 0)) return visit_behind(i, m);
+    return sample_visit(i, m);
+  }
+  bool visit_behind(int i, int m);
   bool sample_visit(int i, int m);
   // Virtual samples (Lee et al. 2010): the window of four true samples, newest last.
   bool vs_segment(float t1, float t2, float dt1, vec4 fw, vec3 g0, vec3 g1, vec3 g2, vec3 g3, float t_limit, bool own);

@@ -106,27 +106,27 @@ bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
 }
 
 
-// Visits lattice index i, standing for the step to index i + m.
-bool RayCaster::visit(int i, int m) {
-  if (i < own_first_) {  // a brick's: before its points (see behind_)
+// A brick's visit before its points, or its first owned visit with visits held back (see
+// behind_): out of line, off the one-process path. True when the ray stopped.
+bool RayCaster::visit_behind(int i, int m) {
+  if (i < own_first_) {
     behind_[1] = behind_[0];
     behind_m_[1] = behind_m_[0];
     behind_[0] = i;
     behind_m_[0] = m;
     return false;
   }
-  if (behind_[0] >= 0) {
-    const int b0 = behind_[0], b1 = behind_[1];
-    behind_[0] = behind_[1] = -1;
-    if (b0 + behind_m_[0] == i) {
-      if (f_.key.virtual_samples && b1 >= 0 && b1 + behind_m_[1] == b0 && sample_visit(b1, behind_m_[1])) return true;
-      if (sample_visit(b0, behind_m_[0])) return true;
-    }
+  const int b0 = behind_[0], b1 = behind_[1];
+  behind_[0] = behind_[1] = -1;
+  if (b0 + behind_m_[0] == i) {
+    if (f_.key.virtual_samples && b1 >= 0 && b1 + behind_m_[1] == b0 && sample_visit(b1, behind_m_[1])) return true;
+    if (sample_visit(b0, behind_m_[0])) return true;
   }
   return sample_visit(i, m);
 }
 
-bool RayCaster::sample_visit(int i, int m) {
+// Visits lattice index i, standing for the step to index i + m.
+HWY_INLINE bool RayCaster::sample_visit(int i, int m) {
   const float dt = lattice_step(L_, float(i), float(m));
   const float t = lattice_t(L_, float(i));
   const float fv = field_at(i, m);
