@@ -16,9 +16,10 @@ namespace peakcast::dist {
 
 // Ghost voxels for a scene: the filter's support and shading's gradient (ghost_voxels), plus,
 // for segment methods (preintegration, peak finding), the longest step (longest_step: a
-// differential lattice's grows with depth): a rank closes its last segment with the point one
-// step past its box; virtual samples two steps (the Catmull-Rom window); adaptive sampling
-// and a ray texture's step channel multiply the step by their largest multipliers.
+// differential lattice's grows with depth): a rank samples the point one step before its first
+// to draw the segment into it; virtual samples two steps (the Catmull-Rom window, both ways);
+// adaptive sampling and a ray texture's step channel multiply the step by their largest
+// multipliers.
 int brick_ghost(const ResolvedScene& scene);
 
 // A brick's share of the whole volume's macrocell grid (core/macrocell_share.h) over the voxels

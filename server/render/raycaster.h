@@ -46,7 +46,7 @@ class Raycaster : public Renderer {
                       RenderStats* stats = nullptr) override;
   Image render_bare(const ResidentVolume& volume, const ResolvedScene& scene, GpuPath path, const Image& full,
                     RenderStats* stats = nullptr) override;
-  // The fragment path with BRICK: ownership and the closing point as the CPU backend's.
+  // The fragment path with BRICK: ownership, look-behind and look-ahead as the CPU backend's.
   Image render_brick(const ResidentVolume& volume, const ResolvedScene& scene, const Brick& brick,
                      RenderStats* stats = nullptr, std::optional<PixelRect> rect = std::nullopt) override;
   int sample_cap(const VariantKey& key) const override;
