@@ -11,12 +11,15 @@ namespace peakcast {
 
 namespace {
 
-// The extremes over the voxels [lo, hi] (inclusive, brick coordinates), and the sums over
-// [own_lo, own_hi] when that box is not empty.
+// One cell's share in one pass over rows of the voxel type (a type switch per voxel made the em
+// volume's grids take over a second): the extremes over the filter's voxels [lo, hi] and the
+// sums over the cell's own voxels [own_lo, own_hi] (inclusive, brick coordinates; the own box
+// may be empty).
 template <typename T>
 void add_box(const T* data, const Dims& n, const int64_t lo[3], const int64_t hi[3], const int64_t own_lo[3],
              const int64_t own_hi[3], double offset, size_t idx, MacrocellShare& s) {
   T mn = data[size_t(lo[0] + n[0] * (lo[1] + n[1] * lo[2]))], mx = mn;
+  double sum = 0, sum2 = 0, own = 0;
   for (int64_t k = lo[2]; k <= hi[2]; ++k)
     for (int64_t j = lo[1]; j <= hi[1]; ++j) {
       const T* row = data + size_t(n[0] * (j + n[1] * k));
@@ -24,37 +27,38 @@ void add_box(const T* data, const Dims& n, const int64_t lo[3], const int64_t hi
         mn = std::min(mn, row[i]);
         mx = std::max(mx, row[i]);
       }
-    }
-  s.min[idx] = float(double(mn) + offset);
-  s.max[idx] = float(double(mx) + offset);
-  if (own_lo[0] > own_hi[0] || own_lo[1] > own_hi[1] || own_lo[2] > own_hi[2]) return;
-  double sum = 0, sum2 = 0;
-  for (int64_t k = own_lo[2]; k <= own_hi[2]; ++k)
-    for (int64_t j = own_lo[1]; j <= own_hi[1]; ++j) {
-      const T* row = data + size_t(n[0] * (j + n[1] * k));
+      if (j < own_lo[1] || j > own_hi[1] || k < own_lo[2] || k > own_hi[2] || own_lo[0] > own_hi[0]) continue;
       for (int64_t i = own_lo[0]; i <= own_hi[0]; ++i) {
         const double val = row[i];
         sum += val;
         sum2 += val * val;
       }
+      own += double(own_hi[0] - own_lo[0] + 1);
     }
-  // The sums are of stored values, as build_macrocells's: the offset shifts the mean only.
+  s.min[idx] = float(double(mn) + offset);
+  s.max[idx] = float(double(mx) + offset);
+  // The sums are of stored values, as the standard deviation needs no offset.
   s.sum[idx] = sum;
   s.sum2[idx] = sum2;
-  s.own[idx] = double((own_hi[0] - own_lo[0] + 1) * (own_hi[1] - own_lo[1] + 1) * (own_hi[2] - own_lo[2] + 1));
+  s.own[idx] = own;
 }
 
 }  // namespace
 
 MacrocellShare macrocell_share(const Volume& v, const Dims& whole, const Dims& count_lo, const Dims& count_hi,
-                               FilterSupport support) {
+                               FilterSupport support, int cell) {
+  return macrocell_share_at(v, v.region_lo, whole, count_lo, count_hi, support, cell);
+}
+
+MacrocellShare macrocell_share_at(const Volume& v, const Dims& region_lo, const Dims& whole, const Dims& count_lo,
+                                  const Dims& count_hi, FilterSupport support, int cell) {
   const Dims n = v.dims();
   for (int a = 0; a < 3; ++a)
-    if (!(0 <= count_lo[a] && count_lo[a] < count_hi[a] && count_hi[a] <= n[a] &&
-          v.region_lo[a] + n[a] <= whole[a]))
+    if (!(0 <= count_lo[a] && count_lo[a] < count_hi[a] && count_hi[a] <= n[a] && region_lo[a] >= 0 &&
+          region_lo[a] + n[a] <= whole[a]))
       throw std::invalid_argument("macrocell_share: the counted box is not inside the brick and the volume");
   MacrocellShare s;
-  s.cell = default_cell_size(whole);
+  s.cell = cell > 0 ? cell : default_cell_size(whole);
   s.support = support;
   for (int a = 0; a < 3; ++a) s.grid[a] = cells_along(whole[a], s.cell);
   const size_t count = size_t(s.grid[0] * s.grid[1] * s.grid[2]);
@@ -73,11 +77,11 @@ MacrocellShare macrocell_share(const Volume& v, const Dims& whole, const Dims& c
       bool empty = false;
       for (int x = 0; x < 3; ++x) {
         // build_macrocells's boxes in the whole volume, cut to the counted voxels, in brick coordinates.
-        const int64_t first = v.region_lo[x] + count_lo[x], last = v.region_lo[x] + count_hi[x] - 1;
-        lo[x] = std::max({int64_t(0), at[x] * s.cell - before, first}) - v.region_lo[x];
-        hi[x] = std::min({whole[x] - 1, (at[x] + 1) * s.cell + after, last}) - v.region_lo[x];
-        own_lo[x] = std::max(at[x] * s.cell, first) - v.region_lo[x];
-        own_hi[x] = std::min({whole[x] - 1, (at[x] + 1) * s.cell - 1, last}) - v.region_lo[x];
+        const int64_t first = region_lo[x] + count_lo[x], last = region_lo[x] + count_hi[x] - 1;
+        lo[x] = std::max({int64_t(0), at[x] * s.cell - before, first}) - region_lo[x];
+        hi[x] = std::min({whole[x] - 1, (at[x] + 1) * s.cell + after, last}) - region_lo[x];
+        own_lo[x] = std::max(at[x] * s.cell, first) - region_lo[x];
+        own_hi[x] = std::min({whole[x] - 1, (at[x] + 1) * s.cell - 1, last}) - region_lo[x];
         empty = empty || lo[x] > hi[x];
       }
       if (empty) continue;

@@ -26,10 +26,15 @@ struct MacrocellShare {
 };
 
 // A brick's share. `brick` was read as a region of a volume of `whole` dims (region_lo: its
-// first voxel there); it counts the voxels [count_lo, count_hi) in its own coordinates.
-// std::invalid_argument when the counted box is not inside the brick or the whole volume.
+// first voxel there); it counts the voxels [count_lo, count_hi) in its own coordinates. `cell`:
+// the edge in voxels, 0 for default_cell_size(whole). build_macrocells is the share of a whole
+// volume counting all of it. std::invalid_argument when the counted box is not inside the brick
+// or the whole volume.
 MacrocellShare macrocell_share(const Volume& brick, const Dims& whole, const Dims& count_lo, const Dims& count_hi,
-                               FilterSupport support);
+                               FilterSupport support, int cell = 0);
+// The same with the brick's first voxel given (build_macrocells: a whole volume at 0).
+MacrocellShare macrocell_share_at(const Volume& brick, const Dims& region_lo, const Dims& whole, const Dims& count_lo,
+                                  const Dims& count_hi, FilterSupport support, int cell = 0);
 // Adds `other` (of the same grid) into `into`: min of the minima, max of the maxima, sums.
 void add_share(MacrocellShare& into, const MacrocellShare& other);
 // The grid once every brick's share has been added. std::invalid_argument when a cell got no voxels.
