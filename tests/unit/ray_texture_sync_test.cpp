@@ -58,6 +58,22 @@ TEST(RayTextureSync, WholeOnceThenOnlyTheNewStrokes) {
   EXPECT_NE(received->lineage, first->lineage);
 }
 
+TEST(RayTextureSync, ATextureWithFewerStrokesThanSentGoesWholeAgain) {
+  auto spec = std::make_shared<const RayTextureSpec>(parse_ray_texture({{"mapping", "view"}, {"size", {8, 8}}}));
+  spec = with_stroke(*spec, stroke(RayChannel::Termination, 0.3, 0.2));
+  spec = with_stroke(*spec, stroke(RayChannel::Step, 0.6, 2.0));
+  dist::RayTextureSender sender;
+  dist::RayTextureReceiver receiver;
+  const auto first = receiver.apply(wire(sender.message(*spec)));
+  RayTextureSpec fewer = *spec;  // the same lineage, one stroke less
+  fewer.strokes.pop_back();
+  const nlohmann::json m = sender.message(fewer);
+  EXPECT_TRUE(m["whole"].get<bool>());
+  const auto again = receiver.apply(wire(m));
+  EXPECT_EQ(to_json(*again), to_json(fewer));
+  EXPECT_NE(again->lineage, first->lineage);  // the worker's renderer builds it anew
+}
+
 TEST(RayTextureSync, APngsTexelsGoAsBinary) {
   auto spec = std::make_shared<RayTextureSpec>(parse_ray_texture({{"mapping", "view"}, {"size", {3, 2}}}));
   auto image = std::make_shared<RayTextureImage>();
