@@ -1,6 +1,7 @@
 // Distributed rendering's clipping of one ray to the lattice points its brick owns
-// (RayCaster::owns; docs/distributed.md). Included per SIMD target by cpu/ray_kernel.cpp
-// (Highway's -inl.h convention).
+// (RayCaster::owns), and the visits it holds back before them (visit_behind;
+// docs/distributed.md). Included per SIMD target by cpu/ray_kernel.cpp (Highway's -inl.h
+// convention).
 #if defined(PEAKCAST_CPU_RAY_BRICK_INL_H_) == defined(HWY_TARGET_TOGGLE)
 #ifdef PEAKCAST_CPU_RAY_BRICK_INL_H_
 #undef PEAKCAST_CPU_RAY_BRICK_INL_H_
@@ -61,6 +62,25 @@ bool RayCaster::clip_to_brick() {
   const int beyond = f_.key.virtual_samples ? 2 * m + 1 : (f_.key.adaptive ? m : 0);
   last_ = int(std::min<int64_t>(int64_t(last) + beyond, last_));
   return true;
+}
+
+// A brick's visit before its points, or its first owned visit with visits held back (see
+// behind_): out of line, off the one-process path. True when the ray stopped.
+bool RayCaster::visit_behind(int i, int m) {
+  if (i < own_first_) {
+    behind_[1] = behind_[0];
+    behind_m_[1] = behind_m_[0];
+    behind_[0] = i;
+    behind_m_[0] = m;
+    return false;
+  }
+  const int b0 = behind_[0], b1 = behind_[1];
+  behind_[0] = behind_[1] = -1;
+  if (b0 + behind_m_[0] == i) {
+    if (f_.key.virtual_samples && b1 >= 0 && b1 + behind_m_[1] == b0 && sample_visit(b1, behind_m_[1])) return true;
+    if (sample_visit(b0, behind_m_[0])) return true;
+  }
+  return sample_visit(i, m);
 }
 
 }  // namespace
