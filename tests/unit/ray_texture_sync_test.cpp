@@ -90,6 +90,21 @@ TEST(RayTextureSync, APngsTexelsGoAsBinary) {
   EXPECT_EQ(got->png, "paint.png");
 }
 
+TEST(RayTextureSync, TexelsThatDoNotFitTheSizeAreRefused) {
+  auto spec = std::make_shared<const RayTextureSpec>(parse_ray_texture({{"mapping", "view"}, {"size", {3, 2}}}));
+  dist::RayTextureSender sender;
+  nlohmann::json m = sender.message(*spec);
+  m["png"] = "paint.png";
+  m["image"] = nlohmann::json::binary(std::vector<uint8_t>(5 * sizeof(float), 0));  // 18 floats for 3x2
+  dist::RayTextureReceiver receiver;
+  try {
+    receiver.apply(wire(m));
+    ADD_FAILURE() << "texels of the wrong count were taken";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("do not fit its size"), std::string::npos) << e.what();
+  }
+}
+
 TEST(RayTextureSync, RanksOutOfStepAreRefusedByName) {
   auto spec = std::make_shared<const RayTextureSpec>(parse_ray_texture({{"mapping", "view"}, {"size", {8, 8}}}));
   dist::RayTextureSender sender;
