@@ -1,12 +1,12 @@
 #!/usr/bin/env python3
-"""bench memory: the server's host memory for a volume against its voxel bytes (issue 13).
+"""bench memory: the server's host memory for a volume against its voxel bytes.
 
 A benchmark command, not a test. Starts `peakcast serve` twice: with a tiny volume (the
 baseline: code, llvmpipe, buffers) and with VOLUME, renders one REST still on each (so the GPU
 copy exists and, on llvmpipe, lives in host memory), and prints VmRSS after the load, after the
 still, and the peak (VmHWM), minus the baseline, as a multiple of the volume's voxel bytes.
 
-With --ranks N (issue 16) the servers run under `mpirun --oversubscribe -np N` and every rank's
+With --ranks N the servers run under `mpirun --oversubscribe -np N` and every rank's
 memory is printed: no rank, the serving rank 0 included, should hold more than its brick.
 
 Usage: scripts/bench_memory.py VOLUME [--peakcast build/server/peakcast] [--ranks N]

@@ -1,14 +1,14 @@
 #!/usr/bin/env python3
 """bench peers: peakcast against VTK's CPU and GPU volume mappers, side by side, at equal error.
 
-A benchmark command, not a test (issue 13). For each scene (volume, TF, camera, image size) it
+A benchmark command, not a test. For each scene (volume, TF, camera, image size) it
 renders, in one run:
   - VTK vtkFixedPointVolumeRayCastMapper (CPU) and vtkOpenGLGPUVolumeRayCastMapper (on whatever
     GL the X server offers: llvmpipe under Xvfb here), both at the scene's sample distance (one
     voxel), AutoAdjustSampleDistances off, image sample distance 1, no jitter, the same opacity
     unit distance as peakcast's scene (the smallest spacing);
   - a converged image: VTK's GPU mapper at 1/20 voxel (the issue's reference);
-  - peakcast (`peakcast bench scene --json` for time, `peakcast render` for the image) at several
+  - peakcast (`peakcast-bench scene --json` for time, `peakcast render` for the image) at several
     steps, and reports for each VTK mapper the fastest peakcast step whose PSNR against the
     converged image is at least that mapper's: "at equal error".
 Frame times are medians over an orbit (--frames frames over --orbit degrees) after warm-up;
@@ -170,14 +170,15 @@ def vtk_case(scene_path, mapper, step, frames, orbit, out_png):
 def peakcast_case(peakcast, scene_path, frames, orbit, out_png, backend):
     env = dict(os.environ, PEAKCAST_BACKEND=backend)
     run([peakcast, "render", scene_path, "-o", out_png], env=env)
-    j = json.loads(run([peakcast, "bench", "scene", scene_path, "--frames", frames, "--orbit", orbit, "--json"],
-                       env=env))
+    bench = str(pathlib.Path(peakcast).with_name("peakcast-bench"))
+    j = json.loads(run([bench, "scene", scene_path, "--frames", frames, "--orbit", orbit, "--json"], env=env))
     return j
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--peakcast", default=str(ROOT / "build/server/peakcast"))
+    ap.add_argument("--peakcast", default=str(ROOT / "build/server/peakcast"),
+                    help="the peakcast executable; peakcast-bench is taken from beside it")
     ap.add_argument("--sizes", default="512,1024")
     ap.add_argument("--scenes", default=",".join(SCENES))
     ap.add_argument("--frames", type=int, default=7)

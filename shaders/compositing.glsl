@@ -1,4 +1,4 @@
-// Front-to-back emission-absorption (DESIGN §4a): colour not premultiplied in the TF.
+// Front-to-back emission-absorption (docs/scenes.md): colour not premultiplied in the TF.
 void composite(inout vec4 acc, vec3 rgb, float alpha) {
   float w = (1.0 - acc.a) * alpha;
   acc.rgb += w * rgb;

@@ -1,4 +1,4 @@
-// Peak finding between samples (Knoll et al. 2009 §4.2, Algorithm 1, DESIGN §3 errata).
+// Peak finding between samples (Knoll et al. 2009 §4.2, Alg. 1, errata in docs/architecture.md).
 // C++ twins: core/peaks.cpp (table lookup) and reference/cpu_raycaster.cpp (root solving).
 layout(binding = UNIT_PEAK_TABLE) uniform sampler2DArray u_peak_table;  // RGBA32F: 4 peak values per layer, NO_PEAK_TEXEL = none
 layout(std430, binding = SSBO_TF_POINTS) readonly buffer TfPoints {

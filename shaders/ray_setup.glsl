@@ -1,4 +1,4 @@
-// Ray generation and ray-box intersection (DESIGN §4a). A pixel's ray goes through its centre;
+// Ray generation and ray-box intersection (docs/scenes.md). A pixel's ray goes through its centre;
 // row 0 is the top row. The ray is written o + t*d with o near the box (not at the eye), so t
 // stays small even for a camera 1e6 away; t_eye is the eye's own parameter (rays start there).
 struct Ray {

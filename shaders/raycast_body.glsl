@@ -468,7 +468,7 @@ RayResult cast_ray(vec2 pixel) {
   // one it leaps out of the cube of empty cells the distance promises to the first lattice point
   // beyond. The points visited are the 3D-DDA's (those inside occupied cells), but a frame costs
   // an iteration per sample or leap instead of one per cell crossed plus one per sample: on
-  // llvmpipe the cell loop cost more than the samples (issue 13). Segment methods add the point
+  // llvmpipe the cell loop cost more than the samples. Segment methods add the point
   // before a run of occupied cells and the one after it (EXTENSION 1), as the cell loop does.
   float edge = u_cells.w;
   vec3 xo = cell_coords(r.o);  // the ray in the cells' voxel coordinates: xo + t * dv

@@ -1,6 +1,6 @@
 // Transfer-function lookup (8192-entry table over the volume's value range, sampled at texel
 // centres, opacities baked for the scene's uniform step by the host) and the opacity correction
-// for the step actually taken (DESIGN §4a).
+// for the step actually taken (docs/scenes.md).
 layout(binding = UNIT_TF) uniform sampler1D u_tf;
 
 vec4 tf_lookup(float s) {

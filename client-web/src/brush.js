@@ -1,4 +1,4 @@
-// The ray-texture brush (issue 11): a paint mode beside orbit. In paint mode a left drag (one
+// The ray-texture brush: a paint mode beside orbit. In paint mode a left drag (one
 // finger) paints strokes: one where the pointer goes down and one every half radius along its
 // path; shift / right drags and the wheel still move the camera. Each stroke joins the client's
 // list (ray-texture-model.js), goes to the server (ray-texture-sync.js) and shows in the preview.

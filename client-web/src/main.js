@@ -91,7 +91,16 @@ disposer.listen(stream, 'volume', (e) => {
 });
 disposer.listen(stream, 'stroke_ack', (e) => brush.sync.onAck(e.detail));
 disposer.listen(stream, 'pong', (e) => brush.sync.onPong(e.detail));
-disposer.listen(stream, 'stats', (e) => { stats.stats(e.detail); $('variant').textContent = e.detail.variant; });
+// What the scene asks for that it will not get (peak finding with a TF without a peak): shown
+// for as long as the server says so, gone with the next frame that has no warning.
+const warningEl = $('warning');
+disposer.listen(stream, 'stats', (e) => {
+  stats.stats(e.detail);
+  $('variant').textContent = e.detail.variant;
+  const warnings = e.detail.warnings ?? [];
+  warningEl.textContent = warnings.join('\n');
+  warningEl.hidden = warnings.length === 0;
+});
 const errorEl = $('error');
 let errorTimer = 0;
 disposer.add(() => clearTimeout(errorTimer));

@@ -68,15 +68,22 @@ void add_render_commands(CLI::App& app, Runner& run) {
       encode::write_png(img, ra->out);
       std::printf("wrote %s: %dx%d, %s, %s\n", ra->out.c_str(), img.width, img.height, st.to_string().c_str(),
                   b.description().c_str());
+      for (const std::string& w : st.warnings) std::fprintf(stderr, "peakcast: warning: %s\n", w.c_str());
       if (!ra->stats.empty()) {
         // The render keys are the stream's stats keys (RenderStats::to_json); the backend's are the CLI's.
         nlohmann::json j = st.to_json();
+        if (ls.scene.tf_derived) {  // the TF it derived, to start editing from
+          Scene with_tf;
+          with_tf.tf = ls.scene.tf;
+          with_tf.opacity_unit = ls.scene.tf.opacity_unit;
+          j["tf"] = scene_to_json(with_tf)["tf"];
+        }
         j["backend"] = render::to_string(b.backend);
         j["renderer"] = b.renderer->description();
-        if (b.context) {
-          j["gl_renderer"] = b.context->info().renderer;
-          j["gl_version"] = b.context->info().version;
-          j["egl_platform"] = b.context->info().platform;
+        if (b.device) {
+          j["gl_renderer"] = b.device->info().renderer;
+          j["gl_version"] = b.device->info().version;
+          j["egl_platform"] = b.device->info().platform;
         }
         std::ofstream(ra->stats) << j.dump(2) << "\n";
       }

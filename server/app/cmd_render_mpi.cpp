@@ -1,4 +1,4 @@
-// `mpirun -np N peakcast render SCENE -o out.png [--stats s.json]` (issue 16, docs/distributed.md):
+// `mpirun -np N peakcast render SCENE -o out.png [--stats s.json]` (docs/distributed.md):
 // the volume cut into N k-d bricks with ghosts, each rank reading only its brick (a region of
 // the file), rendering it on the whole volume's lattice (CpuRenderer::render_brick), IceT
 // compositing the ranks' layers in visibility order, rank 0 writing the image and the stats.
@@ -22,12 +22,12 @@
 #include "core/parallel.h"
 #include "core/volume_io.h"
 #include "cpu/cpu_renderer.h"
-#include "dist/brick_frame.h"
-#include "dist/icet_compositor.h"
-#include "dist/kd_split.h"
-#include "dist/coordinator.h"
-#include "dist/mpi_renderer.h"
-#include "dist/opacity_chain.h"
+#include "distributed/brick_frame.h"
+#include "distributed/icet_compositor.h"
+#include "distributed/kd_split.h"
+#include "distributed/coordinator.h"
+#include "distributed/mpi_renderer.h"
+#include "distributed/opacity_chain.h"
 #include "encode/png.h"
 #include "render/backend.h"
 
@@ -89,23 +89,23 @@ int run(const MpiRenderArgs& a, int rank, int size) {
   const auto t_start = std::chrono::steady_clock::now();
   ParsedSceneFile parsed = parse_scene_file(a.scene);
   // The file's header: every rank reads one voxel of it, which tells the whole volume's box.
-  const Volume head = dist::read_head(parsed.volume.string());
-  VolumeBox box{head.source_dims, head.spacing, head.origin, 0.0, 1.0};
-  const dist::Index3 dims{box.dims[0], box.dims[1], box.dims[2]};
+  const Volume head = distributed::read_head(parsed.volume.string());
+  VolumeBox box{head.source_dims, head.spacing, head.origin, 0.0, 1.0, {}};
+  const distributed::Index3 dims{box.dims[0], box.dims[1], box.dims[2]};
   // Ghosts depend on the step, filter and shading, not on the value range.
-  const int ghost = dist::brick_ghost(resolve_scene(parsed.scene, box));
+  const int ghost = distributed::brick_ghost(resolve_scene(parsed.scene, box));
 
   // Every rank reads its brick; the whole volume's range, histogram and macrocell grids are
-  // reduced from the bricks (dist/brick_load.h).
+  // reduced from the bricks (distributed/brick_load.h).
   const auto t_load = std::chrono::steady_clock::now();
-  dist::BrickLoadRequest request;
+  distributed::BrickLoadRequest request;
   request.path = parsed.volume.string();
   request.ghost = ghost;
-  dist::BrickRead read = dist::read_brick(request);
+  distributed::BrickRead read = distributed::read_brick(request);
   if (read.failed) throw std::runtime_error(read.error);  // names the file (and the rank that failed)
   const double load_ms = ms_between(t_load, std::chrono::steady_clock::now());
-  const dist::KdSplit& split = read.split;
-  const dist::Brick& mine = read.mine;
+  const distributed::KdSplit& split = read.split;
+  const distributed::Brick& mine = read.mine;
   std::shared_ptr<Volume> brick = read.voxels;
   box = read.box;
   ResolvedScene scene = resolve_scene(parsed.scene, box);
@@ -128,16 +128,16 @@ int run(const MpiRenderArgs& a, int rank, int size) {
   auto resident = renderer.make_resident(brick, read.cells);
   const glm::dvec3 eye = (scene.camera.eye - box.origin) / box.spacing;
   const glm::dvec3 dir = glm::normalize((scene.camera.center - scene.camera.eye) / box.spacing);
-  const std::vector<int> order = dist::visibility_order(split, eye, dir, scene.camera.orthographic);
-  render::Brick frame = dist::frame_brick(mine, dims);
-  // A ray texture's termination: the ranks draw in turn, front to back (dist/opacity_chain.h).
+  const std::vector<int> order = distributed::visibility_order(split, eye, dir, scene.camera.orthographic);
+  render::Brick frame = distributed::frame_brick(mine, dims);
+  // A ray texture's termination: the ranks draw in turn, front to back (distributed/opacity_chain.h).
   const size_t pixels = size_t(scene.scene.width) * size_t(scene.scene.height);
-  if (scene.ray_texture) frame.front_opacity = dist::receive_front_opacity(order, pixels);
+  if (scene.ray_texture) frame.front_opacity = distributed::receive_front_opacity(order, pixels);
   render::RenderStats st;
   const Image layer = renderer.render_brick(*resident, scene, frame, &st);
-  if (scene.ray_texture) dist::send_opacity_behind(order, frame.front_opacity.get(), layer);
-  dist::IceTCompositor compositor(MPI_COMM_WORLD, 0);
-  dist::CompositeTiming timing;
+  if (scene.ray_texture) distributed::send_opacity_behind(order, frame.front_opacity.get(), layer);
+  distributed::IceTCompositor compositor(MPI_COMM_WORLD, 0);
+  distributed::CompositeTiming timing;
   const std::vector<float> composed = compositor.composite(layer.rgba, layer.width, layer.height, order, &timing);
 
   RankFigures mine_fig{};
@@ -158,7 +158,7 @@ int run(const MpiRenderArgs& a, int rank, int size) {
   MPI_Gather(&mine_fig, kFields, MPI_DOUBLE, all.data(), kFields, MPI_DOUBLE, 0, MPI_COMM_WORLD);
   if (rank != 0) return 0;
 
-  const Image img = dist::finish_composite(composed, layer.width, layer.height, scene.scene.background);
+  const Image img = distributed::finish_composite(composed, layer.width, layer.height, scene.scene.background);
   encode::write_png(img, a.out);
   const double wall_ms = ms_between(t_start, std::chrono::steady_clock::now());
   double render_max = 0, composite_max = 0;
@@ -204,12 +204,12 @@ int mpi_serve(const std::string& backend, const std::string& egl_device,
     if (provided < MPI_THREAD_SERIALIZED)
       throw std::runtime_error("this MPI cannot be called from the render thread (MPI_THREAD_SERIALIZED)");
     if (rank == 0) {
-      auto coord = std::make_shared<dist::Coordinator>(size);
+      auto coord = std::make_shared<distributed::Coordinator>(size);
       MpiServeHooks hooks;
       hooks.wrap = [coord](std::unique_ptr<render::Renderer> local) -> std::unique_ptr<render::Renderer> {
         // The server's own renderer draws rank 0's brick; on the CPU, with the rank's cores.
         if (std::string(local->backend()) == "cpu") local = std::make_unique<cpu::CpuRenderer>(rank_threads());
-        return std::make_unique<dist::MpiRenderer>(coord, std::move(local));
+        return std::make_unique<distributed::MpiRenderer>(coord, std::move(local));
       };
       hooks.loader = [coord](const std::filesystem::path& path, const LoadOptions& options) {
         return coord->load(path, options);
@@ -218,7 +218,7 @@ int mpi_serve(const std::string& backend, const std::string& egl_device,
       code = serve(std::move(hooks));
     } else {
       RankRenderer r = open_rank_renderer(backend, egl_device);
-      dist::serve_worker(r.get());
+      distributed::serve_worker(r.get());
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "peakcast: error on rank %d of %d: %s\n", rank, size, e.what());

@@ -23,12 +23,12 @@ int mpi_world_size_hint();
 int mpi_render(const MpiRenderArgs& a);
 
 // mpirun peakcast serve: initialises MPI (serialized threads); rank 0 calls `serve` with the
-// hooks below, the others render what it asks (dist::serve_worker). An error on rank 0 before
+// hooks below, the others render what it asks (distributed::serve_worker). An error on rank 0 before
 // it serves ends the job.
 using RendererWrap = std::function<std::unique_ptr<render::Renderer>(std::unique_ptr<render::Renderer>)>;
 struct MpiServeHooks {
-  RendererWrap wrap;    // puts dist::MpiRenderer over the server's own renderer
-  VolumeLoader loader;  // every rank reads its brick; rank 0 keeps no voxels (dist::Coordinator)
+  RendererWrap wrap;    // puts distributed::MpiRenderer over the server's own renderer
+  VolumeLoader loader;  // every rank reads its brick; rank 0 keeps no voxels (distributed::Coordinator)
   int ranks = 1;
 };
 // backend, egl_device: the server's options, for the other ranks' renderers.

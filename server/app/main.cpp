@@ -13,7 +13,6 @@ int main(int argc, char** argv) {
   peakcast::app::Runner run;
   peakcast::app::add_volume_commands(app, run);
   peakcast::app::add_render_commands(app, run);
-  peakcast::app::add_bench_commands(app, run);
   peakcast::app::add_serve_command(app, run);
   try {
     app.parse(argc, argv);

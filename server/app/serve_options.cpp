@@ -8,7 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "gpu/shader_cache.h"
+#include "render/backend.h"
 
 namespace peakcast::app {
 namespace {
@@ -78,7 +78,7 @@ void add_serve_options(CLI::App& s, ServeOptions& o) {
   o.idle_seconds = int(c.idle_timeout.count());
   o.gpu_budget_mib = c.gpu_budget_bytes >> 20;
   o.web_dir = PEAKCAST_WEB_DIR_DEFAULT;
-  o.shader_dir = gpu::default_shader_dir().string();
+  o.shader_dir = render::default_shader_dir().string();
   c.egl_device = "auto";
   c.backend = "auto";
   s.option_defaults()->always_capture_default();

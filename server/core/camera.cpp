@@ -17,13 +17,15 @@ std::string Camera::to_string() const {
   return s.str();
 }
 
-Camera default_camera(const glm::dvec3& lo, const glm::dvec3& hi, double fov_y) {
+Camera default_camera(const glm::dvec3& lo, const glm::dvec3& hi, double fov_y, double azimuth, double elevation) {
   Camera c;
   c.fov_y = fov_y;
   c.center = (lo + hi) * 0.5;
   const double radius = std::max(glm::length(hi - lo) * 0.5, 1e-9);
   const double distance = radius / std::sin(fov_y * M_PI / 360.0);
-  c.eye = c.center + glm::dvec3(0, 0, distance);
+  // From +z, azimuth turns right-handed about +y, elevation lifts towards +y.
+  const double az = azimuth * M_PI / 180.0, el = elevation * M_PI / 180.0;
+  c.eye = c.center + distance * glm::dvec3(std::cos(el) * std::sin(az), std::sin(el), std::cos(el) * std::cos(az));
   c.up = {0, 1, 0};
   c.height = 2.0 * radius;
   return c;

@@ -1,4 +1,4 @@
-// Camera and ray generation shared by the GL ray caster and the CPU reference (DESIGN §4a).
+// Camera and ray generation shared by the GL ray caster and the CPU reference (docs/scenes.md).
 // Rays are expressed in the box-centred frame, starting near the box rather than at the eye,
 // so that float precision holds for a camera far away (see shaders/ray_setup.glsl).
 #pragma once
@@ -17,9 +17,12 @@ struct Camera {
   std::string to_string() const;
 };
 
-// VTK's ResetCamera: look down -z at the box centre from the distance where the bounding sphere
-// fills the vertical view angle.
-Camera default_camera(const glm::dvec3& box_min, const glm::dvec3& box_max, double fov_y = 30.0);
+// The first view of a box: VTK's ResetCamera (looking down -z at the box centre from the
+// distance where the bounding sphere fills the vertical view angle), then turned as VTK's
+// Azimuth (about the view up, +y) and Elevation (towards the view up) would turn it, by
+// `azimuth` and `elevation` degrees: a three-quarter view unless both are 0.
+Camera default_camera(const glm::dvec3& box_min, const glm::dvec3& box_max, double fov_y = 30.0,
+                      double azimuth = 30.0, double elevation = 20.0);
 
 // Throws std::invalid_argument for eye == center, up parallel to the view, bad fov or height.
 void validate_camera(const Camera& c);

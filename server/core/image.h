@@ -1,4 +1,4 @@
-// An RGBA float image, row 0 at the top (DESIGN §4a), plus the per-pixel sample counts.
+// An RGBA float image, row 0 at the top (docs/scenes.md), plus the per-pixel sample counts.
 #pragma once
 
 #include <string>

@@ -1,7 +1,7 @@
 // Distributed rendering (docs/distributed.md): the whole volume's macrocell grids built from its
 // bricks, so that a rank holding one brick walks the same cells as one process holding the
 // volume (space skipping's leaps, adaptive multipliers, where a virtual-sample run ends). Each
-// brick adds what its counted voxels (dist::counted_box: every voxel counted by exactly one
+// brick adds what its counted voxels (distributed::counted_box: every voxel counted by exactly one
 // brick) contribute to each cell's footprint; the shares combine by min, max and sums (an
 // MPI_Allreduce, or add_share in one process), and grid_from_share finishes the grid
 // build_macrocells would have built from the whole volume: the same min/max, the standard

@@ -30,7 +30,7 @@ MacrocellGrid build_macrocells(const Volume& v, int cell, FilterSupport support)
 }
 
 // Two passes, one per grid. A single pass over the tricubic windows serving both grids was
-// tried (issue 13) and was no faster on the em volume (500-560 ms against 222 + 284 ms): the
+// tried and was no faster on the em volume (500-560 ms against 222 + 284 ms): the
 // build is bound by reading rows across planes, not by the passes.
 VolumeMacrocells build_volume_macrocells(const Volume& v) {
   const auto t0 = std::chrono::steady_clock::now();

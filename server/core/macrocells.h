@@ -1,4 +1,4 @@
-// Macrocell min/max grid for empty-space skipping (Knoll §6.1, Lee §3.2, DESIGN §3).
+// Macrocell min/max grid for empty-space skipping (Knoll §6.1, Lee §3.2).
 //
 // Cell (a, b, c) covers the sample positions [c*e, (c+1)*e] in voxel coordinates (the last cell
 // is clipped at n-1). Its [min, max] covers every voxel that a sample inside it can read:

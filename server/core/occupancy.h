@@ -1,4 +1,4 @@
-// Which macrocells can contribute under the current TF (DESIGN §3): a cell is empty when the
+// Which macrocells can contribute under the current TF: a cell is empty when the
 // TF's opacity is zero over its whole [min, max]. Rebuilt on every TF edit: a range-max query
 // per cell over the baked 8192-entry opacity table (sparse table, O(1) per cell).
 #pragma once

@@ -1,4 +1,4 @@
-// Peak finding's transfer-function side (Knoll et al. 2009 §4.1, DESIGN §3 errata):
+// Peak finding's transfer-function side (Knoll et al. 2009 §4.1, errata in docs/architecture.md):
 // the peaks of the TF's opacity and the 2D peak table.
 //
 // A peak is a local maximum of the piecewise-linear opacity: a point, or a run of points of

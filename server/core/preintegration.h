@@ -1,4 +1,4 @@
-// Pre-integrated classification baseline (Engel et al. 2001; DESIGN §3): a 2D table of the
+// Pre-integrated classification baseline (Engel et al. 2001): a 2D table of the
 // emission-absorption integral over a segment of length `step` whose field runs linearly from
 // the front value s_f to the back value s_b.
 //

@@ -1,4 +1,4 @@
-// Where the samples of a ray lie (DESIGN §3 "Sampling", §4a; Knoll §5-§6.2). One definition for
+// Where the samples of a ray lie (docs/scenes.md "Sampling"; Knoll §5-§6.2). One definition for
 // the GL ray caster (shaders/raycast_body.glsl mirrors it) and the CPU twin (reference/).
 //
 // Every ray samples a lattice that starts at its entry into the box:

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <set>
 
+#include "core/auto_tf.h"
 #include "core/json_fields.h"
+#include "core/peaks.h"
 #include "core/preintegration.h"
 
 namespace peakcast {
@@ -203,11 +205,27 @@ json scene_to_json(const Scene& s) {
 
 std::string Scene::to_string() const { return "Scene" + scene_to_json(*this).dump(); }
 
-ResolvedScene resolve_scene(const Scene& s, const Volume& v) {
-  return resolve_scene(s, VolumeBox{v.dims(), v.spacing, v.origin, v.min_value, v.max_value});
+namespace {
+
+// Peak finding draws surfaces at the TF's opacity peaks: without one inside the data's range
+// the frame is plain DVR (or, peaks only, empty), which the user should hear about.
+void check_peaks(ResolvedScene& r, double lo, double hi) {
+  const RenderSettings& rs = r.scene.render;
+  if (rs.classification != Classification::Peaks || rs.peak_mode == PeakMode::DvrOnly) return;
+  const std::vector<Peak> peaks = find_peaks(r.tf);
+  if (peaks.empty()) {
+    r.warnings.push_back(
+        "classification peaks: the TF has no opacity peak (a point more opaque than both its neighbours), so peak "
+        "finding finds no surface and the frame shows only the DVR part");
+    return;
+  }
+  for (const Peak& p : peaks)
+    if (p.value >= lo && p.value <= hi) return;
+  r.warnings.push_back("classification peaks: every opacity peak of the TF lies outside the data's range [" +
+                       std::to_string(lo) + ", " + std::to_string(hi) + "], so no ray crosses one");
 }
 
-ResolvedScene resolve_scene(const Scene& s, const VolumeBox& v) {
+ResolvedScene resolve(const Scene& s, const VolumeBox& v, const std::vector<uint64_t>* histogram) {
   ResolvedScene r;
   r.scene = s;
   for (int a = 0; a < 3; ++a)
@@ -218,8 +236,20 @@ ResolvedScene resolve_scene(const Scene& s, const VolumeBox& v) {
   r.box_min = v.origin;
   r.box_max = v.origin + glm::dvec3(v.dims[0] - 1, v.dims[1] - 1, v.dims[2] - 1) * v.spacing;
   r.camera = s.camera ? *s.camera : default_camera(r.box_min, r.box_max);
-  r.tf = s.tf ? *s.tf : TransferFunction::grey_ramp(v.min_value, v.max_value);
   const double min_spacing = std::min({v.spacing.x, v.spacing.y, v.spacing.z});
+  if (s.tf) {
+    r.tf = *s.tf;
+  } else {
+    AutoTfInput in;
+    in.histogram = histogram && !histogram->empty() ? histogram : nullptr;
+    in.lo = v.min_value;
+    in.hi = v.max_value;
+    const glm::dvec3 extent = r.box_max - r.box_min;
+    in.ray_length = (extent.x + extent.y + extent.z) / 3.0 / min_spacing;
+    in.with_peak = s.render.classification == Classification::Peaks;
+    r.tf = derive_transfer_function(in);
+    r.tf_derived = true;
+  }
   r.tf.opacity_unit = s.opacity_unit > 0 ? s.opacity_unit : min_spacing;
   r.step = s.render.step > 0 ? s.render.step : min_spacing;
   r.min_spacing = min_spacing;
@@ -231,7 +261,16 @@ ResolvedScene resolve_scene(const Scene& s, const VolumeBox& v) {
   if (r.step < kMinStepFraction * min_spacing)
     throw SceneError("render.step: " + std::to_string(r.step) + " is below " + std::to_string(kMinStepFraction) +
                      " x the smallest spacing");
+  check_peaks(r, v.min_value, v.max_value);
   return r;
 }
+
+}  // namespace
+
+ResolvedScene resolve_scene(const Scene& s, const Volume& v) {
+  return resolve(s, VolumeBox{v.dims(), v.spacing, v.origin, v.min_value, v.max_value, {}}, &v.histogram);
+}
+
+ResolvedScene resolve_scene(const Scene& s, const VolumeBox& v) { return resolve(s, v, &v.histogram); }
 
 }  // namespace peakcast

@@ -1,4 +1,4 @@
-// A scene: volume, camera, image size, TF, background and render settings (DESIGN §4a,
+// A scene: volume, camera, image size, TF, background and render settings (docs/scenes.md,
 // proto/scene.schema.json). Parsing refuses unknown keys, wrong types, NaN/Inf, unsorted TFs,
 // zero or oversized images and degenerate cameras, naming the key.
 #pragma once
@@ -55,7 +55,7 @@ struct Scene {
   std::string volume;
   std::optional<Camera> camera;  // default: default_camera() of the volume box
   int width = 512, height = 512;
-  std::optional<TransferFunction> tf;  // default: grey ramp over the value range
+  std::optional<TransferFunction> tf;  // default: derived from the histogram (auto_tf.h)
   double opacity_unit = 0.0;
   glm::dvec3 background{0, 0, 0};
   RenderSettings render;
@@ -78,14 +78,21 @@ struct ResolvedScene {
   // read (build_ray_texture at the scene's early termination): the GL ray caster keeps them
   // per lineage and applies only new strokes, the CPU reference builds them once per image.
   std::shared_ptr<const RayTextureSpec> ray_texture;
+  // The scene came without a TF, and `tf` was derived from the volume's histogram (auto_tf.h).
+  bool tf_derived = false;
+  // What the scene asks for that it will not get, in words for the user (the stats carry them):
+  // peak finding with a TF that has no opacity peak inside the data's range.
+  std::vector<std::string> warnings;
 };
 ResolvedScene resolve_scene(const Scene& s, const Volume& v);
-// What resolving needs of a volume: its box and value range. Distributed rendering resolves
-// against the whole volume's, which no rank holds.
+// What resolving needs of a volume: its box, value range and histogram (for a derived TF; none:
+// a ramp over the range). Distributed rendering resolves against the whole volume's, which no
+// rank holds.
 struct VolumeBox {
   std::array<int64_t, 3> dims{0, 0, 0};
   glm::dvec3 spacing{1.0}, origin{0.0};
   double min_value = 0.0, max_value = 0.0;
+  std::vector<uint64_t> histogram;  // Volume::kHistogramBins bins over the range, or empty
 };
 ResolvedScene resolve_scene(const Scene& s, const VolumeBox& v);
 

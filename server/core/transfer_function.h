@@ -1,4 +1,4 @@
-// Piecewise-linear transfer function in the volume's native data units (DESIGN §4a):
+// Piecewise-linear transfer function in the volume's native data units (docs/scenes.md):
 // points {value, r, g, b, a} sorted by value, linear between, constant outside; two points may
 // share a value (a step: at that value and above, the later point holds). `a` is opacity per
 // `opacity_unit` world units.

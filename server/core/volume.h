@@ -1,4 +1,4 @@
-// A scalar volume held in its native voxel type (DESIGN §3, §4a).
+// A scalar volume held in its native voxel type (docs/scenes.md).
 #pragma once
 
 #include <array>
@@ -59,7 +59,7 @@ class Volume {
   uint8_t* data() { return data_.get(); }
   const uint8_t* data() const { return data_.get(); }
   // The voxels, freed once a GPU copy holds them (GpuResidency, the server): the volume's host
-  // memory is then its texture alone (issue 13: at most 1.1x the voxel bytes). Everything but
+  // memory is then its texture alone (at most 1.1x the voxel bytes). Everything but
   // the voxels stays (dims, spacing, range, histogram). The one mutation of a shared volume:
   // callers guarantee no other thread reads voxels any more (the server reads them only on the
   // loader pool before the volume is published, and on the render thread for the upload).
@@ -105,7 +105,7 @@ class Volume {
   void finalize_statistics();
   // The voxels of the box [lo, hi) of this volume's grid counted into kHistogramBins bins over
   // the stored range [stored_lo, stored_hi], binned as finalize_statistics bins: a distributed
-  // volume's histogram is the sum of its bricks' own boxes (dist/).
+  // volume's histogram is the sum of its bricks' own boxes (distributed/).
   std::vector<uint64_t> box_histogram(const Dims& lo, const Dims& hi, double stored_lo, double stored_hi) const;
   std::string to_string() const;
 

@@ -146,7 +146,7 @@ size_t read_raw(const fs::path& path, int64_t skip, uint8_t* dst, size_t want, b
     std::fseek(f.get(), long(offset), SEEK_SET);
     return std::fread(dst, 1, want, f.get());
   }
-  // Large files: the workers read a share each with pread (issue 13, load phases): the copy
+  // Large files: the workers read a share each with pread: the copy
   // from the page cache and the first touch of the fresh allocation run in parallel.
   const int fd = fileno(f.get());
   std::atomic<bool> failed{false};

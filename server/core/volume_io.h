@@ -1,4 +1,4 @@
-// Loading volumes from files (DESIGN §3, §6). Every refusal is a VolumeError whose message
+// Loading volumes from files (docs/scenes.md). Every refusal is a VolumeError whose message
 // names the file and the reason; nothing larger than the configured limit is ever allocated.
 #pragma once
 

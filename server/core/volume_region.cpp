@@ -1,4 +1,4 @@
-// Reading a box of voxels out of a volume file (issue 16: each MPI rank reads only its brick).
+// Reading a box of voxels out of a volume file (each MPI rank reads only its brick).
 // The payload is the full volume's bytes in x-fastest order, possibly split over several files
 // (NRRD LIST, printf data files) and possibly compressed. The region is a list of rows (one per
 // y and z of the box), each a contiguous run of the payload; only those bytes land in the volume.

@@ -62,10 +62,10 @@ int CpuRenderer::sample_cap(const render::VariantKey&) const { return kMaxSample
 CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, render::GpuPath path, RenderStats* stats) {
   const MacrocellGrid& cells = cv.macrocells(s.scene.render.filter);
   render::SetupOptions o;
-  o.leaps = leaps_;
-  o.vs_widening = vs_widening_;
-  o.force_variant = &force_variant_;
-  const render::FrameSetup fs = render::setup_frame(cv, s, path, o, occupancy_, table_builds_);
+  o.leaps = seam_.leaps;
+  o.vs_widening = seam_.vs_widening;
+  o.force_variant = &seam_.force_variant;
+  const render::FrameSetup fs = render::setup_frame(cv, s, path, o, occupancy_, seam_.table_builds);
   const auto t_tables = Clock::now();
   const double lo = cv.tf_lo(), hi = cv.tf_hi();
 
@@ -107,7 +107,7 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
     std::vector<float> rgba = render::step_tf_table(s, lo, hi);
     std::vector<uint64_t> bits = tf_cell_bits(rgba, TransferFunction::kTableSize);
     tf = &cache_insert(tf_tables_, TfTable{tf_key, std::move(rgba), std::move(bits)}, kCacheEntries);
-    ++table_builds_;
+    ++seam_.table_builds;
   }
   f.tf = tf->rgba.data();
   f.tf_size = TransferFunction::kTableSize;
@@ -136,7 +136,7 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
       n.preint_any = preint_cell_bits(n.preint, n.preint_size);
     }
     t = &cache_insert(tables_, std::move(n), kCacheEntries);
-    ++table_builds_;
+    ++seam_.table_builds;
   }
   f.peak_texels = t->peak_texels.data();
   f.peak_bins = t->peak_bins;
@@ -153,7 +153,7 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
   if (f.key.space_skipping) {
     CellBytes* d = cache_find(distances_, fs.occupancy_key);
     if (!d) {
-      std::vector<uint8_t> distance = render::traversal_distances(*fs.occupancy, leaps_);
+      std::vector<uint8_t> distance = render::traversal_distances(*fs.occupancy, seam_.leaps);
       const bool any = std::find(distance.begin(), distance.end(), uint8_t(0)) != distance.end();
       distance.resize(distance.size() + 4, 0);  // the packet leaps read 4 bytes at a cell's index
       d = &cache_insert(distances_, CellBytes{fs.occupancy_key, std::move(distance), any}, kCacheEntries);
@@ -166,7 +166,7 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
     CellBytes* m = cache_find(multipliers_, mkey);
     if (!m) {
       m = &cache_insert(multipliers_, CellBytes{mkey, adaptive_multipliers(cells, volume_stddev(v))}, kCacheEntries);
-      ++table_builds_;
+      ++seam_.table_builds;
     }
     f.cell_stride = m->bytes.data();
   }
@@ -236,7 +236,7 @@ RenderResult CpuRenderer::render(const render::ResidentVolume& v, const Resolved
   const CpuVolume& cv = cpu_volume(v);
   const PixelRect rect = req.tile.value_or(PixelRect{0, 0, s.scene.width, s.scene.height});
   render::check_rect(rect, s.scene.width, s.scene.height);
-  if (stats) *stats = RenderStats{};
+  if (stats) *stats = RenderStats::for_scene(s);
   CpuFrame f = prepare(cv, s, req.path, stats);
   const bool rgb8 = req.output == render::RenderOutput::Rgb8;
   f.key.rgb8 = rgb8;
@@ -286,7 +286,7 @@ Image CpuRenderer::render_brick(const render::ResidentVolume& v, const ResolvedS
   const glm::dvec3 spacing = cv.volume().spacing;
   const PixelRect rect = render::check_brick_frame(s, brick, spacing, tile);
   const int w = rect.w, h = rect.h;
-  if (stats) *stats = RenderStats{};
+  if (stats) *stats = RenderStats::for_scene(s);
   CpuFrame f = prepare(cv, s, render::GpuPath::Fragment, stats);
   f.brick = true;
   if (brick.front_opacity && f.ray_texture) {
@@ -341,7 +341,7 @@ Image CpuRenderer::render_bare(const render::ResidentVolume& v, const ResolvedSc
   const CpuVolume& cv = cpu_volume(v);
   const int w = s.scene.width, h = s.scene.height;
   if (full.width != w || full.height != h) throw std::invalid_argument("render_bare: image size differs");
-  if (stats) *stats = RenderStats{};
+  if (stats) *stats = RenderStats::for_scene(s);
   CpuFrame f = prepare(cv, s, path, nullptr);
   f.key = render::choose_variant(s, 0, path);
   f.key.cpu = true;

@@ -1,4 +1,4 @@
-// The native CPU backend (issue 13; docs/performance.md has the decision and its numbers): the
+// The native CPU backend (docs/performance.md has the decision and its numbers): the
 // GL ray caster's algorithm and scene contract on the host, for machines whose EGL offers only
 // a software rasteriser. Threads take 16x16-pixel tiles; each ray is cpu/ray_kernel.cpp, its
 // samples reconstructed a SIMD run at a time (cpu/sampler_simd.cpp); the volume is read where

@@ -17,7 +17,7 @@ namespace HWY_NAMESPACE {
 namespace {
 
 // walk_leaps's empty-space leaps up to each ray's first occupied lattice point, for a packet of
-// rays in SIMD lanes (issue 13: on sparse scenes most of a ray's leaps come before its first
+// rays in SIMD lanes (on sparse scenes most of a ray's leaps come before its first
 // occupied cell, and one ray's leaps are a chain of dependent scalar operations). Every lane
 // does walk_leaps's arithmetic operation for operation (no fused multiply-add), so each ray
 // arrives where its scalar walk would: walk() then goes on from there, its visits unchanged.

@@ -1,5 +1,5 @@
 // Peak finding between samples for the CPU ray caster (Knoll et al. 2009 §4.2, Algorithm 1,
-// DESIGN §3 errata): shaders/peak_find.glsl in C++. Included per SIMD target by
+// errata in docs/architecture.md): shaders/peak_find.glsl in C++. Included per SIMD target by
 // cpu/ray_kernel.cpp (Highway's -inl.h convention).
 #if defined(PEAKCAST_CPU_RAY_PEAKS_INL_H_) == defined(HWY_TARGET_TOGGLE)
 #ifdef PEAKCAST_CPU_RAY_PEAKS_INL_H_

@@ -1,4 +1,4 @@
-// A fixed pool of encode threads, each with its own TurboJPEG handle (DESIGN §2).
+// A fixed pool of encode threads, each with its own TurboJPEG handle (docs/architecture.md).
 #pragma once
 
 #include <condition_variable>

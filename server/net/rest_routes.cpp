@@ -102,7 +102,10 @@ void submit_still(AppContext& app, const Request& req, const Scene& scene, std::
   job.volume = std::move(vol);
   const unsigned version = req.version();
   const bool keep_alive = req.keep_alive();
-  job.done = [&app, send, version, keep_alive](StillResult r) {
+  // Of the scene: whether its TF was derived, and what it asks for that it will not get.
+  const std::string tf_source = job.scene.tf_derived ? "auto" : "scene";
+  const std::vector<std::string> warnings = job.scene.warnings;
+  job.done = [&app, send, version, keep_alive, tf_source, warnings](StillResult r) {
     if (!r.error.empty()) {
       const auto status = r.error_code == "shutting_down" || r.error_code == "cancelled"
                               ? http::status::service_unavailable
@@ -121,6 +124,8 @@ void submit_still(AppContext& app, const Request& req, const Scene& scene, std::
     res.set("X-Variant", r.variant);
     res.set("X-Wait-Ms", std::to_string(r.wait_ms));
     res.set("X-Bands", std::to_string(r.bands));
+    res.set("X-TF-Source", tf_source);
+    for (const std::string& w : warnings) res.insert("X-Warning", w);
     res.body().assign(r.bytes.begin(), r.bytes.end());
     res.keep_alive(keep_alive);
     res.prepare_payload();

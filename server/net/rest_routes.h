@@ -1,4 +1,4 @@
-// REST (DESIGN §5): /api/health, /api/volumes, /api/volumes/{id}, POST /api/render, /metrics,
+// REST (docs/rest.md): /api/health, /api/volumes, /api/volumes/{id}, POST /api/render, /metrics,
 // and client-web/ as static files. Responses are produced through `send`, possibly later (render).
 #pragma once
 

@@ -1,5 +1,5 @@
-// The CPU reference renderer (DESIGN §4): the same conventions as the GL ray caster, in double
-// precision, multithreaded over rows.
+// The CPU reference renderer (docs/accuracy.md): the same conventions as the GL ray caster, in
+// double precision, multithreaded over rows.
 //  (a) `render_reference` at a given step: the same algorithm as the GPU (post-classification,
 //      peak finding with the same table and regula falsi, or the same preintegration table), to
 //      check the GL path;

@@ -1,4 +1,4 @@
-// Error metrics over RGB in [0, 1] (DESIGN §4).
+// Error metrics over RGB in [0, 1] (docs/accuracy.md).
 #pragma once
 
 #include <string>

@@ -1,6 +1,6 @@
-// Where a ray's integrand is not smooth, found exactly, for the converged references (DESIGN §4,
-// "semi-analytic"): the faces of the voxel cells (the trilinear field changes polynomial there)
-// and the crossings of the TF's breakpoints and peak values.
+// Where a ray's integrand is not smooth, found exactly, for the converged references
+// (semi-analytic, docs/accuracy.md): the faces of the voxel cells (the trilinear field changes
+// polynomial there) and the crossings of the TF's breakpoints and peak values.
 //
 // Inside one voxel cell the trilinear field along a ray is a cubic in t: it is rebuilt from four
 // samples, split into monotone pieces at the roots of its derivative, and each crossing is

@@ -4,7 +4,6 @@
 #include <stdexcept>
 
 #include "cpu/cpu_renderer.h"
-#include "render/raycaster.h"
 
 namespace peakcast::render {
 
@@ -37,41 +36,59 @@ Backend requested_backend(const std::string& name) {
   return Backend::Auto;
 }
 
+bool gl_built() {
+#ifdef PEAKCAST_HAVE_GL
+  return true;
+#else
+  return false;
+#endif
+}
+
+std::filesystem::path default_shader_dir() {
+#ifdef PEAKCAST_HAVE_GL
+  return gl_shader_dir();
+#else
+  return {};
+#endif
+}
+
 std::string RenderBackend::description() const {
   // GL: the context's line (renderer, version, EGL platform); CPU: the SIMD target and threads.
-  std::string d = std::string(to_string(backend)) + ": " + (context ? context->info().to_string() : renderer->description());
+  std::string d = std::string(to_string(backend)) + ": " + (device ? device->description() : renderer->description());
   if (!why.empty()) d += " (" + why + ")";
   return d;
 }
 
 RenderBackend open_backend(Backend requested, const std::string& egl_device, const std::filesystem::path& shader_dir) {
   RenderBackend b;
-  if (requested == Backend::Cpu) {
+  auto on_cpu = [&b](std::string why) -> RenderBackend& {
     b.backend = Backend::Cpu;
+    b.why = std::move(why);
+    b.device.reset();
     b.renderer = std::make_unique<cpu::CpuRenderer>();
     return b;
-  }
+  };
+  if (requested == Backend::Cpu) return std::move(on_cpu(""));
+#ifdef PEAKCAST_HAVE_GL
   try {
-    b.context = gpu::EglContext::create(egl_device);
+    b.device = open_gl_device(egl_device);
   } catch (const std::exception& e) {
     if (requested == Backend::Gl) throw;
-    b.backend = Backend::Cpu;
-    b.why = std::string("auto: EGL failed: ") + e.what();
-    b.renderer = std::make_unique<cpu::CpuRenderer>();
-    return b;
+    return std::move(on_cpu(std::string("auto: EGL failed: ") + e.what()));
   }
-  if (requested == Backend::Auto && b.context->info().software) {
-    b.backend = Backend::Cpu;
-    b.why = "auto: EGL offers only " + b.context->info().renderer;
-    b.context.reset();
-    b.renderer = std::make_unique<cpu::CpuRenderer>();
-    return b;
-  }
+  if (requested == Backend::Auto && b.device->info().software)
+    return std::move(on_cpu("auto: EGL offers only " + b.device->info().renderer));
   b.backend = Backend::Gl;
   if (requested == Backend::Auto) b.why = "auto: a hardware GL device";
-  b.shaders = std::make_unique<gpu::ShaderCache>(shader_dir.empty() ? gpu::default_shader_dir() : shader_dir);
-  b.renderer = std::make_unique<Raycaster>(*b.shaders);
+  b.renderer = b.device->make_renderer(shader_dir);
   return b;
+#else
+  (void)egl_device;
+  (void)shader_dir;
+  if (requested == Backend::Gl)
+    throw std::runtime_error("backend gl: this peakcast was built without GL (PEAKCAST_WITH_GL=OFF): use --backend cpu");
+  return std::move(on_cpu("auto: built without GL"));
+#endif
 }
 
 }  // namespace peakcast::render

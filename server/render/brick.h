@@ -1,4 +1,4 @@
-// Distributed rendering (issue 16, docs/distributed.md): what one rank draws of a frame. The
+// Distributed rendering (docs/distributed.md): what one rank draws of a frame. The
 // rank's resident volume holds one brick of a larger volume (read as a region, with ghosts);
 // the scene is resolved against the whole volume (its box, camera and sample lattice). Every
 // backend renders the brick's part of each ray: premultiplied RGBA, transparent where the ray

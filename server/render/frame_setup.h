@@ -47,8 +47,8 @@ struct FrameSetup {
 };
 
 struct SetupOptions {
-  bool leaps = true;          // Renderer::set_empty_space_leaps
-  double vs_widening = 0.125;  // Renderer::set_virtual_sample_widening
+  bool leaps = true;          // RendererSeam::set_empty_space_leaps
+  double vs_widening = 0.125;  // RendererSeam::set_virtual_sample_widening
   const std::function<void(VariantKey&)>* force_variant = nullptr;
 };
 
@@ -56,7 +56,7 @@ FrameSetup setup_frame(const ResidentVolume& volume, const ResolvedScene& s, Gpu
                        OccupancyCache& cache, size_t& builds);
 
 // The empty-space distance per cell a traversal reads: the occupancy's, or, with leaps off
-// (Renderer::set_empty_space_leaps), at most 1 so that every empty cell is stepped through.
+// (RendererSeam::set_empty_space_leaps), at most 1 so that every empty cell is stepped through.
 std::vector<uint8_t> traversal_distances(const Occupancy& occupancy, bool leaps);
 
 // The TF as TransferFunction::kTableSize RGBA entries over [lo, hi] whose opacities are already

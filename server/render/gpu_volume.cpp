@@ -38,7 +38,7 @@ GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cell
   // Integer voxels go up as they are and are mapped to TF coordinates in the shader. Float
   // voxels go up already in TF coordinates, computed in double: raw, a volume of denormal values
   // (1e-40) would be flushed to zero by the GPU and 1 / (hi - lo) would overflow a float, so the
-  // picture would depend on the data's scale (DESIGN §6).
+  // picture would depend on the data's scale.
   const bool normalise = v.type() == VoxelType::F32;
   const size_t slice = size_t(d[0] * d[1]) * voxel_bytes(v.type());
   const int64_t slab = normalise ? 8 : 64;  // slices per upload: the driver's (and our) staging stays small

@@ -20,7 +20,7 @@ class GpuVolume : public ResidentVolume {
   float value_scale() const { return scale_; }
   float value_bias() const { return bias_; }
   void bind(unsigned unit) const;
-  // The texture is then the only copy (issue 13).
+  // The texture is then the only copy.
   bool drop_host_voxels() override;
 
  private:

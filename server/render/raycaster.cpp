@@ -127,7 +127,7 @@ RenderResult Raycaster::render(const ResidentVolume& v, const ResolvedScene& s, 
   const GpuVolume& gv = gpu_volume(v);
   const PixelRect rect = req.tile.value_or(PixelRect{0, 0, s.scene.width, s.scene.height});
   check_rect(rect, s.scene.width, s.scene.height);
-  if (stats) *stats = RenderStats{};
+  if (stats) *stats = RenderStats::for_scene(s);
   VariantKey key = prepare(gv, s, req.path, stats);
   key.rgb8 = req.output == RenderOutput::Rgb8;
   return draw(gv, s, key, rect, req.output == RenderOutput::Float || req.sample_stats, stats);
@@ -137,7 +137,7 @@ Image Raycaster::render_brick(const ResidentVolume& v, const ResolvedScene& s, c
                              std::optional<PixelRect> tile) {
   const GpuVolume& gv = gpu_volume(v);
   const PixelRect rect = check_brick_frame(s, brick, gv.volume().spacing, tile);
-  if (stats) *stats = RenderStats{};
+  if (stats) *stats = RenderStats::for_scene(s);
   VariantKey key = prepare(gv, s, GpuPath::Fragment, stats);
   key.brick = true;
   key.rgb8 = false;
@@ -157,7 +157,7 @@ void Raycaster::bind_tf_table(const GpuVolume& gv, const ResolvedScene& s, const
     const std::vector<float> table = step_tf_table(s, gv.tf_lo(), gv.tf_hi());
     glTextureSubImage1D(e.texture.id(), 0, 0, TransferFunction::kTableSize, GL_RGBA, GL_FLOAT, table.data());
     tf_table = &cache_insert(tf_tables_, std::move(e), kCacheEntries);
-    ++table_builds_;
+    ++seam_.table_builds;
   }
   glBindTextureUnit(kUnitTf, tf_table->texture.id());
 }
@@ -165,10 +165,10 @@ void Raycaster::bind_tf_table(const GpuVolume& gv, const ResolvedScene& s, const
 VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPath path, RenderStats* stats) {
   const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
   SetupOptions o;
-  o.leaps = leaps_;
-  o.vs_widening = vs_widening_;
-  o.force_variant = &force_variant_;
-  const FrameSetup f = setup_frame(gv, s, path, o, occupancy_cache_, table_builds_);
+  o.leaps = seam_.leaps;
+  o.vs_widening = seam_.vs_widening;
+  o.force_variant = &seam_.force_variant;
+  const FrameSetup f = setup_frame(gv, s, path, o, occupancy_cache_, seam_.table_builds);
   const auto t_tables = Clock::now();
   bind_tf_table(gv, s, f.tf_sig);
   upload_tables(gv, s, f.key.peaks ? f.peaks : std::vector<Peak>{});
@@ -177,7 +177,7 @@ VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPa
     DistanceEntry* e = cache_find(distance_cache_, f.occupancy_key);
     if (!e) {
       e = &cache_insert(distance_cache_,
-                        DistanceEntry{f.occupancy_key, make_cell_buffer(cells, traversal_distances(*f.occupancy, leaps_))},
+                        DistanceEntry{f.occupancy_key, make_cell_buffer(cells, traversal_distances(*f.occupancy, seam_.leaps))},
                         kCacheEntries);
     }
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboCellDistance, e->buffer.id());
@@ -208,7 +208,7 @@ Image Raycaster::render_bare(const ResidentVolume& v, const ResolvedScene& s, Gp
   VariantKey key = choose_variant(s, 0, path);
   key.shading = false;
   key.bare_sampling = true;
-  if (stats) *stats = RenderStats{};
+  if (stats) *stats = RenderStats::for_scene(s);
   return std::move(draw(gv, s, key, PixelRect{0, 0, w, h}, true, stats).image);
 }
 

@@ -1,6 +1,6 @@
-// The GL backend's ray caster (DESIGN §3, §4a): one fullscreen draw (fragment path) or one dispatch
-// (compute path) per frame or tile, into targets that hold rows top-down (no flip on read):
-// float (an Image) or 8-bit RGB quantised on the GPU (render/frame.h).
+// The GL backend's ray caster (docs/architecture.md, docs/scenes.md): one fullscreen draw
+// (fragment path) or one dispatch (compute path) per frame or tile, into targets that hold rows
+// top-down (no flip on read): float (an Image) or 8-bit RGB quantised on the GPU (render/frame.h).
 #pragma once
 
 #include <functional>

@@ -59,7 +59,7 @@ void Raycaster::bind_multipliers(const GpuVolume& gv, const MacrocellGrid& cells
   if (!e) {
     StrideEntry n{key, make_cell_buffer(cells, adaptive_multipliers(cells, volume_stddev(gv.volume())))};
     e = &cache_insert(stride_cache_, std::move(n), kCacheEntries);
-    ++table_builds_;
+    ++seam_.table_builds;
   }
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboCellStride, e->buffer.id());
 }
@@ -114,7 +114,7 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
   }
   tables_ = t.sizes;
   cache_insert(tables_cache_, std::move(t), kCacheEntries);
-  ++table_builds_;
+  ++seam_.table_builds;
 }
 
 }  // namespace peakcast::render

@@ -3,12 +3,21 @@
 #include <algorithm>
 #include <sstream>
 
+#include "core/scene.h"
+
 namespace peakcast::render {
+
+RenderStats RenderStats::for_scene(const ResolvedScene& s) {
+  RenderStats st;
+  st.tf_source = s.tf_derived ? "auto" : "scene";
+  st.warnings = s.warnings;
+  return st;
+}
 
 nlohmann::json RenderStats::to_json() const {
   nlohmann::json j = {{"render_ms", render_ms}, {"readback_ms", readback_ms}, {"table_ms", table_ms},
                       {"variant", variant},     {"peaks", peaks},             {"empty_macrocells", empty_cells},
-                      {"tiles", tiles}};
+                      {"tiles", tiles},         {"tf_source", tf_source},     {"warnings", warnings}};
   if (variant.find("+raytex") != std::string::npos) {
     j["ray_texture_ms"] = ray_texture_ms;
     j["ray_texture_strokes"] = ray_texture_strokes;
@@ -31,7 +40,7 @@ std::string RenderStats::to_string() const {
   bool first = true;
   for (const char* key : {"variant", "render_ms", "readback_ms", "table_ms", "samples_per_ray", "samples_per_ray_max",
                           "rays_hit", "rays_at_sample_cap", "sample_cap", "peaks", "empty_macrocells", "tiles",
-                          "ray_texture_ms", "ray_texture_strokes", "ray_texture_texels"}) {
+                          "ray_texture_ms", "ray_texture_strokes", "ray_texture_texels", "tf_source", "warnings"}) {
     if (!j.contains(key)) continue;
     s << (first ? "" : " ") << key << "=" << (j[key].is_string() ? j[key].get<std::string>() : j[key].dump());
     first = false;

@@ -5,8 +5,13 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
+
+namespace peakcast {
+struct ResolvedScene;
+}
 
 namespace peakcast::render {
 
@@ -32,8 +37,16 @@ struct RenderStats {
   double ray_texture_ms = 0.0;
   int64_t ray_texture_strokes = 0, ray_texture_texels = 0;
   std::string variant;
+  // Of the scene, not the frame: "auto" when its TF was derived from the histogram, else
+  // "scene"; what it asks for that it will not get (ResolvedScene::warnings).
+  std::string tf_source = "scene";
+  std::vector<std::string> warnings;
 
-  // Keys: render_ms, readback_ms, table_ms, variant, peaks, empty_macrocells, tiles, with a ray
+  // Empty stats carrying the scene's part (tf_source, warnings): where every frame starts.
+  static RenderStats for_scene(const ResolvedScene& s);
+
+  // Keys: render_ms, readback_ms, table_ms, variant, peaks, empty_macrocells, tiles, tf_source,
+  // warnings, with a ray
   // texture ray_texture_ms, ray_texture_strokes, ray_texture_texels, and, with
   // sample counts, samples_per_ray, samples_per_ray_max, rays_hit, rays_at_sample_cap. The stream adds its frame
   // keys (type, frame, final, width, height, encode_ms, bytes) to this object.

@@ -1,6 +1,6 @@
 // The ray caster's interface, whichever backend draws: the GL ray caster (render/raycaster.h,
 // shaders/) or the native CPU one (cpu/cpu_renderer.h). Both take the same scene contract
-// (DESIGN §4a), choose the same variant and produce the same outputs; render/backend.h picks one.
+// (docs/scenes.md), choose the same variant and produce the same outputs; render/backend.h picks one.
 #pragma once
 
 #include <functional>
@@ -54,27 +54,18 @@ class Renderer {
   // bounds a shader's loops: llvmpipe); rays that reach it are counted in the stats.
   virtual int sample_cap(const VariantKey& key) const = 0;
 
-  // TF tables, peak/preintegration tables and occupancy grids built so far (for tests: tiles
-  // interleaved with another session's frames must not rebuild them).
-  size_t table_builds() const { return table_builds_; }
-  // How far the cells' value ranges are widened for virtual samples, as a fraction of each
-  // range: Lee's 1/8 (kCatmullRomOvershoot). Tests set 0 to show the skipped-cell streaks it
-  // prevents (Lee Fig. 14).
-  void set_virtual_sample_widening(double fraction) { vs_widening_ = fraction; }
-  // Off: the traversal steps through every empty macrocell one at a time instead of leaping
-  // by the empty-space distance (tests show the leaps skip exactly what the steps skip).
-  void set_empty_space_leaps(bool on) { leaps_ = on; }
-  // Changes the variant chosen for every later frame (nullptr: none): how tests and the quality
-  // bench put back code the scene's variant leaves out, to show the omission changes no pixel
-  // and to time what it saves. Only features whose tables the frame builds anyway may be forced
-  // on (peaks, space skipping, the differential lattice).
-  void force_variant(std::function<void(VariantKey&)> change) { force_variant_ = std::move(change); }
-
  protected:
-  size_t table_builds_ = 0;
-  bool leaps_ = true;
-  double vs_widening_ = 0.125;  // kCatmullRomOvershoot
-  std::function<void(VariantKey&)> force_variant_;
+  // Switches for tests and benchmarks, set only through render/renderer_seam.h (the product
+  // never changes them): empty-space leaps, the cells' widening for virtual samples, a forced
+  // variant, and a count of the per-TF tables and occupancy grids built.
+  struct Seam {
+    bool leaps = true;
+    double vs_widening = 0.125;  // kCatmullRomOvershoot
+    std::function<void(VariantKey&)> force_variant;
+    size_t table_builds = 0;
+  };
+  Seam seam_;
+  friend class RendererSeam;
 };
 
 }  // namespace peakcast::render

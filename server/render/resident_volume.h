@@ -1,6 +1,6 @@
-// A volume made ready for one rendering backend, with its macrocell grids (DESIGN §2): the GL
-// backend's GpuVolume (a 3D texture) or the CPU backend's CpuVolume (the host voxels). One per
-// loaded volume, shared by every session that views it; render thread only.
+// A volume made ready for one rendering backend, with its macrocell grids (docs/architecture.md):
+// the GL backend's GpuVolume (a 3D texture) or the CPU backend's CpuVolume (the host voxels).
+// One per loaded volume, shared by every session that views it; render thread only.
 #pragma once
 
 #include <cstdint>

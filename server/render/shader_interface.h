@@ -23,7 +23,7 @@ constexpr unsigned kUboRay = 0;          // std140 RayUniforms
 constexpr unsigned kSsboTfPoints = 0;    // TF points for the peak root solve
 // One byte per macrocell, four to a uint, grid order (make_cell_buffer). Buffers, not integer
 // 3D textures: on llvmpipe a texelFetch cost ~30 of a 40 ms blobs frame's traversal, a buffer
-// load a fraction of that (issue 13).
+// load a fraction of that.
 constexpr unsigned kSsboCellDistance = 1;  // cells to the nearest occupied macrocell (0: occupied)
 constexpr unsigned kSsboCellStride = 2;    // adaptive step multiplier per macrocell
 constexpr unsigned kSsboFrontOpacity = 3;  // BRICK + RAY_TEXTURE: the opacity in front, per pixel of the rect

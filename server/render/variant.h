@@ -1,5 +1,5 @@
-// The ray-cast shader variant for a scene (DESIGN §3 "leave out what a scene does not need").
-// Derived from the scene, never set by hand; reported in the frame stats.
+// The ray-cast shader variant for a scene (docs/architecture.md, "leave out what a scene does
+// not need"). Derived from the scene, never set by hand; reported in the frame stats.
 #pragma once
 
 #include <string>

@@ -1,6 +1,6 @@
-// Frame encoding on the encode pool (DESIGN §2): a viewer's frame becomes JPEG (or PNG for a
-// final frame when asked) behind the binary frame header, followed by its stats message; a
-// still becomes the REST response's image. One image encoder serves both.
+// Frame encoding on the encode pool (docs/architecture.md): a viewer's frame becomes JPEG (or
+// PNG for a final frame when asked) behind the binary frame header, followed by its stats
+// message; a still becomes the REST response's image. One image encoder serves both.
 #pragma once
 
 #include <memory>

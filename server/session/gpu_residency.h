@@ -1,4 +1,4 @@
-// The one owner of the GPU memory budget for volumes (DESIGN §2, §6). The volume store asks it
+// The one owner of the GPU memory budget for volumes. The volume store asks it
 // before keeping a volume (admit, on the loader pool); the render thread asks it for a volume's
 // GPU copy (acquire), made on first use and freed once nobody holds the volume any more. A volume
 // counts against the budget from admission until the last session viewing it lets go.

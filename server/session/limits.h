@@ -1,4 +1,4 @@
-// Every limit at the edge of the server, with its unit (DESIGN §6). The serve command can
+// Every limit at the edge of the server, with its unit. The serve command can
 // override the ones marked (cfg).
 #pragma once
 

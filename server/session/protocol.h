@@ -1,4 +1,4 @@
-// The WebSocket protocol (DESIGN §5, proto/): client messages parsed and validated into typed
+// The WebSocket protocol (proto/messages.md): client messages parsed and validated into typed
 // structs, server messages built, and the binary frame header. No sockets here: the whole
 // protocol is testable in memory.
 #pragma once

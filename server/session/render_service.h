@@ -1,5 +1,5 @@
-// The render thread (DESIGN §2): owns the renderer (render/backend.h) and, with the GL backend,
-// the one GL context and every GL object. It asks the
+// The render thread (docs/architecture.md): owns the renderer (render/backend.h) and, with the
+// GL backend, the one GL context and every GL object. It asks the
 // scheduler what to do next (a viewer's frame, or the next band of a still), renders through the
 // GPU residency's copy of the volume, and hands the image to the encode pool, whose threads
 // deliver to the session's connection or answer the still.
@@ -25,7 +25,7 @@ struct RenderServiceOptions {
   std::string egl_device;  // gpu::EglContext::create's choice; empty: PEAKCAST_EGL_DEVICE, else auto
   std::string backend;     // auto | gl | cpu (render/backend.h); empty: PEAKCAST_BACKEND, else auto
   // Distributed rendering (mpirun peakcast serve): the opened backend's renderer handed to this,
-  // on the render thread, which returns the renderer frames go through (dist::MpiRenderer).
+  // on the render thread, which returns the renderer frames go through (distributed::MpiRenderer).
   std::function<std::unique_ptr<render::Renderer>(std::unique_ptr<render::Renderer>)> wrap_renderer;
   int ranks = 1;  // the processes that render each frame (health, metrics)
 };

@@ -1,4 +1,4 @@
-// What the render thread does next (DESIGN §2, §6). Viewers' frames are taken round robin from
+// What the render thread does next. Viewers' frames are taken round robin from
 // the sessions (newest state wins inside each session); scripted stills wait in a bounded queue
 // and are rendered in bands of rows that alternate with viewers' frames, so a viewer's frame
 // waits for at most one band however many stills are queued. No GL here: the policy is tested in

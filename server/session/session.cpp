@@ -37,7 +37,9 @@ ResolvedScene Session::resolve() const {
   s.render.ray_texture = ray_texture_;
   s.width = viewport_.pixel_width();
   s.height = viewport_.pixel_height();
-  return resolve_scene(s, *volume_->volume);
+  ResolvedScene r = resolve_scene(s, *volume_->volume);
+  r.tf_derived = tf_derived_;  // derived once, when the volume was opened, and kept since
+  return r;
 }
 
 void Session::start(std::shared_ptr<VolumeEntry> volume, const protocol::Viewport& vp,
@@ -52,16 +54,19 @@ void Session::start(std::shared_ptr<VolumeEntry> volume, const protocol::Viewpor
     if (auto rt = take_ray_texture(render_json_, texture)) ray_texture_ = *rt;
   }
   if (state.background) scene_.background = *state.background;
-  // Defaults resolved now, so the client knows the camera and TF it starts from.
-  ResolvedScene r = resolve_scene(scene_, *volume_->volume);
-  scene_.camera = state.camera ? *state.camera : r.camera;
-  scene_.tf = state.tf ? *state.tf : r.tf;
+  scene_.camera = state.camera;
+  scene_.tf = state.tf;
   scene_.opacity_unit = state.tf ? state.opacity_unit : 0.0;
+  // Defaults resolved now, so the client knows the camera and TF it starts from (a derived TF
+  // fits the session's classification: with peaks it has one).
   try {
-    resolve();
+    const ResolvedScene r = resolve();
+    scene_.camera = r.camera;
+    scene_.tf = r.tf;
   } catch (const SceneError& e) {
     throw protocol::ProtocolError("bad_message", e.what());
   }
+  tf_derived_ = !state.tf;
   camera_version_ = tf_version_ = render_version_ = 1;
   touch();
 }
@@ -70,12 +75,13 @@ void Session::set_volume(std::shared_ptr<VolumeEntry> volume) {
   std::lock_guard lock(m_);
   volume_ = std::move(volume);
   scene_.volume = volume_->id;
-  Scene defaults;
-  defaults.volume = volume_->id;
-  ResolvedScene r = resolve_scene(defaults, *volume_->volume);
+  scene_.camera.reset();
+  scene_.tf.reset();
+  scene_.opacity_unit = 0.0;
+  const ResolvedScene r = resolve();
   scene_.camera = r.camera;
   scene_.tf = r.tf;
-  scene_.opacity_unit = 0.0;
+  tf_derived_ = true;
   camera_version_++;
   tf_version_++;
   touch();
@@ -92,6 +98,7 @@ void Session::set_tf(const TransferFunction& tf, double opacity_unit, uint32_t v
   std::lock_guard lock(m_);
   scene_.tf = tf;
   scene_.opacity_unit = opacity_unit;
+  tf_derived_ = false;
   tf_version_ = version ? version : tf_version_ + 1;
   touch();
 }

@@ -1,6 +1,6 @@
-// One viewer's state (DESIGN §2): written by its connection (newest wins), read by the render
-// thread as snapshots. Flow control: at most limits::kMaxFramesInFlight un-acknowledged frames;
-// a client that stops acking gets no more frames and costs no more memory.
+// One viewer's state (docs/architecture.md): written by its connection (newest wins), read by
+// the render thread as snapshots. Flow control: at most limits::kMaxFramesInFlight
+// un-acknowledged frames; a client that stops acking gets no more frames and costs no more memory.
 #pragma once
 
 #include <chrono>
@@ -106,6 +106,7 @@ class Session {
   mutable std::mutex m_;
   std::shared_ptr<VolumeEntry> volume_;
   Scene scene_;
+  bool tf_derived_ = false;  // scene_.tf was derived from the histogram, not sent by the client
   nlohmann::json render_json_ = nlohmann::json::object();  // render settings but the ray texture
   std::shared_ptr<const RayTextureSpec> ray_texture_;      // null: none
   PngLocator locate_png_;

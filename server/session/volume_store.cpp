@@ -18,7 +18,7 @@ nlohmann::json VolumeEntry::info(bool with_histogram) const {
                       {"bytes", v.byte_size()},
                       {"resident_bytes", resident_bytes},
                       {"load_ms", v.load_ms},
-                      // Where loading went (issue 13): reading the file (and converting), range and
+                      // Where loading went: reading the file (and converting), range and
                       // histogram, both macrocell grids, the GPU upload (once made).
                       {"load_phases",
                        {{"read_ms", v.load_ms - v.statistics_ms},

@@ -1,6 +1,6 @@
 // The server's volumes: loaded from the configured data directories (or preloaded by the
 // operator), shared by every session that views them. The GPU memory budget belongs to the
-// GpuResidency: the store asks it before keeping a volume (DESIGN §2, §6).
+// GpuResidency: the store asks it before keeping a volume.
 #pragma once
 
 #include <atomic>
@@ -38,7 +38,7 @@ struct VolumeEntry {
 class VolumeStore {
  public:
   // `loader`: how a file becomes a volume; empty: load_volume, whole (mpirun peakcast serve
-  // passes the ranks' brick loader, dist::Coordinator::load).
+  // passes the ranks' brick loader, distributed::Coordinator::load).
   VolumeStore(std::vector<std::filesystem::path> data_dirs, GpuResidency& residency, LoadOptions options = {},
               VolumeLoader loader = {});
 

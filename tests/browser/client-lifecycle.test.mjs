@@ -1,4 +1,4 @@
-// The client's lifecycle and input hygiene (issue 9, point 10): reconnects release what the
+// The client's lifecycle and input hygiene: reconnects release what the
 // previous session held, decoded frames are always closed, the canvas is resized only when its
 // size changes, the token never reaches a shared link, TF drags are coalesced per animation
 // frame, keyboard control, labels, and server errors shown to the user.

@@ -1,4 +1,4 @@
-// The browser client in Debian's chromium against a real server (issue 6, point 8).
+// The browser client in Debian's chromium against a real server.
 import assert from 'node:assert/strict';
 import { after, before, test } from 'node:test';
 import { canvasSummary, difference, frameCount, launch, openClient, screenshot, startServer, waitFinal } from './harness.mjs';
@@ -47,18 +47,44 @@ test('dragging a TF point changes the image', async () => {
   const before_ = await canvasSummary(page);
   const n = await frameCount(page);
   const tf = await page.locator('#tf-canvas').boundingBox();
-  // The grey ramp's last point sits at the top right: drag it down to a fifth of the opacity.
-  await page.mouse.move(tf.x + tf.width - 1, tf.y + 5);
+  // The TF derived from the histogram: drag its last point (the top of its opacity ramp) up.
+  const { x, y, count, opacity } = await page.evaluate(() => {
+    const e = window.peakcast.tfEditor, c = e.canvas, p = e.points[e.points.length - 1];
+    return { x: ((p[0] - e.lo) / (e.hi - e.lo)) * c.width, y: (1 - p[4]) * (c.height - 10) + 5, count: e.points.length,
+      opacity: p[4] };
+  });
+  await page.mouse.move(tf.x + Math.min(x, tf.width - 1), tf.y + y);
   await page.mouse.down();
-  await page.mouse.move(tf.x + tf.width - 1, tf.y + tf.height * 0.8, { steps: 5 });
+  await page.mouse.move(tf.x + Math.min(x, tf.width - 1), tf.y + 8, { steps: 5 });
   await page.mouse.up();
   await waitFinal(page, { afterFrames: n + 1 });
   const after_ = await canvasSummary(page);
-  // Less opacity: rays reach further into the plume. The image must change, whichever way.
+  // More opacity: the plume turns solid. The image must change, whichever way.
   assert.ok(difference(before_, after_) > 0.5, `difference ${difference(before_, after_)}`);
   const points = await page.evaluate(() => window.peakcast.tfEditor.points);
-  assert.equal(points.length, 2, 'the drag moved the existing point');
-  assert.ok(points[1][4] < 0.4, `opacity ${points[1][4]}`);
+  assert.equal(points.length, count, 'the drag moved the existing point');
+  assert.ok(points[count - 1][4] > Math.max(0.9, opacity), `opacity ${points[count - 1][4]}`);
+  await page.close();
+});
+
+test('the first picture has a derived TF, and peak finding without a peak warns', async () => {
+  const page = await openClient(browser, server.url);
+  await waitFinal(page);
+  assert.equal(await page.evaluate(() => window.peakcast.stats.last.stats.tf_source), 'auto');
+  assert.ok(await page.isHidden('#warning'));
+  // A ramp has no opacity peak: peak finding finds nothing, and the page says so.
+  let n = await frameCount(page);
+  await page.evaluate(() => window.peakcast.tfEditor.set([[0, 0, 0, 0, 0], [255, 1, 1, 1, 0.3]], { silent: false }));
+  await page.selectOption('select[name=classification]', 'peaks');
+  await waitFinal(page, { afterFrames: n + 1 });
+  await page.waitForSelector('#warning:not([hidden])', { timeout: 20000 });
+  assert.match(await page.textContent('#warning'), /no opacity peak/);
+  await screenshot(page, 'peaks_without_a_peak');
+  // Back to postclassification: the warning goes.
+  n = await frameCount(page);
+  await page.selectOption('select[name=classification]', 'post');
+  await waitFinal(page, { afterFrames: n + 1 });
+  await page.waitForSelector('#warning', { state: 'hidden', timeout: 20000 });
   await page.close();
 });
 

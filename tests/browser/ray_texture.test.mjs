@@ -1,4 +1,4 @@
-// The ray-texture brush (issue 11, point 5) in Debian's chromium against a real server: a stroke
+// The ray-texture brush in Debian's chromium against a real server: a stroke
 // painted with real pointer events changes the streamed image inside its disk only (PNG finals,
 // compared pixel for pixel), undo and clear bring the first image back, the preview shows the
 // stroke, a reconnect replays the strokes, a long drag is paced and every stroke acknowledged,

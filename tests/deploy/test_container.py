@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Issue 15: the image is really built and run. docker/build-image.sh builds it (buildah, vfs, chroot,
+"""The image is really built and run. docker/build-image.sh builds it (buildah, vfs, chroot,
 on a debootstrap base when no registry answers); the server runs inside on the host's loopback; its
 health answers, a REST render equals the host's `peakcast render`, it runs as a non-root user, and
 it exits within 5 s of SIGTERM. Prints the image size and the build time."""

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Issue 15: docker/compose.yaml and docker/k8s/ parse, and hang together: ports, probes on
+"""docker/compose.yaml and docker/k8s/ parse, and hang together: ports, probes on
 /api/health, the token from a secret or env file, the data volume, one GPU, sticky routing."""
 import os, pathlib, re, shutil, subprocess, sys
 

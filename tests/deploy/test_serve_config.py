@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Issue 15: every serve option as flag, PEAKCAST_* variable and config-file key, one precedence
+"""Every serve option as flag, PEAKCAST_* variable and config-file key, one precedence
 (flag > environment > file > default), --print-config, and each refusal named by its source."""
 import os, pathlib, re, subprocess, sys, tempfile
 

@@ -1,4 +1,4 @@
-// Error against the converged DVR reference falls as the step halves (issue 3, point 6); the
+// Error against the converged DVR reference falls as the step halves; the
 // converged reference itself converges (change < 1e-4 between refinements).
 #include <cmath>
 

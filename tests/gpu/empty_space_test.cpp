@@ -1,4 +1,4 @@
-// Empty-space leaps (issue 13): the GL traversal leaps across the cube of empty macrocells the
+// Empty-space leaps: the GL traversal leaps across the cube of empty macrocells the
 // empty-space distance promises instead of stepping through them one by one, and is driven by
 // the lattice (an iteration per sample or leap) rather than by the cells crossed. A leap must skip
 // exactly the lattice points the steps skip: the same pixels and the same samples per ray, over
@@ -11,6 +11,7 @@
 #include "cpu/cpu_renderer.h"
 #include "encode/png.h"
 #include "gpu/gpu_fixture.h"
+#include "render/renderer_seam.h"
 
 namespace peakcast {
 namespace {
@@ -76,12 +77,12 @@ TEST_P(Leaps, SkipExactlyWhatSteppingThroughEmptyCellsSkips) {
   auto& caster = *test::gpu().caster;
   render::RenderStats st_lattice, st_leap, st_step;
   const Image lattice = test::render_gpu(gv, s, render::GpuPath::Fragment, &st_lattice);
-  caster.force_variant([](render::VariantKey& k) { k.cell_dda = true; });
+  render::RendererSeam::force_variant(caster, [](render::VariantKey& k) { k.cell_dda = true; });
   const Image leap = test::render_gpu(gv, s, render::GpuPath::Fragment, &st_leap);
-  caster.set_empty_space_leaps(false);
+  render::RendererSeam::set_empty_space_leaps(caster, false);
   const Image step = test::render_gpu(gv, s, render::GpuPath::Fragment, &st_step);
-  caster.set_empty_space_leaps(true);
-  caster.force_variant(nullptr);
+  render::RendererSeam::set_empty_space_leaps(caster, true);
+  render::RendererSeam::force_variant(caster, nullptr);
   ASSERT_NE(st_lattice.variant.find("+skip"), std::string::npos) << st_lattice.variant;
   ASSERT_NE(st_leap.variant.find("+dda"), std::string::npos) << st_leap.variant;
   EXPECT_GT(st_step.samples_mean, 0.0) << "nothing visible: the test would prove nothing";
@@ -133,7 +134,7 @@ TEST_P(Leaps, CpuRayPacketsEqualSingleRays) {
 INSTANTIATE_TEST_SUITE_P(Scenes, Leaps, ::testing::ValuesIn(kCases),
                          [](const ::testing::TestParamInfo<LeapCase>& i) { return std::string(i.param.name); });
 
-// A frame with nothing visible (issue 13): when no cell is occupied, the CPU backend fills the
+// A frame with nothing visible: when no cell is occupied, the CPU backend fills the
 // background without casting a ray. Every method must still give exactly the background, and
 // the float output (which reads the sample counts) the same pixels.
 TEST(NothingVisible, EveryMethodGivesExactlyTheBackground) {

@@ -1,4 +1,4 @@
-// Peak finding and preintegration on the GPU (issue 4, point 7): against the CPU twin of the
+// Peak finding and preintegration on the GPU: against the CPU twin of the
 // same algorithm, against the peak-model and DVR references, and the mode semantics.
 #include <cmath>
 
@@ -285,7 +285,7 @@ TEST(Preintegration, AgreesWithTheConvergedDvrReferenceOnASmoothTf) {
 }  // namespace
 
 // Without shading the root's position is unused, so the ray casters count the secant steps
-// regula falsi would take instead of taking them (issue 13). The count, and every sample the
+// regula falsi would take instead of taking them. The count, and every sample the
 // traversal takes, must not change: shading alters colour only, so a shaded render of the same
 // scene (which does solve every root) counts exactly the same samples and the same opacity.
 TEST(PeakModes, UnshadedPeaksCountTheRootStepsTheyNoLongerTake) {

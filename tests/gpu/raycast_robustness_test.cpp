@@ -1,4 +1,4 @@
-// Cameras that break naive ray casters (issue 3, point 6): inside the volume, 1e6 away, exactly
+// Cameras that break naive ray casters: inside the volume, 1e6 away, exactly
 // axis-aligned, grazing the box; orthographic; image orientation pinned (row 0 = top).
 #include <cmath>
 

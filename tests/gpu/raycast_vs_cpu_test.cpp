@@ -1,4 +1,4 @@
-// The GL ray caster against the CPU reference at the same step (issue 3, point 6): scenes x
+// The GL ray caster against the CPU reference at the same step: scenes x
 // filters x GPU paths, each with a measured PSNR bound; space skipping on/off identical.
 #include <cmath>
 

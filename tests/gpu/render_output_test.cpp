@@ -1,4 +1,4 @@
-// The render request (issue 9, points 6 and 2): the 8-bit output equals encode::to_rgb8 of the
+// The render request: the 8-bit output equals encode::to_rgb8 of the
 // float output; tiles equal the same pixels of a full render; stats as one JSON form.
 #include <cmath>
 #include <fstream>
@@ -6,6 +6,7 @@
 
 #include "encode/png.h"
 #include "gpu/gpu_fixture.h"
+#include "render/renderer_seam.h"
 
 using namespace peakcast;
 using nlohmann::json;
@@ -154,12 +155,12 @@ TEST(Tiles, InterleavedWithAnotherTfRebuildNothing) {
     auto& caster = *test::gpu().caster;
     draw(gv, still, render::GpuPath::Fragment, render::RenderOutput::Rgb8, render::PixelRect{0, 0, 8, 8});
     draw(gv, view, render::GpuPath::Fragment, render::RenderOutput::Rgb8);
-    const size_t built = caster.table_builds();
+    const size_t built = render::RendererSeam::table_builds(caster);
     for (const auto& r : render::tile_grid(still.scene.width, still.scene.height, 32, 32)) {
       draw(gv, still, render::GpuPath::Fragment, render::RenderOutput::Rgb8, r);
       draw(gv, view, render::GpuPath::Fragment, render::RenderOutput::Rgb8);
     }
-    EXPECT_EQ(caster.table_builds(), built);
+    EXPECT_EQ(render::RendererSeam::table_builds(caster), built);
   }
 }
 

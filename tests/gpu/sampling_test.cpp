@@ -1,4 +1,4 @@
-// Differential and adaptive sampling (issue 10, Knoll §5, §6.2): the GL ray caster against its
+// Differential and adaptive sampling (Knoll §5, §6.2): the GL ray caster against its
 // CPU twin at the same settings, both against the converged reference; differential against
 // uniform on a close-up camera at an equal sample budget; the s_k sweep; adaptive sampling on a
 // constant volume; orthographic "differential" is uniform at the footprint.

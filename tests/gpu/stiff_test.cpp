@@ -1,4 +1,4 @@
-// The stiff and extreme suite (issue 12, point 2; ctest label `stiff`, one ctest entry per case):
+// The stiff and extreme suite (ctest label `stiff`, one ctest entry per case):
 // near-Dirac TF peaks, steps, huge and empty TFs, degenerate volumes, float volumes at extreme
 // scales, hard cameras, extreme s_k and steps, virtual samples on a thin volume, an extreme ray
 // texture, the smallest and largest images. Every case finishes in bounded time with no NaN/Inf

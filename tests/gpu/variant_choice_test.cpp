@@ -1,4 +1,4 @@
-// "Leave out what a scene does not need" (DESIGN §3, issue 12 point 3): over a table of scenes,
+// "Leave out what a scene does not need" (docs/architecture.md): over a table of scenes,
 // the variant chosen holds exactly the code the scene uses, and where code is left out that
 // could have run (peak finding for a TF without peaks, the macrocell loop when every cell is
 // visible), putting it back changes no pixel by more than 1/255.
@@ -6,6 +6,7 @@
 #include <functional>
 
 #include "gpu/gpu_fixture.h"
+#include "render/renderer_seam.h"
 
 namespace peakcast {
 namespace {
@@ -77,10 +78,10 @@ TEST_P(Variants, HoldOnlyWhatTheSceneUsesAndOmissionsChangeNoPixel) {
   for (const char* part : c.lacks) EXPECT_EQ(st.variant.find(part), std::string::npos) << st.variant << " has " << part;
   if (!c.put_back) return;
   auto& caster = *test::gpu().caster;
-  caster.force_variant(c.put_back);
+  render::RendererSeam::force_variant(caster, c.put_back);
   render::RenderStats full_st;
   const Image full = test::render_gpu(gv, s, render::GpuPath::Fragment, &full_st);
-  caster.force_variant(nullptr);
+  render::RendererSeam::force_variant(caster, nullptr);
   ASSERT_NE(full_st.variant, st.variant) << "nothing was put back";
   float worst = 0;
   for (size_t i = 0; i < chosen.rgba.size(); ++i) worst = std::max(worst, std::abs(chosen.rgba[i] - full.rgba[i]));

@@ -1,4 +1,4 @@
-// Virtual samples (Lee et al. 2010, issue 10): the GL ray caster against its CPU twin, tricubic
+// Virtual samples (Lee et al. 2010): the GL ray caster against its CPU twin, tricubic
 // step 1 + virtual samples against step 1/4, the Catmull-Rom window's reach, and space
 // skipping with Lee's widened cell ranges (Fig. 14).
 #include <algorithm>
@@ -6,6 +6,7 @@
 
 #include "core/sampling.h"
 #include "gpu/sampling_scenes.h"
+#include "render/renderer_seam.h"
 
 using namespace peakcast;
 using namespace peakcast::sampling_scenes;
@@ -132,9 +133,9 @@ TEST(VirtualSamples, WideningKeepsTheCellsSkippingWouldStreak) {
   sj["tf"] = {{"points", {{0.0, 0, 0, 0, 0}, {0.81, 1, 0.6, 0.2, 0.0}, {0.82, 1, 0.6, 0.2, 0.3}, {1.0, 1, 1, 1, 0.3}}}};
   auto render = [&](bool skipping, double widening, render::RenderStats* st = nullptr) {
     sj["render"]["space_skipping"] = skipping;
-    caster.set_virtual_sample_widening(widening);
+    render::RendererSeam::set_virtual_sample_widening(caster, widening);
     Image img = test::render_gpu(gv, test::make_scene(*v, sj), render::GpuPath::Fragment, st);
-    caster.set_virtual_sample_widening(kCatmullRomOvershoot);
+    render::RendererSeam::set_virtual_sample_widening(caster, kCatmullRomOvershoot);
     return img;
   };
   auto differing = [](const Image& a, const Image& b) {

@@ -1,4 +1,4 @@
-// Macrocell grids off the render thread (issue 9, point 7): the store builds them with the
+// Macrocell grids off the render thread: the store builds them with the
 // volume on the loader pool, the backend's resident volume takes them and builds nothing on the
 // render thread.
 #include <filesystem>
@@ -83,7 +83,7 @@ TEST(VolumeCells, ResidentVolumeRefusesGridsOfAnotherVolume) {
   }
 }
 
-// Issue 13: the server keeps a volume once. GpuResidency drops the host voxels when the backend
+// The server keeps a volume once. GpuResidency drops the host voxels when the backend
 // makes its own copy (the GL texture, which on llvmpipe is itself host memory); the CPU backend
 // reads integer voxels where they lie, so they stay and no copy is made. The renders, the
 // entry's metadata and the copy for later frames stay, and no resident volume can be made
@@ -172,7 +172,7 @@ TEST(Backends, RefuseAnotherBackendsVolumeAndUnknownNames) {
   // A forced cpu backend opens no EGL display at all.
   render::RenderBackend b = render::open_backend(render::Backend::Cpu);
   EXPECT_EQ(b.backend, render::Backend::Cpu);
-  EXPECT_EQ(b.context, nullptr);
+  EXPECT_EQ(b.device, nullptr);
   EXPECT_EQ(std::string(b.renderer->backend()), "cpu");
 }
 

@@ -1,5 +1,5 @@
-// Issue 16, label mpi: rank 0's volume loader under `mpirun peakcast serve`
-// (dist::Coordinator::load), on one rank (mpirun -np 1), so the test can call it directly: the
+// Label mpi: rank 0's volume loader under `mpirun peakcast serve`
+// (distributed::Coordinator::load), on one rank (mpirun -np 1), so the test can call it directly: the
 // statistics reduced from the bricks equal a whole read's, rank 0 keeps no voxels, and every
 // refusal names its reason and leaves the command channel usable. Several ranks: mpi_serve.
 #include <gtest/gtest.h>
@@ -15,7 +15,7 @@
 #include "core/generators.h"
 #include "core/volume_io.h"
 #include "core/volume_writer.h"
-#include "dist/coordinator.h"
+#include "distributed/coordinator.h"
 
 namespace fs = std::filesystem;
 using namespace peakcast;
@@ -46,7 +46,7 @@ struct Files {
 };
 
 void expect_same_statistics(const fs::path& path) {
-  dist::Coordinator c(1);
+  distributed::Coordinator c(1);
   const LoadedVolume got = c.load(path, {});
   const Volume want = load_volume(path);
   EXPECT_FALSE(got.volume->has_voxels()) << "rank 0 keeps no voxels";
@@ -75,7 +75,7 @@ TEST(Coordinator, StatisticsFromTheBricksEqualAWholeRead) {
 // a collective the others skipped).
 TEST(Coordinator, RefusalsNameTheirReasonAndTheChannelGoesOn) {
   Files f;
-  dist::Coordinator c(1);
+  distributed::Coordinator c(1);
   auto refused = [&](const fs::path& path, const LoadOptions& o, const std::string& why) {
     try {
       c.load(path, o);
@@ -98,7 +98,7 @@ TEST(Coordinator, RefusalsNameTheirReasonAndTheChannelGoesOn) {
   g.dims = {3, 2, 2};
   write_volume(f.dir / "tiny.nrrd", generate_volume(g));
   try {
-    dist::Coordinator(64).load(f.dir / "tiny.nrrd", {});
+    distributed::Coordinator(64).load(f.dir / "tiny.nrrd", {});
     ADD_FAILURE() << "a volume of 2 cells was split among 64 ranks";
   } catch (const VolumeError& e) {
     EXPECT_NE(std::string(e.what()).find("tiny.nrrd"), std::string::npos) << e.what();

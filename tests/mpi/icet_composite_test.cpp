@@ -1,4 +1,4 @@
-// Issue 16, label mpi: IceT from Debian's ParaView packages composites the ranks' images in the
+// Label mpi: IceT from Debian's ParaView packages composites the ranks' images in the
 // visibility order given, as the "over" of premultiplied RGBA front to back. Run under mpirun with
 // 2 and 3 ranks; every rank renders a different random layer (seeded by its rank), so rank 0 can
 // compute the exact composite itself. Exit 0 when every order matches within float rounding.
@@ -11,7 +11,7 @@
 #include <random>
 #include <vector>
 
-#include "dist/icet_compositor.h"
+#include "distributed/icet_compositor.h"
 
 namespace {
 
@@ -56,7 +56,7 @@ int main(int argc, char** argv) {
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   int failures = 0;
   {
-    peakcast::dist::IceTCompositor compositor(MPI_COMM_WORLD, 0);
+    peakcast::distributed::IceTCompositor compositor(MPI_COMM_WORLD, 0);
     std::vector<int> identity(size_t(size), 0);
     std::iota(identity.begin(), identity.end(), 0);
     std::vector<int> reversed(identity.rbegin(), identity.rend());
@@ -64,7 +64,7 @@ int main(int argc, char** argv) {
     std::rotate(rotated.begin(), rotated.begin() + 1, rotated.end());
     const std::vector<float> mine = layer(rank);
     for (const auto& order : {identity, reversed, rotated}) {
-      peakcast::dist::CompositeTiming timing;
+      peakcast::distributed::CompositeTiming timing;
       const std::vector<float> got = compositor.composite(mine, kWidth, kHeight, order, &timing);
       if (rank != 0) continue;
       const float err = max_diff(got, over(order));

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Issue 16, label mpi: `mpirun -np N peakcast render` (k-d bricks, each rank reading its brick,
+"""Label mpi: `mpirun -np N peakcast render` (k-d bricks, each rank reading its brick,
 IceT compositing) against one process on the same scene, for 2 and 3 ranks oversubscribed on
 this machine: Marschner-Lobb, the heptane sample with its Dirac peak and a peak-finding scene;
 postclassification, preintegration and peak finding equal within 1/255. Each rank's resident
@@ -84,7 +84,7 @@ SCENES = [
     scene("head_mr_adaptive_vs_shaded", HEAD, {"step": 0.7, "adaptive": True, "virtual_samples": 3, "shading": True},
           HEAD_TF),
     # A ray texture: the ranks draw front to back, each ray's termination of the opacity over the
-    # bricks in front (dist/opacity_chain.h); step and blend strokes too.
+    # bricks in front (distributed/opacity_chain.h); step and blend strokes too.
     scene("ml_ray_texture_preint", ML, {"step": 1, "classification": "preint", "ray_texture": {
         "mapping": "view", "size": [32, 32], "strokes": [
             {"channel": "termination", "center": [0.45, 0.5], "radius": 0.35, "falloff": 0.5, "value": 0.3},

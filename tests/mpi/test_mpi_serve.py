@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Issue 16, label mpi: `mpirun -np 2 peakcast serve` (rank 0 serves, both ranks render their
+"""Label mpi: `mpirun -np 2 peakcast serve` (rank 0 serves, both ranks render their
 bricks, IceT composites) against the one-process server: health and /metrics show the ranks, a
 REST still equals `peakcast render`, a viewer's stream (interactive frames, then a lossless
 final frame) equals the one-process server's, a scene bricks cannot draw is refused and the

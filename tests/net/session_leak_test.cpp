@@ -1,4 +1,4 @@
-// The network and session layers without GL (issue 14, point 5): 1000 WebSocket sessions
+// The network and session layers without GL: 1000 WebSocket sessions
 // opened (hello, welcome, camera, TF, render settings, ping/pong) and closed, half with a close
 // frame, half by dropping the TCP connection, against the real listener, HTTP upgrade,
 // WebSocket session, session registry and scheduler; the render thread is not started, so no

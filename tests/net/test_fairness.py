@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Scripted stills and viewers share the render thread fairly (issue 9): a bounded still queue
+"""Scripted stills and viewers share the render thread fairly: a bounded still queue
 (503 + Retry-After at once), a per-request cost cap (422 naming the limit), stills rendered in
 bands between viewers' frames (a viewer's first frame during a burst of heavy stills arrives within
 seconds), cancellation of a still whose client hung up, graceful shutdown under load (exit within

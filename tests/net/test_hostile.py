@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Slow and hostile clients (issue 14): each is bounded by a named limit in server/session/limits.h
+"""Slow and hostile clients: each is bounded by a named limit in server/session/limits.h
 and none moves a normal viewer's frame rate by more than half (stated bound: the viewer keeps at
 least MIN_SHARE of its frame rate measured alone in the same run)."""
 import asyncio, base64, json, os, pathlib, resource, socket, struct, sys, threading, time
@@ -69,7 +69,7 @@ def measure(server, name, hostile):
     """The viewer's frame rate while `hostile` (a thread) runs, against alone: alone is the mean of
     a measurement before and one after (A-B-A), so a machine that speeds up or slows down during
     the test does not read as the hostile client's doing. One alone window read 23.5 fps in a TSan
-    run where the others read 9-19 (stop 25's CI): one window is not a baseline."""
+    run where the others read 9-19 (seen in CI): one window is not a baseline."""
     alone_before = asyncio.run(viewer_fps(server))
     stop = threading.Event()
     result = {}

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Memory over many sessions (issue 14, point 5): 1000 WebSocket sessions opened (hello, welcome,
+"""Memory over many sessions: 1000 WebSocket sessions opened (hello, welcome,
 a first frame, a TF and a render-settings change) and closed, 10 at a time; the server's RSS at
 the end is within 5% of what it was after the first 100 (the warm-up: shader variants, encoder
 pools, allocator arenas). Under a sanitizer the RSS bound is not asserted (quarantine and shadow

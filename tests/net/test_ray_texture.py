@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Ray textures over the wire (issue 11): the stroke message and its acknowledgement, strokes that
+"""Ray textures over the wire: the stroke message and its acknowledgement, strokes that
 change only their disk of the streamed frame, replay on reconnect, PNG ray textures read only from
 the data directories (REST and WebSocket), and every refusal."""
 import asyncio, json, math, os, pathlib, subprocess, sys, tempfile

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""REST and shared resources (issue 5): routes, REST render == CLI render, 16 sessions on one GPU copy,
+"""REST and shared resources: routes, REST render == CLI render, 16 sessions on one GPU copy,
 /metrics as Prometheus text."""
 import asyncio, io, json, pathlib, re, subprocess, sys, tempfile
 

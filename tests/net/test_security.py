@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Security defaults (issue 5 point 8, DESIGN §6): token, Origin allow-list, session cap, limits,
+"""Security defaults (docs/architecture.md): token, Origin allow-list, session cap, limits,
 data directories, loopback bind, GPU memory budget."""
 import asyncio, json, pathlib, sys, time
 
@@ -136,7 +136,7 @@ def test_volumes_only_from_data_directories():
 
 
 def test_crafted_nrrd_pattern_is_refused_and_the_server_lives():
-    # Issue 9: `data file: q.%s 1 9 1` reached snprintf with a user-written format (SIGSEGV).
+    # Regression: `data file: q.%s 1 9 1` reached snprintf with a user-written format (SIGSEGV).
     with tempfile.TemporaryDirectory() as tmp:
         pathlib.Path(tmp, "evil.nhdr").write_text(
             "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 9\nencoding: raw\ndata file: q.%s 1 9 1\n")

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""WebSocket streaming against a real server (issue 5): first frame, still == CLI render, progressive
+"""WebSocket streaming against a real server: first frame, still == CLI render, progressive
 quality, coalescing, flow control with a non-acking client, hostile messages, disconnects."""
 import asyncio, json, os, pathlib, subprocess, sys, tempfile, time
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Independent check of the scene conventions (DESIGN §4a): the same scenes rendered by VTK's
+"""Independent check of the scene conventions (docs/scenes.md): the same scenes rendered by VTK's
 vtkFixedPointVolumeRayCastMapper (Debian's python3-vtk9, offscreen under xvfb-run) and by
 `peakcast render`. Measured on llvmpipe: 41.7-42.2 dB; the bound 38 dB. A mirrored image (a
 broken row order or camera handedness) scores under 25 dB, checked too, so the test can fail."""

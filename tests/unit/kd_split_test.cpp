@@ -1,4 +1,4 @@
-// Issue 16: the k-d split into one brick per rank, and the compositing order for a camera.
+// The k-d split into one brick per rank, and the compositing order for a camera.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -6,9 +6,9 @@
 
 #include "core/macrocell_share.h"
 #include "core/volume.h"
-#include "dist/kd_split.h"
+#include "distributed/kd_split.h"
 
-using namespace peakcast::dist;
+using namespace peakcast::distributed;
 
 namespace {
 
@@ -42,7 +42,7 @@ TEST(KdSplit, BricksTileTheVolumeOnceForAnyRankCount) {
   }
 }
 
-// A distributed volume's statistics are the sum of its bricks' (dist/brick_load.cpp): every
+// A distributed volume's statistics are the sum of its bricks' (distributed/brick_load.cpp): every
 // voxel, shared boundary planes and the volume's upper faces included, in one counted box.
 TEST(KdSplit, CountedBoxesTileTheVoxelsOnceForAnyRankCount) {
   const Index3 dims{17, 9, 12};

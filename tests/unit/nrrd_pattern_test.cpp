@@ -1,4 +1,4 @@
-// The NRRD `data file: <pattern> <min> <max> <step>` form (issue 9: a pattern with %s reached
+// The NRRD `data file: <pattern> <min> <max> <step>` form (a pattern with %s once reached
 // snprintf and crashed the server). The pattern is parsed, never used as a format: one %d or %i
 // with optional flags and width, %% as a literal; everything else refused naming the pattern.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Peaks of the TF and the peak table (Knoll §4.1 with the DESIGN §3 errata).
+// Peaks of the TF and the peak table (Knoll §4.1 with the errata in docs/architecture.md).
 #include <gtest/gtest.h>
 
 #include <random>

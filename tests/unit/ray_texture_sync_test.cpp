@@ -1,12 +1,12 @@
 // Serving under MPI: a session's ray texture reaches the workers inside the render commands
-// (dist/ray_texture_sync.h): whole once, then only the new strokes; each worker keeps one spec
+// (distributed/ray_texture_sync.h): whole once, then only the new strokes; each worker keeps one spec
 // per texture, whose lineage stays put, so its renderer applies only the new strokes.
 #include <gtest/gtest.h>
 
 #include <memory>
 
 #include "core/ray_texture.h"
-#include "dist/ray_texture_sync.h"
+#include "distributed/ray_texture_sync.h"
 
 using namespace peakcast;
 
@@ -28,8 +28,8 @@ nlohmann::json wire(const nlohmann::json& j) { return nlohmann::json::from_cbor(
 TEST(RayTextureSync, WholeOnceThenOnlyTheNewStrokes) {
   auto spec = std::make_shared<const RayTextureSpec>(parse_ray_texture({{"mapping", "volume"}, {"size", {40, 20}}}));
   spec = with_stroke(*spec, stroke(RayChannel::Termination, 0.3, 0.2));
-  dist::RayTextureSender sender;
-  dist::RayTextureReceiver receiver;
+  distributed::RayTextureSender sender;
+  distributed::RayTextureReceiver receiver;
   nlohmann::json m = sender.message(*spec);
   EXPECT_EQ(m["from"], 0);
   EXPECT_EQ(m["strokes"].size(), 1u);
@@ -62,8 +62,8 @@ TEST(RayTextureSync, ATextureWithFewerStrokesThanSentGoesWholeAgain) {
   auto spec = std::make_shared<const RayTextureSpec>(parse_ray_texture({{"mapping", "view"}, {"size", {8, 8}}}));
   spec = with_stroke(*spec, stroke(RayChannel::Termination, 0.3, 0.2));
   spec = with_stroke(*spec, stroke(RayChannel::Step, 0.6, 2.0));
-  dist::RayTextureSender sender;
-  dist::RayTextureReceiver receiver;
+  distributed::RayTextureSender sender;
+  distributed::RayTextureReceiver receiver;
   const auto first = receiver.apply(wire(sender.message(*spec)));
   RayTextureSpec fewer = *spec;  // the same lineage, one stroke less
   fewer.strokes.pop_back();
@@ -82,8 +82,8 @@ TEST(RayTextureSync, APngsTexelsGoAsBinary) {
   for (int k = 0; k < 18; ++k) image->texels.push_back(0.125f * float(k) + 0.001f);
   spec->image = image;
   spec->png = "paint.png";
-  dist::RayTextureSender sender;
-  dist::RayTextureReceiver receiver;
+  distributed::RayTextureSender sender;
+  distributed::RayTextureReceiver receiver;
   const auto got = receiver.apply(wire(sender.message(*spec)));
   ASSERT_TRUE(got->image);
   EXPECT_EQ(got->image->texels, image->texels);
@@ -92,11 +92,11 @@ TEST(RayTextureSync, APngsTexelsGoAsBinary) {
 
 TEST(RayTextureSync, TexelsThatDoNotFitTheSizeAreRefused) {
   auto spec = std::make_shared<const RayTextureSpec>(parse_ray_texture({{"mapping", "view"}, {"size", {3, 2}}}));
-  dist::RayTextureSender sender;
+  distributed::RayTextureSender sender;
   nlohmann::json m = sender.message(*spec);
   m["png"] = "paint.png";
   m["image"] = nlohmann::json::binary(std::vector<uint8_t>(5 * sizeof(float), 0));  // 18 floats for 3x2
-  dist::RayTextureReceiver receiver;
+  distributed::RayTextureReceiver receiver;
   try {
     receiver.apply(wire(m));
     ADD_FAILURE() << "texels of the wrong count were taken";
@@ -107,10 +107,10 @@ TEST(RayTextureSync, TexelsThatDoNotFitTheSizeAreRefused) {
 
 TEST(RayTextureSync, RanksOutOfStepAreRefusedByName) {
   auto spec = std::make_shared<const RayTextureSpec>(parse_ray_texture({{"mapping", "view"}, {"size", {8, 8}}}));
-  dist::RayTextureSender sender;
+  distributed::RayTextureSender sender;
   sender.message(*spec);
   spec = with_stroke(*spec, stroke(RayChannel::Termination, 0.5, 0.3));
-  dist::RayTextureReceiver fresh;  // missed the first command
+  distributed::RayTextureReceiver fresh;  // missed the first command
   try {
     fresh.apply(wire(sender.message(*spec)));
     ADD_FAILURE() << "a continuation of a texture this rank never got was applied";
@@ -120,10 +120,10 @@ TEST(RayTextureSync, RanksOutOfStepAreRefusedByName) {
 }
 
 TEST(RayTextureSync, BothSidesForgetTheOldestAlike) {
-  dist::RayTextureSender sender;
-  dist::RayTextureReceiver receiver;
+  distributed::RayTextureSender sender;
+  distributed::RayTextureReceiver receiver;
   std::vector<std::shared_ptr<const RayTextureSpec>> specs;
-  for (size_t k = 0; k <= dist::kKeptRayTextures; ++k) {  // one more than both keep
+  for (size_t k = 0; k <= distributed::kKeptRayTextures; ++k) {  // one more than both keep
     const RayTextureSpec blank = parse_ray_texture({{"mapping", "view"}, {"size", {4, 4}}});
     specs.push_back(with_stroke(blank, stroke(RayChannel::Step, 0.5, 2.0)));
     receiver.apply(wire(sender.message(*specs.back())));

@@ -1,4 +1,4 @@
-// DESIGN §6 / issue 2 point 4: each bad file is refused with one error naming the file and the
+// Each bad file is refused with one error naming the file and the
 // reason, before any allocation beyond the limit.
 #include <gtest/gtest.h>
 #include <zlib.h>

@@ -183,7 +183,7 @@ TEST(VolumeIo, HistogramCountsEveryVoxel) {
   EXPECT_EQ(v.histogram.size(), size_t(Volume::kHistogramBins));
 }
 
-// Integer volumes get range and histogram from one counting pass (issue 13): the same range
+// Integer volumes get range and histogram from one counting pass: the same range
 // and bins as the definition (bin = int((v - min) * bins / (max - min)), clamped), on random
 // uint8 and uint16 voxels with value offsets (int8, int16), a constant volume and one voxel.
 TEST(VolumeIo, IntegerStatisticsMatchTheirDefinition) {

@@ -1,4 +1,4 @@
-// Issue 16: a rank reads only its brick. Every format that supports it gives the same voxels as
+// A rank reads only its brick. Every format that supports it gives the same voxels as
 // cropping the whole volume, with the origin moved to the region's first voxel.
 #include <gtest/gtest.h>
 

@@ -1,0 +1,146 @@
+// `bench scene SCENE.json`: frame time of any user scene over an orbit, after warm-up, as a
+// viewer pays it (8-bit frame read back, what the stream encodes, without sample counts), with
+// samples per ray (one more frame at the start pose) and the variant. --json prints one object for
+// scripts (scripts/bench_peers.py reads it).
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <nlohmann/json.hpp>
+
+#include "bench/bench_scenes.h"
+#include "bench/bench_util.h"
+#include "bench/commands.h"
+#include "app/scene_file.h"
+#include "render/backend.h"
+
+namespace peakcast::bench {
+namespace {
+
+using app::load_scene_file;
+using app::LoadedScene;
+
+struct SceneBenchArgs {
+  std::string scene, path = "fragment";
+  int frames = 12, warmup = 2;
+  double orbit = 30.0;
+  bool json = false, bare = false;
+};
+
+// The scene's camera turned by `deg` about its up axis through the centre (an orbit).
+Camera orbit_camera(const Camera& c, double deg) {
+  const glm::dmat4 rot = glm::rotate(glm::dmat4(1.0), glm::radians(deg), glm::normalize(c.up));
+  Camera o = c;
+  o.eye = c.center + glm::dvec3(rot * glm::dvec4(c.eye - c.center, 0.0));
+  return o;
+}
+
+int run_scene_bench(const SceneBenchArgs& a) {
+  const auto t_load = std::chrono::steady_clock::now();
+  LoadedScene ls = load_scene_file(a.scene);
+  const double load_ms = ms_between(t_load, std::chrono::steady_clock::now());
+  BenchRenderer b = make_bench_renderer();
+  render::Renderer& caster = *b.renderer;
+  const auto t_upload = std::chrono::steady_clock::now();
+  auto resident = caster.make_resident(ls.volume);  // upload (GL) + the trilinear macrocell grid
+  const render::ResidentVolume& gv = *resident;
+  const double upload_total_ms = ms_between(t_upload, std::chrono::steady_clock::now());
+  double first_frame_ms = 0;
+  render::RenderRequest req;
+  req.path = a.path == "compute" ? render::GpuPath::Compute : render::GpuPath::Fragment;
+  req.output = render::RenderOutput::Rgb8;  // what a viewer's stream renders: no sample counts
+  std::vector<double> frame_ms, render_ms;
+  render::RenderStats st;
+  const int n = std::max(1, a.frames);
+  for (int f = -a.warmup; f < n; ++f) {
+    ResolvedScene s = ls.scene;
+    // Frames spread evenly over the orbit; warm-up frames at the start pose.
+    s.camera = orbit_camera(ls.scene.camera, f < 0 || n == 1 ? 0.0 : a.orbit * f / (n - 1));
+    const auto t0 = std::chrono::steady_clock::now();
+    caster.render(gv, s, req, &st);
+    const double ms = ms_between(t0, std::chrono::steady_clock::now());
+    if (f == -a.warmup) first_frame_ms = ms;
+    if (f < 0) continue;
+    frame_ms.push_back(ms);
+    render_ms.push_back(st.render_ms);
+  }
+  // Samples per ray: one more frame at the start pose that reads the counts back.
+  render::RenderRequest counted = req;
+  counted.sample_stats = true;
+  caster.render(gv, ls.scene, counted, &st);
+  const double samples_per_ray = st.samples_mean;
+  // The ceiling: the bare sampling loop (same rays, same per-ray sample counts, reconstruction
+  // only) at the start pose, against the full ray caster's render_ms there.
+  std::vector<double> bare_ms, full_ms;
+  if (a.bare) {
+    ResolvedScene s = ls.scene;
+    render::RenderStats fs, bs;
+    for (int k = 0; k < 3; ++k) {
+      const Image full = caster.render(gv, s, req.path, &fs);
+      caster.render_bare(gv, s, req.path, full, &bs);
+      full_ms.push_back(fs.render_ms);
+      bare_ms.push_back(bs.render_ms);
+    }
+  }
+  const auto [mn, mx] = std::minmax_element(frame_ms.begin(), frame_ms.end());
+  nlohmann::json j = {{"scene", a.scene},
+                      {"width", ls.scene.scene.width},
+                      {"height", ls.scene.scene.height},
+                      {"step", ls.scene.step},
+                      {"frames", n},
+                      {"orbit_deg", a.orbit},
+                      {"frame_ms_median", median(frame_ms)},
+                      {"frame_ms_min", *mn},
+                      {"frame_ms_max", *mx},
+                      {"render_ms_median", median(render_ms)},
+                      {"samples_per_ray", samples_per_ray},
+                      {"variant", st.variant},
+                      {"load_ms", load_ms},
+                      {"upload_ms", gv.upload_ms()},
+                      {"macrocells_ms", gv.macrocell_ms()},
+                      {"gpu_volume_ms", upload_total_ms},
+                      {"first_frame_ms", first_frame_ms},
+                      {"load_to_first_frame_ms", load_ms + upload_total_ms + first_frame_ms},
+                      {"renderer", b.description()}, {"backend", render::to_string(b.backend)}};
+  if (a.bare) {
+    j["bare_ms"] = median(bare_ms);
+    j["full_render_ms_float"] = median(full_ms);
+  }
+  if (a.json) {
+    std::printf("%s\n", j.dump().c_str());
+    return 0;
+  }
+  std::printf("renderer: %s\nscene: %s (%dx%d, step %.4g, variant %s)\n", b.description().c_str(), a.scene.c_str(),
+              ls.scene.scene.width, ls.scene.scene.height, ls.scene.step, st.variant.c_str());
+  std::printf("load %.0f ms (file, range, histogram), upload %.0f ms, macrocells %.0f ms, first frame %.0f ms "
+              "(shader compile included): load to first frame %.0f ms\n",
+              load_ms, gv.upload_ms(), gv.macrocell_ms(), first_frame_ms, load_ms + upload_total_ms + first_frame_ms);
+  std::printf("%d frames over a %.0f-degree orbit after %d warm-up: frame ms median %.1f min %.1f max %.1f; "
+              "render ms median %.1f; samples per ray %.1f\n",
+              n, a.orbit, a.warmup, median(frame_ms), *mn, *mx, median(render_ms), samples_per_ray);
+  if (a.bare)
+    std::printf("bare sampling loop (same rays and samples, no TF, no compositing, no traversal): %.1f ms against "
+                "%.1f ms for the full ray caster (float output): ratio %.2f\n",
+                median(bare_ms), median(full_ms), median(full_ms) / median(bare_ms));
+  return 0;
+}
+
+}  // namespace
+
+void add_scene_command(CLI::App& bench, Runner& run) {
+  auto a = std::make_shared<SceneBenchArgs>();
+  auto* c = bench.add_subcommand("scene", "Frame ms (median/min/max) of a scene file over an orbit");
+  c->add_option("scene", a->scene, "scene JSON")->required()->check(CLI::ExistingFile);
+  c->add_option("--frames", a->frames, "timed frames")->check(CLI::Range(1, 100000));
+  c->add_option("--warmup", a->warmup, "untimed frames first (shader compile, uploads)")->check(CLI::Range(0, 1000));
+  c->add_option("--orbit", a->orbit, "degrees turned about the camera's up axis over the timed frames")
+      ->check(CLI::Range(-3600.0, 3600.0));
+  c->add_option("--path", a->path, "fragment | compute")->check(CLI::IsMember({"fragment", "compute"}));
+  c->add_flag("--json", a->json, "print one JSON object");
+  c->add_flag("--bare", a->bare, "also time the bare sampling loop on the same rays (the ceiling)");
+  c->callback([a, &run] { run = [a] { return run_scene_bench(*a); }; });
+}
+
+}  // namespace peakcast::bench

@@ -1,0 +1,36 @@
+#include "render/gl_device.h"
+
+#include "gpu/shader_cache.h"
+#include "render/raycaster.h"
+
+namespace peakcast::render {
+namespace {
+
+class EglDevice final : public GlDevice {
+ public:
+  explicit EglDevice(std::unique_ptr<gpu::EglContext> context) : context_(std::move(context)) {}
+  const gpu::GlInfo& info() const override { return context_->info(); }
+  std::string description() const override { return context_->info().to_string(); }
+  std::unique_ptr<Renderer> make_renderer(const std::filesystem::path& shader_dir) override {
+    shaders_ = std::make_unique<gpu::ShaderCache>(shader_dir.empty() ? gpu::default_shader_dir() : shader_dir);
+    return std::make_unique<Raycaster>(*shaders_);
+  }
+  ~EglDevice() override {
+    shaders_.reset();  // programs go while their context is still there
+    context_.reset();
+  }
+
+ private:
+  std::unique_ptr<gpu::EglContext> context_;
+  std::unique_ptr<gpu::ShaderCache> shaders_;
+};
+
+}  // namespace
+
+std::unique_ptr<GlDevice> open_gl_device(const std::string& egl_device) {
+  return std::make_unique<EglDevice>(gpu::EglContext::create(egl_device));
+}
+
+std::filesystem::path gl_shader_dir() { return gpu::default_shader_dir(); }
+
+}  // namespace peakcast::render

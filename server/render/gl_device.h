@@ -1,0 +1,31 @@
+// The GL side of choosing a backend (render/backend.h): an EGL context on a device and the GL
+// ray caster made on it. Only GL builds (PEAKCAST_WITH_GL) define open_gl_device; the
+// interface itself holds no GL type, so the choice compiles and links without GL.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "gpu/egl_context.h"  // GlInfo: strings only
+#include "render/renderer.h"
+
+namespace peakcast::render {
+
+class GlDevice {
+ public:
+  virtual ~GlDevice() = default;
+  virtual const gpu::GlInfo& info() const = 0;
+  virtual std::string description() const = 0;  // renderer, version and EGL platform, one line
+  // The GL ray caster on this device (shaders from `shader_dir`); the device must outlive it.
+  virtual std::unique_ptr<Renderer> make_renderer(const std::filesystem::path& shader_dir) = 0;
+};
+
+// An EGL context on `egl_device` ("auto", "surfaceless", an index; empty: PEAKCAST_EGL_DEVICE,
+// else auto), current on this thread. Throws std::runtime_error saying what was tried.
+std::unique_ptr<GlDevice> open_gl_device(const std::string& egl_device);
+
+// The shaders' folder: $PEAKCAST_SHADER_DIR, else the source tree's.
+std::filesystem::path gl_shader_dir();
+
+}  // namespace peakcast::render
