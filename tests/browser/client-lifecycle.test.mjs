@@ -4,7 +4,7 @@
 // frame, keyboard control, labels, and server errors shown to the user.
 import assert from 'node:assert/strict';
 import { after, before, test } from 'node:test';
-import { launch, openClient, screenshot, startServer, waitFinal } from './harness.mjs';
+import { greyRamp, launch, openClient, screenshot, startServer, waitFinal } from './harness.mjs';
 
 let server, browser;
 before(async () => { server = await startServer(); browser = await launch(); });
@@ -126,6 +126,7 @@ test('the access token never appears in the address bar or a shared link', async
 
 test('a TF drag sends one TF per animation frame, and pointercancel ends it', async () => {
   const page = await open();
+  await greyRamp(page);
   await recordSends(page);
   const tf = await page.locator('#tf-canvas').boundingBox();
   await page.mouse.move(tf.x + tf.width - 1, tf.y + 5);  // the grey ramp's last point
@@ -157,6 +158,7 @@ test('a TF drag sends one TF per animation frame, and pointercancel ends it', as
 
 test('the TF editor works from the keyboard', async () => {
   const page = await open();
+  await greyRamp(page);
   await recordSends(page);
   const before_ = await page.evaluate(() => window.peakcast.tfEditor.points);
   await page.focus('#tf-canvas');

@@ -66,6 +66,18 @@ export async function waitFinal(page, { afterFrames = 0, cameraVersion = 0, time
 
 export const frameCount = (page) => page.evaluate(() => +(document.querySelector('#frame').dataset.frames || 0));
 
+// The editor's tests start from a known TF, a grey ramp over the volume's range (two points),
+// whatever TF the server derived for the first picture: set as the user would, and its frame
+// waited for.
+export async function greyRamp(page) {
+  const n = await frameCount(page);
+  await page.evaluate(() => {
+    const e = window.peakcast.tfEditor;
+    e.set([[e.lo, 0, 0, 0, 0], [e.hi, 1, 1, 1, 1]], { silent: false });
+  });
+  await waitFinal(page, { afterFrames: n });
+}
+
 // Mean and spread of the canvas pixels, and a small grey thumbnail to compare images.
 export function canvasSummary(page) {
   return page.evaluate(() => {

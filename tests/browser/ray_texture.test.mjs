@@ -296,8 +296,11 @@ test('volume mapping: a stroke sits where the ray enters the box; switching the 
   await page.selectOption('select[name=brush-mapping]', 'volume');
   await settled(page, 0);
   assert.match(await page.textContent('#rt-status'), /volume 512×256 · 0 strokes · 0 pending · mapping volume: 1 stroke cleared/);
-  // The default camera looks down -z at the box centre: the ray through the image centre enters
+  // Seen from +z (looking down -z at the box centre): the ray through the image centre enters
   // the +z face at its centre, u = 1/2 + atan2(0, 1) / 2 pi = 0.5, v = acos(0) / pi = 0.5.
+  await page.click('#view-buttons button[data-view="+z"]');
+  const version = await page.evaluate(() => window.peakcast.app.cameraVersion);
+  await waitFinal(page, { cameraVersion: version });
   await page.mouse.click(box.x + box.width / 2, box.y + box.height / 2);
   await settled(page, 1);
   const s = await page.evaluate(() => window.peakcast.brush.model.strokes[0]);

@@ -220,7 +220,7 @@ TEST(RenderStats, JsonUsesTheStreamKeysAndToStringMatches) {
   const json j = st.to_json();
   const std::set<std::string> want = {"render_ms", "readback_ms", "table_ms", "samples_per_ray",
                                       "samples_per_ray_max", "rays_hit", "rays_at_sample_cap", "sample_cap", "variant", "peaks",
-                                      "empty_macrocells", "tiles"};
+                                      "empty_macrocells", "tiles", "tf_source", "warnings"};
   std::set<std::string> got;
   for (auto& [k, _] : j.items()) got.insert(k);
   EXPECT_EQ(got, want);
@@ -234,7 +234,10 @@ TEST(RenderStats, JsonUsesTheStreamKeysAndToStringMatches) {
   for (auto& [k, val] : j.items()) {
     ASSERT_TRUE(props.contains(k)) << k << " is not in $defs/stats";
     const std::string type = props[k]["type"];
-    const bool ok = type == "string" ? val.is_string() : type == "integer" ? val.is_number_integer() : val.is_number();
+    const bool ok = type == "string"    ? val.is_string()
+                    : type == "array"   ? val.is_array()
+                    : type == "integer" ? val.is_number_integer()
+                                        : val.is_number();
     EXPECT_TRUE(ok) << k << ": schema says " << type << ", to_json gives " << val.dump();
   }
   const std::string text = st.to_string();
