@@ -18,7 +18,7 @@ namespace peakcast::app {
 namespace {
 
 struct RenderArgs {
-  std::string scene, out, stats, path = "fragment", backend;
+  std::string scene, out, stats, path = "fragment", backend, program_cache;
 };
 
 struct ReferenceArgs {
@@ -49,6 +49,9 @@ void add_render_commands(CLI::App& app, Runner& run) {
   render->add_option("--path", ra->path, "fragment | compute (GL backend)")->check(CLI::IsMember({"fragment", "compute"}));
   render->add_option("--backend", ra->backend, "auto | gl | cpu (default: PEAKCAST_BACKEND, else auto)")
       ->check(CLI::IsMember({"auto", "gl", "cpu"}));
+  render->add_option("--program-cache", ra->program_cache,
+                     "GL: where linked shader programs are kept between runs: auto | off | a folder "
+                     "(default: PEAKCAST_PROGRAM_CACHE, else auto, ~/.cache/peakcast/programs)");
   render->callback([ra, &run] {
     run = [ra] {
       if (mpi_world_size_hint() > 1) {  // under mpirun -np N (N > 1): one brick per rank
@@ -60,7 +63,7 @@ void add_render_commands(CLI::App& app, Runner& run) {
 #endif
       }
       LoadedScene ls = load_scene_file(ra->scene);
-      render::RenderBackend b = render::open_backend(render::requested_backend(ra->backend));
+      render::RenderBackend b = render::open_backend(render::requested_backend(ra->backend), "", {}, ra->program_cache);
       auto gv = b.renderer->make_resident(ls.volume);
       render::RenderStats st;
       const auto path = ra->path == "compute" ? render::GpuPath::Compute : render::GpuPath::Fragment;

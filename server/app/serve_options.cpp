@@ -81,6 +81,7 @@ void add_serve_options(CLI::App& s, ServeOptions& o) {
   o.shader_dir = render::default_shader_dir().string();
   c.egl_device = "auto";
   c.backend = "auto";
+  c.program_cache = "auto";
   s.option_defaults()->always_capture_default();
   s.add_option("--config", o.config_file, "read options from this TOML file (also PEAKCAST_CONFIG)");
   s.add_flag("--print-config", o.print_config, "print the effective configuration, each value's source, and exit");
@@ -120,6 +121,8 @@ void add_serve_options(CLI::App& s, ServeOptions& o) {
                            std::all_of(v.begin(), v.end(), [](unsigned char ch) { return std::isdigit(ch) != 0; });
         return v == "auto" || v == "surfaceless" || index ? std::string() : "auto, surfaceless or a device index";
       });
+  s.add_option("--program-cache", c.program_cache,
+               "where GL keeps linked shader programs between runs: auto (~/.cache/peakcast/programs) | off | a folder");
   s.add_option("--backend", c.backend,
                "auto (the CPU backend when EGL offers only a software rasteriser, else GL) | gl | cpu")
       ->check(CLI::IsMember({"auto", "gl", "cpu"}));

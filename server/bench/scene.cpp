@@ -51,26 +51,45 @@ int run_scene_bench(const SceneBenchArgs& a) {
   render::RenderRequest req;
   req.path = a.path == "compute" ? render::GpuPath::Compute : render::GpuPath::Fragment;
   req.output = render::RenderOutput::Rgb8;  // what a viewer's stream renders: no sample counts
-  std::vector<double> frame_ms, render_ms;
+  std::vector<double> frame_ms, render_ms, gpu_ms;
   render::RenderStats st;
   const int n = std::max(1, a.frames);
+  // Frames go through submit and collect as the server's stream sends them: where the renderer
+  // overlaps work (a GPU), frame f + 1 is drawn before frame f is collected. A frame's time is
+  // from its submit, or the previous frame's collect if later, to its own collect.
+  using Clock = std::chrono::steady_clock;
+  std::vector<Clock::time_point> submitted;
+  Clock::time_point last_done{};
+  const bool overlap = caster.asynchronous();
+  auto collect = [&](int f) {
+    caster.collect(&st);
+    const Clock::time_point done = Clock::now();
+    const double ms = ms_between(std::max(submitted[size_t(f + a.warmup)], last_done), done);
+    last_done = done;
+    if (f == -a.warmup) first_frame_ms = ms;
+    if (f < 0) return;
+    frame_ms.push_back(ms);
+    render_ms.push_back(st.render_ms);
+    if (st.gpu_ms >= 0) gpu_ms.push_back(st.gpu_ms);
+  };
+  int next_collect = -a.warmup;
   for (int f = -a.warmup; f < n; ++f) {
     ResolvedScene s = ls.scene;
     // Frames spread evenly over the orbit; warm-up frames at the start pose.
     s.camera = orbit_camera(ls.scene.camera, f < 0 || n == 1 ? 0.0 : a.orbit * f / (n - 1));
-    const auto t0 = std::chrono::steady_clock::now();
-    caster.render(gv, s, req, &st);
-    const double ms = ms_between(t0, std::chrono::steady_clock::now());
-    if (f == -a.warmup) first_frame_ms = ms;
-    if (f < 0) continue;
-    frame_ms.push_back(ms);
-    render_ms.push_back(st.render_ms);
+    submitted.push_back(Clock::now());
+    caster.submit(gv, s, req);
+    if (!overlap || caster.in_flight() >= render::Renderer::kFramesInFlight) collect(next_collect++);
   }
+  while (next_collect < n) collect(next_collect++);
   // Samples per ray: one more frame at the start pose that reads the counts back.
   render::RenderRequest counted = req;
   counted.sample_stats = true;
   caster.render(gv, ls.scene, counted, &st);
   const double samples_per_ray = st.samples_mean;
+  // Samples per second over the frame's own render time (the GPU's, where measured).
+  const double work_ms = gpu_ms.empty() ? median(render_ms) : median(gpu_ms);
+  const double gsamples_per_s = st.samples_total / std::max(work_ms, 1e-6) * 1e-6;
   // The ceiling: the bare sampling loop (same rays, same per-ray sample counts, reconstruction
   // only) at the start pose, against the full ray caster's render_ms there.
   std::vector<double> bare_ms, full_ms;
@@ -95,6 +114,7 @@ int run_scene_bench(const SceneBenchArgs& a) {
                       {"frame_ms_min", *mn},
                       {"frame_ms_max", *mx},
                       {"render_ms_median", median(render_ms)},
+                      {"gsamples_per_s", gsamples_per_s},
                       {"samples_per_ray", samples_per_ray},
                       {"variant", st.variant},
                       {"load_ms", load_ms},
@@ -104,6 +124,7 @@ int run_scene_bench(const SceneBenchArgs& a) {
                       {"first_frame_ms", first_frame_ms},
                       {"load_to_first_frame_ms", load_ms + upload_total_ms + first_frame_ms},
                       {"renderer", b.description()}, {"backend", render::to_string(b.backend)}};
+  if (!gpu_ms.empty()) j["gpu_ms_median"] = median(gpu_ms);
   if (a.bare) {
     j["bare_ms"] = median(bare_ms);
     j["full_render_ms_float"] = median(full_ms);
@@ -118,8 +139,10 @@ int run_scene_bench(const SceneBenchArgs& a) {
               "(shader compile included): load to first frame %.0f ms\n",
               load_ms, gv.upload_ms(), gv.macrocell_ms(), first_frame_ms, load_ms + upload_total_ms + first_frame_ms);
   std::printf("%d frames over a %.0f-degree orbit after %d warm-up: frame ms median %.1f min %.1f max %.1f; "
-              "render ms median %.1f; samples per ray %.1f\n",
-              n, a.orbit, a.warmup, median(frame_ms), *mn, *mx, median(render_ms), samples_per_ray);
+              "render ms median %.1f%s; samples per ray %.1f, %.2f G samples/s\n",
+              n, a.orbit, a.warmup, median(frame_ms), *mn, *mx, median(render_ms),
+              gpu_ms.empty() ? "" : (", GPU ms median " + std::to_string(median(gpu_ms))).c_str(), samples_per_ray,
+              gsamples_per_s);
   if (a.bare)
     std::printf("bare sampling loop (same rays and samples, no TF, no compositing, no traversal): %.1f ms against "
                 "%.1f ms for the full ray caster (float output): ratio %.2f\n",

@@ -21,8 +21,11 @@ bool has_extension(const char* list, const char* name) {
   return false;
 }
 
+const EGLint kContextAttribs[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
+                                  EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
+
 // Initialises `display` and creates a 4.5 core context; returns nullptr (and a reason) on failure.
-EGLContext try_context(EGLDisplay display, std::string& why) {
+EGLContext try_context(EGLDisplay display, std::string& why, EGLConfig& chosen) {
   EGLint major = 0, minor = 0;
   if (!eglInitialize(display, &major, &minor)) {
     why = "eglInitialize failed";
@@ -42,10 +45,8 @@ EGLContext try_context(EGLDisplay display, std::string& why) {
     }
     config = EGL_NO_CONFIG_KHR;
   }
-  const EGLint ctx_attribs[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
-                                EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
-                                EGL_NONE};
-  EGLContext ctx = eglCreateContext(display, config, EGL_NO_CONTEXT, ctx_attribs);
+  chosen = config;
+  EGLContext ctx = eglCreateContext(display, config, EGL_NO_CONTEXT, kContextAttribs);
   if (ctx == EGL_NO_CONTEXT) why = "no OpenGL 4.5 core context";
   if (ctx != EGL_NO_CONTEXT && !eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, ctx)) {
     why = "cannot make the context current without a surface";
@@ -105,13 +106,15 @@ std::unique_ptr<EglContext> EglContext::create(const std::string& device) {
       if (choice != "auto" && choice != std::to_string(i)) continue;
       EGLDisplay d = eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
       std::string why = "no display";
-      EGLContext ctx = d ? try_context(d, why) : EGL_NO_CONTEXT;
+      EGLConfig config = nullptr;
+      EGLContext ctx = d ? try_context(d, why, config) : EGL_NO_CONTEXT;
       const char* drm = has_extension(eglQueryDeviceStringEXT(devices[i], EGL_EXTENSIONS), "EGL_EXT_device_drm")
                             ? eglQueryDeviceStringEXT(devices[i], EGL_DRM_DEVICE_FILE_EXT)
                             : nullptr;
       if (ctx != EGL_NO_CONTEXT) {
         self->display_ = d;
         self->context_ = ctx;
+        self->config_ = config;
         self->info_.platform = "device " + std::to_string(i) + (drm ? std::string(" (") + drm + ")" : "");
         break;
       }
@@ -122,10 +125,12 @@ std::unique_ptr<EglContext> EglContext::create(const std::string& device) {
     if (has_extension(client_ext, "EGL_MESA_platform_surfaceless")) {
       EGLDisplay d = eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
       std::string why = "no display";
-      EGLContext ctx = d ? try_context(d, why) : EGL_NO_CONTEXT;
+      EGLConfig config = nullptr;
+      EGLContext ctx = d ? try_context(d, why, config) : EGL_NO_CONTEXT;
       if (ctx != EGL_NO_CONTEXT) {
         self->display_ = d;
         self->context_ = ctx;
+        self->config_ = config;
         self->info_.platform = "surfaceless";
       } else {
         tried << "surfaceless: " << why << "; ";
@@ -147,10 +152,22 @@ std::unique_ptr<EglContext> EglContext::create(const std::string& device) {
 
 EglContext::~EglContext() {
   if (display_) {
-    eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+    if (eglGetCurrentContext() == context_) eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     eglDestroyContext(display_, context_);
-    eglTerminate(display_);
+    if (owns_display_) eglTerminate(display_);
   }
+}
+
+std::unique_ptr<EglContext> EglContext::create_shared() const {
+  EGLContext ctx = eglCreateContext(display_, config_, context_, kContextAttribs);
+  if (ctx == EGL_NO_CONTEXT) throw std::runtime_error("no shared OpenGL context on this display");
+  std::unique_ptr<EglContext> shared(new EglContext());
+  shared->display_ = display_;
+  shared->context_ = ctx;
+  shared->config_ = config_;
+  shared->owns_display_ = false;
+  shared->info_ = info_;
+  return shared;
 }
 
 void EglContext::make_current() {

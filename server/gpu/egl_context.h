@@ -28,11 +28,17 @@ class EglContext {
 
   const GlInfo& info() const { return info_; }
   void make_current();
+  // A second context on this display that shares this one's objects (a program linked there is
+  // usable here), for another thread to make current; it must be destroyed before this one.
+  // Throws std::runtime_error when the driver refuses.
+  std::unique_ptr<EglContext> create_shared() const;
 
  private:
   EglContext() = default;
   void* display_ = nullptr;
   void* context_ = nullptr;
+  void* config_ = nullptr;
+  bool owns_display_ = true;  // false for a shared context: the first one terminates the display
   GlInfo info_;
 };
 

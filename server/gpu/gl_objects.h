@@ -53,8 +53,48 @@ using Program = GlObject<detail::delete_program>;
 using Shader = GlObject<detail::delete_shader>;
 using Query = GlObject<detail::delete_query>;
 
+// A fence (GLsync is a pointer, not a name): owned like the names above.
+class Fence {
+ public:
+  Fence() = default;
+  explicit Fence(GLsync sync) : sync_(sync) {}
+  ~Fence() { reset(); }
+  Fence(Fence&& o) noexcept : sync_(std::exchange(o.sync_, nullptr)) {}
+  Fence& operator=(Fence&& o) noexcept {
+    if (this != &o) {
+      reset();
+      sync_ = std::exchange(o.sync_, nullptr);
+    }
+    return *this;
+  }
+  Fence(const Fence&) = delete;
+  Fence& operator=(const Fence&) = delete;
+  GLsync get() const { return sync_; }
+  explicit operator bool() const { return sync_ != nullptr; }
+  void reset() {
+    if (sync_) glDeleteSync(sync_);
+    sync_ = nullptr;
+  }
+
+ private:
+  GLsync sync_ = nullptr;
+};
+
 Texture make_texture(GLenum target);
 Buffer make_buffer();
+Query make_query(GLenum target);  // e.g. GL_TIMESTAMP
+
+// The GPU's time for a span of commands: a timestamp before and one after (a GL_TIME_ELAPSED
+// query reads 0 or a raw timestamp on llvmpipe; timestamps are right everywhere).
+struct GpuTimer {
+  Query begin, end;
+  static GpuTimer make();
+  void start() const { glQueryCounter(begin.id(), GL_TIMESTAMP); }
+  void stop() const { glQueryCounter(end.id(), GL_TIMESTAMP); }
+  double elapsed_ms() const;  // waits for both results
+};
+// A fence after every command issued so far, and the commands flushed so it will signal.
+Fence fence_now();
 Framebuffer make_framebuffer();
 VertexArray make_vertex_array();
 

@@ -12,7 +12,8 @@ AppContext::AppContext(ServerConfig c)
              RenderServiceOptions{config.shader_dir, config.encode_threads,
                                   SchedulerOptions{config.max_queued_stills, config.still_band_samples,
                                                    limits::kStillDelay, config.max_fps},
-                                  config.egl_device, config.backend, config.wrap_renderer, config.ranks}),
+                                  config.egl_device, config.backend, config.program_cache, config.wrap_renderer,
+                                  config.ranks}),
       ws_sessions(config.max_sessions) {}
 
 PngLocator AppContext::png_locator() const {

@@ -41,6 +41,7 @@ struct ServerConfig {
   std::filesystem::path web_dir, shader_dir;
   std::string egl_device;  // "auto" | "surfaceless" | a device index; empty: PEAKCAST_EGL_DEVICE, else auto
   std::string backend;     // "auto" | "gl" | "cpu" (render/backend.h); empty: PEAKCAST_BACKEND, else auto
+  std::string program_cache;  // GL program binaries: "auto", "off" or a folder (render/backend.h)
   // mpirun peakcast serve: RenderServiceOptions::wrap_renderer and ranks.
   std::function<std::unique_ptr<render::Renderer>(std::unique_ptr<render::Renderer>)> wrap_renderer;
   int ranks = 1;

@@ -59,7 +59,21 @@ std::string RenderBackend::description() const {
   return d;
 }
 
-RenderBackend open_backend(Backend requested, const std::string& egl_device, const std::filesystem::path& shader_dir) {
+std::filesystem::path program_cache_dir(const std::string& choice) {
+  std::string c = choice;
+  if (c.empty())
+    if (const char* env = std::getenv("PEAKCAST_PROGRAM_CACHE"); env && *env) c = env;
+  if (c == "off") return {};
+  if (!c.empty() && c != "auto") return c;
+#ifdef PEAKCAST_HAVE_GL
+  return gl_program_cache_dir();
+#else
+  return {};
+#endif
+}
+
+RenderBackend open_backend(Backend requested, const std::string& egl_device, const std::filesystem::path& shader_dir,
+                           const std::string& program_cache) {
   RenderBackend b;
   auto on_cpu = [&b](std::string why) -> RenderBackend& {
     b.backend = Backend::Cpu;
@@ -80,11 +94,12 @@ RenderBackend open_backend(Backend requested, const std::string& egl_device, con
     return std::move(on_cpu("auto: EGL offers only " + b.device->info().renderer));
   b.backend = Backend::Gl;
   if (requested == Backend::Auto) b.why = "auto: a hardware GL device";
-  b.renderer = b.device->make_renderer(shader_dir);
+  b.renderer = b.device->make_renderer(shader_dir, program_cache_dir(program_cache));
   return b;
 #else
   (void)egl_device;
   (void)shader_dir;
+  (void)program_cache;
   if (requested == Backend::Gl)
     throw std::runtime_error("backend gl: this peakcast was built without GL (PEAKCAST_WITH_GL=OFF): use --backend cpu");
   return std::move(on_cpu("auto: built without GL"));

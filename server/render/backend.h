@@ -39,8 +39,12 @@ struct RenderBackend {
 // Throws std::runtime_error when the requested backend cannot start (gl without a context, or
 // a build without GL). With auto, a machine where EGL cannot start at all renders on the CPU
 // (said in `why`).
+// program_cache: where GL keeps linked programs as driver binaries: a folder, "off", "auto" (the
+// default, ~/.cache/peakcast/programs), or empty for PEAKCAST_PROGRAM_CACHE, else auto.
 RenderBackend open_backend(Backend requested, const std::string& egl_device = "",
-                           const std::filesystem::path& shader_dir = {});
+                           const std::filesystem::path& shader_dir = {}, const std::string& program_cache = "");
+// The program cache's folder for a choice as open_backend takes it (empty: off).
+std::filesystem::path program_cache_dir(const std::string& choice);
 
 // The shaders' folder of GL builds ($PEAKCAST_SHADER_DIR, else the source tree's); empty
 // without GL.

@@ -11,8 +11,10 @@ class EglDevice final : public GlDevice {
   explicit EglDevice(std::unique_ptr<gpu::EglContext> context) : context_(std::move(context)) {}
   const gpu::GlInfo& info() const override { return context_->info(); }
   std::string description() const override { return context_->info().to_string(); }
-  std::unique_ptr<Renderer> make_renderer(const std::filesystem::path& shader_dir) override {
-    shaders_ = std::make_unique<gpu::ShaderCache>(shader_dir.empty() ? gpu::default_shader_dir() : shader_dir);
+  std::unique_ptr<Renderer> make_renderer(const std::filesystem::path& shader_dir,
+                                          const std::filesystem::path& program_cache) override {
+    shaders_ = std::make_unique<gpu::ShaderCache>(shader_dir.empty() ? gpu::default_shader_dir() : shader_dir,
+                                                  program_cache, context_.get());
     return std::make_unique<Raycaster>(*shaders_);
   }
   ~EglDevice() override {
@@ -32,5 +34,7 @@ std::unique_ptr<GlDevice> open_gl_device(const std::string& egl_device) {
 }
 
 std::filesystem::path gl_shader_dir() { return gpu::default_shader_dir(); }
+
+std::filesystem::path gl_program_cache_dir() { return gpu::default_program_cache_dir(); }
 
 }  // namespace peakcast::render

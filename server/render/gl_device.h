@@ -17,8 +17,10 @@ class GlDevice {
   virtual ~GlDevice() = default;
   virtual const gpu::GlInfo& info() const = 0;
   virtual std::string description() const = 0;  // renderer, version and EGL platform, one line
-  // The GL ray caster on this device (shaders from `shader_dir`); the device must outlive it.
-  virtual std::unique_ptr<Renderer> make_renderer(const std::filesystem::path& shader_dir) = 0;
+  // The GL ray caster on this device (shaders from `shader_dir`, linked programs kept as driver
+  // binaries in `program_cache`, empty: off); the device must outlive it.
+  virtual std::unique_ptr<Renderer> make_renderer(const std::filesystem::path& shader_dir,
+                                                  const std::filesystem::path& program_cache) = 0;
 };
 
 // An EGL context on `egl_device` ("auto", "surfaceless", an index; empty: PEAKCAST_EGL_DEVICE,
@@ -27,5 +29,7 @@ std::unique_ptr<GlDevice> open_gl_device(const std::string& egl_device);
 
 // The shaders' folder: $PEAKCAST_SHADER_DIR, else the source tree's.
 std::filesystem::path gl_shader_dir();
+// The program cache's default folder ($XDG_CACHE_HOME or ~/.cache, then peakcast/programs).
+std::filesystem::path gl_program_cache_dir();
 
 }  // namespace peakcast::render

@@ -57,6 +57,7 @@ Raycaster::Raycaster(gpu::ShaderCache& shaders) : shaders_(shaders) {
   llvmpipe_ = renderer && std::string(renderer).find("llvmpipe") != std::string::npos;
   ubo_ = gpu::make_buffer();
   front_opacity_ = gpu::make_buffer();
+  timer_ = gpu::GpuTimer::make();
   glNamedBufferStorage(ubo_.id(), sizeof(RayUniforms), nullptr, GL_DYNAMIC_STORAGE_BIT);
   vao_ = gpu::make_vertex_array();
 }
@@ -94,6 +95,28 @@ int Raycaster::sample_cap(const VariantKey& key) const {
 const gpu::Program& Raycaster::program(const VariantKey& key) {
   if (key.path == GpuPath::Compute) return shaders_.get(key.name(), {"raycast.comp"}, key.defines());
   return shaders_.get(key.name(), {"fullscreen.vert", "raycast.frag"}, key.defines());
+}
+
+void Raycaster::prefetch_variants() {
+  // Around the last frame's variant: the other classifications, shading toggled, and the float
+  // output of stills; built on the shader cache's thread, most likely first.
+  std::vector<VariantKey> next;
+  VariantKey k = last_key_;
+  k.bare_sampling = false;
+  auto with = [&](auto change) {
+    VariantKey v = k;
+    change(v);
+    next.push_back(v);
+  };
+  with([](VariantKey& v) { v.shading = !v.shading; });
+  with([](VariantKey& v) { v.peaks = false, v.preintegration = false; });
+  with([](VariantKey& v) { v.peaks = false, v.preintegration = true; });
+  with([](VariantKey& v) { v.peaks = true, v.preintegration = false; });
+  with([](VariantKey& v) { v.rgb8 = !v.rgb8; });
+  for (const VariantKey& v : next) {
+    if (v.path == GpuPath::Compute) shaders_.prefetch(v.name(), {"raycast.comp"}, v.defines());
+    else shaders_.prefetch(v.name(), {"fullscreen.vert", "raycast.frag"}, v.defines());
+  }
 }
 
 Raycaster::Targets& Raycaster::targets(int w, int h, RenderOutput output) {
@@ -212,15 +235,15 @@ Image Raycaster::render_bare(const ResidentVolume& v, const ResolvedScene& s, Gp
   return std::move(draw(gv, s, key, PixelRect{0, 0, w, h}, true, stats).image);
 }
 
-RenderResult Raycaster::draw(const GpuVolume& gv, const ResolvedScene& s, const VariantKey& key,
-                           const PixelRect& rect, bool read_samples, RenderStats* stats, const Brick* brick) {
-  const int w = rect.w, h = rect.h;
+Raycaster::Targets& Raycaster::setup_draw(const GpuVolume& gv, const ResolvedScene& s, const VariantKey& key,
+                                           const PixelRect& rect, const Brick* brick, RenderStats* stats) {
   const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
-  const GpuPath path = key.path;
-  const RenderOutput output = key.rgb8 ? RenderOutput::Rgb8 : RenderOutput::Float;
+  const auto t_program = Clock::now();
+  const bool was_ready = shaders_.ready(key.name());
   const gpu::Program& prog = program(key);
-  const int cap = sample_cap(key);
-  const RayUniforms u = make_uniforms(gv, s, cells, tables_, rect, cap, brick);
+  if (stats && !was_ready) stats->compile_ms = ms_since(t_program);  // built, loaded or waited for
+  last_key_ = key;
+  const RayUniforms u = make_uniforms(gv, s, cells, tables_, rect, sample_cap(key), brick);
   glNamedBufferSubData(ubo_.id(), 0, sizeof u, &u);
   glBindBufferBase(GL_UNIFORM_BUFFER, kUboRay, ubo_.id());
   gv.bind(kUnitVolume);  // the TF table and the other per-TF tables were bound by prepare()
@@ -229,27 +252,41 @@ RenderResult Raycaster::draw(const GpuVolume& gv, const ResolvedScene& s, const 
     glNamedBufferData(front_opacity_.id(), GLsizeiptr(front.size() * sizeof(float)), front.data(), GL_STREAM_DRAW);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboFrontOpacity, front_opacity_.id());
   }
-  Targets& t = targets(w, h, output);
+  Targets& t = targets(rect.w, rect.h, key.rgb8 ? RenderOutput::Rgb8 : RenderOutput::Float);
   glUseProgram(prog.id());
+  return t;
+}
 
-  glFinish();
-  const auto t0 = Clock::now();
-  if (path == GpuPath::Compute) {
+void Raycaster::dispatch(const VariantKey& key, Targets& t, bool read_samples, const gpu::GpuTimer& timer) {
+  timer.start();
+  if (key.path == GpuPath::Compute) {
     glBindImageTexture(kImageColor, t.color.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, key.rgb8 ? GL_RGBA8UI : GL_RGBA32F);
     glBindImageTexture(kImageSamples, t.samples.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
-    glDispatchCompute(GLuint((w + 7) / 8), GLuint((h + 7) / 8), 1);
-    glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
+    glDispatchCompute(GLuint((t.w + 7) / 8), GLuint((t.h + 7) / 8), 1);
+    glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_PIXEL_BUFFER_BARRIER_BIT);
   } else {
     // Sample counts nobody reads are not written (draw buffer NONE drops them).
     const GLenum bufs[] = {GL_COLOR_ATTACHMENT0, read_samples ? GLenum(GL_COLOR_ATTACHMENT1) : GLenum(GL_NONE)};
     glNamedFramebufferDrawBuffers(t.fbo.id(), 2, bufs);
     glBindFramebuffer(GL_FRAMEBUFFER, t.fbo.id());
-    glViewport(0, 0, w, h);
+    glViewport(0, 0, t.w, t.h);
     glDisable(GL_BLEND);
     glDisable(GL_DEPTH_TEST);
     glBindVertexArray(vao_.id());
     glDrawArrays(GL_TRIANGLES, 0, 3);
   }
+  timer.stop();
+}
+
+RenderResult Raycaster::draw(const GpuVolume& gv, const ResolvedScene& s, const VariantKey& key,
+                           const PixelRect& rect, bool read_samples, RenderStats* stats, const Brick* brick) {
+  const int w = rect.w, h = rect.h;
+  const RenderOutput output = key.rgb8 ? RenderOutput::Rgb8 : RenderOutput::Float;
+  const int cap = sample_cap(key);
+  Targets& t = setup_draw(gv, s, key, rect, brick, stats);
+  glFinish();  // render_ms is the draw's alone, not the uploads queued before it
+  const auto t0 = Clock::now();
+  dispatch(key, t, read_samples, timer_);
   glFinish();
   const double render_ms = ms_since(t0);
   gpu::check_gl("ray cast");
@@ -279,22 +316,25 @@ RenderResult Raycaster::draw(const GpuVolume& gv, const ResolvedScene& s, const 
   gpu::check_gl("read-back");
   if (stats) {
     stats->render_ms = render_ms;
+    stats->gpu_ms = timer_.elapsed_ms();
     stats->readback_ms = ms_since(t1);
     stats->variant = key.name();
-    stats->has_samples = read_samples;
+    if (read_samples) count_samples(output == RenderOutput::Float ? res.image.samples : samples, cap, *stats);
     stats->sample_cap = cap;
-    if (read_samples) {
-      for (float n : output == RenderOutput::Float ? res.image.samples : samples) {
-        if (n < 0) continue;  // missed the box
-        stats->samples_total += n;
-        stats->samples_max = std::max<double>(stats->samples_max, n);
-        stats->rays_hit++;
-        if (n >= float(cap)) stats->rays_at_cap++;
-      }
-      stats->samples_mean = stats->rays_hit ? stats->samples_total / double(stats->rays_hit) : 0.0;
-    }
   }
   return res;
+}
+
+void count_samples(const std::vector<float>& samples, int cap, RenderStats& stats) {
+  stats.has_samples = true;
+  for (float n : samples) {
+    if (n < 0) continue;  // missed the box
+    stats.samples_total += n;
+    stats.samples_max = std::max<double>(stats.samples_max, n);
+    stats.rays_hit++;
+    if (n >= float(cap)) stats.rays_at_cap++;
+  }
+  stats.samples_mean = stats.rays_hit ? stats.samples_total / double(stats.rays_hit) : 0.0;
 }
 
 }  // namespace peakcast::render

@@ -3,6 +3,7 @@
 // top-down (no flip on read): float (an Image) or 8-bit RGB quantised on the GPU (render/frame.h).
 #pragma once
 
+#include <chrono>
 #include <functional>
 #include <string>
 #include <vector>
@@ -71,6 +72,12 @@ class Raycaster : public Renderer {
   void bind_multipliers(const GpuVolume& volume, const MacrocellGrid& cells);
   RenderResult draw(const GpuVolume& volume, const ResolvedScene& scene, const VariantKey& key, const PixelRect& rect,
                     bool read_samples, RenderStats* stats, const Brick* brick = nullptr);
+  // A draw in parts, shared by draw() and the asynchronous frames: the program (its wait in
+  // stats->compile_ms), uniforms and targets; then the draw or dispatch between a timer
+  // query's begin and end; then the query's result (waits for it).
+  Targets& setup_draw(const GpuVolume& volume, const ResolvedScene& scene, const VariantKey& key, const PixelRect& rect,
+                      const Brick* brick, RenderStats* stats);
+  void dispatch(const VariantKey& key, Targets& targets, bool read_samples, const gpu::GpuTimer& timer);
 
   gpu::ShaderCache& shaders_;
   gpu::Buffer ubo_;
@@ -111,8 +118,35 @@ class Raycaster : public Renderer {
   void bind_ray_texture(const ResolvedScene& scene, RenderStats* stats);
   RayTables tables_;  // what the current frame's tables hold (for the uniforms and stats)
   bool llvmpipe_ = false;
+  VariantKey last_key_;           // the last draw's variant (prefetch_variants starts from it)
   std::vector<Targets> targets_;  // most recently used first
+  gpu::GpuTimer timer_;           // the synchronous draws' timer
+
+  // Asynchronous frames (raycaster_async.cpp): a ring of pixel-buffer objects, each with the
+  // fence after its read-back and its draw's timer query.
+  struct InFlight {
+    gpu::Buffer pbo;
+    size_t bytes = 0;       // the buffer's size
+    gpu::GpuTimer timer;
+    gpu::Fence fence;
+    int w = 0, h = 0, cap = 0;
+    bool samples = false;   // per-pixel sample counts follow the RGB bytes
+    RenderStats stats;
+    std::chrono::steady_clock::time_point issued;
+  };
+  std::vector<InFlight> ring_;  // kFramesInFlight slots
+  size_t ring_head_ = 0, ring_count_ = 0;
+
+ public:
+  void submit(const ResidentVolume& volume, const ResolvedScene& scene, const RenderRequest& request) override;
+  RenderResult collect(RenderStats* stats = nullptr) override;
+  size_t in_flight() const override { return ring_count_; }
+  bool asynchronous() const override { return !llvmpipe_; }
+  void prefetch_variants() override;
 };
+
+// Adds per-pixel sample counts (-1: the ray missed the box) to the stats.
+void count_samples(const std::vector<float>& samples, int cap, RenderStats& stats);
 
 using peakcast::kMaxSamplesPerRay;
 constexpr int kLlvmpipeLoopBudget = 60000;  // of llvmpipe's 65535 loop iterations per invocation

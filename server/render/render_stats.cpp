@@ -17,7 +17,9 @@ RenderStats RenderStats::for_scene(const ResolvedScene& s) {
 nlohmann::json RenderStats::to_json() const {
   nlohmann::json j = {{"render_ms", render_ms}, {"readback_ms", readback_ms}, {"table_ms", table_ms},
                       {"variant", variant},     {"peaks", peaks},             {"empty_macrocells", empty_cells},
-                      {"tiles", tiles},         {"tf_source", tf_source},     {"warnings", warnings}};
+                      {"tiles", tiles},         {"tf_source", tf_source},     {"warnings", warnings},
+                      {"compile_ms", compile_ms}};
+  if (gpu_ms >= 0) j["gpu_ms"] = gpu_ms;
   if (variant.find("+raytex") != std::string::npos) {
     j["ray_texture_ms"] = ray_texture_ms;
     j["ray_texture_strokes"] = ray_texture_strokes;
@@ -40,7 +42,8 @@ std::string RenderStats::to_string() const {
   bool first = true;
   for (const char* key : {"variant", "render_ms", "readback_ms", "table_ms", "samples_per_ray", "samples_per_ray_max",
                           "rays_hit", "rays_at_sample_cap", "sample_cap", "peaks", "empty_macrocells", "tiles",
-                          "ray_texture_ms", "ray_texture_strokes", "ray_texture_texels", "tf_source", "warnings"}) {
+                          "ray_texture_ms", "ray_texture_strokes", "ray_texture_texels", "tf_source", "warnings",
+                          "compile_ms", "gpu_ms"}) {
     if (!j.contains(key)) continue;
     s << (first ? "" : " ") << key << "=" << (j[key].is_string() ? j[key].get<std::string>() : j[key].dump());
     first = false;
@@ -52,6 +55,8 @@ std::string RenderStats::to_string() const {
 void RenderStats::merge(const RenderStats& t) {
   render_ms += t.render_ms;
   readback_ms += t.readback_ms;
+  gpu_ms = gpu_ms >= 0 && t.gpu_ms >= 0 ? gpu_ms + t.gpu_ms : -1.0;
+  compile_ms += t.compile_ms;
   table_ms += t.table_ms;
   has_samples = has_samples && t.has_samples;
   samples_total += t.samples_total;

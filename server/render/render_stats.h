@@ -16,7 +16,12 @@ struct ResolvedScene;
 namespace peakcast::render {
 
 struct RenderStats {
-  double render_ms = 0.0;    // GPU work, draw to glFinish
+  double render_ms = 0.0;    // the draw: GL, issued to finished (wall); CPU, the ray cast
+  // GL only: the GPU's own time for the draw (a timer query), apart from the frame's waits;
+  // < 0 where not measured (the CPU backend, a driver without timer queries).
+  double gpu_ms = -1.0;
+  // GL only: how long the frame waited for its shader program (0: compiled before, in memory).
+  double compile_ms = 0.0;
   double readback_ms = 0.0;  // GPU -> host copy of the output (and the sample counts when read)
   double table_ms = 0.0;     // peak table / preintegration table / occupancy rebuilt for this frame
   // Sample counts are read back for RenderOutput::Float always, for Rgb8 only on request
@@ -46,7 +51,7 @@ struct RenderStats {
   static RenderStats for_scene(const ResolvedScene& s);
 
   // Keys: render_ms, readback_ms, table_ms, variant, peaks, empty_macrocells, tiles, tf_source,
-  // warnings, with a ray
+  // warnings, compile_ms, gpu_ms (when measured), with a ray
   // texture ray_texture_ms, ray_texture_strokes, ray_texture_texels, and, with
   // sample counts, samples_per_ray, samples_per_ray_max, rays_hit, rays_at_sample_cap. The stream adds its frame
   // keys (type, frame, final, width, height, encode_ms, bytes) to this object.

@@ -3,6 +3,7 @@
 // (docs/scenes.md), choose the same variant and produce the same outputs; render/backend.h picks one.
 #pragma once
 
+#include <deque>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -54,6 +55,26 @@ class Renderer {
   // bounds a shader's loops: llvmpipe); rays that reach it are counted in the stats.
   virtual int sample_cap(const VariantKey& key) const = 0;
 
+  // The stream's frames, drawn and read back asynchronously. submit() draws the whole image as
+  // 8-bit RGB (`request.output` must be Rgb8, no tile) and starts its read-back; collect()
+  // returns the oldest frame submitted and not yet collected, waiting for it, with its stats.
+  // The render thread draws frame N + 1 between the two calls for frame N, so the read-back
+  // and encode of one frame overlap the next frame's draw. At most kFramesInFlight frames are
+  // submitted and not collected (std::logic_error beyond; collect with none: the same). This
+  // default draws and reads back inside submit(): the CPU backend has nothing to overlap.
+  static constexpr size_t kFramesInFlight = 2;
+  virtual void submit(const ResidentVolume& volume, const ResolvedScene& scene, const RenderRequest& request);
+  virtual RenderResult collect(RenderStats* stats = nullptr);
+  virtual size_t in_flight() const { return done_.size(); }
+  // Whether drawing the next frame before collecting this one overlaps work (a GPU's draw with
+  // the host's read-back and encode). False for the default, where it would only delay this
+  // frame by the next one's whole render, and on llvmpipe, which draws on the same cores.
+  virtual bool asynchronous() const { return false; }
+  // Prepares, off the render thread, what the next frames may need that the last one did not
+  // (GL: the shader variants of the other classifications, shading toggled, still output), so a
+  // session that switches does not wait for a compile. Nothing to prepare by default.
+  virtual void prefetch_variants() {}
+
  protected:
   // Switches for tests and benchmarks, set only through render/renderer_seam.h (the product
   // never changes them): empty-space leaps, the cells' widening for virtual samples, a forced
@@ -66,6 +87,15 @@ class Renderer {
   };
   Seam seam_;
   friend class RendererSeam;
+
+  static void check_submit(const RenderRequest& request, size_t in_flight);
+
+ private:
+  struct Done {
+    RenderResult result;
+    RenderStats stats;
+  };
+  std::deque<Done> done_;  // the default submit's frames, oldest first
 };
 
 }  // namespace peakcast::render

@@ -1,6 +1,7 @@
 #include "session/render_service.h"
 
 #include <algorithm>
+#include <deque>
 #include <future>
 #include <tuple>
 
@@ -10,9 +11,16 @@
 
 namespace peakcast {
 
-// The renderer (and GL state) that lives on the render thread only.
+// The renderer (and GL state) that lives on the render thread only, and the viewers' frames
+// submitted to it and not yet collected (oldest first).
 struct RenderService::Impl {
   render::RenderBackend backend;
+  struct Submitted {
+    std::shared_ptr<Session> session;
+    std::shared_ptr<FrameSink> sink;
+    FrameJob job;
+  };
+  std::deque<Submitted> submitted;
 };
 
 RenderService::RenderService(GpuResidency& residency, Metrics& metrics, RenderServiceOptions options)
@@ -29,7 +37,7 @@ void RenderService::start() {
     auto impl = std::make_unique<Impl>();
     try {
       impl->backend = render::open_backend(render::requested_backend(options_.backend), options_.egl_device,
-                                           options_.shader_dir);
+                                           options_.shader_dir, options_.program_cache);
       if (options_.wrap_renderer) impl->backend.renderer = options_.wrap_renderer(std::move(impl->backend.renderer));
       ready.set_value({impl->backend.description(), render::to_string(impl->backend.backend)});
     } catch (...) {
@@ -74,17 +82,31 @@ void RenderService::refuse(StillJob& job, const std::string& code, const std::st
 }
 
 void RenderService::loop() {
-  while (auto w = scheduler_.next()) {
+  // A frame is submitted, then collected: right away, or, where the renderer overlaps work (a
+  // GPU), after the next frame is submitted, so the next draw runs while this frame is read
+  // back and encoded. A band of a still waits for the frames in flight.
+  const bool overlap = impl_->backend.renderer->asynchronous();
+  for (;;) {
+    auto w = scheduler_.next(impl_->submitted.empty());
+    if (!w) {
+      if (impl_->submitted.empty()) break;  // shutting down
+      collect_frame();                      // nothing else ready: this frame goes now
+      continue;
+    }
     for (auto& job : w->cancelled) refuse(job, "cancelled", "the client went away");
-    if (w->still)
+    if (w->still) {
+      while (!impl_->submitted.empty()) collect_frame();
       render_band(*w);
-    else if (w->frame)
-      render_frame(*w);
+    } else if (w->frame) {
+      submit_frame(*w);
+      if (!overlap || impl_->submitted.size() >= render::Renderer::kFramesInFlight) collect_frame();
+    }
     metrics_.set("peakcast_stills_queued", "", double(scheduler_.stills_pending()));
   }
+  while (!impl_->submitted.empty()) collect_frame();
 }
 
-void RenderService::render_frame(Scheduler::Work& w) {
+void RenderService::submit_frame(Scheduler::Work& w) {
   FrameJob& job = *w.frame;
   auto sink = w.session->sink();
   if (!sink) {
@@ -94,29 +116,43 @@ void RenderService::render_frame(Scheduler::Work& w) {
   try {
     // 8-bit RGB straight from the GPU (3 bytes per pixel); the per-pixel sample counts (4 more)
     // only for final frames, whose stats the client shows.
-    render::RenderStats st;
     render::RenderRequest req;
     req.output = render::RenderOutput::Rgb8;
     req.sample_stats = job.final;
-    render::RenderResult out = impl_->backend.renderer->render(residency_.acquire(job.volume, *impl_->backend.renderer),
-                                                                   job.scene, req, &st);
+    render::Renderer& r = *impl_->backend.renderer;
+    r.submit(residency_.acquire(job.volume, r), job.scene, req);
+    impl_->submitted.push_back({w.session, std::move(sink), std::move(job)});
+  } catch (const std::exception& e) {
+    w.session->frame_dropped(job.frame_id);
+    sink->deliver_text(protocol::error_message("render_failed", e.what()));
+  }
+}
+
+void RenderService::collect_frame() {
+  Impl::Submitted s = std::move(impl_->submitted.front());
+  impl_->submitted.pop_front();
+  try {
+    render::RenderStats st;
+    render::RenderResult out = impl_->backend.renderer->collect(&st);
     metrics_.set("peakcast_gpu_volumes", "", double(residency_.gpu_volumes()));
     metrics_.set("peakcast_gpu_volume_bytes", "", double(residency_.gpu_bytes()));
     RenderedFrame f;
     f.rendered = Clock::now();
-    metrics_.observe("peakcast_render_ms", job.final ? "kind=\"final\"" : "kind=\"interactive\"", st.render_ms);
-    if (!job.final) w.session->interactive_rendered(int64_t(out.rgb8.width) * out.rgb8.height, st.render_ms);
+    metrics_.observe("peakcast_render_ms", s.job.final ? "kind=\"final\"" : "kind=\"interactive\"", st.render_ms);
+    if (!s.job.final) s.session->interactive_rendered(int64_t(out.rgb8.width) * out.rgb8.height, st.render_ms);
+    // At rest: what the session may switch to next is prepared in the background meanwhile.
+    if (s.job.final) impl_->backend.renderer->prefetch_variants();
     f.width = out.rgb8.width;
     f.height = out.rgb8.height;
     f.rgb = std::move(out.rgb8.rgb);
     f.stats = st.to_json();
-    f.job = std::move(job);
-    pool_->submit([this, f = std::move(f), sink](encode::JpegEncoder& enc) {
+    f.job = std::move(s.job);
+    pool_->submit([this, f = std::move(f), sink = s.sink](encode::JpegEncoder& enc) {
       encode_viewer_frame(enc, f, *sink, metrics_);
     });
   } catch (const std::exception& e) {
-    w.session->frame_dropped(job.frame_id);
-    sink->deliver_text(protocol::error_message("render_failed", e.what()));
+    s.session->frame_dropped(s.job.frame_id);
+    s.sink->deliver_text(protocol::error_message("render_failed", e.what()));
   }
 }
 

@@ -24,6 +24,7 @@ struct RenderServiceOptions {
   SchedulerOptions scheduling;
   std::string egl_device;  // gpu::EglContext::create's choice; empty: PEAKCAST_EGL_DEVICE, else auto
   std::string backend;     // auto | gl | cpu (render/backend.h); empty: PEAKCAST_BACKEND, else auto
+  std::string program_cache;  // auto | off | a folder (render/backend.h); empty: PEAKCAST_PROGRAM_CACHE
   // Distributed rendering (mpirun peakcast serve): the opened backend's renderer handed to this,
   // on the render thread, which returns the renderer frames go through (distributed::MpiRenderer).
   std::function<std::unique_ptr<render::Renderer>(std::unique_ptr<render::Renderer>)> wrap_renderer;
@@ -55,7 +56,8 @@ class RenderService {
  private:
   struct Impl;
   void loop();
-  void render_frame(Scheduler::Work& w);
+  void submit_frame(Scheduler::Work& w);
+  void collect_frame();  // the oldest frame submitted: to the encode pool
   void render_band(Scheduler::Work& w);
   void refuse(StillJob& job, const std::string& code, const std::string& message);
 

@@ -137,7 +137,7 @@ std::optional<FrameJob> Scheduler::take_session_job(Clock::time_point now, std::
   return std::nullopt;
 }
 
-std::optional<Scheduler::Work> Scheduler::next() {
+std::optional<Scheduler::Work> Scheduler::next(bool wait) {
   std::unique_lock lock(m_);
   for (;;) {
     if (stopping_) return std::nullopt;
@@ -168,6 +168,7 @@ std::optional<Scheduler::Work> Scheduler::next() {
     }
     if (!w.cancelled.empty()) return w;  // nothing to render, but stills to answer
     last_was_session_ = false;
+    if (!wait) return std::nullopt;
     if (next_wake == Clock::time_point::max())
       cv_.wait(lock, [&] { return stopping_ || wake_; });
     else

@@ -97,7 +97,9 @@ class Scheduler {
     int y0 = 0, rows = 0;
     std::vector<StillJob> cancelled;   // stills whose clients went away: answer them
   };
-  std::optional<Work> next();
+  // wait false: nullopt at once when nothing is ready (the render thread has a frame in flight
+  // to finish meanwhile).
+  std::optional<Work> next(bool wait = true);
   // The band handed out by next() is in still->image: the still leaves the scheduler when complete.
   void band_done(const std::shared_ptr<StillWork>& still);
   // The still failed: it leaves the scheduler.

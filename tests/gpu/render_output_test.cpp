@@ -218,11 +218,13 @@ TEST(RenderStats, JsonUsesTheStreamKeysAndToStringMatches) {
   render::RenderStats st;
   draw(gv, s, render::GpuPath::Fragment, render::RenderOutput::Float, std::nullopt, &st);
   const json j = st.to_json();
-  const std::set<std::string> want = {"render_ms", "readback_ms", "table_ms", "samples_per_ray",
+  std::set<std::string> want = {"render_ms", "readback_ms", "table_ms", "samples_per_ray",
                                       "samples_per_ray_max", "rays_hit", "rays_at_sample_cap", "sample_cap", "variant", "peaks",
                                       "empty_macrocells", "tiles", "tf_source", "warnings"};
   std::set<std::string> got;
   for (auto& [k, _] : j.items()) got.insert(k);
+  want.insert("compile_ms");
+  if (!test::cpu_backend()) want.insert("gpu_ms");  // a timer query: the GPU's own time
   EXPECT_EQ(got, want);
   EXPECT_EQ(j["samples_per_ray"].get<double>(), st.samples_mean);
   EXPECT_EQ(j["variant"].get<std::string>(), st.variant);
