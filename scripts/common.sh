@@ -25,7 +25,7 @@ PEAKCAST_PACKAGES=("${PEAKCAST_BUILD_PACKAGES[@]}" git python3 python3-jsonschem
 # container label: buildah and debootstrap; manifests: python3-yaml; the mpi label: OpenMPI and
 # IceT from ParaView's packages).
 PEAKCAST_TEST_PACKAGES=(chromium nodejs python3-vtk9 xvfb xauth clang libclang-rt-14-dev
-  buildah debootstrap python3-yaml
+  buildah debootstrap python3-yaml python3-pytest python3-numpy python3-venv
   libopenmpi-dev openmpi-bin paraview-dev)
 # paraview-dev brings IceT (the mpi label). --no-install-recommends matters for it: with
 # recommends it pulls python3-paraview, which removes python3-vtk9.

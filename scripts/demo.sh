@@ -6,4 +6,4 @@ source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 bash "$PEAKCAST_ROOT/scripts/build.sh"
 data="$PEAKCAST_ROOT/tests/data"
 exec "$BUILD_DIR/server/peakcast" serve --port "${PEAKCAST_PORT:-8080}" --bind "${PEAKCAST_BIND:-127.0.0.1}" \
-  --data "$data" --volume "$data/heptane_151.nrrd" "$@"
+  --data "$data" --volume "$data/heptane_151.nrrd" --upload-dir "${PEAKCAST_UPLOAD_DIR:-$BUILD_DIR/uploads}" "$@"

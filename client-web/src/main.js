@@ -10,6 +10,7 @@ import { StatsOverlay } from './stats.js';
 import { Stream } from './stream.js';
 import { TfEditor } from './tf-editor.js';
 import { VolumePicker } from './volume-picker.js';
+import { DropUpload } from './upload.js';
 
 const $ = (id) => document.getElementById(id);
 const disposer = new Disposer();
@@ -60,6 +61,8 @@ const brush = new Brush({ section: $('ray-texture'), controls: $('rt-controls'),
 
 function share() { return { volume: app.volume, camera: app.camera, tf: app.tf, render: app.render }; }
 
+function titleOf(v) { return `peakcast — ${v.uploaded ? v.name : v.id}`; }
+
 function applyState(state, volumeInfo, volumes) {
   app.volume = volumeInfo.id;
   app.volumeInfo = volumeInfo;
@@ -82,10 +85,13 @@ disposer.listen(stream, 'welcome', (e) => {
   controls.build(w.capabilities, w.state.render);
   brush.welcome(w.capabilities, w.state);
   app.welcomed = true;
-  document.title = `peakcast — ${w.volume.id}`;
+  document.title = titleOf(w.volume);
 });
 disposer.listen(stream, 'volume', (e) => {
-  applyState(e.detail.state, e.detail.volume, app.volumes.some((v) => v.id === e.detail.volume.id) ? app.volumes : [...app.volumes, e.detail.volume]);
+  document.title = titleOf(e.detail.volume);  // the tab follows the volume
+  // A volume opened by path or uploaded stays in the menu after switching to another.
+  if (!app.volumes.some((v) => v.id === e.detail.volume.id)) app.volumes = [...app.volumes, e.detail.volume];
+  applyState(e.detail.state, e.detail.volume, app.volumes);
   camera.set(e.detail.state.camera, { home: true, silent: true });
   brush.volumeChanged(e.detail.state);
 });
@@ -184,6 +190,10 @@ disposer.listen(controls, 'change', (e) => {
   writeState(share());
 });
 disposer.listen(picker, 'pick', (e) => stream.send({ type: 'volume', volume: e.detail }));
+// A file dropped on the view: uploaded, then opened like any volume.
+const uploads = new DropUpload({ target: $('view'), overlay: $('drop-overlay'), progress: $('volume-progress') },
+  { token: () => token }, disposer);
+disposer.listen(uploads, 'uploaded', (e) => stream.send({ type: 'volume', volume: e.detail.id }));
 for (const b of document.querySelectorAll('#view-buttons button')) disposer.listen(b, 'click', () => camera.view(b.dataset.view));
 
 let resizeTimer = 0;
@@ -210,5 +220,5 @@ disposer.listen($('share'), 'click', async () => {
 });
 
 disposer.listen(window, 'pagehide', () => disposer.dispose());
-window.peakcast = { app, stats, stream, camera, tfEditor, controls, brush, disposer };  // for tests and the console
+window.peakcast = { app, stats, stream, camera, tfEditor, controls, brush, disposer, uploads };  // for tests and the console
 stream.connect();

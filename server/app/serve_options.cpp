@@ -70,6 +70,12 @@ net::ServerConfig ServeOptions::resolved() const {
   c.gpu_budget_bytes = gpu_budget_mib << 20;
   c.web_dir = web_dir;
   c.shader_dir = shader_dir;
+  c.upload_dir = upload_dir;
+  c.upload_limits.max_bytes = max_upload_mib << 20;
+  c.upload_limits.budget_bytes = upload_budget_mib << 20;
+  c.upload_limits.max_concurrent = max_uploads;
+  c.upload_limits.per_minute = uploads_per_minute;
+  c.upload_limits.idle_timeout = std::chrono::seconds(upload_timeout);
   return c;
 }
 
@@ -112,6 +118,16 @@ void add_serve_options(CLI::App& s, ServeOptions& o) {
       ->check(CLI::IsMember({"text", "json"}));
   s.add_option("--io-threads", c.io_threads, "network threads")->check(CLI::Range(1, 64));
   s.add_option("--encode-threads", c.encode_threads, "JPEG encode threads")->check(CLI::Range(1, 64));
+  s.add_option("--upload-dir", o.upload_dir,
+               "where uploaded volumes are kept (POST /api/volumes); empty: uploads are off. Never inside a --data directory");
+  s.add_option("--max-upload-mib", o.max_upload_mib, "MiB of one upload")->check(CLI::Range(int64_t(1), int64_t(1) << 22));
+  s.add_option("--upload-budget-mib", o.upload_budget_mib, "MiB of every upload kept, in all")
+      ->check(CLI::Range(int64_t(1), int64_t(1) << 26));
+  s.add_option("--max-uploads", o.max_uploads, "uploads received at once; beyond, 503")->check(CLI::Range(1, 64));
+  s.add_option("--uploads-per-minute", o.uploads_per_minute, "uploads one client address may start a minute (a burst of 10); beyond, 429")
+      ->check(CLI::Range(1.0, 1e6));
+  s.add_option("--upload-timeout", o.upload_timeout, "seconds an upload may send nothing before it is ended")
+      ->check(CLI::Range(1, 3600));
   s.add_option("--web-dir", o.web_dir, "the browser client's files");
   s.add_option("--shader-dir", o.shader_dir, "the GLSL shaders");
   s.add_option("--egl-device", c.egl_device,

@@ -22,6 +22,11 @@ struct ServeOptions {
   int idle_seconds = 0;
   int64_t gpu_budget_mib = 0;
   std::string web_dir, shader_dir;
+  std::string upload_dir;
+  int64_t max_upload_mib = limits::kDefaultMaxUploadBytes >> 20, upload_budget_mib = limits::kDefaultUploadBudgetBytes >> 20;
+  int max_uploads = limits::kDefaultMaxConcurrentUploads;
+  double uploads_per_minute = limits::kUploadsPerMinutePerClient;
+  int upload_timeout = int(limits::kDefaultUploadIdleTimeout.count());
   std::string log_level = "info", log_format = "text";
   std::string config_file;
   bool print_config = false;

@@ -1,5 +1,8 @@
 #include "net/app_context.h"
 
+#include <cctype>
+#include <string>
+
 #include "core/volume_io.h"
 
 namespace peakcast::net {
@@ -8,6 +11,7 @@ AppContext::AppContext(ServerConfig c)
     : config(std::move(c)),
       residency(config.gpu_budget_bytes),
       volumes(config.data_dirs, residency, LoadOptions{}, config.volume_loader),
+      uploads(config.upload_dir, config.upload_limits, volumes),
       render(residency, metrics,
              RenderServiceOptions{config.shader_dir, config.encode_threads,
                                   SchedulerOptions{config.max_queued_stills, config.still_band_samples,
@@ -42,6 +46,22 @@ std::string query_param(const std::string& target, const std::string& key) {
     i = amp + 1;
   }
   return "";
+}
+
+std::string url_decode(const std::string& s) {
+  std::string out;
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (s[i] == '+') {
+      out += ' ';
+    } else if (s[i] == '%' && i + 2 < s.size() && std::isxdigit(static_cast<unsigned char>(s[i + 1])) &&
+               std::isxdigit(static_cast<unsigned char>(s[i + 2]))) {
+      out += char(std::stoi(s.substr(i + 1, 2), nullptr, 16));
+      i += 2;
+    } else {
+      out += s[i];
+    }
+  }
+  return out;
 }
 
 std::string token_from(const std::string& authorization, const std::string& target) {

@@ -18,6 +18,7 @@
 #include "session/gpu_residency.h"
 #include "session/limits.h"
 #include "session/render_service.h"
+#include "session/upload_store.h"
 #include "session/volume_store.h"
 
 namespace peakcast::net {
@@ -47,6 +48,9 @@ struct ServerConfig {
   int ranks = 1;
   // mpirun peakcast serve: reads volumes as bricks on every rank (VolumeStore); empty: whole.
   VolumeLoader volume_loader;
+  // Uploads (POST /api/volumes): their folder (empty: off) and limits.
+  std::filesystem::path upload_dir;
+  UploadLimits upload_limits;
 };
 
 struct AppContext {
@@ -54,6 +58,7 @@ struct AppContext {
   Metrics metrics;
   GpuResidency residency;  // the GPU budget's one owner
   VolumeStore volumes;
+  UploadStore uploads;
   RenderService render;
   SessionRegistry ws_sessions;
   ConnectionCounter connections{limits::kMaxConnections, limits::kMaxConnectionsPerAddress};
@@ -72,5 +77,6 @@ struct AppContext {
 std::string token_from(const std::string& authorization, const std::string& target);
 std::string path_of(const std::string& target);  // target without the query
 std::string query_param(const std::string& target, const std::string& key);
+std::string url_decode(const std::string& s);  // %XX and '+' (a query's space)
 
 }  // namespace peakcast::net

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdint>
+#include <limits>
 
 #include "net/connection_slot.h"
 #include "net/ws_session.h"
@@ -17,9 +19,24 @@ void HttpSession::run() {
 
 void HttpSession::read() {
   parser_.emplace();
-  parser_->body_limit(limits::kMaxHttpBodyBytes);
+  // No body limit while the header is read (Beast checks Content-Length against it there): an
+  // upload's is its own; every other request's is set once the header names the route. (Not
+  // boost::none: Boost 1.74 compares a length against an empty optional as larger.)
+  parser_->body_limit(std::numeric_limits<std::uint64_t>::max());
   parser_->header_limit(uint32_t(limits::kMaxHttpHeaderBytes));
   stream_.expires_after(limits::kHandshakeTimeout);
+  http::async_read_header(stream_, buffer_, *parser_,
+                          [self = shared_from_this()](beast::error_code ec, std::size_t) { self->on_header(ec); });
+}
+
+// The header first: an upload's body goes to a file as it arrives (http_upload.cpp); every other
+// request's body is read whole, within limits::kMaxHttpBodyBytes.
+void HttpSession::on_header(beast::error_code ec) {
+  if (ec) return on_read(ec);
+  const auto& req = parser_->get();
+  if (req.method() == http::verb::post && path_of(std::string(req.target())) == "/api/volumes") return start_upload();
+  if (auto n = parser_->content_length(); n && *n > limits::kMaxHttpBodyBytes) return on_read(http::error::body_limit);
+  parser_->body_limit(limits::kMaxHttpBodyBytes);  // a chunked body is counted as it arrives
   http::async_read(stream_, buffer_, *parser_,
                    [self = shared_from_this()](beast::error_code ec, std::size_t) { self->on_read(ec); });
 }

@@ -19,7 +19,13 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
 
  private:
   void read();
+  void on_header(beast::error_code ec);
   void on_read(beast::error_code ec);
+  // POST /api/volumes (http_upload.cpp): the body streamed into the upload store's file.
+  void start_upload();
+  void read_upload();
+  void on_upload_read(beast::error_code ec);
+  void refuse_upload(int status, const std::string& code, const std::string& message);
   void upgrade(Request req);
   void write(Response res);
   bool origin_allowed(const Request& req) const;
@@ -29,6 +35,9 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   beast::flat_buffer buffer_;
   AppContext& app_;
   std::optional<http::request_parser<http::string_body>> parser_;
+  std::optional<http::request_parser<http::file_body>> upload_parser_;
+  std::unique_ptr<UploadStore::Ticket> upload_;
+  UploadParams upload_params_;
   std::shared_ptr<ConnectionSlot> slot_;
   bool pending_ = false;  // a request is being answered (on the strand)
 };

@@ -79,10 +79,11 @@ void submit_still(AppContext& app, const Request& req, const Scene& scene, std::
   }
   const std::string format = query_param(std::string(req.target()), "format");
   const std::string accept(req[http::field::accept]);
-  if (!format.empty() && format != "png" && format != "jpeg" && format != "jpg") {
+  if (!format.empty() && format != "png" && format != "jpeg" && format != "jpg" && format != "rgb") {
     count(app, "render", http::status::bad_request);
-    return send(error_response(req, http::status::bad_request, "bad_request", "format must be png or jpeg"));
+    return send(error_response(req, http::status::bad_request, "bad_request", "format must be png, jpeg or rgb"));
   }
+  job.raw_rgb = format == "rgb";  // packed 8-bit RGB rows from the top: what a script puts in an array
   job.png = !(format == "jpeg" || format == "jpg" ||
               (format.empty() && accept.find("image/jpeg") != std::string::npos && accept.find("image/png") == std::string::npos));
   const std::string q = query_param(std::string(req.target()), "quality");
@@ -125,6 +126,8 @@ void submit_still(AppContext& app, const Request& req, const Scene& scene, std::
     res.set("X-Wait-Ms", std::to_string(r.wait_ms));
     res.set("X-Bands", std::to_string(r.bands));
     res.set("X-TF-Source", tf_source);
+    res.set("X-Image-Width", std::to_string(r.width));
+    res.set("X-Image-Height", std::to_string(r.height));
     for (const std::string& w : warnings) res.insert("X-Warning", w);
     res.body().assign(r.bytes.begin(), r.bytes.end());
     res.keep_alive(keep_alive);
@@ -221,8 +224,27 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
     }
     return render_still(app, req, std::move(send), std::move(cancelled));
   }
+  if (req.method() == http::verb::delete_ && path.rfind("/api/volumes/", 0) == 0) {
+    const std::string id = url_decode(path.substr(std::strlen("/api/volumes/")));
+    // Off the io thread: removing a large file takes a while on some file systems.
+    return asio::post(app.loader, [&app, req, id, send = std::move(send)] {
+      try {
+        app.uploads.remove(id);
+        count(app, "delete", http::status::ok);
+        send(json_response(req, http::status::ok, nlohmann::json{{"deleted", id}}.dump()));
+      } catch (const UploadRefusal& r) {
+        count(app, "delete", http::status(r.status));
+        send(error_response(req, http::status(r.status), r.code, r.what()));
+      } catch (const std::exception& e) {
+        count(app, "delete", http::status::internal_server_error);
+        send(error_response(req, http::status::internal_server_error, "internal", e.what()));
+      }
+    });
+  }
   if (req.method() != http::verb::get && req.method() != http::verb::head)
-    return send(error_response(req, http::status::method_not_allowed, "bad_request", "GET only"));
+    return send(error_response(req, http::status::method_not_allowed, "bad_request",
+                               path.rfind("/api/volumes", 0) == 0 ? "GET, POST an upload, or DELETE an upload"
+                                                                   : "GET only"));
   if (path == "/api/health") {
     const bool stopping = app.stopping.load();
     const auto status = stopping ? http::status::service_unavailable : http::status::ok;
@@ -236,19 +258,34 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
                                              {"max_sessions", app.config.max_sessions},
                                              {"volumes", app.volumes.list().size()},
                                              {"stills_queued", app.render.stills_pending()},
-                                             {"max_queued_stills", app.config.max_queued_stills}}
+                                             {"max_queued_stills", app.config.max_queued_stills},
+                                             {"uploads",
+                                              {{"enabled", app.uploads.enabled()},
+                                               {"max_bytes", app.uploads.limits().max_bytes},
+                                               {"budget_bytes", app.uploads.limits().budget_bytes},
+                                               {"used_bytes", app.uploads.used_bytes()}}}}
                                   .dump()));
   }
   if (path == "/api/volumes") {
-    nlohmann::json list = nlohmann::json::array();
-    for (const auto& v : app.volumes.list()) list.push_back(v->info(false));
+    const nlohmann::json list = app.volumes.listing();
     count(app, "volumes", http::status::ok);
     return send(json_response(req, http::status::ok,
                               nlohmann::json{{"volumes", list}, {"default", app.volumes.default_id()}}.dump()));
   }
   if (path.rfind("/api/volumes/", 0) == 0) {
-    const std::string id = path.substr(std::strlen("/api/volumes/"));
+    const std::string id = url_decode(path.substr(std::strlen("/api/volumes/")));
     auto v = app.volumes.find(id);
+    if (!v && app.volumes.known(id))  // an upload listed since a restart, read when first asked for
+      return asio::post(app.loader, [&app, req, id, send = std::move(send)] {
+        try {
+          auto e = app.volumes.get(id);
+          count(app, "volume", http::status::ok);
+          send(json_response(req, http::status::ok, e->info(true).dump()));
+        } catch (const std::exception& e) {
+          count(app, "volume", http::status::internal_server_error);
+          send(error_response(req, http::status::internal_server_error, "volume_error", e.what()));
+        }
+      });
     count(app, "volume", v ? http::status::ok : http::status::not_found);
     if (!v) return send(error_response(req, http::status::not_found, "not_found", "no loaded volume '" + id + "'"));
     return send(json_response(req, http::status::ok, v->info(true).dump()));

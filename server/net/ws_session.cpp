@@ -246,7 +246,7 @@ void WsSession::start_session(const protocol::Hello& hello, std::shared_ptr<Volu
   session->start(volume, hello.viewport, hello.state, texture);
   session_ = session;
   nlohmann::json vols = nlohmann::json::array();
-  for (const auto& v : app_.volumes.list()) vols.push_back(v->info(false));
+  for (const auto& v : app_.volumes.listing()) vols.push_back(v);
   protocol::Welcome welcome;
   welcome.session = session_->id();
   welcome.volume = volume->info(true);

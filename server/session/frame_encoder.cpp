@@ -53,15 +53,19 @@ void encode_still(encode::JpegEncoder& enc, StillWork& w, Metrics& metrics) {
   StillResult r;
   const auto t0 = Clock::now();
   try {
-    const auto rgb = encode::to_rgb8(w.image);
-    r.bytes = encode_image(enc, rgb, w.image.width, w.image.height, w.job.png, w.job.quality, encode::Subsampling::S444);
+    auto rgb = encode::to_rgb8(w.image);
+    r.bytes = w.job.raw_rgb ? std::move(rgb)
+                            : encode_image(enc, rgb, w.image.width, w.image.height, w.job.png, w.job.quality,
+                                           encode::Subsampling::S444);
   } catch (const std::exception& e) {
     r.error = e.what();
     r.error_code = "encode_failed";
     metrics.add("peakcast_stills_total", "outcome=\"failed\"", 1);
     return w.job.done(std::move(r));
   }
-  r.content_type = w.job.png ? "image/png" : "image/jpeg";
+  r.content_type = w.job.raw_rgb ? "application/octet-stream" : w.job.png ? "image/png" : "image/jpeg";
+  r.width = w.image.width;
+  r.height = w.image.height;
   r.encode_ms = ms_between(t0, Clock::now());
   r.render_ms = w.render_ms;
   r.wait_ms = ms_between(w.queued, w.started);

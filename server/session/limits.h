@@ -37,6 +37,13 @@ constexpr size_t kDefaultMaxQueuedStills = 4;            // (cfg) REST stills wa
 constexpr double kDefaultMaxStillSamples = 8e9;          // (cfg) estimated samples (pixels x samples per ray) of one still; beyond: 422
 constexpr double kStillBandSamples = 1.5e7;              // estimated samples per band of a still: bounds a viewer's wait (~50-100 ms on llvmpipe)
 constexpr std::chrono::seconds kStillRetryAfter{5};      // Retry-After of a 503 for a full still queue
+constexpr int64_t kDefaultMaxUploadBytes = int64_t(4) << 30;     // (cfg) one volume upload's body
+constexpr int64_t kDefaultUploadBudgetBytes = int64_t(16) << 30; // (cfg) every upload kept, in all
+constexpr int kDefaultMaxConcurrentUploads = 2;             // (cfg) uploads being received at once; beyond: 503
+constexpr double kUploadsPerMinutePerClient = 60;           // (cfg) per client address, sustained (a burst of 10); beyond: 429
+constexpr double kUploadBurst = 10;
+constexpr std::chrono::seconds kDefaultUploadIdleTimeout{30};  // (cfg) no upload bytes for this long: the upload ends
+constexpr size_t kMaxUploadNameLength = 200;                // characters of an upload's name
 constexpr std::chrono::milliseconds kShutdownGrace{4000};  // SIGTERM -> forced exit, if the graceful path has not finished
 constexpr std::chrono::milliseconds kCloseFlush{1000};   // SIGTERM: time given to WebSocket close frames and answers
 

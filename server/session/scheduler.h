@@ -25,7 +25,7 @@ struct StillResult {
   std::vector<uint8_t> bytes;
   std::string content_type;
   double render_ms = 0, encode_ms = 0, wait_ms = 0, samples_per_ray = 0;
-  int bands = 0;
+  int bands = 0, width = 0, height = 0;
   std::string variant;
   std::string error, error_code;  // error: the job failed (message for the client; code from proto/)
 };
@@ -36,6 +36,7 @@ struct StillJob {
   std::shared_ptr<VolumeEntry> volume;
   ResolvedScene scene;
   bool png = true;
+  bool raw_rgb = false;  // the 8-bit RGB bytes themselves (format=rgb), no encoding
   int quality = 95;
   std::function<void(StillResult)> done;
   // Set by the connection when its client goes away: the still stops at the next band.

@@ -9,7 +9,8 @@ namespace peakcast {
 nlohmann::json VolumeEntry::info(bool with_histogram) const {
   const Volume& v = *volume;
   nlohmann::json j = {{"id", id},
-                      {"name", path.filename().string()},
+                      {"name", name.empty() ? path.filename().string() : name},
+                      {"uploaded", uploaded},
                       {"dims", {v.dims()[0], v.dims()[1], v.dims()[2]}},
                       {"dtype", to_string(v.source_type())},
                       {"spacing", {v.spacing.x, v.spacing.y, v.spacing.z}},
@@ -40,12 +41,15 @@ VolumeStore::VolumeStore(std::vector<fs::path> dirs, GpuResidency& residency, Lo
     };
 }
 
-std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::path& path, bool preloaded) {
+std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::path& path, bool preloaded,
+                                             const std::string& upload_name) {
   std::lock_guard load(load_m_);
   if (auto e = find(id)) return e;
   auto e = std::make_shared<VolumeEntry>();
   e->id = id;
   e->path = path;
+  e->uploaded = !upload_name.empty();
+  e->name = upload_name;
   LoadedVolume loaded = loader_(path, options_);
   e->volume = std::move(loaded.volume);
   e->resident_bytes = loaded.resident_bytes;
@@ -74,6 +78,14 @@ std::shared_ptr<VolumeEntry> VolumeStore::preload(const fs::path& path) {
 
 std::shared_ptr<VolumeEntry> VolumeStore::get(const std::string& id_or_path) {
   if (auto e = find(id_or_path)) return e;
+  {
+    std::unique_lock lock(m_);
+    if (auto u = uploads_.find(id_or_path); u != uploads_.end()) {
+      const Upload up = u->second;
+      lock.unlock();
+      return add(id_or_path, up.path, false, up.name);
+    }
+  }
   const fs::path resolved = resolve_in_roots(id_or_path, dirs_);
   {
     std::lock_guard lock(m_);
@@ -94,6 +106,41 @@ std::vector<std::shared_ptr<VolumeEntry>> VolumeStore::list() const {
   std::vector<std::shared_ptr<VolumeEntry>> out;
   for (auto& [_, e] : entries_) out.push_back(e);
   return out;
+}
+
+nlohmann::json VolumeStore::listing() const {
+  std::lock_guard lock(m_);
+  nlohmann::json out = nlohmann::json::array();
+  for (auto& [_, e] : entries_) out.push_back(e->info(false));
+  for (auto& [id, u] : uploads_)
+    if (!entries_.count(id)) out.push_back(u.info);
+  return out;
+}
+
+std::shared_ptr<VolumeEntry> VolumeStore::add_upload(const std::string& id, const fs::path& path,
+                                                     const std::string& name) {
+  auto e = add(id, path, false, name);
+  std::lock_guard lock(m_);
+  uploads_[id] = Upload{path, name, e->info(false)};
+  return e;
+}
+
+void VolumeStore::register_upload(const std::string& id, const fs::path& path, const std::string& name,
+                                  nlohmann::json info) {
+  std::lock_guard lock(m_);
+  uploads_[id] = Upload{path, name, std::move(info)};
+}
+
+void VolumeStore::remove_upload(const std::string& id) {
+  std::lock_guard lock(m_);
+  uploads_.erase(id);
+  entries_.erase(id);
+  if (default_ == id) default_ = entries_.empty() ? "" : entries_.begin()->first;
+}
+
+bool VolumeStore::known(const std::string& id) const {
+  std::lock_guard lock(m_);
+  return entries_.count(id) || uploads_.count(id);
 }
 
 std::string VolumeStore::default_id() const {

@@ -32,6 +32,8 @@ struct VolumeEntry {
   // phase, reported with the others in info().
   std::atomic<double> upload_ms{-1.0};
   bool preloaded = false;
+  bool uploaded = false;  // sent by a client (POST /api/volumes); `name` is the one it gave
+  std::string name;       // empty: the file's name
   nlohmann::json info(bool with_histogram) const;
 };
 
@@ -49,10 +51,31 @@ class VolumeStore {
   std::shared_ptr<VolumeEntry> get(const std::string& id_or_path);
   std::shared_ptr<VolumeEntry> find(const std::string& id) const;  // nullptr when not loaded
   std::vector<std::shared_ptr<VolumeEntry>> list() const;
+  // What /api/volumes lists: every loaded volume's info, and the uploads not loaded now (their
+  // info as it was when they were uploaded).
+  nlohmann::json listing() const;
   std::string default_id() const;
+  const std::vector<std::filesystem::path>& data_dirs() const { return dirs_; }
+
+  // Uploads (session/upload_store.h): an uploaded file read now and kept under `id`; one listed
+  // again at start-up, read when first asked for; one removed (sessions viewing it keep their
+  // copy until they switch).
+  std::shared_ptr<VolumeEntry> add_upload(const std::string& id, const std::filesystem::path& path,
+                                          const std::string& name);
+  void register_upload(const std::string& id, const std::filesystem::path& path, const std::string& name,
+                       nlohmann::json info);
+  void remove_upload(const std::string& id);
+  bool known(const std::string& id) const;  // loaded, or an upload that can be
 
  private:
-  std::shared_ptr<VolumeEntry> add(const std::string& id, const std::filesystem::path& path, bool preloaded);
+  std::shared_ptr<VolumeEntry> add(const std::string& id, const std::filesystem::path& path, bool preloaded,
+                                   const std::string& upload_name = "");
+  struct Upload {
+    std::filesystem::path path;
+    std::string name;
+    nlohmann::json info;
+  };
+  std::map<std::string, Upload> uploads_;
   std::vector<std::filesystem::path> dirs_;
   GpuResidency& residency_;
   LoadOptions options_;

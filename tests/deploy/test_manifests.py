@@ -25,6 +25,10 @@ def test_compose():
     assert svc["env_file"] == ["peakcast.env"] and (DOCKER / "peakcast.env.example").is_file()
     assert "PEAKCAST_TOKEN=" in (DOCKER / "peakcast.env.example").read_text()
     assert any(re.search(r":/data(:ro)?$", v) for v in svc["volumes"]), svc["volumes"]
+    # Uploads: the image's upload folder, a volume of its own, outside the read-only data.
+    _, env = dockerfile()
+    assert any(v.endswith(":" + env["PEAKCAST_UPLOAD_DIR"]) for v in svc["volumes"]), svc["volumes"]
+    assert not env["PEAKCAST_UPLOAD_DIR"].startswith("/data")
     _, env = dockerfile()
     host, container = svc["ports"][0].rsplit(":", 1)
     assert container == env["PEAKCAST_PORT"] and host.startswith("127.0.0.1:"), svc["ports"]
@@ -74,6 +78,7 @@ def test_kubernetes():
     assert pod["securityContext"]["runAsNonRoot"] and pod["securityContext"]["runAsUser"] != 0
     assert "USER peakcast" in dockerfile()[0] and "--uid 10001" in dockerfile()[0]
     assert pod["securityContext"]["runAsUser"] == 10001
+    assert any(m["mountPath"] == env["PEAKCAST_UPLOAD_DIR"] and not m.get("readOnly") for m in c["volumeMounts"])
     # The data volume: a claim bound to the PersistentVolume, mounted at /data.
     mount = next(m for m in c["volumeMounts"] if m["mountPath"] == "/data")
     vol = next(v for v in pod["volumes"] if v["name"] == mount["name"])

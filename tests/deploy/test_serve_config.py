@@ -57,7 +57,9 @@ NON_DEFAULT = {"bind": "0.0.0.0", "port": "9123", "max-sessions": "5", "idle-tim
                "gpu-budget-mib": "512", "max-queued-stills": "2", "max-still-samples": "1e+09",
                "still-band-samples": "2e+07", "log-level": "debug", "log-format": "json", "io-threads": "3",
                "encode-threads": "3", "web-dir": "/tmp", "shader-dir": "/tmp", "egl-device": "surfaceless",
-               "program-cache": "off",
+               "program-cache": "off", "upload-dir": "/tmp/peakcast-config-test-uploads", "max-upload-mib": "64",
+               "upload-budget-mib": "128", "max-uploads": "3", "upload-timeout": "5",
+               "uploads-per-minute": "10",
                "backend": "cpu"}
 
 

@@ -1,0 +1,14 @@
+"""peakcast: a Python client for the peakcast volume render server.
+
+    import numpy as np, peakcast
+    client = peakcast.Client("http://localhost:8080")
+    vid = client.upload(np.random.rand(64, 96, 128).astype(np.float32), spacing=(1, 1, 2))
+    image = client.render({"volume": vid, "image": {"width": 512, "height": 512}})  # (512, 512, 3) uint8
+
+Arrays are indexed [z, y, x] (the numpy imaging convention of tifffile, zarr and napari); spacing
+and origin are given in x, y, z order, as in scene files. Only the standard library and numpy.
+"""
+from .client import Client, ServerError
+
+__all__ = ["Client", "ServerError"]
+__version__ = "0.1.0"

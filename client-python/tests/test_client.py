@@ -1,0 +1,262 @@
+"""The Python client against a live server: an uploaded array renders pixel for pixel like
+`peakcast render` of the same data written to a file, in any memory order; every refusal answers
+by name and leaves no file and no volume; a disconnect or a stall mid-upload leaves nothing; the
+examples run; the package installs with pip."""
+import json
+import os
+import pathlib
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+import pytest
+
+from conftest import DATA, PEAKCAST, ROOT
+import peakcast
+
+
+def blobs(shape=(20, 24, 28), dtype=np.uint16, seed=3):
+    """A smooth field with structure, indexed [z, y, x]."""
+    z, y, x = np.mgrid[0:shape[0], 0:shape[1], 0:shape[2]].astype(np.float64)
+    rng = np.random.default_rng(seed)
+    f = np.zeros(shape)
+    for _ in range(5):
+        c = rng.uniform(0, 1, 3) * np.array(shape)
+        f += np.exp(-((z - c[0]) ** 2 + (y - c[1]) ** 2 + (x - c[2]) ** 2) / 30.0)
+    f /= f.max()
+    if np.dtype(dtype).kind == "f":
+        return f.astype(dtype)
+    info = np.iinfo(dtype)
+    return (info.min + f * (info.max - info.min)).astype(dtype)
+
+
+SCENE = {"image": {"width": 96, "height": 80},
+         "camera": {"eye": [60, 50, 70], "center": [13.5, 11.5, 14.25], "up": [0, 1, 0]},
+         "render": {"classification": "peaks", "shading": True}}
+
+
+def cli_render(array, spacing, scene):
+    """`peakcast render` of the same voxels written as raw + JSON sidecar."""
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = pathlib.Path(tmp)
+        np.ascontiguousarray(array).astype(array.dtype.newbyteorder("<")).tofile(tmp / "v.raw")
+        (tmp / "v.json").write_text(json.dumps({"dims": list(array.shape[::-1]), "dtype": str(array.dtype),
+                                                "spacing": list(spacing), "data_file": "v.raw"}))
+        (tmp / "s.json").write_text(json.dumps(dict(scene, volume="v.json")))
+        subprocess.run([PEAKCAST, "render", tmp / "s.json", "-o", tmp / "s.png"], check=True, capture_output=True)
+        from PIL import Image
+        return np.asarray(Image.open(tmp / "s.png").convert("RGB"))
+
+
+def no_uploads_left(server, before):
+    assert server.files() == before, (before, server.files())
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.int8, np.uint16, np.int16, np.float32])
+def test_an_uploaded_array_renders_like_peakcast_render(server, dtype):
+    c = peakcast.Client(server.url)
+    a = blobs(dtype=dtype)
+    spacing = (1.0, 1.0, 1.5)
+    vid = c.upload(a, spacing=spacing, name=f"blobs {np.dtype(dtype).name}")
+    try:
+        info = next(v for v in c.volumes() if v["id"] == vid)
+        assert info["uploaded"] and info["dims"] == [28, 24, 20] and info["dtype"] == np.dtype(dtype).name, info
+        assert info["spacing"] == list(spacing)
+        got = c.render(dict(SCENE, volume=vid))
+        assert got.shape == (80, 96, 3) and got.dtype == np.uint8
+        want = cli_render(a, spacing, SCENE)
+        assert np.array_equal(got, want), f"{np.abs(got.astype(int) - want).max()} levels off"
+        assert got.std() > 5, "the picture shows nothing"
+    finally:
+        c.delete(vid)
+
+
+def test_memory_order_does_not_change_the_picture(server):
+    c = peakcast.Client(server.url)
+    a = blobs()
+    images = []
+    for variant in (np.ascontiguousarray(a), np.asfortranarray(a), a[::-1][::-1], a.byteswap().view(a.dtype.newbyteorder())):
+        vid = c.upload(variant, spacing=(1, 1, 1.5))
+        try:
+            images.append(c.render(dict(SCENE, volume=vid)))
+        finally:
+            c.delete(vid)
+    for img in images[1:]:
+        assert np.array_equal(img, images[0])
+
+
+def test_a_file_uploads_as_itself(server, tmp_path):
+    c = peakcast.Client(server.url)
+    vid = c.upload(DATA / "heptane_151.nrrd")
+    try:
+        info = c.volume(vid)
+        assert info["name"] == "heptane_151.nrrd" and info["dims"] == [151, 151, 151]
+        c.render_png({"volume": vid, "image": {"width": 64, "height": 64}}, tmp_path / "h.png")
+        assert (tmp_path / "h.png").read_bytes()[:4] == b"\x89PNG"
+    finally:
+        c.delete(vid)
+
+
+def raw_post(server, query, body, headers=None, token=None):
+    """A POST /api/volumes as any HTTP client sends it (no Expect), for refusals the client
+    itself would not let through."""
+    import http.client
+    conn = http.client.HTTPConnection("127.0.0.1", server.port, timeout=30)
+    h = dict(headers or {})
+    if token:
+        h["Authorization"] = "Bearer " + token
+    conn.request("POST", "/api/volumes?" + query, body=body, headers=h)
+    r = conn.getresponse()
+    out = r.status, json.loads(r.read() or b"{}")
+    conn.close()
+    return out
+
+
+def test_refusals_answer_by_name_and_leave_nothing(server):
+    c = peakcast.Client(server.url)
+    before, volumes = server.files(), c.volumes()
+    cases = [
+        # (what, query, body, status, code)
+        ("truncated", "dims=28,24,21&dtype=uint16", blobs().tobytes(), 422, "bad_volume"),
+        ("wrong dims", "dims=28,24,0&dtype=uint16", blobs().tobytes(), 400, "bad_upload"),
+        ("wrong dims count", "dims=28,24&dtype=uint16", blobs().tobytes(), 400, "bad_upload"),
+        ("bad dtype", "dims=28,24,20&dtype=uint32", blobs().tobytes(), 400, "bad_upload"),
+        ("bad spacing", "dims=28,24,20&dtype=uint16&spacing=1,0,1", blobs().tobytes(), 400, "bad_upload"),
+        ("no header", "name=x", b"\x01\x02" * 1000, 415, "unsupported_upload"),
+        ("detached nrrd", "", (DATA / "nucleon.nhdr").read_bytes(), 415, "unsupported_upload"),
+        ("empty", "dims=2,2,2&dtype=uint8", b"", 400, "bad_upload"),
+    ]
+    for what, query, body, status, code in cases:
+        print("case", what)
+        got_status, answer = raw_post(server, query, body)
+        assert (got_status, answer.get("error")) == (status, code), (what, got_status, answer)
+        assert str(server.upload_dir) not in answer.get("message", ""), (what, answer)  # no server path
+        no_uploads_left(server, before)
+    # Through the client: too large (4 MiB per upload here) is refused before the body is sent.
+    with pytest.raises(peakcast.ServerError) as e:
+        c.upload(np.zeros((80, 128, 128), np.uint8))  # 1.25 MiB: fine
+        c.upload(np.zeros((160, 128, 256), np.uint8))  # 5 MiB: too large
+    assert e.value.status == 413 and e.value.code == "too_large"
+    for v in c.volumes():
+        if v["id"] not in [w["id"] for w in volumes]:
+            c.delete(v["id"])
+    no_uploads_left(server, before)
+    assert c.volumes() == volumes
+    with pytest.raises(ValueError):
+        c.upload(np.zeros((4, 4, 4), np.int64))
+    with pytest.raises(peakcast.ServerError) as e:
+        c.delete("heptane_151_nope")
+    assert e.value.status == 404
+
+
+def test_the_budget_fills(server):
+    c = peakcast.Client(server.url)
+    before = server.files()
+    kept = [c.upload(np.full((64, 128, 128), i, np.uint16) + np.arange(128, dtype=np.uint16)) for i in range(2)]  # 2 MiB each
+    try:
+        kept.append(c.upload(np.zeros((64, 128, 128), np.uint16) + 7))  # 6 of 10 MiB
+        kept.append(c.upload(np.zeros((64, 128, 128), np.uint16) + 9))  # 8 of 10 MiB
+        with pytest.raises(peakcast.ServerError) as e:
+            c.upload(np.zeros((96, 128, 128), np.uint16) + 5)  # 3 MiB: past the budget
+        assert e.value.status == 507 and e.value.code == "upload_budget", e.value
+    finally:
+        for vid in kept:
+            c.delete(vid)
+    no_uploads_left(server, before)
+
+
+def test_no_token_is_refused(guarded):
+    before = guarded.files()
+    status, answer = raw_post(guarded, "dims=28,24,20&dtype=uint16", blobs().tobytes())
+    assert (status, answer["error"]) == (401, "unauthorized")
+    with pytest.raises(peakcast.ServerError) as e:
+        peakcast.Client(guarded.url).upload(blobs())
+    assert e.value.status == 401
+    vid = peakcast.Client(guarded.url, token="sesame").upload(blobs())
+    peakcast.Client(guarded.url, token="sesame").delete(vid)
+    no_uploads_left(guarded, before)
+
+
+def test_a_client_past_its_rate_is_refused(guarded):
+    c = peakcast.Client(guarded.url, token="sesame")
+    before = guarded.files()
+    refused = None
+    for i in range(14):  # a burst of 10, then 1 a second
+        try:
+            c.delete(c.upload(blobs(shape=(4, 4, 4), dtype=np.uint8)))
+        except peakcast.ServerError as e:
+            refused = e
+            break
+    assert refused is not None and refused.status == 429 and refused.code == "rate_limited", refused
+    no_uploads_left(guarded, before)
+
+
+def start_stalled_upload(server, size=1 << 20):
+    """An upload that sends its header and a little of its body, then nothing."""
+    s = socket.create_connection(("127.0.0.1", server.port))
+    s.sendall(f"POST /api/volumes?dims=64,64,256&dtype=uint8 HTTP/1.1\r\nHost: x\r\nContent-Length: {size}\r\n\r\n"
+              .encode() + b"\0" * 1000)
+    return s
+
+
+def test_concurrent_limit_stall_and_disconnect_leave_nothing(server):
+    c = peakcast.Client(server.url)
+    before = server.files()
+    stalled = start_stalled_upload(server)
+    time.sleep(0.3)
+    assert any(f.startswith(".incoming/") for f in server.files()), "the upload is not being received"
+    # One at a time here (--max-uploads 1): the next is refused by name.
+    with pytest.raises(peakcast.ServerError) as e:
+        c.upload(blobs())
+    assert e.value.status == 503 and e.value.code == "uploads_busy"
+    # The stall ends after --upload-timeout (2 s): the connection closes, the file goes.
+    stalled.settimeout(10)
+    t0 = time.time()
+    assert stalled.recv(1000) == b"", "the stalled upload got an answer instead of being closed"
+    assert time.time() - t0 < 8
+    stalled.close()
+    time.sleep(0.3)
+    no_uploads_left(server, before)
+    # A client that goes away mid-upload leaves nothing either.
+    gone = start_stalled_upload(server)
+    time.sleep(0.3)
+    gone.close()
+    time.sleep(0.5)
+    no_uploads_left(server, before)
+    vid = c.upload(blobs())  # and the slot is free again
+    c.delete(vid)
+
+
+@pytest.mark.parametrize("example", ["orbit.py", "tf_sweep.py", "isosurface.py"])
+def test_examples_run(server, tmp_path, example):
+    c = peakcast.Client(server.url)
+    vid = c.upload(blobs(), spacing=(1, 1, 1.5), name="example")
+    args = {"orbit.py": ["--volume", vid, "--frames", "3", "--size", "64", "--out", str(tmp_path / "o")],
+            "tf_sweep.py": ["--volume", vid, "--steps", "3", "--size", "64", "--out", str(tmp_path / "s")],
+            "isosurface.py": ["--n", "32", "--out", str(tmp_path / "iso.png")]}[example]
+    env = dict(os.environ, PYTHONPATH=str(ROOT / "client-python"))
+    try:
+        r = subprocess.run([sys.executable, str(ROOT / "client-python/examples" / example), "--url", server.url, *args],
+                           capture_output=True, text=True, env=env, timeout=300)
+        assert r.returncode == 0, r.stderr
+        pngs = list(tmp_path.rglob("*.png"))
+        assert len(pngs) == {"orbit.py": 3, "tf_sweep.py": 3, "isosurface.py": 1}[example], pngs
+        assert all(p.read_bytes()[:4] == b"\x89PNG" for p in pngs)
+    finally:
+        c.delete(vid)
+
+
+def test_pip_installs_the_package(tmp_path):
+    """`pip install ./client-python` (offline here: --no-build-isolation uses Debian's setuptools)."""
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)], check=True)
+    pip = [str(venv / "bin/python"), "-m", "pip", "install", "--quiet", "--no-index", "--no-build-isolation",
+           str(ROOT / "client-python")]
+    r = subprocess.run(pip, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    r = subprocess.run([str(venv / "bin/python"), "-c", "import peakcast, sys; print(peakcast.__file__)"],
+                       capture_output=True, text=True, cwd=tmp_path)
+    assert r.returncode == 0 and str(venv) in r.stdout, (r.stdout, r.stderr)

@@ -1,0 +1,215 @@
+#include "session/upload_formats.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <vector>
+
+#include "session/upload_store.h"
+
+namespace fs = std::filesystem;
+
+namespace peakcast {
+namespace {
+
+constexpr size_t kSniffBytes = 64 * 1024;        // a header must be within this
+constexpr size_t kMultipartHeadBytes = 1 << 20;  // the parts before the data, with their headers
+
+UploadRefusal bad(const std::string& message) { return UploadRefusal(400, "bad_upload", message); }
+UploadRefusal unsupported(const std::string& message) { return UploadRefusal(415, "unsupported_upload", message); }
+
+std::string head_of(const fs::path& file, size_t n) {
+  std::ifstream in(file, std::ios::binary);
+  std::string s(n, '\0');
+  in.read(s.data(), std::streamsize(n));
+  s.resize(size_t(in.gcount()));
+  return s;
+}
+
+std::string lower(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// The header lines of a text header (NRRD, MetaImage), up to its first blank line.
+std::vector<std::string> header_lines(const std::string& head) {
+  std::vector<std::string> out;
+  size_t i = 0;
+  while (i < head.size()) {
+    size_t e = head.find('\n', i);
+    if (e == std::string::npos) e = head.size();
+    std::string line = head.substr(i, e - i);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty()) break;
+    out.push_back(line);
+    i = e + 1;
+  }
+  return out;
+}
+
+bool is_metaimage(const std::string& head) {
+  static const char* keys[] = {"objecttype", "ndims", "comment", "transformtype", "dimsize", "elementtype"};
+  const auto lines = header_lines(head);
+  if (lines.empty()) return false;
+  const std::string first = lower(lines[0]);
+  const auto eq = first.find('=');
+  if (eq == std::string::npos) return false;
+  std::string key = first.substr(0, eq);
+  key.erase(key.find_last_not_of(' ') + 1);
+  return std::find(std::begin(keys), std::end(keys), key) != std::end(keys);
+}
+
+}  // namespace
+
+const char* extension_of(UploadFormat f) {
+  switch (f) {
+    case UploadFormat::Nrrd: return ".nrrd";
+    case UploadFormat::MetaImage: return ".mha";
+    case UploadFormat::Tiff: return ".tif";
+    case UploadFormat::Raw: return ".raw";
+  }
+  return ".raw";
+}
+
+UploadFormat sniff_upload(const fs::path& file, bool raw_header_given) {
+  if (raw_header_given) return UploadFormat::Raw;  // the request said what the bytes are
+  const std::string head = head_of(file, kSniffBytes);
+  if (head.rfind("NRRD000", 0) == 0) {
+    for (const std::string& line : header_lines(head)) {
+      const std::string l = lower(line);
+      if (l.rfind("data file:", 0) == 0 || l.rfind("datafile:", 0) == 0)
+        throw unsupported("a detached NRRD header names another file ('" + line.substr(0, 80) +
+                          "'): an upload is one file, send the .nrrd with its data attached");
+    }
+    return UploadFormat::Nrrd;
+  }
+  if (head.size() >= 4 && (head.compare(0, 4, std::string("II*\0", 4)) == 0 ||
+                           head.compare(0, 4, std::string("MM\0*", 4)) == 0 ||
+                           head.compare(0, 4, std::string("II+\0", 4)) == 0))
+    return UploadFormat::Tiff;
+  if (is_metaimage(head)) {
+    for (const std::string& line : header_lines(head)) {
+      const auto eq = line.find('=');
+      if (eq == std::string::npos) continue;
+      std::string key = lower(line.substr(0, eq)), value = line.substr(eq + 1);
+      key.erase(key.find_last_not_of(' ') + 1);
+      value.erase(0, value.find_first_not_of(' '));
+      if (key == "elementdatafile" && lower(value) != "local")
+        throw unsupported("a MetaImage header whose data is in another file (ElementDataFile = " + value.substr(0, 80) +
+                          ") is not one file: send an .mha (ElementDataFile = LOCAL)");
+    }
+    return UploadFormat::MetaImage;
+  }
+  throw unsupported("the body is neither NRRD (data attached), MetaImage (.mha), TIFF, nor raw voxels with their "
+                    "header (dims and dtype as query parameters or a JSON part)");
+}
+
+nlohmann::json raw_sidecar(const nlohmann::json& h, const std::string& data_file) {
+  if (!h.is_object()) throw bad("the raw header must be a JSON object");
+  static const char* known[] = {"dims", "dtype", "spacing", "origin", "endian"};
+  for (auto& [key, _] : h.items())
+    if (std::find(std::begin(known), std::end(known), key) == std::end(known))
+      throw bad("raw header: unknown key '" + key.substr(0, 40) + "' (dims, dtype, spacing, origin, endian)");
+  auto triple = [&](const char* key, bool positive_int) {
+    const auto& v = h.at(key);
+    if (!v.is_array() || v.size() != 3) throw bad(std::string("raw header: ") + key + " must be 3 numbers");
+    for (const auto& x : v) {
+      if (!x.is_number() || !std::isfinite(x.get<double>()))
+        throw bad(std::string("raw header: ") + key + " must be 3 finite numbers");
+      if (positive_int && (!x.is_number_integer() || x.get<int64_t>() < 1))
+        throw bad(std::string("raw header: ") + key + " must be 3 integers >= 1");
+    }
+    return v;
+  };
+  if (!h.contains("dims") || !h.contains("dtype")) throw bad("raw voxels need their header: dims and dtype");
+  nlohmann::json out = {{"dims", triple("dims", true)}, {"data_file", data_file}};
+  static const char* dtypes[] = {"uint8", "int8", "uint16", "int16", "float32"};
+  if (!h["dtype"].is_string() ||
+      std::find(std::begin(dtypes), std::end(dtypes), h["dtype"].get<std::string>()) == std::end(dtypes))
+    throw bad("raw header: dtype must be uint8, int8, uint16, int16 or float32");
+  out["dtype"] = h["dtype"];
+  if (h.contains("spacing")) {
+    out["spacing"] = triple("spacing", false);
+    for (const auto& x : out["spacing"])
+      if (!(x.get<double>() > 0)) throw bad("raw header: spacing must be > 0");
+  }
+  if (h.contains("origin")) out["origin"] = triple("origin", false);
+  if (h.contains("endian")) {
+    if (h["endian"] != "little" && h["endian"] != "big") throw bad("raw header: endian must be little or big");
+    out["endian"] = h["endian"];
+  }
+  return out;
+}
+
+MultipartUpload split_multipart(const fs::path& file, const std::string& content_type, const fs::path& data_out) {
+  std::string boundary;
+  if (auto b = content_type.find("boundary="); b != std::string::npos) {
+    boundary = content_type.substr(b + 9);
+    boundary = boundary.substr(0, boundary.find(';'));
+    if (boundary.size() >= 2 && boundary.front() == '"') boundary = boundary.substr(1, boundary.size() - 2);
+  }
+  if (boundary.empty() || boundary.size() > 200) throw bad("multipart/form-data without a boundary");
+  const std::string delim = "--" + boundary, next = "\r\n" + delim;
+  const std::string head = head_of(file, kMultipartHeadBytes);
+  size_t pos = head.find(delim);
+  if (pos == std::string::npos) throw bad("multipart body without its boundary");
+  MultipartUpload out;
+  for (;;) {
+    pos += delim.size();
+    if (head.compare(pos, 2, "--") == 0) throw bad("multipart body without a data part");
+    if (head.compare(pos, 2, "\r\n") != 0) throw bad("malformed multipart body");
+    const size_t headers_end = head.find("\r\n\r\n", pos);
+    if (headers_end == std::string::npos) throw bad("multipart part headers too long or cut");
+    const std::string headers = lower(head.substr(pos + 2, headers_end - pos - 2));
+    auto param = [&](const std::string& key) -> std::optional<std::string> {
+      const auto k = headers.find(key + "=\"");
+      if (k == std::string::npos) return std::nullopt;
+      const auto s = k + key.size() + 2, e = headers.find('"', s);
+      return headers.substr(s, e - s);
+    };
+    const std::string name = param(" name").value_or(param(";name").value_or(""));
+    const size_t content = headers_end + 4;
+    if (name == "header") {
+      const size_t end = head.find(next, content);
+      if (end == std::string::npos) throw bad("the JSON part is too large or the body cut");
+      try {
+        out.header = nlohmann::json::parse(head.substr(content, end - content));
+      } catch (const nlohmann::json::exception& e) {
+        throw bad(std::string("the JSON part is not JSON: ") + e.what());
+      }
+      pos = end + 2;
+      continue;
+    }
+    // The data: the rest of the body up to the closing delimiter, found from the end.
+    out.filename = param("filename").value_or("");
+    const auto size = fs::file_size(file);
+    const size_t tail_n = size_t(std::min<uintmax_t>(size, 4096));
+    std::ifstream in(file, std::ios::binary);
+    std::string tail(tail_n, '\0');
+    in.seekg(std::streamoff(size - tail_n));
+    in.read(tail.data(), std::streamsize(tail_n));
+    const size_t close = tail.rfind(next);
+    if (close == std::string::npos || size - tail_n + close < content) throw bad("multipart body cut: no closing boundary");
+    const uintmax_t end = size - tail_n + close;
+    if (tail.find(next, close + 1) != std::string::npos || tail.compare(close + next.size(), 2, "--") != 0)
+      throw bad("multipart data must be the last part (the JSON 'header' part first)");
+    std::ofstream o(data_out, std::ios::binary | std::ios::trunc);
+    in.clear();
+    in.seekg(std::streamoff(content));
+    std::vector<char> buf(1 << 20);
+    for (uintmax_t left = end - content; left > 0;) {
+      const auto n = std::streamsize(std::min<uintmax_t>(left, buf.size()));
+      in.read(buf.data(), n);
+      if (in.gcount() != n) throw bad("multipart body cut");
+      o.write(buf.data(), n);
+      left -= uintmax_t(n);
+    }
+    if (!o) throw UploadRefusal(507, "upload_failed", "the upload could not be written on the server");
+    in.close();
+    fs::remove(file);
+    return out;
+  }
+}
+
+}  // namespace peakcast

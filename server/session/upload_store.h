@@ -1,0 +1,107 @@
+// Volumes that scripts and the browser send (POST /api/volumes): streamed into the upload folder
+// as a file of their own, checked by the same readers and limits as any volume file, then moved
+// into place under a new id and registered with the volume store, or refused with the reason and
+// nothing left behind. The folder is the server's own (--upload-dir), never a data directory.
+// Uploads outlive the process: a restart lists them again. No network here: the HTTP side
+// (net/http_upload.cpp) streams the body into a Ticket's file.
+#pragma once
+
+#include <chrono>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/volume_io.h"
+#include "session/limits.h"
+#include "session/volume_store.h"
+
+namespace peakcast {
+
+// A refused upload or deletion: an HTTP status, a code from proto/ and a message that names no
+// server path.
+struct UploadRefusal : std::runtime_error {
+  UploadRefusal(int status, std::string code, const std::string& message)
+      : std::runtime_error(message), status(status), code(std::move(code)) {}
+  int status;
+  std::string code;
+};
+
+struct UploadLimits {
+  int64_t max_bytes = limits::kDefaultMaxUploadBytes;
+  int64_t budget_bytes = limits::kDefaultUploadBudgetBytes;
+  int max_concurrent = limits::kDefaultMaxConcurrentUploads;
+  double per_minute = limits::kUploadsPerMinutePerClient;
+  double burst = limits::kUploadBurst;
+  std::chrono::seconds idle_timeout = limits::kDefaultUploadIdleTimeout;
+};
+
+// What the request says of its body besides the bytes: a name, and for raw voxels their
+// header (query parameters, or the JSON part of a multipart body).
+struct UploadParams {
+  std::string name;
+  std::string content_type;            // multipart/form-data carries a JSON part and a data part
+  std::optional<nlohmann::json> raw;   // {dims, dtype, spacing?, origin?, endian?}
+};
+
+class UploadStore {
+ public:
+  // `dir` empty: uploads are off (every begin() is refused saying how to turn them on).
+  // Throws std::invalid_argument for a folder inside a data directory or one that cannot be
+  // written. Leftovers of uploads cut short by a crash are removed; finished ones are listed.
+  UploadStore(std::filesystem::path dir, UploadLimits limits, VolumeStore& volumes, LoadOptions load = {});
+  bool enabled() const { return !dir_.empty(); }
+  const UploadLimits& limits() const { return limits_; }
+
+  // One upload being received: its file in the folder's incoming area. Destroying a ticket that
+  // was not committed removes the file and gives the slot back.
+  class Ticket {
+   public:
+    ~Ticket();
+    Ticket(const Ticket&) = delete;
+    Ticket& operator=(const Ticket&) = delete;
+    const std::filesystem::path& file() const { return file_; }
+    const std::string& id() const { return id_; }
+
+   private:
+    friend class UploadStore;
+    Ticket(UploadStore& store, std::string id, std::filesystem::path file) : store_(store), id_(std::move(id)), file_(std::move(file)) {}
+    UploadStore& store_;
+    std::string id_;
+    std::filesystem::path file_;
+    bool committed_ = false;
+  };
+
+  // Refused (UploadRefusal) when uploads are off, `client` exceeds its rate, too many are being
+  // received, or the announced length exceeds the per-upload limit or the budget left.
+  std::unique_ptr<Ticket> begin(const std::string& client, std::optional<int64_t> length);
+  // The body is in the ticket's file: find its format, check it as any volume file is, move it
+  // into place and register it. Throws UploadRefusal (the files are gone then).
+  std::shared_ptr<VolumeEntry> commit(std::unique_ptr<Ticket> ticket, const UploadParams& params);
+  // Removes an upload (UploadRefusal 404 for no such volume, 403 for a volume that is not an upload).
+  void remove(const std::string& id);
+  int64_t used_bytes() const;
+
+ private:
+  void release(Ticket& t);
+  std::filesystem::path dir_, incoming_;
+  UploadLimits limits_;
+  VolumeStore& volumes_;
+  LoadOptions load_;
+  mutable std::mutex m_;
+  int receiving_ = 0;
+  std::map<std::string, int64_t> kept_;  // id -> bytes on disk
+  struct Bucket {
+    double tokens;
+    std::chrono::steady_clock::time_point last;
+  };
+  std::map<std::string, Bucket> rate_;
+};
+
+}  // namespace peakcast
