@@ -13,8 +13,10 @@ SCRIPTS = {"bench_peers.py": ROOT / "scripts/bench_peers.py", "bench_memory.py":
 
 def docs():
     files = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md")), ROOT / "proto/messages.md"]
-    files += [p for p in ROOT.glob("*/**/README.md") if "node_modules" not in p.parts and not p.parts[-2].startswith("build")]
-    return [f for f in files if f.exists() and "build" not in f.relative_to(ROOT).parts[0]]
+    files += [p for p in ROOT.glob("*/**/README.md")
+              if not any(part.startswith((".", "build")) or part in ("node_modules", "__pycache__")
+                         for part in p.relative_to(ROOT).parts)]
+    return [f for f in files if f.exists()]
 
 
 def help_text(cmd):
