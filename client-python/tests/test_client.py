@@ -128,6 +128,8 @@ def test_refusals_answer_by_name_and_leave_nothing(server):
         ("no header", "name=x", b"\x01\x02" * 1000, 415, "unsupported_upload"),
         ("detached nrrd", "", (DATA / "nucleon.nhdr").read_bytes(), 415, "unsupported_upload"),
         ("empty", "dims=2,2,2&dtype=uint8", b"", 400, "bad_upload"),
+        # More voxels than the server's limit (2^32): refused from the header, before any allocation.
+        ("voxel limit", "dims=4096,4096,512&dtype=uint8", b"\0" * 4096, 422, "bad_volume"),
     ]
     for what, query, body, status, code in cases:
         print("case", what)
@@ -251,10 +253,12 @@ def test_examples_run(server, tmp_path, example):
 
 def test_pip_installs_the_package(tmp_path):
     """`pip install ./client-python` (offline here: --no-build-isolation uses Debian's setuptools)."""
-    venv = tmp_path / "venv"
+    import shutil
+    venv, src = tmp_path / "venv", tmp_path / "client-python"
+    # A copy: pip builds in the source folder (build/, *.egg-info), which is not the checkout's.
+    shutil.copytree(ROOT / "client-python", src, ignore=shutil.ignore_patterns("tests", "build", "*.egg-info", "__pycache__"))
     subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)], check=True)
-    pip = [str(venv / "bin/python"), "-m", "pip", "install", "--quiet", "--no-index", "--no-build-isolation",
-           str(ROOT / "client-python")]
+    pip = [str(venv / "bin/python"), "-m", "pip", "install", "--quiet", "--no-index", "--no-build-isolation", str(src)]
     r = subprocess.run(pip, capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     r = subprocess.run([str(venv / "bin/python"), "-c", "import peakcast, sys; print(peakcast.__file__)"],

@@ -14,6 +14,10 @@ void add_volume_commands(CLI::App& app, Runner& run);  // make-volume, convert, 
 void add_render_commands(CLI::App& app, Runner& run);  // render, reference, compare
 void add_serve_command(CLI::App& app, Runner& run);    // serve
 
+// Parses the command line and runs the chosen command; a failure is one line on stderr,
+// "<program>: error: ...", and the exit code below.
+int run_command_line(CLI::App& app, Runner& run, int argc, char** argv, const char* program);
+
 // Exit codes: 0 ok, 1 failure of the job (GL, EGL, shader, I/O while writing), 2 bad input
 // (file, scene, arguments).
 constexpr int kExitFailure = 1;

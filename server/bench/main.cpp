@@ -1,12 +1,7 @@
 // peakcast-bench: the benchmarks, commands that measure (never tests). Same libraries as the
 // `peakcast` executable, kept out of it so the product binary holds only the product.
 // `peakcast-bench --help` lists them.
-#include <cstdio>
-#include <exception>
-
 #include "bench/commands.h"
-#include "core/scene.h"
-#include "core/volume_io.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"peakcast-bench " PEAKCAST_VERSION " - benchmarks of the peakcast ray caster and render server"};
@@ -21,25 +16,5 @@ int main(int argc, char** argv) {
   peakcast::bench::add_raytex_command(app, run);
   peakcast::bench::add_quality_command(app, run);
   peakcast::bench::add_scene_command(app, run);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);
-    return code == 0 ? 0 : peakcast::bench::kExitBadInput;
-  }
-  auto fail = [](const std::exception& e, int code) {
-    std::fprintf(stderr, "peakcast-bench: error: %s\n", e.what());
-    return code;
-  };
-  try {
-    return run ? run() : 0;
-  } catch (const peakcast::VolumeError& e) {
-    return fail(e, peakcast::bench::kExitBadInput);
-  } catch (const peakcast::SceneError& e) {
-    return fail(e, peakcast::bench::kExitBadInput);
-  } catch (const std::invalid_argument& e) {
-    return fail(e, peakcast::bench::kExitBadInput);
-  } catch (const std::exception& e) {
-    return fail(e, peakcast::bench::kExitFailure);
-  }
+  return peakcast::app::run_command_line(app, run, argc, argv, "peakcast-bench");
 }

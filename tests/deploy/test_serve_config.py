@@ -179,16 +179,7 @@ def test_layered_values_reach_the_server():
 
 
 if __name__ == "__main__":
-    tests = [v for k, v in list(globals().items()) if k.startswith("test_")]
-    failed = 0
-    for t in tests:
-        try:
-            t()
-            print(f"ok   {t.__name__}", flush=True)
-        except Exception:
-            import traceback
-            traceback.print_exc()
-            print(f"FAIL {t.__name__}", flush=True)
-            failed += 1
-    print(f"{len(tests) - failed} passed, {failed} failed")
-    sys.exit(1 if failed else 0)
+    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1]))
+    import script_tests
+
+    script_tests.run(globals())
