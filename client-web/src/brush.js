@@ -19,6 +19,7 @@ export class Brush extends EventTarget {
   termination = DEFAULT_TERMINATION;
   note = '';          // the last thing worth saying (a mapping switch cleared the strokes, ...)
   #drag = null;       // {id, last, carry}: a paint drag
+  #drags = [];        // the stroke count where each drag began: undo takes back a whole drag
   #pointer = null;    // the pointer over the image, for the outline
   #raf = 0;
 
@@ -95,15 +96,22 @@ export class Brush extends EventTarget {
   }
 
   undo() {
-    if (!this.model?.strokes.length) return;
-    this.model.pop();
+    const m = this.model;
+    if (!m?.strokes.length) return;
+    // Back to where the last drag began (strokes the page did not paint, restored from the
+    // session, go one at a time).
+    let start = m.strokes.length - 1;
+    while (this.#drags.length && this.#drags.at(-1) >= m.strokes.length) this.#drags.pop();
+    if (this.#drags.length) start = this.#drags.pop();
+    m.truncate(start);
     this.note = '';
-    this.sync.replace(this.model);
+    this.sync.replace(m);
   }
 
   clear() {
     if (!this.model) return;
     this.note = this.model.strokes.length ? `cleared ${strokes(this.model.strokes.length)}` : '';
+    this.#drags = [];
     this.sync.replace(this.#newModel(this.model.mapping));
   }
 
@@ -121,6 +129,7 @@ export class Brush extends EventTarget {
     if (key === 'mapping' && this.model && this.model.mapping !== value) {
       const n = this.model.strokes.length;
       this.note = n ? `mapping ${value}: ${strokes(n)} cleared` : '';
+      this.#drags = [];
       this.sync.replace(this.#newModel(value));
     }
     this.#redrawSoon();
@@ -152,6 +161,7 @@ export class Brush extends EventTarget {
     this.ui.canvas.setPointerCapture(e.pointerId);
     const p = this.#pos(e);
     this.#drag = { id: e.pointerId, last: p, carry: 0 };
+    this.#drags.push(this.model.strokes.length);
     this.#pointer = p;
     this.#stamp(p);
   }

@@ -1,12 +1,34 @@
 // Render controls built from the capabilities the server's welcome lists, so a method that
 // lands on the server later appears here without a client change. Each build (one per welcome)
-// owns the listeners of its inputs and releases them when the next build replaces them.
+// owns the listeners of its inputs and releases them when the next build replaces them. Every
+// control says what it does (its tooltip); a control that does not apply to the current
+// settings is disabled (peak mode without peak finding, s_k without differential sampling); a
+// number outside its limits is marked and not sent.
 import { Disposer } from './disposer.js';
 
 const LABELS = {
   classification: 'classification', peak_mode: 'peak mode', max_peaks: 'max peaks', sampling: 'sampling',
   s_k: 's_k', step: 'step (world units)', filter: 'filter', virtual_samples: 'virtual samples',
   shading: 'shading', space_skipping: 'space skipping', adaptive: 'adaptive sampling',
+};
+// What each control does (docs/scenes.md has the whole story).
+export const HELP = {
+  classification: 'post: the TF applied to each sample (DVR). preint: a preintegrated table per segment, smoother at ' +
+    'large steps. peaks: DVR plus the TF\'s opacity peaks found between samples and drawn as crisp surfaces (Knoll 2009).',
+  peak_mode: 'With peak finding: dvr+peaks draws both; xor draws a segment\'s peak instead of its DVR; peaks_only ' +
+    'the surfaces alone; dvr_only leaves peak finding out.',
+  max_peaks: 'With peak finding: how many peak crossings one segment between samples may hold (1 to 4).',
+  sampling: 'uniform: one step along every ray. differential: the step grows with distance from the eye ' +
+    '(Knoll §5), scaled by s_k; perspective cameras only.',
+  s_k: 'With differential sampling: the step where a ray crosses the focal plane in units of the pixel footprint ' +
+    'there; smaller is finer and slower.',
+  step: 'The sample step in world units (empty: the smallest voxel spacing). At least 1/1000 of that spacing.',
+  filter: 'trilinear: hardware-style interpolation. tricubic: a smooth B-spline from 8 trilinear fetches, slower, ' +
+    'fewer staircase artefacts.',
+  virtual_samples: 'Catmull-Rom samples between the true ones (Lee 2010): 3 or 7 per segment, smoother at large steps.',
+  shading: 'Blinn-Phong lighting with a head light, from the field\'s gradient.',
+  space_skipping: 'Skip the macrocells the TF leaves empty. Changes no pixel, saves time.',
+  adaptive: 'A step per macrocell from its spread of values (Knoll §6.2): finer where the data varies.',
 };
 
 export class RenderControls extends EventTarget {
@@ -15,6 +37,7 @@ export class RenderControls extends EventTarget {
     this.container = container;
     this.built = new Disposer();
     this.inputs = {};
+    this.minStep = 0;  // from the volume: 1/1000 of its smallest spacing
     disposer.add(() => this.built.dispose());
   }
 
@@ -24,10 +47,12 @@ export class RenderControls extends EventTarget {
     this.inputs = {};
     const add = (key, input) => {
       const label = document.createElement('label');
+      label.title = HELP[key] ?? '';
+      input.title = label.title;
       label.append(LABELS[key] ?? key, input);
       this.container.append(label);
       this.inputs[key] = input;
-      this.built.listen(input, 'change', () => this.#changed(key));
+      this.built.listen(input, input.type === 'number' ? 'input' : 'change', () => this.#changed(key));
     };
     for (const key of ['classification', 'peak_mode', 'max_peaks', 'sampling', 'filter', 'virtual_samples']) {
       const options = capabilities[key];
@@ -48,6 +73,24 @@ export class RenderControls extends EventTarget {
       box.checked = current[key] ?? key === 'space_skipping';
       add(key, box);
     }
+    this.#applicable();
+  }
+
+  setVolume(info) { this.minStep = 1e-3 * Math.min(...info.spacing); }
+
+  // Sets controls as the user would (a preset that needs peak finding and shading), sending one
+  // change with every key.
+  set(values) {
+    const patch = {};
+    for (const [key, value] of Object.entries(values)) {
+      const input = this.inputs[key];
+      if (!input) continue;
+      if (input.type === 'checkbox') input.checked = !!value;
+      else input.value = String(value);
+      patch[key] = value;
+    }
+    this.#applicable();
+    if (Object.keys(patch).length) this.dispatchEvent(new CustomEvent('change', { detail: patch }));
   }
 
   #number(name, value) {
@@ -61,12 +104,46 @@ export class RenderControls extends EventTarget {
     return n;
   }
 
+  // Disabled where it does not apply, with the reason in its tooltip.
+  #applicable() {
+    const v = (k) => this.inputs[k]?.value;
+    const rules = {
+      peak_mode: [v('classification') === 'peaks', 'applies with classification peaks'],
+      max_peaks: [v('classification') === 'peaks' && v('peak_mode') !== 'dvr_only', 'applies with peak finding'],
+      s_k: [v('sampling') === 'differential', 'applies with differential sampling'],
+    };
+    for (const [key, [on, why]] of Object.entries(rules)) {
+      const input = this.inputs[key];
+      if (!input) continue;
+      input.disabled = !on;
+      input.title = on ? HELP[key] : `${HELP[key]} (${why})`;
+    }
+  }
+
+  // A number outside its limits: marked, explained, not sent (the last valid value stays).
+  #invalid(key, value) {
+    if (value === null) return '';
+    if (!Number.isFinite(value)) return 'a number';
+    if (key === 's_k' && !(value > 0)) return 'must be > 0';
+    if (key === 'step' && !(value > 0 && value >= this.minStep))
+      return `must be at least ${+this.minStep.toPrecision(3)} (1/1000 of the smallest spacing)`;
+    return '';
+  }
+
   #changed(key) {
     const input = this.inputs[key];
     let value;
     if (input.type === 'checkbox') value = input.checked;
     else if (input.type === 'number') value = input.value === '' ? null : parseFloat(input.value);
     else value = /^\d+$/.test(input.value) && key !== 'classification' ? parseInt(input.value, 10) : input.value;
+    if (input.type === 'number') {
+      const why = this.#invalid(key, value);
+      input.setAttribute('aria-invalid', String(!!why));
+      input.classList.toggle('invalid', !!why);
+      input.title = why ? `${LABELS[key]} ${why}` : HELP[key];
+      if (why) return;
+    }
+    this.#applicable();
     this.dispatchEvent(new CustomEvent('change', { detail: { [key]: value } }));  // null removes the key (merge patch)
   }
 }

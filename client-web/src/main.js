@@ -11,6 +11,9 @@ import { Stream } from './stream.js';
 import { TfEditor } from './tf-editor.js';
 import { VolumePicker } from './volume-picker.js';
 import { DropUpload } from './upload.js';
+import { bindPanel, bindViewKeys, toggle } from './keys.js';
+import { Annotations } from './annotations.js';
+import { bindTfTools } from './tf-tools.js';
 
 const $ = (id) => document.getElementById(id);
 const disposer = new Disposer();
@@ -63,6 +66,10 @@ function share() { return { volume: app.volume, camera: app.camera, tf: app.tf, 
 
 function titleOf(v) { return `peakcast — ${v.uploaded ? v.name : v.id}`; }
 
+const annotations = new Annotations($('annotations'), disposer);
+for (const box of document.querySelectorAll('#show-annotations input'))
+  disposer.listen(box, 'change', () => annotations.update({ show: { ...annotations.show, [box.name]: box.checked } }));
+
 function applyState(state, volumeInfo, volumes) {
   app.volume = volumeInfo.id;
   app.volumeInfo = volumeInfo;
@@ -73,8 +80,10 @@ function applyState(state, volumeInfo, volumes) {
   app.render = render;
   camera.set(state.camera, { home: !app.welcomed || !restored, silent: true });
   tfEditor.setVolume(volumeInfo);
+  controls.setVolume(volumeInfo);
   tfEditor.set(state.tf.points);
   if (volumes) picker.show(volumes, volumeInfo);
+  annotations.update({ camera: app.camera, volume: volumeInfo, tf: app.tf });
   writeState(share());
 }
 
@@ -89,11 +98,16 @@ disposer.listen(stream, 'welcome', (e) => {
 });
 disposer.listen(stream, 'volume', (e) => {
   document.title = titleOf(e.detail.volume);  // the tab follows the volume
+  // A new volume brings a new TF (derived from its histogram): said, and undo gives the old one back.
+  const before = app.tf;
   // A volume opened by path or uploaded stays in the menu after switching to another.
   if (!app.volumes.some((v) => v.id === e.detail.volume.id)) app.volumes = [...app.volumes, e.detail.volume];
   applyState(e.detail.state, e.detail.volume, app.volumes);
   camera.set(e.detail.state.camera, { home: true, silent: true });
   brush.volumeChanged(e.detail.state);
+  if (before) tfEditor.remember(before);
+  $('tf-note').textContent = `TF derived from ${e.detail.volume.uploaded ? e.detail.volume.name : e.detail.volume.id}'s ` +
+    'histogram (undo brings back the previous one)';
 });
 disposer.listen(stream, 'stroke_ack', (e) => brush.sync.onAck(e.detail));
 disposer.listen(stream, 'pong', (e) => brush.sync.onPong(e.detail));
@@ -174,6 +188,7 @@ disposer.listen(tokenForm, 'submit', (e) => {
 
 disposer.listen(camera, 'change', (e) => {
   app.camera = e.detail;
+  annotations.update({ camera: app.camera });
   app.cameraVersion++;
   stats.inputSent(app.cameraVersion);
   stream.send({ type: 'camera', camera: e.detail });
@@ -181,6 +196,8 @@ disposer.listen(camera, 'change', (e) => {
 });
 disposer.listen(tfEditor, 'change', (e) => {
   app.tf = e.detail.points;
+  annotations.update({ tf: app.tf });
+  $('tf-note').textContent = '';
   stream.send({ type: 'tf', tf: { points: e.detail.points }, version: e.detail.version });
   writeState(share());
 });
@@ -190,6 +207,17 @@ disposer.listen(controls, 'change', (e) => {
   writeState(share());
 });
 disposer.listen(picker, 'pick', (e) => stream.send({ type: 'volume', volume: e.detail }));
+bindTfTools(tfEditor, { window: $('tf-window'), level: $('tf-level'), log: $('tf-log'), save: $('tf-save'),
+  load: $('tf-load'), note: $('tf-note') }, disposer);
+// A preset that needs a classification (the isosurface: peak finding, shaded) sets it.
+disposer.listen(tfEditor, 'preset', (e) => controls.set(e.detail));
+// The keyboard in the 3D view, the help overlay, the stats toggle, the collapsible panel.
+const showStats = (show) => { toggle($('stats'), show); $('show-stats').checked = show; };
+bindViewKeys({ canvas, camera, help: $('help'), toggleStats: () => showStats($('stats').hidden) }, disposer);
+disposer.listen($('help-button'), 'click', () => toggle($('help')));
+disposer.listen($('help'), 'click', () => { $('help').hidden = true; });
+disposer.listen($('show-stats'), 'change', () => showStats($('show-stats').checked));
+const panel = bindPanel({ panel: $('panel'), button: $('panel-toggle') }, disposer);
 // A file dropped on the view: uploaded, then opened like any volume.
 const uploads = new DropUpload({ target: $('view'), overlay: $('drop-overlay'), progress: $('volume-progress') },
   { token: () => token }, disposer);
@@ -220,5 +248,5 @@ disposer.listen($('share'), 'click', async () => {
 });
 
 disposer.listen(window, 'pagehide', () => disposer.dispose());
-window.peakcast = { app, stats, stream, camera, tfEditor, controls, brush, disposer, uploads };  // for tests and the console
+window.peakcast = { app, stats, stream, camera, tfEditor, controls, brush, disposer, uploads, panel, annotations };  // for tests and the console
 stream.connect();

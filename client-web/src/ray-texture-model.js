@@ -51,6 +51,13 @@ export class RayTextureModel {
     return s;
   }
 
+  // Keeps the first n strokes (an undone drag): one rebuild, however many strokes go.
+  truncate(n) {
+    if (n >= this.strokes.length) return;
+    this.strokes.length = Math.max(0, n);
+    this.rebuild();
+  }
+
   rebuild() {
     const t = this.texels;
     for (let i = 0; i < t.length; i += 3) { t[i] = 1; t[i + 1] = this.termination; t[i + 2] = 0; }

@@ -2,7 +2,7 @@
 // opacity curve; add, drag, delete points, a colour per point, detected peaks marked, presets,
 // undo/redo, keyboard control. Every edit emits the full TF with a new version; a drag emits at
 // most one per animation frame (the newest), however fast the pointer moves.
-import { findPeaks, interpolate, preset, TfHistory } from './tf-model.js';
+import { findPeaks, interpolate, preset, PRESET_NEEDS, TfHistory } from './tf-model.js';
 
 const hex = (rgb) => '#' + rgb.map((c) => Math.round(c * 255).toString(16).padStart(2, '0')).join('');
 const rgbOf = (h) => [1, 3, 5].map((i) => parseInt(h.slice(i, i + 2), 16) / 255);
@@ -10,6 +10,7 @@ const rgbOf = (h) => [1, 3, 5].map((i) => parseInt(h.slice(i, i + 2), 16) / 255)
 export class TfEditor extends EventTarget {
   points = [];
   version = 1;
+  logHistogram = true;  // the histogram's vertical axis: log counts (else linear)
   selected = -1;
   #history = new TfHistory();
   #drag = null;
@@ -33,6 +34,8 @@ export class TfEditor extends EventTarget {
     disposer.listen(ui.undo, 'click', () => this.#restore(this.#history.undo(this.points)));
     disposer.listen(ui.redo, 'click', () => this.#restore(this.#history.redo(this.points)));
     disposer.listen(ui.preset, 'change', () => this.applyPreset(ui.preset.value));
+    // The isovalue follows its box while the isosurface preset is the TF.
+    disposer.listen(ui.iso, 'input', () => { if (ui.preset.value === 'iso' && Number.isFinite(parseFloat(ui.iso.value))) this.applyPreset('iso'); });
   }
 
   setVolume(info) {
@@ -42,19 +45,36 @@ export class TfEditor extends EventTarget {
     this.ui.iso.value = ((this.lo + this.hi) / 2).toPrecision(5);
   }
 
+  // Keeps `points` as the state undo returns to (the TF a new volume replaced).
+  remember(points) { this.#history.push(points); }
+
+  // A TF from a tool (window/level, a file): an edit the user can undo.
+  apply(points) {
+    this.#history.push(this.points);
+    this.set(points, { silent: false });
+  }
+
   set(points, { silent = true } = {}) {
     this.points = structuredClone(points);
     this.selected = -1;
+    this.ui.preset.value = '';  // a TF from elsewhere (the server, undo, a file) is no preset
     this.draw();
     if (!silent) this.#emit();
   }
 
+  // The preset stays shown in its menu until the TF is edited by hand. A preset that needs a
+  // classification says so ('preset' event: {classification, shading}).
   applyPreset(name) {
     const p = preset(name, this.lo, this.hi, parseFloat(this.ui.iso.value));
-    this.ui.preset.value = '';
-    if (!p) return;
+    if (!p) {
+      this.ui.preset.value = '';
+      return;
+    }
     this.#history.push(this.points);
     this.set(p, { silent: false });
+    this.ui.preset.value = name;
+    const needs = PRESET_NEEDS[name];
+    if (needs) this.dispatchEvent(new CustomEvent('preset', { detail: needs }));
   }
 
   // Canvas geometry: x = value over [lo, hi], y = opacity.
@@ -74,6 +94,7 @@ export class TfEditor extends EventTarget {
   #down(e) {
     let i = this.#hit(e);
     this.#history.push(this.points);
+    this.ui.preset.value = '';
     if (i < 0) {  // add a point with the colour the curve has there
       const p = this.#pos(e), v = this.#value(p.x);
       const c = interpolate(this.points, v);
@@ -118,6 +139,7 @@ export class TfEditor extends EventTarget {
     else if (e.key === 'Delete' || e.key === 'Backspace') { this.#remove(i); this.#announce(); e.preventDefault(); return; }
     else if (i >= 0 && e.key.startsWith('Arrow')) {
       this.#history.push(this.points);
+      this.ui.preset.value = '';
       const p = this.points[i], span = this.hi - this.lo;
       if (e.key === 'ArrowLeft' || e.key === 'ArrowRight') {
         const lo = i > 0 ? this.points[i - 1][0] : this.lo - span, hi = i + 1 < n ? this.points[i + 1][0] : this.hi + span;
@@ -142,8 +164,9 @@ export class TfEditor extends EventTarget {
     if (this.ui.point) this.ui.point.textContent = p ? `point ${this.selected + 1} of ${this.points.length}: value ${p[0].toPrecision(5)}, opacity ${p[4].toFixed(2)}` : '';
   }
 
+  // The end points stay: they set the TF beyond the data's range (move them instead).
   #remove(i) {
-    if (i < 0 || this.points.length <= 1) return;
+    if (i <= 0 || i >= this.points.length - 1) return;
     this.#history.push(this.points);
     this.points.splice(i, 1);
     this.selected = -1;
@@ -176,14 +199,17 @@ export class TfEditor extends EventTarget {
   }
 
   draw() {
+    this.#announce();  // the readout shows what is drawn: never one edit behind
+    this.dispatchEvent(new Event('drawn'));
     const { ctx, canvas } = this, w = canvas.width, h = canvas.height;
     ctx.clearRect(0, 0, w, h);
-    if (this.histogram?.length) {  // log-scale histogram
-      const max = Math.log1p(Math.max(...this.histogram));
+    if (this.histogram?.length) {  // log or linear counts
+      const f = this.logHistogram ? Math.log1p : (n) => n;
+      const max = f(Math.max(...this.histogram)) || 1;
       ctx.fillStyle = '#334';
       const bw = w / this.histogram.length;
       this.histogram.forEach((n, i) => {
-        const bh = (Math.log1p(n) / max) * (h - 10);
+        const bh = (f(n) / max) * (h - 10);
         ctx.fillRect(i * bw, h - bh, Math.ceil(bw), bh);
       });
     }

@@ -21,8 +21,65 @@ export function interpolate(points, v) {
   return a.slice(1).map((x, c) => x + (b[c + 1] - x) * w);
 }
 
+// What a preset needs of the render settings to show what it is for.
+export const PRESET_NEEDS = {
+  iso: { classification: 'peaks', shading: true },
+  'ct-bone': { classification: 'preint', shading: true },
+  'ct-soft': { classification: 'preint', shading: true },
+  em: { classification: 'post', shading: false },
+};
+
+// Hounsfield values clamped into the volume's range (a CT preset on data that is not in HU
+// still spreads over it).
+function hu(lo, hi, values) {
+  const inHu = lo <= -900 && hi >= 500;
+  return values.map((v, k) => (inHu ? v : lo + ((k + 1) / (values.length + 1)) * (hi - lo)));
+}
+
+// Perceptual colour maps (sRGB stops, evenly spaced): matplotlib's viridis and magma, Moreland's
+// cool-warm, and grey.
+export const COLORMAPS = {
+  viridis: [[68, 1, 84], [72, 36, 117], [64, 67, 135], [52, 95, 141], [41, 120, 142], [32, 144, 141], [34, 168, 132],
+    [67, 191, 112], [122, 210, 81], [188, 223, 39], [253, 231, 37]],
+  magma: [[0, 0, 4], [28, 16, 68], [79, 18, 123], [129, 37, 129], [181, 54, 122], [229, 80, 100], [251, 135, 97],
+    [254, 194, 135], [252, 253, 191]],
+  coolwarm: [[59, 76, 192], [98, 130, 234], [141, 176, 254], [184, 208, 249], [221, 221, 221], [245, 196, 173],
+    [244, 154, 123], [222, 96, 77], [180, 4, 38]],
+  grey: [[0, 0, 0], [255, 255, 255]],
+};
+
+// A colour map over [lo, hi] with opacity rising from 0 to `top` (an opacity ramp, DVR).
+export function colormapTf(name, lo, hi, top = 0.6) {
+  const stops = COLORMAPS[name];
+  return stops.map((c, k) => {
+    const t = k / (stops.length - 1);
+    return [lo + t * (hi - lo), c[0] / 255, c[1] / 255, c[2] / 255, top * t];
+  });
+}
+
+// Rescales the TF's points from their span to the window [level - window/2, level + window/2]
+// (window/level as in radiology viewers: the same TF over another range of values).
+export function windowLevel(points, window, level) {
+  const a = points[0][0], b = points[points.length - 1][0];
+  const lo = level - window / 2, span = b - a || 1;
+  return points.map((p) => [lo + ((p[0] - a) / span) * window, ...p.slice(1)]);
+}
+
 export function preset(name, lo, hi, iso) {
   const at = (r) => lo + r * (hi - lo);
+  if (COLORMAPS[name]) return colormapTf(name, lo, hi);
+  switch (name) {
+    case 'ct-bone': {  // CT in Hounsfield units: bone above ~300 HU, soft tissue faint
+      const [s0, s1, b0] = hu(lo, hi, [-100, 200, 300]);
+      return [[lo, 0, 0, 0, 0], [s0, 0.7, 0.4, 0.3, 0], [s1, 0.85, 0.55, 0.45, 0.05], [b0, 1, 0.95, 0.85, 0.6], [hi, 1, 1, 0.95, 0.9]];
+    }
+    case 'ct-soft': {  // CT soft tissue: fat to muscle (-100..100 HU), bone dim
+      const [f0, m0, m1] = hu(lo, hi, [-150, 20, 150]);
+      return [[lo, 0, 0, 0, 0], [f0, 0.9, 0.7, 0.55, 0], [m0, 0.85, 0.35, 0.3, 0.15], [m1, 0.95, 0.75, 0.65, 0.25], [hi, 1, 1, 1, 0.3]];
+    }
+    case 'em':  // electron microscopy: membranes and organelles are dark; they become opaque
+      return [[lo, 0.95, 0.9, 0.8, 0.6], [at(0.35), 0.7, 0.6, 0.5, 0.15], [at(0.55), 0.5, 0.5, 0.5, 0], [hi, 0.5, 0.5, 0.5, 0]];
+  }
   switch (name) {
     case 'grey': return [[lo, 0, 0, 0, 0], [hi, 1, 1, 1, 1]];
     case 'coolwarm':

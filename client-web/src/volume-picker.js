@@ -6,6 +6,7 @@ export class VolumePicker extends EventTarget {
     this.ui = ui;
     disposer.listen(ui.select, 'change', () => this.#pick(ui.select.value));
     disposer.listen(ui.open, 'click', () => ui.path.value && this.#pick(ui.path.value.trim()));
+    disposer.listen(ui.path, 'keydown', (e) => { if (e.key === 'Enter' && ui.path.value.trim()) this.#pick(ui.path.value.trim()); });
   }
 
   show(volumes, current) {

@@ -315,6 +315,25 @@ Volume load_volume(const fs::path& path, const LoadOptions& options) {
   if (!fs::exists(path, ec)) throw VolumeError(path, "no such file");
   const std::string ext = lower(path.extension().string());
   Volume v;
+  if (fs::is_directory(path, ec)) {
+    // A folder of slices described by one header (headsq/quarter.nhdr): that header. TIFF slices
+    // without one: the stack.
+    std::vector<fs::path> headers;
+    bool tiffs = false;
+    for (const auto& e : fs::directory_iterator(path, ec)) {
+      const std::string x = lower(e.path().extension().string());
+      tiffs |= x == ".tif" || x == ".tiff";
+      if (x == ".nhdr" || x == ".nrrd" || x == ".mhd" || x == ".mha") headers.push_back(e.path());
+    }
+    if (!tiffs && headers.size() == 1) {
+      Volume h = load_volume(headers[0], options);
+      h.name = path.filename().string();
+      return h;
+    }
+    if (!tiffs && headers.size() > 1)
+      throw VolumeError(path, "a folder with " + std::to_string(headers.size()) +
+                                  " volume headers: open one of them (" + headers[0].filename().string() + ", ...)");
+  }
   if (fs::is_directory(path, ec) || ext == ".tif" || ext == ".tiff") {
     if (options.region) throw VolumeError(path, "a region of a TIFF stack cannot be read (use NRRD, MetaImage or raw)");
     v = read_tiff(path, options);

@@ -92,7 +92,29 @@ std::shared_ptr<VolumeEntry> VolumeStore::get(const std::string& id_or_path) {
     for (auto& [_, e] : entries_)
       if (e->path == resolved) return e;
   }
-  return add(id_or_path, resolved, false);
+  try {
+    return add(id_or_path, resolved, false);
+  } catch (const VolumeError& e) {
+    // Clients see what they asked for, never where it lies on the server.
+    throw VolumeError(id_or_path, without_paths(e.what(), resolved, id_or_path));
+  }
+}
+
+// `message` with the server's paths of `resolved` (the file, its folder) and of the data
+// directories replaced by what the client asked for, and the "file: " prefix dropped.
+std::string VolumeStore::without_paths(std::string message, const fs::path& resolved, const std::string& asked) const {
+  const std::string prefix = resolved.string() + ": ";
+  if (message.rfind(prefix, 0) == 0) message = message.substr(prefix.size());
+  auto replace_all = [&](const std::string& from, const std::string& to) {
+    if (from.empty()) return;
+    for (size_t at = 0; (at = message.find(from, at)) != std::string::npos; at += to.size()) message.replace(at, from.size(), to);
+  };
+  replace_all(resolved.string(), asked);
+  for (const fs::path& d : dirs_) {
+    replace_all(fs::weakly_canonical(d).string() + "/", "");
+    replace_all(d.string() + "/", "");
+  }
+  return message;
 }
 
 std::shared_ptr<VolumeEntry> VolumeStore::find(const std::string& id) const {

@@ -70,6 +70,7 @@ class VolumeStore {
  private:
   std::shared_ptr<VolumeEntry> add(const std::string& id, const std::filesystem::path& path, bool preloaded,
                                    const std::string& upload_name = "");
+  std::string without_paths(std::string message, const std::filesystem::path& resolved, const std::string& asked) const;
   struct Upload {
     std::filesystem::path path;
     std::string name;

@@ -121,7 +121,19 @@ TEST(Region, Refusals) {
   refused(dir / "v.nrrd", {{0, 0, 0}, {24, 11, 9}}, "not inside the volume's 23 voxels");
   refused(dir / "v.nrrd", {{-1, 0, 0}, {5, 11, 9}}, "not inside");
   refused(dir / "v.nrrd", {{5, 0, 0}, {5, 11, 9}}, "not inside");
-  refused(test::data_dir() / "headsq", {{0, 0, 0}, {2, 2, 2}}, "a region of a TIFF stack cannot be read");
+  // TIFF slices have no regions (an empty folder reads as a stack too, and is refused first).
+  fs::create_directories(dir / "slices");
+  test::write_file(dir / "slices/s000.tif", "not read");
+  refused(dir / "slices", {{0, 0, 0}, {2, 2, 2}}, "a region of a TIFF stack cannot be read");
+  // A folder of slices with one header is that header's volume, regions included.
+  LoadOptions corner;
+  corner.region = VoxelRegion{{0, 0, 0}, {2, 2, 2}};
+  EXPECT_EQ(load_volume(test::data_dir() / "headsq", corner).dims(), (Dims{2, 2, 2}));
+  // Two headers in one folder: which one is meant is not guessed.
+  fs::create_directories(dir / "two");
+  write_volume(dir / "two/a.nhdr", v);
+  write_volume(dir / "two/b.nhdr", v);
+  refused(dir / "two", {{0, 0, 0}, {2, 2, 2}}, "a folder with 2 volume headers");
   // A truncated file is refused even when the region lies in the part that exists.
   write_volume(dir / "t.nhdr", v);
   fs::resize_file(dir / "t.raw", 100);
