@@ -7,7 +7,9 @@
 
 #include <boost/asio/post.hpp>
 
+#include "reference/cpu_raycaster.h"
 #include "render/variant.h"
+#include "session/protocol.h"
 #include "session/limits.h"
 
 namespace fs = std::filesystem;
@@ -187,6 +189,56 @@ void render_still(AppContext& app, const Request& req, std::function<void(Respon
   });
 }
 
+// POST /api/probe: a scene plus "pixel": [x, y]; what lies under that pixel (docs/rest.md).
+void probe(AppContext& app, const Request& req, std::function<void(Response)> send) {
+  Scene scene;
+  int x = 0, y = 0;
+  try {
+    nlohmann::json body = nlohmann::json::parse(req.body());
+    if (!body.is_object()) throw SceneError("the body must be a JSON object: a scene plus \"pixel\": [x, y]");
+    if (!body.contains("pixel")) throw SceneError("pixel: required, [x, y] counted from the image's top left");
+    std::tie(x, y) = protocol::parse_pixel(body["pixel"], "pixel");
+    body.erase("pixel");
+    scene = parse_scene(body);
+  } catch (const std::exception& e) {  // not JSON, a bad pixel, a bad scene
+    count(app, "probe", http::status::bad_request);
+    return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
+  }
+  // Loading the volume, reading a PNG and the ray itself: on the loader pool, never this io thread.
+  asio::post(app.loader, [&app, req, scene, x, y, send = std::move(send)]() mutable {
+    auto refuse = [&](http::status status, const char* code, const std::string& message) {
+      count(app, "probe", status);
+      send(error_response(req, status, code, message));
+    };
+    std::shared_ptr<VolumeEntry> vol;
+    try {
+      scene.render.ray_texture = load_ray_texture_png(scene.render.ray_texture, app.png_locator());
+      vol = app.volumes.get(scene.volume);
+    } catch (const SceneError& e) {
+      return refuse(http::status::bad_request, "bad_scene", e.what());
+    } catch (const VolumeError& e) {
+      return refuse(http::status::not_found, "volume_error", e.what());
+    } catch (const std::exception& e) {
+      return refuse(http::status::internal_server_error, "internal", e.what());
+    }
+    try {
+      const ResolvedScene resolved = resolve_scene(scene, *vol->volume);
+      if (!vol->volume->has_voxels())
+        return refuse(http::status::unprocessable_entity, "not_supported",
+                      "probing needs the volume's voxels; under mpirun they live in the ranks' bricks");
+      const auto p = reference::probe_reference(*vol->volume, resolved, x, y);
+      count(app, "probe", http::status::ok);
+      send(json_response(req, http::status::ok, protocol::probe_json(p.hit, p.position, p.value, p.distance, p.opacity).dump()));
+    } catch (const SceneError& e) {
+      refuse(http::status::bad_request, "bad_scene", e.what());
+    } catch (const std::invalid_argument& e) {  // the pixel is outside the image
+      refuse(http::status::bad_request, "bad_scene", e.what());
+    } catch (const std::exception& e) {
+      refuse(http::status::internal_server_error, "internal", e.what());
+    }
+  });
+}
+
 }  // namespace
 
 Response json_response(const Request& req, http::status status, const std::string& body) {
@@ -223,6 +275,11 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
       return send(std::move(res));
     }
     return render_still(app, req, std::move(send), std::move(cancelled));
+  }
+  if (path == "/api/probe") {
+    if (req.method() != http::verb::post)
+      return send(error_response(req, http::status::method_not_allowed, "bad_request", "POST a scene with \"pixel\": [x, y]"));
+    return probe(app, req, std::move(send));
   }
   if (req.method() == http::verb::delete_ && path.rfind("/api/volumes/", 0) == 0) {
     const std::string id = url_decode(path.substr(std::strlen("/api/volumes/")));

@@ -1,5 +1,7 @@
 #include "net/ws_session.h"
 
+#include "reference/cpu_raycaster.h"
+
 #include "core/ray_texture_png.h"
 
 #include "net/connection_slot.h"
@@ -198,6 +200,7 @@ void WsSession::handle(const std::string& text) {
         if constexpr (std::is_same_v<T, QualityMsg>) session_->set_quality(m);
         if constexpr (std::is_same_v<T, ViewportMsg>) session_->set_viewport(m.viewport);
         if constexpr (std::is_same_v<T, AckMsg>) session_->ack(m.frame);
+        if constexpr (std::is_same_v<T, ProbeMsg>) probe(m);
         if constexpr (std::is_same_v<T, StrokeMsg>) queue_text(stroke_ack_message(m.seq, session_->add_stroke(m.stroke)));
         if constexpr (std::is_same_v<T, VolumeMsg>) {
           with_volume(m.volume, [this](std::shared_ptr<VolumeEntry> entry) {
@@ -209,6 +212,31 @@ void WsSession::handle(const std::string& text) {
       },
       msg);
   app_.render.notify();
+}
+
+void WsSession::probe(const protocol::ProbeMsg& m) {
+  if (probing_) {
+    next_probe_ = m;
+    return;
+  }
+  probing_ = true;
+  auto [volume, scene] = session_->view();
+  asio::post(app_.loader, [self = shared_from_this(), m, volume, scene = std::move(scene)] {
+    std::string answer, error;
+    try {
+      const auto p = reference::probe_reference(*volume->volume, scene, m.x, m.y);
+      answer = protocol::probe_message(m.id, protocol::probe_json(p.hit, p.position, p.value, p.distance, p.opacity));
+    } catch (const std::exception& e) {
+      error = std::string("probe: ") + e.what();
+    }
+    asio::post(self->ws_.get_executor(), [self, answer, error] {
+      self->probing_ = false;
+      if (self->closing_) return;
+      if (!error.empty()) self->send_error("bad_message", error);
+      else self->queue_text(answer);
+      if (auto next = std::exchange(self->next_probe_, std::nullopt)) self->guarded([&] { self->probe(*next); });
+    });
+  });
 }
 
 void WsSession::with_png(const nlohmann::json& render, TextureThen then) {

@@ -51,6 +51,9 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   void start_session(const protocol::Hello& hello, std::shared_ptr<VolumeEntry> volume,
                      std::optional<std::shared_ptr<const RayTextureSpec>> texture);
   void handle(const std::string& text);
+  // Probes run on the loader pool one at a time; one that arrives meanwhile waits, and a newer one
+  // replaces it (the cursor moved on).
+  void probe(const protocol::ProbeMsg& m);
   void send_error(const std::string& code, const std::string& message);
   void queue_text(std::string text);  // on the strand: in order with what this handler does next
   void enqueue(Outgoing out);
@@ -71,6 +74,8 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   std::shared_ptr<Session> session_;
   bool starting_ = false;  // hello accepted, volume loading
   bool paused_ = false;    // a PNG is being read: the next message waits
+  bool probing_ = false;
+  std::optional<protocol::ProbeMsg> next_probe_;
   std::deque<Outgoing> queue_;
   asio::steady_timer idle_, pace_, write_timer_;
   std::shared_ptr<ConnectionSlot> slot_;

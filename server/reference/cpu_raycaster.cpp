@@ -53,8 +53,13 @@ struct Frame {
 struct Accum {
   glm::dvec3 rgb{0.0};
   double alpha = 0.0;
+  // Where the ray is (t) and the value drawn there, set before each add: the probe's answer is
+  // the first add that takes alpha past one half (probe.h).
+  double at_t = 0.0, at_value = 0.0;
+  double half_t = std::nan(""), half_value = 0.0;
   void add(const glm::dvec3& c, double a) {
     const double w = (1.0 - alpha) * a;
+    if (alpha < 0.5 && alpha + w >= 0.5 && std::isnan(half_t)) half_t = at_t, half_value = at_value;
     rgb += w * c;
     alpha += w;
   }
@@ -110,10 +115,13 @@ Image for_each_pixel(const Frame& fr, PixelFn fn) {
   return img;
 }
 
-}  // namespace
 
-Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceOptions& opt) {
-  const Frame fr(v, s);
+// The set-up of a reference frame, then `body(pixel)` with the per-ray function
+// pixel(ray, t0, t1, acc, samples, x, y): the whole image, or one pixel for a probe.
+template <typename Body>
+auto run_reference(const Frame& fr, const ReferenceOptions& opt, Body body) {
+  const Volume& v = fr.v;
+  const ResolvedScene& s = fr.s;
   const RenderSettings& rs = s.scene.render;
   SamplingPlan plan = plan_sampling(s, opt.step_scale);
   if (opt.step > 0 && !plan.differential) plan.step = opt.step;
@@ -136,7 +144,7 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
   }
   const std::optional<RayTexture> ray_texture =
       s.ray_texture ? std::optional<RayTexture>(build_ray_texture(*s.ray_texture, rs.early_termination)) : std::nullopt;
-  return for_each_pixel(fr, [&](const Ray& r, double t0, double t1, Accum& acc, double& samples, int x, int y) {
+  return body([&](const Ray& r, double t0, double t1, Accum& acc, double& samples, int x, int y) {
     // The ray texture's controls (twin of shaders/ray_texture.glsl): step multiplier,
     // termination, DVR/peak blend.
     double step_mult = 1.0, stop = stop_default, dvr_weight = 1.0, peak_weight = 1.0;
@@ -166,11 +174,13 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
         for (double pv : peaks_crossed(table, f_prev, f, rs.max_peaks)) {
           const double tr = solve_root(fr, r, t_prev, f_prev, t, f, pv, rs.secant_iterations, samples);
           const glm::dvec4 c = s.tf.eval(pv);
+          acc.at_t = tr, acc.at_value = pv;
           acc.add(fr.lit(glm::dvec3(c), r, tr), c.a * peak_weight);
           peak_hit = true;
           if (acc.alpha >= stop) break;
         }
       }
+      acc.at_t = t, acc.at_value = f;
       if (preint) {
         if (!first) {
           glm::dvec4 c = lookup_preintegration(pre, f_prev, f);
@@ -273,6 +283,41 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
     finish();
   });
 }
+
+}  // namespace
+
+Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceOptions& opt) {
+  const Frame fr(v, s);
+  return run_reference(fr, opt, [&](const auto& pixel) { return for_each_pixel(fr, pixel); });
+}
+
+ProbeResult probe_reference(const Volume& v, const ResolvedScene& scene, int x, int y) {
+  if (!v.has_voxels()) throw std::invalid_argument("probing needs the volume's voxels, which this process does not hold");
+  if (x < 0 || y < 0 || x >= scene.scene.width || y >= scene.scene.height)
+    throw std::invalid_argument("pixel [" + std::to_string(x) + ", " + std::to_string(y) + "] is outside the " +
+                                std::to_string(scene.scene.width) + " x " + std::to_string(scene.scene.height) + " image");
+  // Adaptive sampling would build the whole volume's macrocells for one ray: the scene's
+  // uniform lattice instead (the half-opacity point moves by less than a step).
+  ResolvedScene s = scene;
+  s.scene.render.adaptive = false;
+  const Frame fr(v, s);
+  return run_reference(fr, ReferenceOptions{}, [&](const auto& pixel) {
+    ProbeResult out;
+    const Ray r = make_ray(fr.view, x, y);
+    double t0, t1, samples = 0.0;
+    Accum acc;
+    if (!intersect_box(r, fr.half, t0, t1)) return out;
+    pixel(r, t0, t1, acc, samples, x, y);
+    out.opacity = acc.alpha;
+    if (std::isnan(acc.half_t)) return out;
+    out.hit = true;
+    out.position = r.o + acc.half_t * r.d + (s.box_min + s.box_max) * 0.5;
+    out.value = acc.half_value;
+    out.distance = acc.half_t - r.t_eye;
+    return out;
+  });
+}
+
 
 ConvergedImage render_converged(const Volume& v, const ResolvedScene& s, OpticalModel model, double tolerance,
                                 double min_step_voxels) {

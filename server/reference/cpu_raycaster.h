@@ -24,6 +24,20 @@ struct ReferenceOptions {
 
 Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceOptions& options = {});
 
+// What lies under one pixel (the viewer's probe, POST /api/probe): the reference ray of the
+// scene's method, and the first place where its accumulated opacity passes one half. `value` is
+// the data value drawn there (a peak's value at a peak surface). Adaptive sampling is replaced
+// by the uniform step. Throws std::invalid_argument for a pixel outside the image or a volume
+// without voxels (a distributed volume on the serving rank).
+struct ProbeResult {
+  bool hit = false;
+  glm::dvec3 position{0.0};  // world units (docs/scenes.md)
+  double value = 0.0;
+  double distance = 0.0;  // from the eye (the image plane for orthographic views) along the ray
+  double opacity = 0.0;   // the ray's whole accumulated opacity
+};
+ProbeResult probe_reference(const Volume& v, const ResolvedScene& s, int x, int y);
+
 enum class OpticalModel { Dvr, Peaks };
 
 struct ConvergedImage {

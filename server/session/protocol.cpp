@@ -188,6 +188,18 @@ ClientMessage parse_client_message(const std::string& text) {
     if (j.contains("id")) p.id = string_of(j["id"], "ping.id", limits::kMaxPingIdLength);
     return p;
   }
+  if (type == "probe") {
+    only_keys(j, "probe", {"id", "pixel"});
+    ProbeMsg m;
+    if (j.contains("id")) {
+      if (!j["id"].is_number_unsigned() || j["id"].get<uint64_t>() > 0xffffffffull)
+        bad("probe.id: must be an unsigned 32-bit integer");
+      m.id = j["id"].get<uint32_t>();
+    }
+    if (!j.contains("pixel")) bad("probe.pixel: required");
+    std::tie(m.x, m.y) = parse_pixel(j["pixel"], "probe.pixel");
+    return m;
+  }
   throw ProtocolError("unknown_type", "unknown message type '" + type.substr(0, 64) + "'");
 }
 
@@ -199,6 +211,30 @@ std::string pong_message(const std::string& id) { return json{{"type", "pong"}, 
 
 std::string stroke_ack_message(uint32_t seq, size_t strokes) {
   return json{{"type", "stroke_ack"}, {"seq", seq}, {"strokes", strokes}}.dump();
+}
+
+std::pair<int, int> parse_pixel(const json& p, const std::string& where) {
+  auto coordinate = [](const json& c) { return c.is_number_unsigned() && c.get<uint64_t>() <= 1u << 20; };
+  if (!p.is_array() || p.size() != 2 || !coordinate(p[0]) || !coordinate(p[1]))
+    bad(where + ": must be [x, y], whole pixels counted from the top left");
+  return {p[0].get<int>(), p[1].get<int>()};
+}
+
+json probe_json(bool hit, const glm::dvec3& position, double value, double distance, double opacity) {
+  json j = {{"hit", hit}, {"position", nullptr}, {"value", nullptr}, {"distance", nullptr}, {"opacity", opacity}};
+  if (hit) {
+    j["position"] = {position.x, position.y, position.z};
+    j["value"] = value;
+    j["distance"] = distance;
+  }
+  return j;
+}
+
+std::string probe_message(uint32_t id, const json& answer) {
+  json j = answer;
+  j["type"] = "probe";
+  j["id"] = id;
+  return j.dump();
 }
 
 std::string volume_message(const json& volume_info, const json& state) {

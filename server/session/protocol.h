@@ -80,8 +80,14 @@ struct StrokeMsg {
   Stroke stroke;
 };
 
-using ClientMessage =
-    std::variant<Hello, CameraMsg, TfMsg, RenderMsg, QualityMsg, ViewportMsg, VolumeMsg, AckMsg, PingMsg, StrokeMsg>;
+// What lies under a pixel of the view (device pixels of the viewport, from the top left):
+// answered by a probe message with the same id (reference::probe_reference).
+struct ProbeMsg {
+  uint32_t id = 0;
+  int x = 0, y = 0;
+};
+using ClientMessage = std::variant<Hello, CameraMsg, TfMsg, RenderMsg, QualityMsg, ViewportMsg, VolumeMsg, AckMsg,
+                                   PingMsg, StrokeMsg, ProbeMsg>;
 
 // Throws ProtocolError (bad_json, too_large, bad_message, unknown_type).
 ClientMessage parse_client_message(const std::string& text);
@@ -91,6 +97,12 @@ std::string error_message(const std::string& code, const std::string& message);
 std::string pong_message(const std::string& id);
 // A stroke is in the session's ray texture, which now holds `strokes` strokes.
 std::string stroke_ack_message(uint32_t seq, size_t strokes);
+// A probe's answer: {"hit", "position", "value", "distance", "opacity"} (position and value
+// null without a hit), the body of POST /api/probe too; the message adds type and id.
+nlohmann::json probe_json(bool hit, const glm::dvec3& position, double value, double distance, double opacity);
+std::string probe_message(uint32_t id, const nlohmann::json& answer);
+// Reads "pixel": [x, y] (non-negative integers) of a probe message or REST body.
+std::pair<int, int> parse_pixel(const nlohmann::json& j, const std::string& where);
 // A volume switch: the new volume's info (with histogram) and the session's reset state.
 std::string volume_message(const nlohmann::json& volume_info, const nlohmann::json& state);
 struct Welcome {

@@ -42,6 +42,11 @@ ResolvedScene Session::resolve() const {
   return r;
 }
 
+std::pair<std::shared_ptr<VolumeEntry>, ResolvedScene> Session::view() const {
+  std::lock_guard lock(m_);
+  return {volume_, resolve()};
+}
+
 void Session::start(std::shared_ptr<VolumeEntry> volume, const protocol::Viewport& vp,
                     const protocol::StatePatch& state, std::optional<std::shared_ptr<const RayTextureSpec>> texture) {
   std::lock_guard lock(m_);

@@ -117,9 +117,64 @@ def test_static_client_is_served():
     assert status == 200 and headers["Content-Type"].startswith("text/html")
 
 
+def probe(body, pixel):
+    return http(SERVER, "/api/probe", "POST", json.dumps(dict(body, pixel=pixel)).encode())
+
+
+def test_probe_over_rest_and_websocket():
+    # The centre of the heptane view lands on the plume's peak surface (value 200) inside the box.
+    status, _, body = probe(SCENE, [100, 80])
+    answer = json.loads(body)
+    assert status == 200 and answer["hit"], (status, body)
+    assert all(0 <= c <= 150 for c in answer["position"]), answer
+    assert answer["opacity"] >= 0.5 and answer["distance"] > 0, answer
+    # The probe lies on the pixel's ray: from the eye, along the direction to the hit point, the
+    # distance is the eye-to-point length (perspective camera).
+    eye = SCENE["camera"]["eye"]
+    length = sum((p - e) ** 2 for p, e in zip(answer["position"], eye)) ** 0.5
+    assert abs(length - answer["distance"]) < 1e-6 * length, (length, answer)
+    # A corner of a wide view misses the box: no hit, nulls.
+    wide = dict(SCENE, camera=dict(SCENE["camera"], fov_y=90))
+    status, _, body = probe(wide, [0, 0])
+    miss = json.loads(body)
+    assert status == 200 and miss == {"hit": False, "position": None, "value": None, "distance": None,
+                                      "opacity": 0.0}, miss
+    # The viewer's probe message in the same state answers the same.
+    async def run():
+        c = await Client.connect(SERVER)
+        state = {k: SCENE[k] for k in ("camera", "tf", "render")}
+        await c.hello(200, 160, state=state)
+        await c.send({"type": "probe", "id": 7, "pixel": [100, 80]})
+        m = await c.next_text("probe")
+        assert m["id"] == 7 and {k: m[k] for k in answer} == answer, (m, answer)
+        await c.send({"type": "probe", "id": 8, "pixel": [200, 0]})  # one past the right edge
+        e = await c.next_text("error")
+        assert e["code"] == "bad_message" and "outside the 200 x 160 image" in e["message"], e
+        await c.send({"type": "probe", "pixel": [1.5, 0]})
+        e = await c.next_text("error")
+        assert e["code"] == "bad_message" and "probe.pixel" in e["message"], e
+        await c.send({"type": "ping", "id": "still here"})
+        assert (await c.next_text("pong"))["id"] == "still here"
+        await c.close()
+    asyncio.run(run())
+
+
+def test_probe_refusals():
+    assert http(SERVER, "/api/probe")[0] == 405
+    for body, code, words in ((b"not json", 400, b"parse"), (b"[1, 2]", 400, b"JSON object"),
+                              (json.dumps(SCENE).encode(), 400, b"pixel: required"),
+                              (json.dumps(dict(SCENE, pixel=[-1, 0])).encode(), 400, b"pixel: must be [x, y]"),
+                              (json.dumps(dict(SCENE, pixel=[0, 160])).encode(), 400, b"outside the 200 x 160 image"),
+                              (json.dumps(dict(SCENE, pixel=[0, 0], render={"s_k": -1})).encode(), 400, b"render.s_k"),
+                              (json.dumps(dict(SCENE, pixel=[0, 0], volume="nope")).encode(), 404, b"nope")):
+        status, _, answer = http(SERVER, "/api/probe", "POST", body)
+        assert status == code and words in answer, (body[:60], status, answer)
+        assert json.loads(answer)["error"], answer
+
+
 if __name__ == "__main__":
     with Server("--max-sessions", "20") as s:
         SERVER = s
         run_tests([test_health_and_volumes, test_rest_render_equals_cli_render, test_rest_jpeg_and_refusals,
                    test_sixteen_sessions_share_one_gpu_copy, test_metrics_parse_as_prometheus_text,
-                   test_static_client_is_served])
+                   test_static_client_is_served, test_probe_over_rest_and_websocket, test_probe_refusals])
