@@ -12,6 +12,7 @@ export class Annotations {
   camera = null;
   volume = null;
   tf = null;
+  marks = [];  // the measure's points (world), drawn whatever is hidden
   #raf = 0;
 
   constructor(canvas, disposer) {
@@ -60,6 +61,20 @@ export class Annotations {
     if (this.show.triad) this.#triad(g, w, h);
     if (this.show.scale) this.#scaleBar(g, w, h);
     if (this.show.colorbar && this.tf) this.#colorBar(g, w, h);
+    if (this.marks.length) this.#marks(g, w, h);
+  }
+
+  #marks(g, w, h) {
+    const pts = this.marks.map((p) => this.project(p, w, h));
+    g.strokeStyle = '#fd4';
+    g.lineWidth = 2;
+    g.beginPath();
+    if (pts.length === 2 && pts[0] && pts[1]) {
+      g.moveTo(...pts[0]);
+      g.lineTo(...pts[1]);
+    }
+    for (const p of pts) if (p) { g.moveTo(p[0] + 5, p[1]); g.arc(p[0], p[1], 5, 0, 2 * Math.PI); }
+    g.stroke();
   }
 
   corners() {

@@ -1,9 +1,10 @@
 // The keyboard and the layout around the view: the 3D view takes keys when focused (arrows
-// orbit, Shift+arrows pan, + and - zoom, R resets, S shows or hides the stats, ? the help); the
+// orbit, Shift+arrows pan, + and - zoom, R resets, S shows or hides the stats, M measures, F
+// fullscreen, ? the help); the
 // help overlay lists them; the side panel collapses (a button, or the narrow layout's default).
 const ORBIT_PX = 24, PAN_PX = 24, ZOOM = 0.9;
 
-export function bindViewKeys({ canvas, camera, help, toggleStats }, disposer) {
+export function bindViewKeys({ canvas, camera, help, toggleStats, measure, fullscreen }, disposer) {
   disposer.listen(canvas, 'keydown', (e) => {
     const k = e.key;
     if (k.startsWith('Arrow')) {
@@ -15,6 +16,8 @@ export function bindViewKeys({ canvas, camera, help, toggleStats }, disposer) {
     else if (k === 'r' || k === 'R') camera.reset();
     else if (k === 's' || k === 'S') toggleStats();
     else if (k === '?') toggle(help);
+    else if (k === 'm' || k === 'M') measure();
+    else if (k === 'f' || k === 'F') fullscreen();
     else if (k === 'Escape' && !help.hidden) help.hidden = true;
     else return;
     e.preventDefault();
@@ -40,4 +43,10 @@ export function bindPanel({ panel, button }, disposer) {
   set(!narrow.matches);
   disposer.listen(button, 'click', () => set(document.body.classList.contains('panel-collapsed')));
   return { open: () => set(true), close: () => set(false), get isOpen() { return !document.body.classList.contains('panel-collapsed'); }, panel };
+}
+
+// The whole page fullscreen (the panel stays reachable; collapse it for the view alone).
+export function toggleFullscreen() {
+  if (document.fullscreenElement) return document.exitFullscreen();
+  return document.documentElement.requestFullscreen().catch(() => {});
 }

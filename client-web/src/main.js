@@ -11,7 +11,8 @@ import { Stream } from './stream.js';
 import { TfEditor } from './tf-editor.js';
 import { VolumePicker } from './volume-picker.js';
 import { DropUpload } from './upload.js';
-import { bindPanel, bindViewKeys, toggle } from './keys.js';
+import { bindPanel, bindViewKeys, toggle, toggleFullscreen } from './keys.js';
+import { Probe } from './probe.js';
 import { Annotations } from './annotations.js';
 import { bindTfTools } from './tf-tools.js';
 
@@ -105,6 +106,7 @@ disposer.listen(stream, 'volume', (e) => {
   applyState(e.detail.state, e.detail.volume, app.volumes);
   camera.set(e.detail.state.camera, { home: true, silent: true });
   brush.volumeChanged(e.detail.state);
+  probe.reset();
   if (before) tfEditor.remember(before);
   $('tf-note').textContent = `TF derived from ${e.detail.volume.uploaded ? e.detail.volume.name : e.detail.volume.id}'s ` +
     'histogram (undo brings back the previous one)';
@@ -129,6 +131,7 @@ disposer.listen(stream, 'error', (e) => {
   brush.sync.onError(e.detail);  // a refused stroke or texture: the brush resends its list
   if (e.detail.code === 'volume_error') return picker.failed(e.detail.message);
   if (e.detail.code === 'unauthorized') return;  // the status banner and token form say it
+  if (e.detail.message?.startsWith('probe: ')) return probe.failed(e.detail.message);  // said under the view
   errorEl.textContent = `${e.detail.code}: ${e.detail.message}`;  // what the server refused, and why
   errorEl.hidden = false;
   clearTimeout(errorTimer);
@@ -213,7 +216,11 @@ bindTfTools(tfEditor, { window: $('tf-window'), level: $('tf-level'), log: $('tf
 disposer.listen(tfEditor, 'preset', (e) => controls.set(e.detail));
 // The keyboard in the 3D view, the help overlay, the stats toggle, the collapsible panel.
 const showStats = (show) => { toggle($('stats'), show); $('show-stats').checked = show; };
-bindViewKeys({ canvas, camera, help: $('help'), toggleStats: () => showStats($('stats').hidden) }, disposer);
+const probe = new Probe({ canvas, readout: $('probe-readout'), measure: $('measure'), stream }, disposer);
+disposer.listen(probe, 'points', (e) => annotations.update({ marks: e.detail }));
+disposer.listen($('fullscreen'), 'click', () => toggleFullscreen());
+bindViewKeys({ canvas, camera, help: $('help'), toggleStats: () => showStats($('stats').hidden),
+  measure: () => probe.setMeasuring(!probe.measuring), fullscreen: toggleFullscreen }, disposer);
 disposer.listen($('help-button'), 'click', () => toggle($('help')));
 disposer.listen($('help'), 'click', () => { $('help').hidden = true; });
 disposer.listen($('show-stats'), 'change', () => showStats($('show-stats').checked));
@@ -222,7 +229,7 @@ const panel = bindPanel({ panel: $('panel'), button: $('panel-toggle') }, dispos
 const uploads = new DropUpload({ target: $('view'), overlay: $('drop-overlay'), progress: $('volume-progress') },
   { token: () => token }, disposer);
 disposer.listen(uploads, 'uploaded', (e) => stream.send({ type: 'volume', volume: e.detail.id }));
-for (const b of document.querySelectorAll('#view-buttons button')) disposer.listen(b, 'click', () => camera.view(b.dataset.view));
+for (const b of document.querySelectorAll('#view-buttons button[data-view]')) disposer.listen(b, 'click', () => camera.view(b.dataset.view));
 
 let resizeTimer = 0;
 disposer.listen(window, 'resize', () => {
@@ -248,5 +255,5 @@ disposer.listen($('share'), 'click', async () => {
 });
 
 disposer.listen(window, 'pagehide', () => disposer.dispose());
-window.peakcast = { app, stats, stream, camera, tfEditor, controls, brush, disposer, uploads, panel, annotations };  // for tests and the console
+window.peakcast = { app, stats, stream, camera, tfEditor, controls, brush, disposer, uploads, panel, annotations, probe };  // for tests and the console
 stream.connect();

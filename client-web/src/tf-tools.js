@@ -8,8 +8,8 @@ export function bindTfTools(editor, ui, disposer) {
     const p = editor.points;
     if (!p.length) return;
     const a = p[0][0], b = p[p.length - 1][0];
-    if (document.activeElement !== ui.window) ui.window.value = +(b - a).toPrecision(6);
-    if (document.activeElement !== ui.level) ui.level.value = +((a + b) / 2).toPrecision(6);
+    if (document.activeElement !== ui.window) ui.window.value = +(b - a).toPrecision(5);
+    if (document.activeElement !== ui.level) ui.level.value = +((a + b) / 2).toPrecision(5);
   };
   disposer.listen(editor, 'change', show);
   disposer.listen(editor, 'drawn', show);

@@ -9,6 +9,7 @@
 
 #include "reference/cpu_raycaster.h"
 #include "render/variant.h"
+#include "session/data_listing.h"
 #include "session/protocol.h"
 #include "session/limits.h"
 
@@ -322,6 +323,22 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
                                                {"budget_bytes", app.uploads.limits().budget_bytes},
                                                {"used_bytes", app.uploads.used_bytes()}}}}
                                   .dump()));
+  }
+  if (path == "/api/files") {  // the data-directory browser: one folder, relative names only
+    const std::string dir = url_decode(query_param(std::string(req.target()), "dir"));
+    return asio::post(app.loader, [&app, req, dir, send = std::move(send)] {
+      try {
+        auto list = list_data_dir(app.volumes.data_dirs(), dir);
+        count(app, "files", http::status::ok);
+        send(json_response(req, http::status::ok, list.dump()));
+      } catch (const VolumeError& e) {
+        count(app, "files", http::status::not_found);
+        send(error_response(req, http::status::not_found, "not_found", e.what()));
+      } catch (const std::exception& e) {
+        count(app, "files", http::status::internal_server_error);
+        send(error_response(req, http::status::internal_server_error, "internal", e.what()));
+      }
+    });
   }
   if (path == "/api/volumes") {
     const nlohmann::json list = app.volumes.listing();

@@ -172,9 +172,55 @@ def test_probe_refusals():
         assert json.loads(answer)["error"], answer
 
 
+def test_data_directory_listing():
+    """GET /api/files: one folder of the data directories at a time, names relative to them."""
+    with tempfile.TemporaryDirectory() as tmp:
+        root = pathlib.Path(tmp)
+        (root / "cells.nrrd").write_bytes(b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n\n" + bytes(8))
+        (root / "beads.raw").write_bytes(bytes(8))
+        (root / "beads.raw.json").write_text(json.dumps({"dims": [2, 2, 2], "dtype": "uint8"}))
+        (root / "orphan.raw").write_bytes(bytes(8))       # no sidecar: a header's data, not a volume
+        (root / ".hidden.nrrd").write_bytes(b"")
+        (root / "notes.txt").write_text("not a volume")
+        (root / "slices").mkdir()
+        for i in range(2):
+            (root / "slices" / f"z{i}.tif").write_bytes(b"")
+        (root / "two").mkdir()
+        for n in ("a.nhdr", "b.mhd"):
+            (root / "two" / n).write_text("")
+        (root / "outside").symlink_to("/etc")              # a link out is not offered
+        with Server("--data", tmp) as s:
+            def files(dir_=None):
+                status, _, body = http(s, "/api/files" + (f"?dir={dir_}" if dir_ is not None else ""))
+                return status, json.loads(body)
+            status, top = files()
+            assert status == 200 and top["dir"] == "" and not top["truncated"], top
+            kinds = {e["name"]: e["kind"] for e in top["entries"]}
+            # Both data directories, merged: the test data and this one.
+            assert kinds["cells.nrrd"] == "volume" and kinds["beads.raw"] == "volume", kinds
+            assert kinds["heptane_151.nrrd"] == "volume" and kinds["headsq"] == "stack", kinds
+            assert kinds["slices"] == "stack" and kinds["two"] == "folder", kinds
+            for absent in ("orphan.raw", ".hidden.nrrd", "notes.txt", "outside", "beads.raw.json"):
+                assert absent not in kinds, (absent, kinds)
+            folders = [e["kind"] != "volume" for e in top["entries"]]
+            assert folders == sorted(folders, reverse=True), "folders first"
+            assert tmp not in json.dumps(top) and str(DATA) not in json.dumps(top), "no server path"
+            status, two = files("two")
+            assert [e["path"] for e in two["entries"]] == ["two/a.nhdr", "two/b.mhd"], two
+            # What is listed opens by its path.
+            status, _, body = http(s, "/api/render", "POST", json.dumps(
+                {"volume": "cells.nrrd", "image": {"width": 8, "height": 8}}).encode())
+            assert status == 200, body[:200]
+            for bad, words in (("..", "outside"), ("/etc", "relative"), ("nope", "no such"),
+                               ("outside", "outside"), ("cells.nrrd", "not a folder")):
+                status, body = files(bad)
+                assert status == 404 and words in body["message"] and tmp not in body["message"], (bad, body)
+
+
 if __name__ == "__main__":
     with Server("--max-sessions", "20") as s:
         SERVER = s
         run_tests([test_health_and_volumes, test_rest_render_equals_cli_render, test_rest_jpeg_and_refusals,
                    test_sixteen_sessions_share_one_gpu_copy, test_metrics_parse_as_prometheus_text,
-                   test_static_client_is_served, test_probe_over_rest_and_websocket, test_probe_refusals])
+                   test_static_client_is_served, test_probe_over_rest_and_websocket, test_probe_refusals,
+                   test_data_directory_listing])

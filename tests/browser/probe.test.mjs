@@ -1,0 +1,135 @@
+// Probing and measuring in the view, fullscreen, and touch: Debian's chromium through
+// playwright-core, against a real server. The probe's answers are checked against POST
+// /api/probe of the same scene, which the server's unit tests check against closed forms.
+import assert from 'node:assert/strict';
+import { after, before, test } from 'node:test';
+import { launch, openClient, screenshot, startServer, waitFinal } from './harness.mjs';
+
+let server, browser;
+before(async () => { server = await startServer(); browser = await launch(); });
+after(async () => { await browser?.close(); await server?.stop(); });
+
+// What POST /api/probe answers for the page's current scene at a device pixel.
+const restProbe = (page, pixel) => page.evaluate(async (pixel) => {
+  const { app } = window.peakcast, r = document.querySelector('#frame').getBoundingClientRect();
+  const scene = { volume: app.volume, camera: app.camera, tf: { points: app.tf }, render: app.render,
+    image: { width: Math.round(r.width), height: Math.round(r.height) }, pixel };
+  const res = await fetch('/api/probe', { method: 'POST', body: JSON.stringify(scene) });
+  return res.json();
+}, pixel);
+
+test('the value and world position under the cursor show as it moves, as the server probes them', async () => {
+  const page = await openClient(browser, server.url, { width: 1200, height: 700 });
+  await waitFinal(page);
+  const box = await page.locator('#frame').boundingBox();
+  const px = [Math.floor(box.width / 2), Math.floor(box.height / 2)];
+  await page.mouse.move(box.x + px[0] + 0.5, box.y + px[1] + 0.5);
+  await page.waitForFunction(() => /^value .* at \(/.test(document.querySelector('#probe-readout').textContent));
+  const shown = await page.evaluate(() => window.peakcast.probe.last);
+  const rest = await restProbe(page, px);
+  assert.ok(rest.hit, JSON.stringify(rest));
+  for (const k of ['hit', 'value', 'distance', 'opacity']) assert.equal(shown[k], rest[k], k);
+  assert.deepEqual(shown.position, rest.position);
+  const text = await page.textContent('#probe-readout');
+  assert.ok(text.includes(String(+rest.value.toPrecision(4))), text);
+  // The top left corner looks past the volume: said so.
+  await page.mouse.move(box.x + 3, box.y + 3);
+  await page.waitForFunction(() => /nothing opaque/.test(document.querySelector('#probe-readout').textContent));
+  await page.mouse.move(box.x - 20, box.y + 100);  // off the view: the readout goes
+  await page.waitForFunction(() => document.querySelector('#probe-readout').hidden);
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+test('measure: two clicks give the distance between the surfaces under them, drawn over the view', async () => {
+  const page = await openClient(browser, server.url, { width: 1200, height: 700 });
+  await waitFinal(page);
+  const box = await page.locator('#frame').boundingBox();
+  const a = [Math.floor(box.width * 0.45), Math.floor(box.height * 0.45)];
+  const b = [Math.floor(box.width * 0.55), Math.floor(box.height * 0.6)];
+  await page.click('#measure');
+  assert.equal(await page.getAttribute('#measure', 'aria-pressed'), 'true');
+  assert.match(await page.textContent('#probe-readout'), /click a first point/);
+  await page.mouse.click(box.x + a[0] + 0.5, box.y + a[1] + 0.5);
+  await page.waitForFunction(() => window.peakcast.probe.points.length === 1);
+  await page.mouse.click(box.x + b[0] + 0.5, box.y + b[1] + 0.5);
+  await page.waitForFunction(() => window.peakcast.probe.points.length === 2);
+  const [pa, pb] = [await restProbe(page, a), await restProbe(page, b)];
+  const expected = Math.hypot(...pa.position.map((v, i) => v - pb.position[i]));
+  const measured = +(await page.getAttribute('#probe-readout', 'data-distance'));
+  assert.ok(Math.abs(measured - expected) < 1e-9 * expected, `${measured} vs ${expected}`);
+  assert.match(await page.textContent('#probe-readout'), new RegExp(`distance ${+expected.toPrecision(4)}`));
+  // The line between them is drawn (yellow) on the overlay at its midpoint.
+  await page.waitForTimeout(100);
+  const yellowAtMid = () => page.evaluate(() => {
+    const an = window.peakcast.annotations, c = document.querySelector('#annotations');
+    const w = c.clientWidth, h = c.clientHeight, dpr = c.width / w;
+    const [p, q] = an.marks.map((m) => an.project(m, w, h));
+    const g = c.getContext('2d');
+    const d = g.getImageData(Math.round(((p[0] + q[0]) / 2) * dpr) - 2, Math.round(((p[1] + q[1]) / 2) * dpr) - 2, 5, 5).data;
+    for (let i = 0; i < d.length; i += 4) if (d[i] > 200 && d[i + 1] > 180 && d[i + 2] < 120 && d[i + 3] > 100) return true;
+    return false;
+  });
+  assert.ok(await yellowAtMid(), 'the measure line is drawn');
+  await screenshot(page, 'measure');
+  // A drag still orbits and adds no point; M ends the measure and clears it.
+  const before = await page.evaluate(() => window.peakcast.app.camera.eye);
+  await page.mouse.move(box.x + 200, box.y + 200);
+  await page.mouse.down();
+  await page.mouse.move(box.x + 300, box.y + 220, { steps: 5 });
+  await page.mouse.up();
+  assert.notDeepEqual(await page.evaluate(() => window.peakcast.app.camera.eye), before);
+  assert.equal(await page.evaluate(() => window.peakcast.probe.points.length), 2);
+  await page.focus('#frame');
+  await page.keyboard.press('m');
+  assert.equal(await page.getAttribute('#measure', 'aria-pressed'), 'false');
+  assert.equal(await page.evaluate(() => window.peakcast.probe.points.length), 0);
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+test('fullscreen from its button and from F', async () => {
+  const page = await openClient(browser, server.url);
+  await waitFinal(page);
+  await page.click('#fullscreen');
+  await page.waitForFunction(() => document.fullscreenElement === document.documentElement);
+  await page.click('#fullscreen');
+  await page.waitForFunction(() => document.fullscreenElement === null);
+  await page.focus('#frame');
+  await page.keyboard.press('f');
+  await page.waitForFunction(() => document.fullscreenElement !== null);
+  await page.keyboard.press('f');
+  await page.waitForFunction(() => document.fullscreenElement === null);
+  await page.close();
+});
+
+test('on a tablet: one finger orbits, two fingers pinch to zoom', async () => {
+  const context = await browser.newContext({ viewport: { width: 1024, height: 768 }, hasTouch: true, isMobile: true });
+  const page = await context.newPage();
+  await page.goto(server.url);
+  await waitFinal(page);
+  const cdp = await context.newCDPSession(page);
+  const box = await page.locator('#frame').boundingBox();
+  const cx = box.x + box.width / 2, cy = box.y + box.height / 2;
+  const touch = (type, points) => cdp.send('Input.dispatchTouchEvent', { type, touchPoints: points.map(([x, y], id) => ({ x, y, id })) });
+  const cam = () => page.evaluate(() => window.peakcast.app.camera);
+  const dist = (c) => Math.hypot(...c.eye.map((v, i) => v - c.center[i]));
+  const start = await cam();
+  // One finger across the view: the eye turns about the centre at the same distance.
+  await touch('touchStart', [[cx - 100, cy]]);
+  for (let i = 1; i <= 8; i++) await touch('touchMove', [[cx - 100 + i * 25, cy]]);
+  await touch('touchEnd', []);
+  await page.waitForFunction((e) => window.peakcast.app.camera.eye.some((v, i) => Math.abs(v - e[i]) > 1), start.eye);
+  const orbited = await cam();
+  assert.ok(Math.abs(dist(orbited) - dist(start)) < 1e-6 * dist(start), 'an orbit keeps the distance');
+  // Two fingers moving apart: closer.
+  await touch('touchStart', [[cx - 40, cy], [cx + 40, cy]]);
+  for (let i = 1; i <= 8; i++) await touch('touchMove', [[cx - 40 - i * 15, cy], [cx + 40 + i * 15, cy]]);
+  await touch('touchEnd', []);
+  await page.waitForFunction((d) => {
+    const c = window.peakcast.app.camera;
+    return Math.hypot(...c.eye.map((v, i) => v - c.center[i])) < d * 0.9;
+  }, dist(orbited));
+  await screenshot(page, 'tablet');
+  await context.close();
+});
