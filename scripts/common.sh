@@ -55,7 +55,7 @@ install_packages() {
 install_node_modules() {
   # Debian's nodejs ships npm separately; some images' nodejs brings its own (and conflicts with it).
   command -v npm >/dev/null || install_packages npm
-  if [[ ! -d $PEAKCAST_ROOT/tests/browser/node_modules/playwright-core ]]; then
+  if [[ ! -d $PEAKCAST_ROOT/tests/browser/node_modules/playwright-core || ! -d $PEAKCAST_ROOT/tests/browser/node_modules/axe-core ]]; then
     (cd "$PEAKCAST_ROOT/tests/browser" && npm install --no-audit --no-fund --silent)
   fi
 }

@@ -49,7 +49,13 @@ export class RenderControls extends EventTarget {
       const label = document.createElement('label');
       label.title = HELP[key] ?? '';
       input.title = label.title;
-      label.append(LABELS[key] ?? key, input);
+      // The whole story of each setting: docs/scenes.md, served by the server beside the client.
+      const doc = Object.assign(document.createElement('a'), { href: '/docs/scenes.md#render', target: '_blank',
+        rel: 'noopener', className: 'doc', textContent: '?', title: `${LABELS[key] ?? key} in docs/scenes.md` });
+      doc.setAttribute('aria-label', `${LABELS[key] ?? key}: explained in docs/scenes.md`);
+      const name = document.createElement('span');
+      name.append(LABELS[key] ?? key, ' ', doc);
+      label.append(name, input);
       this.container.append(label);
       this.inputs[key] = input;
       this.built.listen(input, input.type === 'number' ? 'input' : 'change', () => this.#changed(key));

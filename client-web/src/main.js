@@ -10,6 +10,7 @@ import { StatsOverlay } from './stats.js';
 import { Stream } from './stream.js';
 import { TfEditor } from './tf-editor.js';
 import { VolumePicker } from './volume-picker.js';
+import { FileBrowser } from './file-browser.js';
 import { DropUpload } from './upload.js';
 import { bindPanel, bindViewKeys, toggle, toggleFullscreen } from './keys.js';
 import { Probe } from './probe.js';
@@ -210,6 +211,8 @@ disposer.listen(controls, 'change', (e) => {
   writeState(share());
 });
 disposer.listen(picker, 'pick', (e) => stream.send({ type: 'volume', volume: e.detail }));
+const files = new FileBrowser({ button: $('volume-browse'), list: $('files') }, { token: () => token }, disposer);
+disposer.listen(files, 'pick', (e) => picker.pick(e.detail.path, e.detail.bytes));
 bindTfTools(tfEditor, { window: $('tf-window'), level: $('tf-level'), log: $('tf-log'), save: $('tf-save'),
   load: $('tf-load'), note: $('tf-note') }, disposer);
 // A preset that needs a classification (the isosurface: peak finding, shaded) sets it.
@@ -255,5 +258,5 @@ disposer.listen($('share'), 'click', async () => {
 });
 
 disposer.listen(window, 'pagehide', () => disposer.dispose());
-window.peakcast = { app, stats, stream, camera, tfEditor, controls, brush, disposer, uploads, panel, annotations, probe };  // for tests and the console
+window.peakcast = { app, stats, stream, camera, tfEditor, controls, brush, disposer, uploads, panel, annotations, probe, files };  // for tests and the console
 stream.connect();

@@ -1,9 +1,13 @@
-// Volume picker: the server's loaded volumes, or a path inside a data directory; shows progress
-// until the server answers with the new volume.
+// Volume picker: the server's loaded volumes, or a path inside a data directory (typed, or chosen
+// in the data browser); shows what is loading and for how long until the server answers with the
+// new volume.
 export class VolumePicker extends EventTarget {
+  #timer = 0;
+
   constructor(ui, disposer) {
     super();
     this.ui = ui;
+    disposer.add(() => clearInterval(this.#timer));
     disposer.listen(ui.select, 'change', () => this.#pick(ui.select.value));
     disposer.listen(ui.open, 'click', () => ui.path.value && this.#pick(ui.path.value.trim()));
     disposer.listen(ui.path, 'keydown', (e) => { if (e.key === 'Enter' && ui.path.value.trim()) this.#pick(ui.path.value.trim()); });
@@ -14,13 +18,36 @@ export class VolumePicker extends EventTarget {
     this.ui.select.replaceChildren(...volumes.map((v) => new Option(label(v), v.id)));
     this.ui.select.value = current.id;
     this.ui.info.textContent = `${current.dims.join('×')} ${current.dtype}, spacing ${current.spacing.join(' ')}, range ${current.range.map((x) => +x.toPrecision(5)).join(' … ')}`;
-    this.ui.progress.textContent = '';
+    this.#done('');
   }
 
-  failed(message) { this.ui.progress.textContent = '⚠ ' + message; }
+  failed(message) { this.#done('⚠ ' + message); }
 
-  #pick(id) {
-    this.ui.progress.textContent = 'loading…';
+  // Opens a volume by id or data-directory path; `bytes`, when known, is shown while it loads.
+  pick(id, bytes = 0) { this.#pick(id, bytes); }
+
+  #done(text) {
+    clearInterval(this.#timer);
+    this.#timer = 0;
+    this.ui.progress.textContent = text;
+  }
+
+  #pick(id, bytes = 0) {
+    const start = performance.now(), size = bytes ? ` (${formatBytes(bytes)})` : '';
+    const tick = () => {
+      const s = Math.round((performance.now() - start) / 1000);
+      this.ui.progress.textContent = `loading ${id}${size}…${s >= 1 ? ` ${s} s` : ''}`;
+    };
+    clearInterval(this.#timer);
+    tick();
+    this.#timer = setInterval(tick, 1000);
     this.dispatchEvent(new CustomEvent('pick', { detail: id }));
   }
+}
+
+export function formatBytes(n) {
+  const units = ['B', 'KiB', 'MiB', 'GiB', 'TiB'];
+  let i = 0;
+  while (n >= 1024 && i < units.length - 1) { n /= 1024; i++; }
+  return `${+n.toPrecision(3)} ${units[i]}`;
 }

@@ -33,6 +33,7 @@ const char* mime_type(const std::string& path) {
   if (ends(".svg")) return "image/svg+xml";
   if (ends(".png")) return "image/png";
   if (ends(".ico")) return "image/x-icon";
+  if (ends(".md")) return "text/plain; charset=utf-8";  // the docs, read as text
   return "application/octet-stream";
 }
 
@@ -375,6 +376,9 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
     return send(std::move(res));
   }
   if (api) return send(error_response(req, http::status::not_found, "not_found", path + " is not an API route"));
+  // The docs the client's help links to (docs/ beside client-web/, in the container too).
+  if (path.rfind("/docs/", 0) == 0 && (path.ends_with(".md") || path.ends_with(".png")))
+    return send(static_file(req, (app.config.web_dir / "..").lexically_normal() / "docs", path.substr(5)));
   send(static_file(req, app.config.web_dir, path));
 }
 

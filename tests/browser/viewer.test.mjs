@@ -135,6 +135,12 @@ test('controls that do not apply are disabled and every control explains itself'
   assert.ok(await page.isEnabled('input[name=s_k]'));
   const untitled = await page.$$eval('#controls label', (ls) => ls.filter((l) => (l.title || '').length < 20).map((l) => l.textContent));
   assert.deepEqual(untitled, []);
+  // Each links to docs/scenes.md, which the server serves beside the client.
+  const links = await page.$$eval('#controls label', (ls) => ls.map((l) => l.querySelector('a.doc')?.href));
+  assert.ok(links.length >= 10 && links.every((h) => h?.endsWith('/docs/scenes.md#render')), String(links));
+  const doc = await page.evaluate(async (h) => { const r = await fetch(h); return [r.status, await r.text()]; }, links[0]);
+  assert.equal(doc[0], 200);
+  assert.match(doc[1], /### `render`/);
   await page.close();
 });
 

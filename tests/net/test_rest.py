@@ -115,6 +115,12 @@ def test_metrics_parse_as_prometheus_text():
 def test_static_client_is_served():
     status, headers, body = http(SERVER, "/")
     assert status == 200 and headers["Content-Type"].startswith("text/html")
+    # The docs the client's controls link to, as text; nothing else beside them.
+    status, headers, body = http(SERVER, "/docs/scenes.md")
+    assert status == 200 and headers["Content-Type"].startswith("text/plain") and b"### `render`" in body
+    assert http(SERVER, "/docs/nope.md")[0] == 404
+    assert http(SERVER, "/docs/../CMakeLists.txt")[0] in (400, 404)
+    assert http(SERVER, "/docs/../README.md")[0] in (400, 404)
 
 
 def probe(body, pixel):

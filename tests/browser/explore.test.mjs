@@ -1,4 +1,5 @@
-// Probing and measuring in the view, fullscreen, and touch: Debian's chromium through
+// Exploring: probing and measuring in the view, the data browser, fullscreen, and touch. Debian's
+// chromium through
 // playwright-core, against a real server. The probe's answers are checked against POST
 // /api/probe of the same scene, which the server's unit tests check against closed forms.
 import assert from 'node:assert/strict';
@@ -132,4 +133,32 @@ test('on a tablet: one finger orbits, two fingers pinch to zoom', async () => {
   }, dist(orbited));
   await screenshot(page, 'tablet');
   await context.close();
+});
+
+test('the data browser lists the data directories by relative names, looks into folders and opens a volume', async () => {
+  const page = await openClient(browser, server.url);
+  await waitFinal(page);
+  await page.click('#volume-browse');
+  await page.waitForSelector('#files li button');
+  const names = () => page.$$eval('#files li', (li) => li.map((e) => e.textContent));
+  const top = await names();
+  for (const n of ['🗂 headsq', '📁 scenes/', '▦ heptane_151.nrrd', '▦ nucleon.nhdr', '▦ HeadMRVolume.mhd'])
+    assert.ok(top.includes(n), `${n} in ${top}`);
+  assert.ok(!top.some((t) => t.includes('nucleon.raw')), 'a header\'s data file is not offered');
+  assert.ok(!top.some((t) => t.includes('/work') || t.includes('tests/data')), `no server path: ${top}`);
+  await page.click('#files button:text("📁 scenes/")');
+  await page.waitForFunction(() => document.querySelector('#files li').textContent === 'data/scenes');
+  assert.ok((await names()).includes('📁 good/'));
+  await page.click('#files button:text("↑ ..")');
+  await page.waitForFunction(() => document.querySelector('#files li').textContent === 'data/');
+  const n = await page.evaluate(() => +(document.querySelector('#frame').dataset.frames || 0));
+  await page.click('#files button:text("▦ nucleon.nhdr")');
+  assert.match(await page.textContent('#volume-progress'), /^loading nucleon\.nhdr \(\d/);
+  assert.ok(await page.isHidden('#files'));
+  await page.waitForFunction(() => window.peakcast.app.volumeInfo?.dims?.join('x') === '41x41x41');
+  await waitFinal(page, { afterFrames: n });
+  assert.equal(await page.textContent('#volume-progress'), '');
+  assert.match(await page.title(), /nucleon/);
+  assert.deepEqual(page.errors, []);
+  await page.close();
 });
