@@ -26,6 +26,29 @@ Ray make_ray(vec2 pixel_from_top_left) {
   return r;
 }
 
+// render.clip (core/clip.h clip_span, its twin): the span cut to the crop box and to the kept
+// side of the plane; empty when x > y.
+vec2 clip_span(Ray r, vec2 span) {
+  if (u_clip_lo.w > 0.5) {
+    for (int a = 0; a < 3; ++a) {
+      if (r.d[a] == 0.0) {
+        if (r.o[a] < u_clip_lo[a] || r.o[a] > u_clip_hi[a]) return vec2(1.0, 0.0);
+        continue;
+      }
+      float ta = (u_clip_lo[a] - r.o[a]) / r.d[a], tb = (u_clip_hi[a] - r.o[a]) / r.d[a];
+      span.x = max(span.x, min(ta, tb));
+      span.y = min(span.y, max(ta, tb));
+    }
+  }
+  if (u_clip_hi.w > 0.5) {
+    float dn = dot(u_clip_plane.xyz, r.d), on = dot(u_clip_plane.xyz, r.o) - u_clip_plane.w;
+    if (dn > 0.0) span.x = max(span.x, -on / dn);
+    else if (dn < 0.0) span.y = min(span.y, -on / dn);
+    else if (on < 0.0) return vec2(1.0, 0.0);
+  }
+  return span;
+}
+
 // Slab test against the box [-half, half]; returns (t_enter, t_exit), empty when x > y.
 vec2 intersect_box(Ray r) {
   // Axis-parallel rays: a tiny stand-in for 0 keeps every product finite (no 0 * inf = NaN).

@@ -417,9 +417,15 @@ RayResult cast_ray(vec2 pixel) {
     res.samples = -1.0;
     return res;
   }
+  float t_box = span.x;  // the box entry: where a volume-mapped ray texture is read
+  span = clip_span(r, span);
+  if (!(span.x <= span.y)) {  // the clip keeps none of the ray
+    res.samples = 0.0;
+    return res;
+  }
   Lattice L = ray_lattice(r, span.x);
 #ifdef RAY_TEXTURE
-  float step_mult = read_ray_texture(r, pixel, span.x);
+  float step_mult = read_ray_texture(r, pixel, t_box);
   L.A *= step_mult;
   L.B *= step_mult;
 #endif

@@ -18,4 +18,7 @@ layout(std140, binding = UBO_RAY) uniform RayUniforms {
   vec4 u_brick_half; // BRICK: xyz: what voxel_coords adds (half the box less the brick's first voxel, world); w: front opacity's row width (0: none)
   vec4 u_own_lo;     // BRICK: xyz: the owned box's low corner (whole-volume voxels); w: axes without that bound (bits)
   vec4 u_own_hi;     // BRICK: xyz: its high corner; w: likewise
+  vec4 u_clip_lo;    // render.clip (box-centred): xyz: the crop box's low corner; w: 1 with a crop box
+  vec4 u_clip_hi;    // xyz: its high corner; w: 1 with a clip plane
+  vec4 u_clip_plane; // xyz: the plane's unit normal; w: its offset (kept: dot(p, normal) >= offset)
 };

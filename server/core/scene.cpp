@@ -65,7 +65,7 @@ TransferFunction parse_tf(const json& j, double& opacity_unit) {
 RenderSettings parse_render(const json& j) {
   only_keys(j, "render", {"classification", "peak_mode", "max_peaks", "peak_table_bins", "secant_iterations",
                           "preint_table_size", "preint_method", "sampling", "step", "s_k", "filter", "virtual_samples", "shading",
-                          "early_termination", "space_skipping", "adaptive", "ray_texture"});
+                          "early_termination", "space_skipping", "adaptive", "clip", "ray_texture"});
   RenderSettings r;
   if (j.contains("classification"))
     r.classification = choice<Classification>(j["classification"], "render.classification",
@@ -110,6 +110,7 @@ RenderSettings parse_render(const json& j) {
   }
   if (j.contains("space_skipping")) r.space_skipping = boolean(j["space_skipping"], "render.space_skipping");
   if (j.contains("adaptive")) r.adaptive = boolean(j["adaptive"], "render.adaptive");
+  if (j.contains("clip")) r.clip = parse_clip(j["clip"]);
   if (j.contains("ray_texture")) {
     r.ray_texture = std::make_shared<const RayTextureSpec>(parse_ray_texture(j["ray_texture"]));
   }
@@ -199,6 +200,7 @@ json scene_to_json(const Scene& s) {
                  {"early_termination", r.early_termination}, {"space_skipping", r.space_skipping},
                  {"adaptive", r.adaptive}};
   if (r.step > 0) j["render"]["step"] = r.step;
+  if (r.clip.active()) j["render"]["clip"] = to_json(r.clip);
   if (r.ray_texture) j["render"]["ray_texture"] = to_json(*r.ray_texture);
   return j;
 }

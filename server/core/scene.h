@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/camera.h"
+#include "core/clip.h"
 #include "core/ray_texture.h"
 #include "core/scene_error.h"
 #include "core/transfer_function.h"
@@ -47,6 +48,7 @@ struct RenderSettings {
   double early_termination = 1.0 - 1.0 / 255.0;
   bool space_skipping = true;
   bool adaptive = false;
+  ClipSettings clip;  // none by default
   // Parsed once, shared and immutable (a painted stroke makes a new spec); null when absent.
   std::shared_ptr<const RayTextureSpec> ray_texture;
 };

@@ -87,6 +87,7 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
   f.half_h = float(view.half_h);
   f.dist = float(view.dist);
   f.box_half = glm::vec3((s.box_max - s.box_min) * 0.5);
+  f.clip = center_clip<glm::vec3, float>(s.scene.render.clip, (s.box_min + s.box_max) * 0.5);
   f.sample_half = f.box_half;
   f.step = float(plan.step);
   f.spacing = glm::vec3(v.spacing);

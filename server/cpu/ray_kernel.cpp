@@ -138,11 +138,16 @@ bool RayCaster::setup(float px, float py) {
     res_.samples = -1.f;
     return false;
   }
+  const float t_box = span_x_;  // the box entry: where a volume-mapped ray texture is read
+  if (!clip_span(f_.clip, r_.o, r_.d, span_x_, span_y_)) {  // the clip keeps none of the ray
+    res_.samples = 0.f;
+    return false;
+  }
   L_ = ray_lattice(f_, r_, span_x_);
   stop_ = f_.stop;
   if (f_.ray_texture) {
     const glm::dvec2 uv = f_.key.ray_texture_volume
-                              ? volume_uv(glm::dvec3(r_.o + span_x_ * r_.d), glm::dvec3(f_.box_half))
+                              ? volume_uv(glm::dvec3(r_.o + t_box * r_.d), glm::dvec3(f_.box_half))
                               : glm::dvec2(px / float(f_.image_w), py / float(f_.image_h));
     const auto c = sample_ray_texture(*f_.ray_texture, uv);
     stop_ = float(c[1]);
@@ -212,10 +217,11 @@ void CastRays(const CpuFrame& f, const float* px, const float* py, int n, RayRes
     RayCaster* rays[kRayPacket];
     LeapInputs in[kRayPacket];
     int first[kRayPacket] = {}, hit_index[kRayPacket];
+    bool walks[kRayPacket] = {};
     int hits = 0;
     for (int q = 0; q < m; ++q) {
       rays[q] = new (storage[q]) RayCaster(f);
-      if (rays[q]->setup(px[k0 + q], py[k0 + q])) {
+      if ((walks[q] = rays[q]->setup(px[k0 + q], py[k0 + q]))) {
         if (leaps) in[hits] = rays[q]->leap_inputs();
         hit_index[hits++] = q;
       }
@@ -224,7 +230,7 @@ void CastRays(const CpuFrame& f, const float* px, const float* py, int n, RayRes
     if (leaps && hits > 0) leaps_to_first_occupied(f, in, hits, firsts);
     for (int h = 0; h < hits; ++h) first[hit_index[h]] = firsts[h];
     for (int q = 0; q < m; ++q) {
-      out[k0 + q] = rays[q]->result().samples < 0.f ? rays[q]->result() : rays[q]->walk(first[q]);
+      out[k0 + q] = walks[q] ? rays[q]->walk(first[q]) : rays[q]->result();  // a miss, or clipped away
       rays[q]->~RayCaster();
     }
   }

@@ -10,6 +10,7 @@
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
+#include "core/clip.h"
 #include "core/ray_texture.h"
 #include "cpu/sampler.h"
 #include "render/variant.h"
@@ -25,6 +26,7 @@ struct CpuFrame {
   glm::vec3 p0{0}, right{0}, up{0}, forward{0};
   float half_w = 0, half_h = 0, dist = 0;
   glm::vec3 box_half{0};
+  CenteredClip<glm::vec3, float> clip;  // render.clip, box-centred (core/clip.h)
   // Voxel coordinates of the resident voxels: (p + sample_half) * inv_spacing. box_half for a
   // whole volume; a brick's (distributed rendering) is moved by its first voxel.
   glm::vec3 sample_half{0};

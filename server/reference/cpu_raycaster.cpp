@@ -29,6 +29,7 @@ struct Frame {
   double lo, hi, min_spacing;
   Filter filter;
   bool shading;
+  CenteredClip<glm::dvec3, double> clip;
 
   Frame(const Volume& vol, const ResolvedScene& sc)
       : v(vol), s(sc), filter(sc.scene.render.filter), shading(sc.scene.render.shading) {
@@ -39,6 +40,14 @@ struct Frame {
     lo = range.lo;
     hi = range.hi;
     min_spacing = std::min({v.spacing.x, v.spacing.y, v.spacing.z});
+    clip = center_clip<glm::dvec3, double>(s.scene.render.clip, center);
+  }
+  // The ray's span through the box (t_box: its entry, where a volume-mapped ray texture is read)
+  // cut by the clip; false when the ray misses the box (`missed`) or the clip keeps none of it.
+  bool span(const Ray& r, double& t_box, double& t0, double& t1, bool& missed) const {
+    missed = !intersect_box(r, half, t0, t1);
+    t_box = t0;
+    return !missed && clip_span(clip, r.o, r.d, t0, t1);
   }
   glm::dvec3 voxel(const Ray& r, double t) const { return (r.o + t * r.d + half) / v.spacing; }
   double field(const Ray& r, double t) const { return sample(v, voxel(r, t), filter); }
@@ -100,11 +109,14 @@ Image for_each_pixel(const Frame& fr, PixelFn fn) {
     const int y = int(row);
     for (int x = 0; x < w; ++x) {
       const Ray r = make_ray(fr.view, x, y);
-      double t0, t1, samples = -1.0;  // -1: the ray misses the box
+      double t_box, t0, t1, samples = -1.0;  // -1: the ray misses the box
+      bool missed;
       Accum acc;
-      if (intersect_box(r, fr.half, t0, t1)) {
+      if (fr.span(r, t_box, t0, t1, missed)) {
         samples = 0.0;
-        fn(r, t0, t1, acc, samples, x, y);
+        fn(r, t_box, t0, t1, acc, samples, x, y);
+      } else if (!missed) {
+        samples = 0.0;  // clipped away
       }
       float* px = img.pixel(x, y);
       const glm::dvec3 out = acc.rgb + (1.0 - acc.alpha) * fr.s.scene.background;
@@ -144,14 +156,14 @@ auto run_reference(const Frame& fr, const ReferenceOptions& opt, Body body) {
   }
   const std::optional<RayTexture> ray_texture =
       s.ray_texture ? std::optional<RayTexture>(build_ray_texture(*s.ray_texture, rs.early_termination)) : std::nullopt;
-  return body([&](const Ray& r, double t0, double t1, Accum& acc, double& samples, int x, int y) {
+  return body([&](const Ray& r, double t_box, double t0, double t1, Accum& acc, double& samples, int x, int y) {
     // The ray texture's controls (twin of shaders/ray_texture.glsl): step multiplier,
     // termination, DVR/peak blend.
     double step_mult = 1.0, stop = stop_default, dvr_weight = 1.0, peak_weight = 1.0;
     if (ray_texture) {
       const glm::dvec2 uv = s.ray_texture->mapping == RayTextureMapping::View
                                 ? view_uv(x, y, s.scene.width, s.scene.height)
-                                : volume_uv(r.o + t0 * r.d, fr.half);
+                                : volume_uv(r.o + t_box * r.d, fr.half);
       const auto c = sample_ray_texture(*ray_texture, uv);
       step_mult = c[0];
       if (opt.early_termination) stop = c[1];
@@ -304,10 +316,11 @@ ProbeResult probe_reference(const Volume& v, const ResolvedScene& scene, int x, 
   return run_reference(fr, ReferenceOptions{}, [&](const auto& pixel) {
     ProbeResult out;
     const Ray r = make_ray(fr.view, x, y);
-    double t0, t1, samples = 0.0;
+    double t_box, t0, t1, samples = 0.0;
+    bool missed;
     Accum acc;
-    if (!intersect_box(r, fr.half, t0, t1)) return out;
-    pixel(r, t0, t1, acc, samples, x, y);
+    if (!fr.span(r, t_box, t0, t1, missed)) return out;
+    pixel(r, t_box, t0, t1, acc, samples, x, y);
     out.opacity = acc.alpha;
     if (std::isnan(acc.half_t)) return out;
     out.hit = true;
@@ -334,9 +347,10 @@ ConvergedImage render_converged(const Volume& v, const ResolvedScene& s, Optical
   parallel_for(size_t(h), [&](size_t row) {
     for (int x = 0; x < w; ++x) {
       const Ray r = make_ray(fr.view, x, int(row));
-      double t0, t1;
+      double t_box, t0, t1;
+      bool missed;
       const size_t k = row * size_t(w) + size_t(x);
-      if (intersect_box(r, fr.half, t0, t1)) {
+      if (fr.span(r, t_box, t0, t1, missed)) {
         hit[k] = 1;
         splits[k] = split_ray(v, fr.filter, r, fr.half, t0, t1, breakpoints, peak_values);
       }
@@ -344,7 +358,7 @@ ConvergedImage render_converged(const Volume& v, const ResolvedScene& s, Optical
   });
   auto render_at = [&](double step) {
     // Misses keep the background (for_each_pixel with nothing to integrate), hits are filled below.
-    Image img = for_each_pixel(fr, [](const Ray&, double, double, Accum&, double&, int, int) {});
+    Image img = for_each_pixel(fr, [](const Ray&, double, double, double, Accum&, double&, int, int) {});
     parallel_for(size_t(h), [&](size_t row) {
       for (int x = 0; x < w; ++x) {
         const size_t k = row * size_t(w) + size_t(x);

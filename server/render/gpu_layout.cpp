@@ -11,7 +11,8 @@ std::map<std::string, size_t> host_uniform_offsets() {
           {"u_image", offsetof(RayUniforms, image)},
           {"u_peaks", offsetof(RayUniforms, peaks)},           {"u_tables", offsetof(RayUniforms, tables)},
           {"u_brick_half", offsetof(RayUniforms, brick_half)}, {"u_own_lo", offsetof(RayUniforms, own_lo)},
-          {"u_own_hi", offsetof(RayUniforms, own_hi)}};
+          {"u_own_hi", offsetof(RayUniforms, own_hi)},         {"u_clip_lo", offsetof(RayUniforms, clip_lo)},
+          {"u_clip_hi", offsetof(RayUniforms, clip_hi)},       {"u_clip_plane", offsetof(RayUniforms, clip_plane)}};
 }
 
 std::map<std::string, size_t> gl_uniform_offsets(const gpu::Program& program) {

@@ -34,9 +34,14 @@ struct RayUniforms {
   glm::vec4 brick_half;
   glm::vec4 own_lo;
   glm::vec4 own_hi;
+  // render.clip, box-centred (core/clip.h): lo.w 1 with a crop box, hi.w 1 with a plane; plane:
+  // xyz its unit normal, w its offset.
+  glm::vec4 clip_lo;
+  glm::vec4 clip_hi;
+  glm::vec4 clip_plane;
 };
 
-static_assert(sizeof(RayUniforms) == 16 * 16, "std140 block size");
+static_assert(sizeof(RayUniforms) == 19 * 16, "std140 block size");
 static_assert(offsetof(RayUniforms, value_map) == 7 * 16, "std140 offset");
 static_assert(offsetof(RayUniforms, image) == 10 * 16, "std140 offset");
 

@@ -34,6 +34,10 @@ RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const Mac
   u.image = glm::ivec4(s.scene.width, s.scene.height, rect.x, rect.y);
   u.peaks = glm::vec4(float(t.peak_bins), float(t.peak_layers), float(t.max_peaks), float(t.secant_iterations));
   u.tables = glm::vec4(float(t.preint_size), float(t.tf_points), float(plan.k), float(plan.min_step));
+  const auto clip = center_clip<glm::vec3, float>(s.scene.render.clip, center);
+  u.clip_lo = glm::vec4(clip.lo, clip.box ? 1.f : 0.f);
+  u.clip_hi = glm::vec4(clip.hi, clip.plane ? 1.f : 0.f);
+  u.clip_plane = glm::vec4(clip.normal, clip.offset);
   if (brick) {  // as cpu_renderer.cpp's render_brick sets its frame
     u.brick_half = glm::vec4(glm::vec3(u.box_half) - glm::vec3(brick->read_lo * v.spacing), 0.f);
     float open_lo = 0.f, open_hi = 0.f;

@@ -184,6 +184,24 @@ TEST(Bricks, RealSamplesEqualOneProcess) {
     check_all_splits({"", R"({"step": 1, "classification": "preint"})", "", axis}, kData + "nucleon.nhdr");
 }
 
+// render.clip: every rank cuts its rays as one process does (the whole volume's ray, clipped,
+// then the brick's part of its lattice), so bricks equal one process with a crop box and a
+// plane too; nucleon is 41^3 (box [0, 40]^3).
+TEST(Bricks, ClippedEqualsOneProcess) {
+  const char* clip = R"("clip": {"box": [[4, -1, 6], [41, 33, 41]], "plane": {"point": [20, 20, 20], "normal": [-1, 0.4, 0.3]}})";
+  check_all_splits({"", std::string(R"({"step": 1, "classification": "preint", )") + clip + "}", "", ""}, kData + "nucleon.nhdr");
+  check_all_splits({"", std::string(R"({"step": 1.5, "virtual_samples": 3, )") + clip + "}", "", ""}, kData + "nucleon.nhdr");
+  // Peak finding on Marschner-Lobb (a narrow peak), the crop box and plane of the mpirun test.
+  const std::string file = generated(GeneratorKind::MarschnerLobb, {64, 64, 64}, SourceType::F32, {1, 1, 1});
+  check_all_splits({"", R"({"step": 1, "classification": "peaks", "clip": {"box": [[8, -1, -1], [64, 50, 64]],
+                       "plane": {"point": [31.5, 31.5, 31.5], "normal": [-1, 0.2, 0.5]}}})",
+                    R"([[0, 0.1, 0.2, 0.8, 0], [0.35, 0.2, 0.5, 1, 0.03], [0.5499, 0.2, 0.5, 1, 0], [0.55, 1, 0.3, 0.1, 0.9],
+                        [0.5501, 0.2, 0.5, 1, 0], [1, 1, 1, 1, 0]])",
+                    R"({"eye": [150, 120, 180], "center": [31.5, 31.5, 31.5], "up": [0, 1, 0], "fov_y": 30})"},
+                   file);
+  std::filesystem::remove(file);
+}
+
 // Virtual samples and adaptive sampling walk the whole volume's macrocells (the grids reduced
 // from the bricks' shares): the points visited, where a virtual-sample run ends (its end
 // sample repeated) and each cell's multiplier are one process's. A brick samples the visit

@@ -83,6 +83,10 @@ SCENES = [
     scene("ml_adaptive_peaks", ML, {"step": 0.5, "adaptive": True, "classification": "peaks"}, ML_TF, ML_CAM),
     scene("head_mr_adaptive_vs_shaded", HEAD, {"step": 0.7, "adaptive": True, "virtual_samples": 3, "shading": True},
           HEAD_TF),
+    # render.clip: every rank cuts its rays as one process does (a crop box and an oblique plane).
+    scene("ml_clipped_peaks", ML, {"step": 1, "classification": "peaks", "clip": {
+        "box": [[8, -1, -1], [64, 50, 64]], "plane": {"point": [31.5, 31.5, 31.5], "normal": [-1, 0.2, 0.5]}}},
+        ML_TF, ML_CAM),
     # A ray texture: the ranks draw front to back, each ray's termination of the opacity over the
     # bricks in front (distributed/opacity_chain.h); step and blend strokes too.
     scene("ml_ray_texture_preint", ML, {"step": 1, "classification": "preint", "ray_texture": {

@@ -58,6 +58,20 @@ def test_rest_jpeg_and_refusals():
         assert status == 400 and key in body, (bad, status, body)
 
 
+def test_rest_stills_honour_the_clip():
+    """render.clip over REST: a covering box changes no pixel; a plane through the middle does."""
+    status, _, plain = http(SERVER, "/api/render", "POST", json.dumps(SCENE).encode())
+    covering = dict(SCENE, render=dict(SCENE["render"], clip={"box": [[-5, -5, -5], [160, 160, 160]]}))
+    status, _, same = http(SERVER, "/api/render", "POST", json.dumps(covering).encode())
+    assert status == 200 and psnr(decode_image(plain), decode_image(same)) == 200.0
+    half = dict(SCENE, render=dict(SCENE["render"], clip={"plane": {"point": [75, 75, 75], "normal": [1, 0, 0]}}))
+    status, _, cut = http(SERVER, "/api/render", "POST", json.dumps(half).encode())
+    assert status == 200 and psnr(decode_image(plain), decode_image(cut)) < 30
+    bad = dict(SCENE, render=dict(SCENE["render"], clip={"plane": {"point": [0, 0, 0], "normal": [0, 0, 0]}}))
+    status, _, body = http(SERVER, "/api/render", "POST", json.dumps(bad).encode())
+    assert status == 400 and b"render.clip.plane.normal" in body, body
+
+
 def test_sixteen_sessions_share_one_gpu_copy():
     async def run():
         clients = [await Client.connect(SERVER) for _ in range(16)]
@@ -227,6 +241,7 @@ if __name__ == "__main__":
     with Server("--max-sessions", "20") as s:
         SERVER = s
         run_tests([test_health_and_volumes, test_rest_render_equals_cli_render, test_rest_jpeg_and_refusals,
+                   test_rest_stills_honour_the_clip,
                    test_sixteen_sessions_share_one_gpu_copy, test_metrics_parse_as_prometheus_text,
                    test_static_client_is_served, test_probe_over_rest_and_websocket, test_probe_refusals,
                    test_data_directory_listing])

@@ -44,6 +44,26 @@ TEST(Reference, LatticeSamplesIncludeEntryAndExit) {
   }
 }
 
+// render.clip: the span is cut before the lattice is laid, so a constant TF seen along x through
+// what the clip keeps composites exactly the samples of the kept length, from the clipped entry.
+TEST(Reference, ClipKeepsTheSpanItLeavesAndStartsTheLatticeThere) {
+  Volume v = ramp();
+  ResolvedScene s = constant_tf_scene(v, 1.0);  // eye on +x looking to -x: rays run x = 32 -> 0
+  s.scene.render.clip = parse_clip(nlohmann::json::parse(R"({"plane": {"point": [10.5, 0, 0], "normal": [-1, 0, 0]}})"));
+  Image img = reference::render_reference(v, s);
+  // Kept: x <= 10.5, entered at x = 10.5: samples at 10.5, 9.5, ..., 0.5 (11 of them).
+  EXPECT_NEAR(img.pixel(4, 4)[3], 1.0 - std::pow(0.95, 11.0), 1e-6);
+  EXPECT_EQ(img.samples[4 * 8 + 4], 11.f);
+  // A crop box on y keeps the upper half of the 8-pixel window (y in [8, 12] world: rows 0-3).
+  s.scene.render.clip = parse_clip(nlohmann::json::parse(R"({"box": [[-5, 8, -5], [40, 30, 40]]})"));
+  img = reference::render_reference(v, s);
+  EXPECT_GT(img.pixel(4, 4)[3], 0.5f);  // constant_tf_scene's up is +z: rows follow z, columns y
+  int kept = 0;
+  for (int x = 0; x < 8; ++x) kept += img.pixel(x, 4)[3] > 0.5f;
+  EXPECT_EQ(kept, 4);
+  EXPECT_EQ(img.samples[4 * 8 + 0] + img.samples[4 * 8 + 7], 33.f);  // one side has all 33, the other none
+}
+
 TEST(Reference, ConvergedEqualsTheContinuousIntegral) {
   Volume v = ramp();
   auto c = reference::render_converged(v, constant_tf_scene(v, 1.0), reference::OpticalModel::Dvr, 1e-6);

@@ -82,6 +82,28 @@ TEST(Scene, Refusals) {
   expect_refused(R"({"volume": "v", "render": {"preint_method": "magic"}})", "render.preint_method");
   expect_refused(R"({"volume": "v", "background": [0, 0]})", "background");
   expect_refused(R"([1, 2])", "scene");
+  expect_refused(R"({"volume": "v", "render": {"clip": []}})", "render.clip");
+  expect_refused(R"({"volume": "v", "render": {"clip": {"sphere": 1}}})", "render.clip.sphere");
+  expect_refused(R"({"volume": "v", "render": {"clip": {"box": [[0, 0, 0]]}}})", "render.clip.box");
+  expect_refused(R"({"volume": "v", "render": {"clip": {"box": [[0, 5, 0], [1, 1, 1]]}}})", "the low one");
+  expect_refused(R"({"volume": "v", "render": {"clip": {"box": [[0, 0, 0], [1, "a", 1]]}}})", "render.clip.box[1][1]");
+  expect_refused(R"({"volume": "v", "render": {"clip": {"plane": {"point": [0, 0, 0]}}}})", "needs point and normal");
+  expect_refused(R"({"volume": "v", "render": {"clip": {"plane": {"point": [0, 0, 0], "normal": [0, 0, 0]}}}})",
+                 "render.clip.plane.normal");
+  expect_refused(R"({"volume": "v", "render": {"clip": {"plane": {"point": [0, 0, 0], "normal": [0, 0, 1], "d": 1}}}})",
+                 "render.clip.plane.d");
+}
+
+TEST(Scene, ClipRoundTripsWithAUnitNormal) {
+  Scene s = parse_scene_text(R"({"volume": "v", "render": {"clip": {"box": [[0, 1, 2], [3, 4, 5]],
+    "plane": {"point": [1, 1, 1], "normal": [0, 3, 4]}}}})");
+  ASSERT_TRUE(s.render.clip.box && s.render.clip.plane);
+  EXPECT_EQ(s.render.clip.box_hi, glm::dvec3(3, 4, 5));
+  EXPECT_NEAR(s.render.clip.normal.y, 0.6, 1e-15);
+  EXPECT_NEAR(s.render.clip.normal.z, 0.8, 1e-15);
+  EXPECT_EQ(scene_to_json(parse_scene(scene_to_json(s))), scene_to_json(s));
+  EXPECT_FALSE(parse_scene_text(R"({"volume": "v"})").render.clip.active());
+  EXPECT_FALSE(scene_to_json(parse_scene_text(R"({"volume": "v"})"))["render"].contains("clip"));
 }
 
 TEST(Scene, StepBelowTheFloorRefusedOnResolve) {
