@@ -4,6 +4,7 @@
 // projection is the server's (docs/scenes.md: perspective with fov_y, or orthographic with height;
 // up orthogonalised), so the box lies on the volume's edges.
 import { cross, dot, length, normalize, sub } from './vec.js';
+import { planeSection } from './clip-controls.js';
 
 const AXES = [[[1, 0, 0], '#e55', 'x'], [[0, 1, 0], '#5d5', 'y'], [[0, 0, 1], '#59f', 'z']];
 
@@ -13,6 +14,7 @@ export class Annotations {
   volume = null;
   tf = null;
   marks = [];  // the measure's points (world), drawn whatever is hidden
+  clip = null;  // render.clip: its box and the plane's cut through the volume, drawn whatever is hidden
   #raf = 0;
 
   constructor(canvas, disposer) {
@@ -62,6 +64,30 @@ export class Annotations {
     if (this.show.scale) this.#scaleBar(g, w, h);
     if (this.show.colorbar && this.tf) this.#colorBar(g, w, h);
     if (this.marks.length) this.#marks(g, w, h);
+    if (this.clip) this.#clip(g, w, h);
+  }
+
+  #clip(g, w, h) {
+    const line = (pts, closed) => {
+      g.beginPath();
+      pts.forEach((p, i) => (i ? g.lineTo(...p) : g.moveTo(...p)));
+      if (closed) g.closePath();
+      g.stroke();
+    };
+    g.lineWidth = 1.5;
+    if (this.clip.box) {
+      const [lo, hi] = this.clip.box, k = [];
+      for (let i = 0; i < 8; i++) k.push(this.project([i & 1 ? hi[0] : lo[0], i & 2 ? hi[1] : lo[1], i & 4 ? hi[2] : lo[2]], w, h));
+      g.strokeStyle = '#f93';
+      for (let i = 0; i < 8; i++)
+        for (const bit of [1, 2, 4]) if ((i | bit) !== i && k[i] && k[i | bit]) line([k[i], k[i | bit]]);
+    }
+    if (this.clip.plane) {
+      const [lo, hi] = [this.corners()[0], this.corners()[7]];
+      const poly = planeSection(lo, hi, this.clip.plane.point, this.clip.plane.normal).map((p) => this.project(p, w, h));
+      g.strokeStyle = '#4df';
+      if (poly.length && poly.every(Boolean)) line(poly, true);
+    }
   }
 
   #marks(g, w, h) {

@@ -14,6 +14,7 @@ import { FileBrowser } from './file-browser.js';
 import { DropUpload } from './upload.js';
 import { bindPanel, bindViewKeys, toggle, toggleFullscreen } from './keys.js';
 import { Probe } from './probe.js';
+import { ClipControls } from './clip-controls.js';
 import { Annotations } from './annotations.js';
 import { bindTfTools } from './tf-tools.js';
 
@@ -69,6 +70,15 @@ function share() { return { volume: app.volume, camera: app.camera, tf: app.tf, 
 function titleOf(v) { return `peakcast — ${v.uploaded ? v.name : v.id}`; }
 
 const annotations = new Annotations($('annotations'), disposer);
+const clip = new ClipControls({ boxOn: $('clip-box'), sliders: [...document.querySelectorAll('.clip-sliders input')],
+  planeOn: $('clip-plane'), facing: $('clip-facing'), axes: [...document.querySelectorAll('.clip-axis')], flip: $('clip-flip'),
+  offset: $('clip-offset'), readout: $('clip-readout') }, { camera, canvas }, disposer);
+disposer.listen(clip, 'change', (e) => {
+  if (e.detail) app.render.clip = e.detail; else delete app.render.clip;
+  stream.send({ type: 'render', render: { clip: e.detail } });  // null removes it
+  annotations.update({ clip: e.detail });
+  writeState(share());
+});
 for (const box of document.querySelectorAll('#show-annotations input'))
   disposer.listen(box, 'change', () => annotations.update({ show: { ...annotations.show, [box.name]: box.checked } }));
 
@@ -84,8 +94,9 @@ function applyState(state, volumeInfo, volumes) {
   tfEditor.setVolume(volumeInfo);
   controls.setVolume(volumeInfo);
   tfEditor.set(state.tf.points);
+  clip.setVolume(volumeInfo, render.clip);
   if (volumes) picker.show(volumes, volumeInfo);
-  annotations.update({ camera: app.camera, volume: volumeInfo, tf: app.tf });
+  annotations.update({ camera: app.camera, volume: volumeInfo, tf: app.tf, clip: render.clip ?? null });
   writeState(share());
 }
 
@@ -258,5 +269,5 @@ disposer.listen($('share'), 'click', async () => {
 });
 
 disposer.listen(window, 'pagehide', () => disposer.dispose());
-window.peakcast = { app, stats, stream, camera, tfEditor, controls, brush, disposer, uploads, panel, annotations, probe, files };  // for tests and the console
+window.peakcast = { app, stats, stream, camera, tfEditor, controls, brush, disposer, uploads, panel, annotations, probe, files, clip };  // for tests and the console
 stream.connect();

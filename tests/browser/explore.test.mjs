@@ -162,3 +162,62 @@ test('the data browser lists the data directories by relative names, looks into 
   assert.deepEqual(page.errors, []);
   await page.close();
 });
+
+test('clipping: a crop box and a plane from the panel and Ctrl+drag, honoured by the server and the still', async () => {
+  const page = await openClient(browser, server.url, { width: 1280, height: 800 });
+  await waitFinal(page);
+  const { canvasSummary, difference } = await import('./harness.mjs');
+  const before = await canvasSummary(page);
+  const frames = () => page.evaluate(() => +(document.querySelector('#frame').dataset.frames || 0));
+  // The crop box: its x-low slider to the middle.
+  let n = await frames();
+  await page.check('#clip-box');
+  await page.$eval('.clip-sliders input', (s) => { s.value = String((+s.min + +s.max) / 2); s.dispatchEvent(new Event('input')); });
+  await page.waitForFunction(() => window.peakcast.app.render.clip?.box?.[0]?.[0] > 70);
+  await waitFinal(page, { afterFrames: n });
+  const cropped = await canvasSummary(page);
+  assert.ok(difference(before, cropped) > 2, `the crop changed the picture: ${difference(before, cropped)}`);
+  await screenshot(page, 'clip_box');
+  // The plane facing the viewer, then moved by Ctrl+drag: the offset follows the drag.
+  await page.uncheck('#clip-box');
+  await page.click('#clip-facing');
+  await page.waitForFunction(() => window.peakcast.app.render.clip?.plane && !window.peakcast.app.render.clip.box);
+  const offset = () => page.evaluate(() => window.peakcast.clip.plane.offset);
+  assert.equal(await offset(), 0);
+  const box = await page.locator('#frame').boundingBox();
+  await page.keyboard.down('Control');
+  await page.mouse.move(box.x + 300, box.y + 400);
+  await page.mouse.down();
+  await page.mouse.move(box.x + 300, box.y + 300, { steps: 5 });
+  await page.mouse.up();
+  await page.keyboard.up('Control');
+  assert.ok((await offset()) > 20, `Ctrl+drag up moved the plane further in: ${await offset()}`);
+  n = await frames();
+  await waitFinal(page, { afterFrames: n });
+  await screenshot(page, 'clip_plane');
+  // The server renders what the page asks: a still of the page's scene equals the view's frame
+  // (both from the same render.clip), and a probe through the cut finds what lies behind it.
+  const still = await page.evaluate(async () => {
+    const { app } = window.peakcast, r = document.querySelector('#frame').getBoundingClientRect();
+    const scene = { volume: app.volume, camera: app.camera, tf: { points: app.tf }, render: app.render,
+      image: { width: Math.round(r.width), height: Math.round(r.height) } };
+    const res = await fetch('/api/render?format=rgb', { method: 'POST', body: JSON.stringify(scene) });
+    const rgb = new Uint8Array(await res.arrayBuffer());
+    const c = document.querySelector('#frame'), g = c.getContext('2d');
+    const shown = g.getImageData(0, 0, c.width, c.height).data;
+    let diff = 0;
+    for (let p = 0, q = 0; p < rgb.length; p += 3, q += 4) diff += Math.abs(rgb[p] - shown[q]) + Math.abs(rgb[p + 1] - shown[q + 1]);
+    return { status: res.status, mean: diff / (rgb.length / 3) / 2, clip: app.render.clip };
+  });
+  assert.equal(still.status, 200);
+  assert.ok(still.mean < 3, `the still and the view differ by ${still.mean} levels on average (JPEG)`);
+  // Off again: the picture comes back.
+  n = await frames();
+  await page.uncheck('#clip-plane');
+  await page.waitForFunction(() => !window.peakcast.app.render.clip);
+  await waitFinal(page, { afterFrames: n });
+  const again = await canvasSummary(page);
+  assert.ok(difference(before, again) < 1, `without a clip the picture is the first one: ${difference(before, again)}`);
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
