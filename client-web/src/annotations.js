@@ -78,9 +78,18 @@ export class Annotations {
     if (this.clip.box) {
       const [lo, hi] = this.clip.box, k = [];
       for (let i = 0; i < 8; i++) k.push(this.project([i & 1 ? hi[0] : lo[0], i & 2 ? hi[1] : lo[1], i & 4 ? hi[2] : lo[2]], w, h));
-      g.strokeStyle = '#f93';
+      g.strokeStyle = g.fillStyle = '#f93';
       for (let i = 0; i < 8; i++)
         for (const bit of [1, 2, 4]) if ((i | bit) !== i && k[i] && k[i | bit]) line([k[i], k[i | bit]]);
+      // A handle on each face's centre: drag it to move the face (clip-controls.js).
+      const c = lo.map((l, a) => (l + hi[a]) / 2);
+      for (let a = 0; a < 3; a++)
+        for (const v of [lo[a], hi[a]]) {
+          const p = [...c];
+          p[a] = v;
+          const s = this.project(p, w, h);
+          if (s) g.fillRect(s[0] - 4, s[1] - 4, 8, 8);
+        }
     }
     if (this.clip.plane) {
       const [lo, hi] = [this.corners()[0], this.corners()[7]];

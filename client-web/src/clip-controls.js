@@ -1,11 +1,12 @@
-// Clipping (docs/scenes.md, render.clip): a crop box set by a pair of sliders per axis, and one
-// clip plane, turned to face the viewer or an axis and moved along its normal by its slider or by
-// Ctrl+drag in the view (up: further in). Each change goes out as `render.clip` (null: none), one
+// Clipping (docs/scenes.md, render.clip): a crop box, set by a pair of sliders per axis or by
+// dragging the handles on its six faces in the view, and one clip plane, turned to face the viewer
+// or an axis and moved along its normal by its slider or by Ctrl+drag in the view (up: further in). Each change goes out as `render.clip` (null: none), one
 // per animation frame; the annotations draw the box and the plane's cut through the volume.
 import { add, dot, normalize, scale, sub } from './vec.js';
 
 const AXES = ['x', 'y', 'z'];
 const DRAG_SPEED = 1.5;  // the box diagonal per view height of Ctrl+drag
+const HANDLE_PX = 9;     // how near (CSS pixels) a press must be to a face's handle to drag it
 
 export class ClipControls extends EventTarget {
   box = null;    // [[x0, y0, z0], [x1, y1, z1]] or null
@@ -14,9 +15,9 @@ export class ClipControls extends EventTarget {
   #raf = 0;
   #drag = null;
 
-  constructor(ui, { camera, canvas }, disposer) {
+  constructor(ui, { camera, canvas, project }, disposer) {
     super();
-    Object.assign(this, { ui, camera, canvas });
+    Object.assign(this, { ui, camera, canvas, project });
     disposer.listen(ui.boxOn, 'change', () => { this.box = ui.boxOn.checked ? this.#bounds() : null; this.#sync(); });
     for (const input of ui.sliders) disposer.listen(input, 'input', () => this.#fromSliders());
     disposer.listen(ui.planeOn, 'change', () => this.setPlane(ui.planeOn.checked ? this.#facing() : null));
@@ -25,18 +26,35 @@ export class ClipControls extends EventTarget {
     disposer.listen(ui.flip, 'click', () => this.plane && this.setPlane({ normal: scale(this.plane.normal, -1), offset: -this.plane.offset }));
     disposer.listen(ui.offset, 'input', () => this.plane && this.setPlane({ ...this.plane, offset: +ui.offset.value }));
     // Ctrl+drag in the view moves the plane along its normal (the camera leaves that drag alone).
+    // A press on a face's handle drags that face (the camera leaves both drags alone).
     const ignore = camera.ignore;
-    camera.ignore = (e) => (this.plane && e.ctrlKey && e.button === 0) || ignore(e);
+    camera.ignore = (e) => (e.button === 0 && ((this.plane && e.ctrlKey) || !!this.handleAt(e))) || ignore(e);
     disposer.add(() => { camera.ignore = ignore; });
     disposer.listen(canvas, 'pointerdown', (e) => {
-      if (!this.plane || !e.ctrlKey || e.button !== 0) return;
-      this.#drag = { y: e.clientY, offset: this.plane.offset };
+      if (e.button !== 0) return;
+      const face = this.handleAt(e);
+      if (face) {
+        // The screen movement of one world unit along the face's axis: a drag moves the face by
+        // the drag's share of it.
+        const q = [...face.p];
+        q[face.a] += 1;
+        const s1 = this.project(q);
+        if (!s1) return;
+        this.#drag = { face, x: e.clientX, y: e.clientY, value: this.box[face.side][face.a], unit: [s1[0] - face.s[0], s1[1] - face.s[1]] };
+      } else if (this.plane && e.ctrlKey) {
+        this.#drag = { y: e.clientY, offset: this.plane.offset };
+      } else return;
       canvas.setPointerCapture(e.pointerId);
     });
     disposer.listen(canvas, 'pointermove', (e) => {
-      if (!this.#drag) return;
+      const d = this.#drag;
+      if (!d) {
+        if (e.buttons === 0) canvas.style.cursor = this.handleAt(e) ? 'move' : '';
+        return;
+      }
+      if (d.face) return this.#dragFace(d, e);
       const per = (DRAG_SPEED * this.#diagonal()) / Math.max(1, canvas.clientHeight);
-      this.setPlane({ ...this.plane, offset: this.#drag.offset + (this.#drag.y - e.clientY) * per });
+      this.setPlane({ ...this.plane, offset: d.offset + (d.y - e.clientY) * per });
     });
     const end = () => { this.#drag = null; };
     disposer.listen(canvas, 'pointerup', end);
@@ -61,6 +79,42 @@ export class ClipControls extends EventTarget {
       this.plane = { normal: n, offset: dot(sub(clip.plane.point, this.#center()), n) };
     }
     this.#show();
+  }
+
+  // The crop box's faces: axis a, side 0 (low) or 1 (high), centre p (world).
+  faces() {
+    if (!this.box) return [];
+    const c = this.box[0].map((l, a) => (l + this.box[1][a]) / 2), out = [];
+    for (let a = 0; a < 3; a++)
+      for (const side of [0, 1]) {
+        const p = [...c];
+        p[a] = this.box[side][a];
+        out.push({ a, side, p });
+      }
+    return out;
+  }
+
+  // The face whose handle lies under a pointer event, with its screen position s; null: none.
+  handleAt(e) {
+    const r = this.canvas.getBoundingClientRect(), x = e.clientX - r.left, y = e.clientY - r.top;
+    let best = null;
+    for (const f of this.faces()) {
+      const s = this.project(f.p);
+      const d = s ? Math.hypot(s[0] - x, s[1] - y) : Infinity;
+      if (d <= HANDLE_PX && (!best || d < best.d)) best = { ...f, s, d };
+    }
+    return best;
+  }
+
+  #dragFace(d, e) {
+    const { a, side } = d.face, u = d.unit, uu = u[0] * u[0] + u[1] * u[1];
+    if (!(uu > 1e-9)) return;  // the axis points at the viewer: its faces do not move sideways
+    const move = ((e.clientX - d.x) * u[0] + (e.clientY - d.y) * u[1]) / uu;
+    const [lo, hi] = this.#box();
+    const box = this.box.map((c) => [...c]);
+    box[side][a] = side === 0 ? Math.min(Math.max(d.value + move, lo[a]), box[1][a]) : Math.max(Math.min(d.value + move, hi[a]), box[0][a]);
+    this.box = box;
+    this.#sync();
   }
 
   setPlane(plane) {

@@ -72,7 +72,8 @@ function titleOf(v) { return `peakcast — ${v.uploaded ? v.name : v.id}`; }
 const annotations = new Annotations($('annotations'), disposer);
 const clip = new ClipControls({ boxOn: $('clip-box'), sliders: [...document.querySelectorAll('.clip-sliders input')],
   planeOn: $('clip-plane'), facing: $('clip-facing'), axes: [...document.querySelectorAll('.clip-axis')], flip: $('clip-flip'),
-  offset: $('clip-offset'), readout: $('clip-readout') }, { camera, canvas }, disposer);
+  offset: $('clip-offset'), readout: $('clip-readout') },
+{ camera, canvas, project: (p) => (annotations.camera ? annotations.project(p, canvas.clientWidth, canvas.clientHeight) : null) }, disposer);
 disposer.listen(clip, 'change', (e) => {
   if (e.detail) app.render.clip = e.detail; else delete app.render.clip;
   stream.send({ type: 'render', render: { clip: e.detail } });  // null removes it

@@ -221,3 +221,34 @@ test('clipping: a crop box and a plane from the panel and Ctrl+drag, honoured by
   assert.deepEqual(page.errors, []);
   await page.close();
 });
+
+test('clipping: the crop box\'s faces drag in the view', async () => {
+  const page = await openClient(browser, server.url, { width: 1280, height: 800 });
+  await waitFinal(page);
+  await page.check('#clip-box');
+  await page.waitForFunction(() => window.peakcast.app.render.clip?.box);
+  const handle = (a, side) => page.evaluate(([a, side]) => {
+    const { clip } = window.peakcast, f = clip.faces().find((q) => q.a === a && q.side === side);
+    const r = document.querySelector('#frame').getBoundingClientRect(), s = clip.project(f.p);
+    return { x: r.left + s[0], y: r.top + s[1], value: clip.box[side][a] };
+  }, [a, side]);
+  // The x-high face's handle, dragged towards the x-low one: the box shrinks along x only.
+  const hi = await handle(0, 1), lo = await handle(0, 0);
+  await page.mouse.move(hi.x, hi.y);
+  await page.mouse.down();
+  await page.mouse.move(hi.x + (lo.x - hi.x) * 0.4, hi.y + (lo.y - hi.y) * 0.4, { steps: 6 });
+  await page.mouse.up();
+  await page.waitForFunction((v) => window.peakcast.app.render.clip.box[1][0] < v - 20, hi.value);
+  const box = await page.evaluate(() => window.peakcast.app.render.clip.box);
+  const camera = await page.evaluate(() => window.peakcast.app.camera);
+  assert.ok(Math.abs(box[1][0] - (hi.value - 0.4 * (hi.value - lo.value))) < 0.1 * (hi.value - lo.value), JSON.stringify(box));
+  assert.deepEqual([box[0][1], box[0][2], box[1][1], box[1][2]], [0, 0, 150, 150], 'the other faces stay');
+  assert.equal(box[0][0], 0);
+  // The drag moved the face, not the camera.
+  const n = await page.evaluate(() => +(document.querySelector('#frame').dataset.frames || 0));
+  await waitFinal(page, { afterFrames: n - 1 });
+  assert.deepEqual(await page.evaluate(() => window.peakcast.app.camera), camera);
+  await screenshot(page, 'clip_box_drag');
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
