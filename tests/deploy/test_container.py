@@ -117,6 +117,8 @@ def main():
                                        *health[1:]], capture_output=True, timeout=30)
         check(hc.returncode == 0, "the image's HEALTHCHECK command passes")
         check(http(server, "/api/volumes")[0] == 401, "the token from the environment is required")
+        status, _, body = http(server, "/docs/scenes.md")
+        check(status == 200 and b"## Clipping" in body, "the docs the client links to are served (/docs/scenes.md)")
 
         scene = dict(SCENE, volume="/data/host/heptane.nrrd")
         status, headers, png = http(server, "/api/render", "POST", json.dumps(scene).encode(),
