@@ -105,9 +105,12 @@ def gl_ranks_check(tmp):
         scene = {"volume": "heptane_151.nrrd", "image": {"width": 120, "height": 90}, "camera": CAMERA, "tf": TF,
                  "render": RENDER, "background": [0.1, 0.1, 0.2]}
         status, variant, cmp = still_against_one_process(srv, scene, DATA / "heptane_151.nrrd", tmp, "gl", "gl")
-        return ("GL ranks: a REST still equals peakcast render --backend gl within 1/255",
-                status == 200 and "brick" in variant and "2ranks" in variant and cmp["max_abs"] <= 1 / 255 + 1e-6,
-                (status, variant, cmp))
+        # A probe needs the voxels, which the serving rank does not hold: refused by name.
+        pstatus, _, pbody = http(srv, "/api/probe", "POST", json.dumps(dict(scene, pixel=[60, 45])).encode())
+        return ("GL ranks: a REST still equals peakcast render --backend gl within 1/255; a probe gets 422",
+                status == 200 and "brick" in variant and "2ranks" in variant and cmp["max_abs"] <= 1 / 255 + 1e-6
+                and pstatus == 422 and b"not_supported" in pbody,
+                (status, variant, cmp, pstatus, pbody[:200]))
     finally:
         srv.stop()
 
