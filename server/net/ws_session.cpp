@@ -1,6 +1,5 @@
 #include "net/ws_session.h"
 
-#include "reference/cpu_raycaster.h"
 
 #include "core/ray_texture_png.h"
 
@@ -212,31 +211,6 @@ void WsSession::handle(const std::string& text) {
       },
       msg);
   app_.render.notify();
-}
-
-void WsSession::probe(const protocol::ProbeMsg& m) {
-  if (probing_) {
-    next_probe_ = m;
-    return;
-  }
-  probing_ = true;
-  auto [volume, scene] = session_->view();
-  asio::post(app_.loader, [self = shared_from_this(), m, volume, scene = std::move(scene)] {
-    std::string answer, error;
-    try {
-      const auto p = reference::probe_reference(*volume->volume, scene, m.x, m.y);
-      answer = protocol::probe_message(m.id, protocol::probe_json(p.hit, p.position, p.value, p.distance, p.opacity));
-    } catch (const std::exception& e) {
-      error = std::string("probe: ") + e.what();
-    }
-    asio::post(self->ws_.get_executor(), [self, answer, error] {
-      self->probing_ = false;
-      if (self->closing_) return;
-      if (!error.empty()) self->send_error("bad_message", error);
-      else self->queue_text(answer);
-      if (auto next = std::exchange(self->next_probe_, std::nullopt)) self->guarded([&] { self->probe(*next); });
-    });
-  });
 }
 
 void WsSession::with_png(const nlohmann::json& render, TextureThen then) {

@@ -13,66 +13,15 @@
 #include "core/ray_texture_mapping.h"
 #include "core/sampling.h"
 #include "reference/field.h"
-#include "reference/ray_events.h"
 #include "reference/shading.h"
 #include "core/value_range.h"
+
+#include "reference/ray_frame.h"
 
 namespace peakcast::reference {
 namespace {
 
-// What every pixel of a frame shares.
-struct Frame {
-  const Volume& v;
-  const ResolvedScene& s;
-  glm::dvec3 half;
-  ViewSetup view;
-  double lo, hi, min_spacing;
-  Filter filter;
-  bool shading;
-  CenteredClip<glm::dvec3, double> clip;
-
-  Frame(const Volume& vol, const ResolvedScene& sc)
-      : v(vol), s(sc), filter(sc.scene.render.filter), shading(sc.scene.render.shading) {
-    const glm::dvec3 center = (s.box_min + s.box_max) * 0.5;
-    half = (s.box_max - s.box_min) * 0.5;
-    view = setup_view(s.camera, center, s.scene.width, s.scene.height);
-    const ValueRange range = table_range(v.min_value, v.max_value);
-    lo = range.lo;
-    hi = range.hi;
-    min_spacing = std::min({v.spacing.x, v.spacing.y, v.spacing.z});
-    clip = center_clip<glm::dvec3, double>(s.scene.render.clip, center);
-  }
-  // The ray's span through the box (t_box: its entry, where a volume-mapped ray texture is read)
-  // cut by the clip; false when the ray misses the box (`missed`) or the clip keeps none of it.
-  bool span(const Ray& r, double& t_box, double& t0, double& t1, bool& missed) const {
-    missed = !intersect_box(r, half, t0, t1);
-    t_box = t0;
-    return !missed && clip_span(clip, r.o, r.d, t0, t1);
-  }
-  glm::dvec3 voxel(const Ray& r, double t) const { return (r.o + t * r.d + half) / v.spacing; }
-  double field(const Ray& r, double t) const { return sample(v, voxel(r, t), filter); }
-  glm::dvec3 lit(const glm::dvec3& rgb, const Ray& r, double t) const { return lit_with(rgb, grad(r, t), r); }
-  glm::dvec3 grad(const Ray& r, double t) const { return gradient(v, voxel(r, t), filter); }
-  // Shaded with a given gradient (data units per voxel): virtual samples interpolate it.
-  glm::dvec3 lit_with(const glm::dvec3& rgb, const glm::dvec3& g, const Ray& r) const {
-    return shading ? shade(rgb, g / (hi - lo), r.d, min_spacing) : rgb;
-  }
-};
-
-struct Accum {
-  glm::dvec3 rgb{0.0};
-  double alpha = 0.0;
-  // Where the ray is (t) and the value drawn there, set before each add: the probe's answer is
-  // the first add that takes alpha past one half (probe.h).
-  double at_t = 0.0, at_value = 0.0;
-  double half_t = std::nan(""), half_value = 0.0;
-  void add(const glm::dvec3& c, double a) {
-    const double w = (1.0 - alpha) * a;
-    if (alpha < 0.5 && alpha + w >= 0.5 && std::isnan(half_t)) half_t = at_t, half_value = at_value;
-    rgb += w * c;
-    alpha += w;
-  }
-};
+using namespace detail;
 
 // Catmull-Rom through p0..p3, between p1 (u = 0) and p2 (u = 1): twin of the shader's.
 template <typename T>
@@ -101,31 +50,6 @@ double solve_root(const Frame& fr, const Ray& r, double t0, double f0, double t1
   return gb == ga ? 0.5 * (ta + tb) : std::clamp(ta - ga * (tb - ta) / (gb - ga), std::min(ta, tb), std::max(ta, tb));
 }
 
-template <typename PixelFn>
-Image for_each_pixel(const Frame& fr, PixelFn fn) {
-  const int w = fr.s.scene.width, h = fr.s.scene.height;
-  Image img(w, h);
-  parallel_for(size_t(h), [&](size_t row) {
-    const int y = int(row);
-    for (int x = 0; x < w; ++x) {
-      const Ray r = make_ray(fr.view, x, y);
-      double t_box, t0, t1, samples = -1.0;  // -1: the ray misses the box
-      bool missed;
-      Accum acc;
-      if (fr.span(r, t_box, t0, t1, missed)) {
-        samples = 0.0;
-        fn(r, t_box, t0, t1, acc, samples, x, y);
-      } else if (!missed) {
-        samples = 0.0;  // clipped away
-      }
-      float* px = img.pixel(x, y);
-      const glm::dvec3 out = acc.rgb + (1.0 - acc.alpha) * fr.s.scene.background;
-      px[0] = float(out.x), px[1] = float(out.y), px[2] = float(out.z), px[3] = float(acc.alpha);
-      img.samples[size_t(y) * w + x] = float(samples);
-    }
-  });
-  return img;
-}
 
 
 // The set-up of a reference frame, then `body(pixel)` with the per-ray function
@@ -329,99 +253,6 @@ ProbeResult probe_reference(const Volume& v, const ResolvedScene& scene, int x, 
     out.distance = acc.half_t - r.t_eye;
     return out;
   });
-}
-
-
-ConvergedImage render_converged(const Volume& v, const ResolvedScene& s, OpticalModel model, double tolerance,
-                                double min_step_voxels) {
-  const Frame fr(v, s);
-  std::vector<double> breakpoints, peak_values;
-  for (const auto& p : s.tf.points) breakpoints.push_back(p.value);
-  if (model == OpticalModel::Peaks)
-    for (const auto& p : find_peaks(s.tf)) peak_values.push_back(p.value);
-  // The ray splits do not depend on the step: find them once per pixel.
-  const int w = s.scene.width, h = s.scene.height;
-  std::vector<RaySplit> splits(size_t(w) * h);
-  std::vector<double> enter(splits.size(), 0.0);
-  std::vector<char> hit(splits.size(), 0);
-  parallel_for(size_t(h), [&](size_t row) {
-    for (int x = 0; x < w; ++x) {
-      const Ray r = make_ray(fr.view, x, int(row));
-      double t_box, t0, t1;
-      bool missed;
-      const size_t k = row * size_t(w) + size_t(x);
-      if (fr.span(r, t_box, t0, t1, missed)) {
-        hit[k] = 1;
-        splits[k] = split_ray(v, fr.filter, r, fr.half, t0, t1, breakpoints, peak_values);
-      }
-    }
-  });
-  auto render_at = [&](double step) {
-    // Misses keep the background (for_each_pixel with nothing to integrate), hits are filled below.
-    Image img = for_each_pixel(fr, [](const Ray&, double, double, double, Accum&, double&, int, int) {});
-    parallel_for(size_t(h), [&](size_t row) {
-      for (int x = 0; x < w; ++x) {
-        const size_t k = row * size_t(w) + size_t(x);
-        if (!hit[k]) continue;
-        const Ray r = make_ray(fr.view, x, int(row));
-        const RaySplit& sp = splits[k];
-        Accum acc;
-        double samples = 0;
-        size_t next_peak = 0;
-        for (size_t c = 0; c + 1 < sp.cuts.size(); ++c) {
-          const double a = sp.cuts[c], b = sp.cuts[c + 1];
-          while (next_peak < sp.peaks.size() && sp.peaks[next_peak].t <= a) {  // surfaces at this cut
-            const double pv = sp.peaks[next_peak].value;
-            const glm::dvec4 col = s.tf.eval(pv);
-            acc.add(fr.lit(glm::dvec3(col), r, sp.peaks[next_peak].t), col.a);
-            ++next_peak;
-          }
-          if (b <= a) continue;
-          // Midpoint steps of at most `step`, and small enough that opacity changes by at most
-          // `da` per step: inside a Dirac-like tent the field lingers where the TF is steep.
-          const double da = 0.02 * step / s.step;
-          const double a0 = s.tf.eval(fr.field(r, a)).a, a1 = s.tf.eval(fr.field(r, b)).a;
-          const int pieces = std::min(1 << 16, std::max({1, int(std::ceil((b - a) / step)), int(std::ceil(std::abs(a1 - a0) / da))}));
-          const double hstep = (b - a) / pieces;
-          for (int q = 0; q < pieces; ++q) {
-            const double t = a + (q + 0.5) * hstep;
-            const glm::dvec4 col = s.tf.eval(fr.field(r, t));
-            samples += 1;
-            if (col.a > 0) acc.add(fr.lit(glm::dvec3(col), r, t), correct_opacity(col.a, hstep, s.tf.opacity_unit));
-          }
-        }
-        while (next_peak < sp.peaks.size()) {
-          const glm::dvec4 col = s.tf.eval(sp.peaks[next_peak].value);
-          acc.add(fr.lit(glm::dvec3(col), r, sp.peaks[next_peak].t), col.a);
-          ++next_peak;
-        }
-        float* px = img.pixel(x, int(row));
-        const glm::dvec3 out = acc.rgb + (1.0 - acc.alpha) * s.scene.background;
-        px[0] = float(out.x), px[1] = float(out.y), px[2] = float(out.z), px[3] = float(acc.alpha);
-        img.samples[k] = float(samples);
-      }
-    });
-    return img;
-  };
-  ConvergedImage out;
-  out.step = s.step;
-  out.image = render_at(out.step);
-  while (out.step > min_step_voxels * fr.min_spacing) {
-    Image finer = render_at(out.step * 0.5);
-    double change = 0;
-    for (size_t i = 0; i < finer.rgba.size(); ++i)
-      if (i % 4 != 3) change = std::max(change, double(std::abs(finer.rgba[i] - out.image.rgba[i])));
-    out.image = std::move(finer);
-    out.step *= 0.5;
-    out.last_change = change;
-    if (std::getenv("PEAKCAST_DEBUG_CONVERGENCE")) std::fprintf(stderr, "step %g change %g\n", out.step, change);
-    out.refinements++;
-    if (change < tolerance) {
-      out.converged = true;
-      break;
-    }
-  }
-  return out;
 }
 
 }  // namespace peakcast::reference
