@@ -98,20 +98,21 @@ void RenderService::loop() {
       while (!impl_->submitted.empty()) collect_frame();
       render_band(*w);
     } else if (w->frame) {
-      submit_frame(*w);
-      if (!overlap || impl_->submitted.size() >= render::Renderer::kFramesInFlight) collect_frame();
+      // A frame whose viewer has gone, or whose submit failed, was never submitted: nothing to collect.
+      const bool submitted = submit_frame(*w);
+      if (submitted && (!overlap || impl_->submitted.size() >= render::Renderer::kFramesInFlight)) collect_frame();
     }
     metrics_.set("peakcast_stills_queued", "", double(scheduler_.stills_pending()));
   }
   while (!impl_->submitted.empty()) collect_frame();
 }
 
-void RenderService::submit_frame(Scheduler::Work& w) {
+bool RenderService::submit_frame(Scheduler::Work& w) {
   FrameJob& job = *w.frame;
   auto sink = w.session->sink();
   if (!sink) {
     w.session->frame_dropped(job.frame_id);
-    return;
+    return false;
   }
   try {
     // 8-bit RGB straight from the GPU (3 bytes per pixel); the per-pixel sample counts (4 more)
@@ -122,9 +123,11 @@ void RenderService::submit_frame(Scheduler::Work& w) {
     render::Renderer& r = *impl_->backend.renderer;
     r.submit(residency_.acquire(job.volume, r), job.scene, req);
     impl_->submitted.push_back({w.session, std::move(sink), std::move(job)});
+    return true;
   } catch (const std::exception& e) {
     w.session->frame_dropped(job.frame_id);
     sink->deliver_text(protocol::error_message("render_failed", e.what()));
+    return false;
   }
 }
 

@@ -56,7 +56,7 @@ class RenderService {
  private:
   struct Impl;
   void loop();
-  void submit_frame(Scheduler::Work& w);
+  bool submit_frame(Scheduler::Work& w);  // false: not submitted (the viewer went away, or it failed)
   void collect_frame();  // the oldest frame submitted: to the encode pool
   void render_band(Scheduler::Work& w);
   void refuse(StillJob& job, const std::string& code, const std::string& message);
