@@ -3,7 +3,7 @@
 #   bash scripts/test.sh            everything: all CTest labels in the Release build, then the
 #                                   unit and net labels under ASan+UBSan, the net label under TSan,
 #                                   the container label (builds the image with buildah, runs it),
-#                                   and every fuzz target for 30 s (PEAKCAST_FUZZ_SECONDS)
+#                                   and every fuzz target for 15 s (PEAKCAST_FUZZ_SECONDS)
 #   bash scripts/test.sh -L unit    only the Release build's CTest, with these ctest arguments
 # Each part is timed; the last line sums the tests of every part ("N passed, N failed").
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -12,7 +12,8 @@ install_node_modules
 
 declare -a part_names part_secs
 tally=$(mktemp)  # "passed failed" lines from every part (parts may run in subshells)
-trap 'rm -f "$tally"' EXIT
+failures=$(mktemp)  # "part: test" for every test that failed, repeated at the end of the output
+trap 'rm -f "$tally" "$failures"' EXIT
 # with_env VAR=value... CMD: runs CMD (a function too) with those variables, in a subshell.
 with_env() {
   (
@@ -42,6 +43,9 @@ ctest_counted() {
   total=$(grep -oE 'tests passed, [0-9]+ tests failed out of [0-9]+' "$log" | grep -oE '[0-9]+$' | tail -1)
   fails=$(grep -oE '[0-9]+ tests failed out of' "$log" | grep -oE '^[0-9]+' | tail -1)
   echo "$((${total:-0} - ${fails:-0})) ${fails:-0}" >>"$tally"
+  # CTest lists them after "The following tests FAILED:", one "\t<n> - <name> (<why>)" a line.
+  sed -n '/The following tests FAILED:/,$p' "$log" | grep -E '^[[:space:]]+[0-9]+ - ' |
+    sed "s|^[[:space:]]*|${dir##*/}: |" >>"$failures"
   rm -f "$log"
   return "$rc"
 }
@@ -53,6 +57,7 @@ fuzz_counted() {
   rc=${PIPESTATUS[0]}
   local line
   line=$(grep -E '^fuzz: [0-9]+ passed, [0-9]+ failed' "$log" | tail -1)
+  grep -E '^fuzz_[a-z_]+ .* FAILED' "$log" | sed 's/^/fuzz: /' >>"$failures" || true
   echo "$(echo "$line" | grep -oE '[0-9]+ passed' | grep -oE '[0-9]+' || echo 0) $(echo "$line" | grep -oE '[0-9]+ failed' | grep -oE '[0-9]+' || echo 1)" >>"$tally"
   rm -f "$log"
   return "$rc"
@@ -83,7 +88,7 @@ else
     part "container: build the image, run it" ctest_counted "$BUILD_DIR" -L container
   fi
   if [[ -z ${PEAKCAST_SKIP_FUZZ:-} ]]; then
-    part "fuzz (${PEAKCAST_FUZZ_SECONDS:-30} s per target)" fuzz_counted "${PEAKCAST_FUZZ_SECONDS:-30}"
+    part "fuzz (${PEAKCAST_FUZZ_SECONDS:-15} s per target)" fuzz_counted "${PEAKCAST_FUZZ_SECONDS:-15}"
   fi
 fi
 
@@ -93,4 +98,8 @@ printf '%6d s  total\n' "$SECONDS"
 passed=$(awk '{p += $1} END {print p + 0}' "$tally")
 failed=$(awk '{f += $2} END {print f + 0}' "$tally")
 echo "$passed passed, $failed failed"
+if [[ -s $failures ]]; then
+  echo "== failed tests (build folder: ctest number - name)"
+  cat "$failures"
+fi
 [[ $any_failed -eq 0 && $failed -eq 0 ]]

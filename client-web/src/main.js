@@ -124,6 +124,7 @@ disposer.listen(stream, 'volume', (e) => {
   $('tf-note').textContent = `TF derived from ${e.detail.volume.uploaded ? e.detail.volume.name : e.detail.volume.id}'s ` +
     'histogram (undo brings back the previous one)';
 });
+disposer.listen(stream, 'loading', (e) => picker.loading(e.detail));
 disposer.listen(stream, 'stroke_ack', (e) => brush.sync.onAck(e.detail));
 disposer.listen(stream, 'pong', (e) => brush.sync.onPong(e.detail));
 // What the scene asks for that it will not get (peak finding with a TF without a peak): shown

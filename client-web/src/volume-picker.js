@@ -1,8 +1,10 @@
 // Volume picker: the server's loaded volumes, or a path inside a data directory (typed, or chosen
 // in the data browser); shows what is loading and for how long until the server answers with the
-// new volume.
+// new volume, with the share of the file read so far when the server tells it (loading messages).
 export class VolumePicker extends EventTarget {
   #timer = 0;
+  #tick = null;
+  #fraction = null;
 
   constructor(ui, disposer) {
     super();
@@ -23,24 +25,40 @@ export class VolumePicker extends EventTarget {
 
   failed(message) { this.#done('⚠ ' + message); }
 
+  // A loading message: how much of `volume` the server has read. Also for the volume a first
+  // hello asked for, which no pick started.
+  loading({ volume, fraction }) {
+    if (!this.#timer) this.#start(volume);
+    this.#fraction = fraction;
+    this.#tick();
+  }
+
   // Opens a volume by id or data-directory path; `bytes`, when known, is shown while it loads.
   pick(id, bytes = 0) { this.#pick(id, bytes); }
 
   #done(text) {
     clearInterval(this.#timer);
     this.#timer = 0;
+    this.#fraction = null;
     this.ui.progress.textContent = text;
   }
 
-  #pick(id, bytes = 0) {
+  #start(id, bytes = 0) {
     const start = performance.now(), size = bytes ? ` (${formatBytes(bytes)})` : '';
-    const tick = () => {
+    this.#fraction = null;
+    this.#tick = () => {
       const s = Math.round((performance.now() - start) / 1000);
-      this.ui.progress.textContent = `loading ${id}${size}…${s >= 1 ? ` ${s} s` : ''}`;
+      const f = this.#fraction;
+      const read = f === null ? '' : f < 1 ? ` ${Math.floor(f * 100)}%` : ' read, preparing';
+      this.ui.progress.textContent = `loading ${id}${size}…${read}${s >= 1 ? ` ${s} s` : ''}`;
     };
     clearInterval(this.#timer);
-    tick();
-    this.#timer = setInterval(tick, 1000);
+    this.#tick();
+    this.#timer = setInterval(this.#tick, 1000);
+  }
+
+  #pick(id, bytes = 0) {
+    this.#start(id, bytes);
     this.dispatchEvent(new CustomEvent('pick', { detail: id }));
   }
 }

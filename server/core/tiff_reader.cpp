@@ -107,6 +107,7 @@ Volume read_tiff(const fs::path& path, const LoadOptions& options) {
   check_header(path, h, options);
   Volume v(h);
   const size_t slice_bytes = size_t(h.dims[0] * h.dims[1]) * source_bytes(h.source);
+  LoadProgress progress(options, slice_bytes * size_t(h.dims[2]));
   for (int64_t z = 0; z < h.dims[2]; ++z) {
     uint8_t* dst = v.data() + size_t(z) * slice_bytes;
     if (slices.empty()) {
@@ -118,9 +119,11 @@ Volume read_tiff(const fs::path& path, const LoadOptions& options) {
       check_slice(slices[z], slice->spec(), h);
       read_slice(slices[z], *slice, 0, h, dst);
     }
+    progress.add(slice_bytes);
   }
   // OIIO delivers native-endian samples; signed ones still need the shift.
   finish_volume(path, v, std::endian::native == std::endian::big, options);
+  progress.done();
   return v;
 }
 

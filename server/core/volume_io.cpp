@@ -128,8 +128,9 @@ File open_file(const fs::path& path) {
   return f;
 }
 
-// Reads up to `want` bytes of raw data into dst; returns the count read.
-size_t read_raw(const fs::path& path, int64_t skip, uint8_t* dst, size_t want, bool last) {
+// Reads up to `want` bytes of raw data into dst; returns the count read. Reads go in pieces of at
+// most 8 MiB, each told to `progress`.
+size_t read_raw(const fs::path& path, int64_t skip, uint8_t* dst, size_t want, bool last, LoadProgress& progress) {
   File f = open_file(path);
   std::error_code ec;
   const auto size = int64_t(fs::file_size(path, ec));
@@ -142,9 +143,17 @@ size_t read_raw(const fs::path& path, int64_t skip, uint8_t* dst, size_t want, b
                                 " data bytes, file holds " + std::to_string(size - offset));
   const size_t avail = size_t(std::max<int64_t>(0, size - offset));
   const size_t n = std::min(want, avail);
+  constexpr size_t piece = size_t(8) << 20;
   if (n < (size_t(64) << 20)) {
     std::fseek(f.get(), long(offset), SEEK_SET);
-    return std::fread(dst, 1, want, f.get());
+    size_t got = 0;
+    while (got < n) {
+      const size_t r = std::fread(dst + got, 1, std::min(piece, n - got), f.get());
+      if (r == 0) break;
+      got += r;
+      progress.add(r);
+    }
+    return got;
   }
   // Large files: the workers read a share each with pread: the copy
   // from the page cache and the first touch of the fresh allocation run in parallel.
@@ -152,12 +161,13 @@ size_t read_raw(const fs::path& path, int64_t skip, uint8_t* dst, size_t want, b
   std::atomic<bool> failed{false};
   parallel_chunks(n, [&](size_t begin, size_t end, int) {
     while (begin < end && !failed) {
-      const ssize_t got = ::pread(fd, dst + begin, std::min<size_t>(end - begin, size_t(1) << 30), off_t(offset + int64_t(begin)));
+      const ssize_t got = ::pread(fd, dst + begin, std::min(end - begin, piece), off_t(offset + int64_t(begin)));
       if (got <= 0) {
         failed = true;
         return;
       }
       begin += size_t(got);
+      progress.add(size_t(got));
     }
   });
   if (failed) throw VolumeError(path, "read failed (the file shrank or could not be read)");
@@ -165,12 +175,14 @@ size_t read_raw(const fs::path& path, int64_t skip, uint8_t* dst, size_t want, b
 }
 
 // Inflates gzip or zlib streams (auto-detected) into dst, 1 MiB of input at a time.
-size_t read_compressed(const fs::path& path, int64_t skip, Encoding enc, uint8_t* dst, size_t want) {
+size_t read_compressed(const fs::path& path, int64_t skip, Encoding enc, uint8_t* dst, size_t want,
+                       LoadProgress& progress) {
   size_t produced = 0;
   inflate_file(path, skip, enc, [&](const uint8_t* data, size_t n) {
     const size_t take = std::min(n, want - produced);
     std::copy(data, data + take, dst + produced);
     produced += take;
+    progress.add(take);
     return produced < want;
   });
   return produced;
@@ -185,6 +197,25 @@ void byteswap_all(uint8_t* data, size_t count) {
 }
 
 }  // namespace
+
+void LoadProgress::add(size_t bytes) {
+  if (!tell_ || total_ == 0) return;
+  const size_t now = bytes_.fetch_add(bytes) + bytes;
+  // Reading ends at 99%: the statistics are still to come.
+  const int percent = int(std::min<size_t>(99, now / (total_ / 100 + 1)));
+  if (percent > told_.load(std::memory_order_relaxed)) tell(percent);
+}
+
+void LoadProgress::done() {
+  if (tell_) tell(100);
+}
+
+void LoadProgress::tell(int percent) {
+  std::lock_guard lock(m_);
+  if (percent <= told_) return;
+  told_ = percent;
+  tell_(percent / 100.0);
+}
 
 void inflate_file(const fs::path& path, int64_t skip, Encoding enc,
                   const std::function<bool(const uint8_t*, size_t)>& sink) {
@@ -283,7 +314,12 @@ Volume read_payload(const fs::path& header_file, const VolumeHeader& h, const Pa
                             std::to_string(total) + " data bytes, the data holds " +
                             std::to_string(available));
   }
-  if (options.region) return read_payload_region(header_file, h, payload, options);  // raw: checked above
+  LoadProgress progress(options, total);
+  if (options.region) {  // raw: checked above
+    Volume v = read_payload_region(header_file, h, payload, options);
+    progress.done();
+    return v;
+  }
   Volume v(h);
   size_t got = 0;
   for (size_t i = 0; i < payload.files.size() && got < total; ++i) {
@@ -294,15 +330,16 @@ Volume read_payload(const fs::path& header_file, const VolumeHeader& h, const Pa
       std::error_code ec;
       int64_t fsize = int64_t(fs::file_size(payload.files[i], ec)) - std::max<int64_t>(skip, 0);
       if (!last) want = std::min<size_t>(want, size_t(std::max<int64_t>(fsize, 0)));
-      got += read_raw(payload.files[i], skip, v.data() + got, want, last);
+      got += read_raw(payload.files[i], skip, v.data() + got, want, last, progress);
     } else {
-      got += read_compressed(payload.files[i], skip, payload.encoding, v.data() + got, want);
+      got += read_compressed(payload.files[i], skip, payload.encoding, v.data() + got, want, progress);
     }
   }
   if (got < total)
     throw VolumeError(payload.files.back(), "truncated: expected " + std::to_string(total) +
                                                 " data bytes, got " + std::to_string(got));
   finish_volume(header_file, v, h.big_endian, options);
+  progress.done();
   return v;
 }
 

@@ -43,6 +43,10 @@ struct LoadOptions {
   // Raw data reads only the region's rows (pread); compressed data is inflated up to the
   // region's last row and the rest discarded. TIFF stacks are refused (whole-file format).
   std::optional<VoxelRegion> region;
+  // Told the fraction of the voxel data read so far: non-decreasing, in steps of at least 1%, and
+  // 1 once the volume is whole (statistics done). Called from the loading thread or its workers,
+  // never two calls at once. Empty: nobody is told.
+  std::function<void(double)> progress;
 };
 
 // Format by name: .nrrd/.nhdr, .mhd/.mha, .json (sidecar) or .raw with a sidecar,

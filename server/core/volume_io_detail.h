@@ -3,7 +3,9 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <atomic>
 #include <functional>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -17,6 +19,23 @@ struct PayloadSpec {
   std::vector<std::filesystem::path> files;  // concatenated in order
   Encoding encoding = Encoding::Raw;
   int64_t byte_skip = 0;  // in the first file (raw: -1 = the data is the last bytes)
+};
+
+// Counts the bytes a reader has placed and tells options.progress each new whole percent
+// (LoadOptions::progress). Safe to add to from several threads.
+class LoadProgress {
+ public:
+  LoadProgress(const LoadOptions& options, size_t total) : tell_(options.progress), total_(total) {}
+  void add(size_t bytes);
+  void done();  // 1, once
+
+ private:
+  void tell(int percent);
+  const std::function<void(double)>& tell_;
+  const size_t total_;
+  std::atomic<size_t> bytes_{0};
+  std::atomic<int> told_{-1};
+  std::mutex m_;
 };
 
 // Checks dims and the voxel limit (overflow-safe); throws VolumeError naming `file`.

@@ -1,8 +1,8 @@
 #include "net/ws_session.h"
 
+#include <chrono>
 
 #include "core/ray_texture_png.h"
-
 #include "net/connection_slot.h"
 #include "render/variant.h"
 #include "session/protocol.h"
@@ -140,8 +140,19 @@ void WsSession::with_volume(const std::string& id, std::function<void(std::share
   asio::post(app_.loader, [self = shared_from_this(), id, then = std::move(then)] {
     std::shared_ptr<VolumeEntry> entry;
     std::string error;
+    // The client hears how far the read is: the first percent, then at most every 100 ms, and the
+    // end (a loading message of 1 comes before the welcome or volume message).
+    auto last = std::chrono::steady_clock::now() - std::chrono::seconds(1);
+    auto progress = [&self, &id, &last](double fraction) {
+      const auto now = std::chrono::steady_clock::now();
+      if (fraction < 1 && now - last < std::chrono::milliseconds(100)) return;
+      last = now;
+      asio::post(self->ws_.get_executor(), [self, message = protocol::loading_message(id, fraction)]() mutable {
+        if (!self->closing_) self->queue_text(std::move(message));
+      });
+    };
     try {
-      entry = self->app_.volumes.get(id);
+      entry = self->app_.volumes.get(id, progress);
     } catch (const std::exception& e) {
       error = e.what();
     }

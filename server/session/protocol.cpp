@@ -1,5 +1,6 @@
 #include "session/protocol.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -211,6 +212,10 @@ std::string pong_message(const std::string& id) { return json{{"type", "pong"}, 
 
 std::string stroke_ack_message(uint32_t seq, size_t strokes) {
   return json{{"type", "stroke_ack"}, {"seq", seq}, {"strokes", strokes}}.dump();
+}
+
+std::string loading_message(const std::string& volume, double fraction) {
+  return json{{"type", "loading"}, {"volume", volume}, {"fraction", std::clamp(fraction, 0.0, 1.0)}}.dump();
 }
 
 std::pair<int, int> parse_pixel(const json& p, const std::string& where) {

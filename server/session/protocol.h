@@ -103,6 +103,8 @@ nlohmann::json probe_json(bool hit, const glm::dvec3& position, double value, do
 std::string probe_message(uint32_t id, const nlohmann::json& answer);
 // Reads "pixel": [x, y] (non-negative integers) of a probe message or REST body.
 std::pair<int, int> parse_pixel(const nlohmann::json& j, const std::string& where);
+// A volume being read for this client (hello or volume message): the fraction read so far.
+std::string loading_message(const std::string& volume, double fraction);
 // A volume switch: the new volume's info (with histogram) and the session's reset state.
 std::string volume_message(const nlohmann::json& volume_info, const nlohmann::json& state);
 struct Welcome {

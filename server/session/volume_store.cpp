@@ -42,7 +42,7 @@ VolumeStore::VolumeStore(std::vector<fs::path> dirs, GpuResidency& residency, Lo
 }
 
 std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::path& path, bool preloaded,
-                                             const std::string& upload_name) {
+                                             const std::string& upload_name, std::function<void(double)> progress) {
   std::lock_guard load(load_m_);
   if (auto e = find(id)) return e;
   auto e = std::make_shared<VolumeEntry>();
@@ -50,7 +50,9 @@ std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::p
   e->path = path;
   e->uploaded = !upload_name.empty();
   e->name = upload_name;
-  LoadedVolume loaded = loader_(path, options_);
+  LoadOptions options = options_;
+  options.progress = std::move(progress);
+  LoadedVolume loaded = loader_(path, options);
   e->volume = std::move(loaded.volume);
   e->resident_bytes = loaded.resident_bytes;
   e->preloaded = preloaded;
@@ -76,14 +78,14 @@ std::shared_ptr<VolumeEntry> VolumeStore::preload(const fs::path& path) {
   return add(id, path, true);
 }
 
-std::shared_ptr<VolumeEntry> VolumeStore::get(const std::string& id_or_path) {
+std::shared_ptr<VolumeEntry> VolumeStore::get(const std::string& id_or_path, std::function<void(double)> progress) {
   if (auto e = find(id_or_path)) return e;
   {
     std::unique_lock lock(m_);
     if (auto u = uploads_.find(id_or_path); u != uploads_.end()) {
       const Upload up = u->second;
       lock.unlock();
-      return add(id_or_path, up.path, false, up.name);
+      return add(id_or_path, up.path, false, up.name, std::move(progress));
     }
   }
   const fs::path resolved = resolve_in_roots(id_or_path, dirs_);
@@ -93,7 +95,7 @@ std::shared_ptr<VolumeEntry> VolumeStore::get(const std::string& id_or_path) {
       if (e->path == resolved) return e;
   }
   try {
-    return add(id_or_path, resolved, false);
+    return add(id_or_path, resolved, false, "", std::move(progress));
   } catch (const VolumeError& e) {
     // Clients see what they asked for, never where it lies on the server.
     throw VolumeError(id_or_path, without_paths(e.what(), resolved, id_or_path));

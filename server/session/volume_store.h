@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -48,7 +49,8 @@ class VolumeStore {
   std::shared_ptr<VolumeEntry> preload(const std::filesystem::path& path);
   // An id of a loaded volume, or a path inside a data directory (loaded now). A volume the
   // residency cannot admit within the GPU budget is refused with a VolumeError.
-  std::shared_ptr<VolumeEntry> get(const std::string& id_or_path);
+  // `progress` hears how much of a file being loaded now was read (LoadOptions::progress).
+  std::shared_ptr<VolumeEntry> get(const std::string& id_or_path, std::function<void(double)> progress = {});
   std::shared_ptr<VolumeEntry> find(const std::string& id) const;  // nullptr when not loaded
   std::vector<std::shared_ptr<VolumeEntry>> list() const;
   // What /api/volumes lists: every loaded volume's info, and the uploads not loaded now (their
@@ -69,7 +71,7 @@ class VolumeStore {
 
  private:
   std::shared_ptr<VolumeEntry> add(const std::string& id, const std::filesystem::path& path, bool preloaded,
-                                   const std::string& upload_name = "");
+                                   const std::string& upload_name = "", std::function<void(double)> progress = {});
   std::string without_paths(std::string message, const std::filesystem::path& resolved, const std::string& asked) const;
   struct Upload {
     std::filesystem::path path;

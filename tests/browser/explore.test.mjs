@@ -4,7 +4,7 @@
 // /api/probe of the same scene, which the server's unit tests check against closed forms.
 import assert from 'node:assert/strict';
 import { after, before, test } from 'node:test';
-import { launch, openClient, screenshot, startServer, waitFinal } from './harness.mjs';
+import { launch, recordTexts, openClient, screenshot, startServer, waitFinal } from './harness.mjs';
 
 let server, browser;
 before(async () => { server = await startServer(); browser = await launch(); });
@@ -152,10 +152,11 @@ test('the data browser lists the data directories by relative names, looks into 
   await page.click('#files button:text("↑ ..")');
   await page.waitForFunction(() => document.querySelector('#files li').textContent === 'data/');
   const n = await page.evaluate(() => +(document.querySelector('#frame').dataset.frames || 0));
+  const shown = await recordTexts(page, '#volume-progress');
   await page.click('#files button:text("▦ nucleon.nhdr")');
-  assert.match(await page.textContent('#volume-progress'), /^loading nucleon\.nhdr \(\d/);
   assert.ok(await page.isHidden('#files'));
   await page.waitForFunction(() => window.peakcast.app.volumeInfo?.dims?.join('x') === '41x41x41');
+  assert.ok((await shown()).some((t) => /^loading nucleon\.nhdr \(\d/.test(t)), JSON.stringify(await shown()));
   await waitFinal(page, { afterFrames: n });
   assert.equal(await page.textContent('#volume-progress'), '');
   assert.match(await page.title(), /nucleon/);

@@ -64,6 +64,18 @@ export async function waitFinal(page, { afterFrames = 0, cameraVersion = 0, time
   }, [afterFrames, cameraVersion], { timeout });
 }
 
+// Records every text `selector` shows from now on (a load's progress line comes and goes faster
+// than a test can look); returns a function that reads the list.
+export async function recordTexts(page, selector) {
+  await page.evaluate((sel) => {
+    const el = document.querySelector(sel);
+    (window.__texts ??= {})[sel] = [];
+    new MutationObserver(() => window.__texts[sel].push(el.textContent))
+      .observe(el, { childList: true, characterData: true, subtree: true });
+  }, selector);
+  return () => page.evaluate((sel) => window.__texts[sel], selector);
+}
+
 export const frameCount = (page) => page.evaluate(() => +(document.querySelector('#frame').dataset.frames || 0));
 
 // The editor's tests start from a known TF, a grey ramp over the volume's range (two points),

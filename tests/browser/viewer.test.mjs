@@ -2,7 +2,7 @@
 // and held here. Debian's chromium through playwright-core, against a real server.
 import assert from 'node:assert/strict';
 import { after, before, test } from 'node:test';
-import { frameCount, greyRamp, launch, openClient, screenshot, startServer, waitFinal } from './harness.mjs';
+import { frameCount, recordTexts, greyRamp, launch, openClient, screenshot, startServer, waitFinal } from './harness.mjs';
 
 let server, browser;
 before(async () => { server = await startServer(); browser = await launch(); });
@@ -171,6 +171,30 @@ test('the 3D view takes the keyboard; ? shows the help; S hides the stats', asyn
   assert.equal(await page.isChecked('#show-stats'), false);
   await page.check('#show-stats');
   assert.ok(await page.isVisible('#stats'));
+  await page.close();
+});
+
+test('opening a volume shows how much of it the server has read', async () => {
+  const page = await openClient(browser, server.url);
+  await waitFinal(page);
+  // Every text the progress line shows, and every loading message the server sends.
+  const shownTexts = await recordTexts(page, '#volume-progress');
+  await page.evaluate(() => {
+    window.__loading = [];
+    window.peakcast.stream.addEventListener('loading', (e) => window.__loading.push(e.detail));
+  });
+  await page.fill('#volume-path', 'HeadMRVolume.mhd');
+  await page.press('#volume-path', 'Enter');
+  await page.waitForFunction(() => window.peakcast.app.volumeInfo?.id === 'HeadMRVolume.mhd', null, { timeout: 30000 });
+  const loading = await page.evaluate(() => window.__loading);
+  assert.ok(loading.length > 0 && loading.at(-1).fraction === 1, JSON.stringify(loading));
+  assert.ok(loading.every((m) => m.volume === 'HeadMRVolume.mhd'));
+  const shown = await shownTexts();
+  assert.ok(shown.some((t) => /loading HeadMRVolume\.mhd… read, preparing/.test(t)), JSON.stringify(shown));
+  assert.equal(await page.textContent('#volume-progress'), '');
+  // A fraction under 1 is a whole percentage, also for a load no pick started (a first hello's).
+  await page.evaluate(() => window.peakcast.stream.dispatchEvent(new CustomEvent('loading', { detail: { volume: 'big.nrrd', fraction: 0.427 } })));
+  assert.match(await page.textContent('#volume-progress'), /^loading big\.nrrd… 42%$/);
   await page.close();
 });
 

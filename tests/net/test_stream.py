@@ -280,6 +280,34 @@ async def test_switch_volume_and_budget_refusal():
     await c.close()
 
 
+def loading_before(texts, kind, volume):
+    """The loading messages for `volume` before the first `kind` message: rising, the last 1."""
+    end = next(i for i, m in enumerate(texts) if m["type"] == kind)
+    told = [m["fraction"] for m in texts[:end] if m["type"] == "loading"]
+    assert all(m["volume"] == volume for m in texts[:end] if m["type"] == "loading"), texts[:end]
+    assert told == sorted(told) and all(0 < f <= 1 for f in told), told
+    return told
+
+
+async def test_loading_is_told_before_the_volume():
+    c = await Client.connect(SERVER)
+    await c.hello(volume="HeadMRVolume.mhd")
+    told = loading_before(c.texts, "welcome", "HeadMRVolume.mhd")
+    assert told and told[-1] == 1, told
+    await c.next_frame(final=True)
+    c.texts.clear()
+    await c.send({"type": "volume", "volume": "headsq"})
+    await c.next_text("volume")
+    told = loading_before(c.texts, "volume", "headsq")
+    assert told and told[-1] == 1, told
+    # A volume already loaded is switched to at once: no loading message.
+    c.texts.clear()
+    await c.send({"type": "volume", "volume": "HeadMRVolume.mhd"})
+    await c.next_text("volume")
+    assert loading_before(c.texts, "volume", "HeadMRVolume.mhd") == []
+    await c.close()
+
+
 def main():
     global SERVER
     with Server("--max-sessions", "8") as s:
@@ -289,7 +317,8 @@ def main():
                    test_fast_input_coalesces,
                    test_non_acking_client_gets_two_frames_and_costs_nothing,
                    test_hostile_messages_get_errors_and_the_session_renders, test_message_before_hello_is_refused,
-                   test_disconnect_mid_render, test_switch_volume_and_budget_refusal])
+                   test_disconnect_mid_render, test_switch_volume_and_budget_refusal,
+                   test_loading_is_told_before_the_volume])
 
 
 if __name__ == "__main__":
