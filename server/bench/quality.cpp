@@ -179,7 +179,7 @@ int run_quality(const QualityArgs& a) {
       json j = base_json;
       j["render"]["sampling"] = "differential";
       j["render"]["s_k"] = 1.0;
-      sk_one_voxel = base.min_spacing / plan_sampling(resolve_scene(parse_scene(j), *vol)).k;
+      sk_one_voxel = base.min_spacing / plan_sampling(resolve_scene(parse_scene(j), *vol)).footprint;
     }
     for (const Method& m : methods_for(base)) {
       std::vector<double> knobs = {2, 1, 0.5, 0.25};

@@ -16,12 +16,18 @@ SamplingPlan plan_sampling(const ResolvedScene& s, double step_scale) {
   p.pixel_du = 2.0 * view.half_w / s.scene.width;
   const double pixel_dv = 2.0 * view.half_h / s.scene.height;
   const double focus = s.camera.orthographic ? 1.0 : glm::length(s.camera.center - s.camera.eye);
-  p.k = s.scene.render.s_k * step_scale * std::hypot(p.pixel_du, pixel_dv) * focus;
+  p.footprint = std::hypot(p.pixel_du, pixel_dv) * focus;
+  const double at_focus = s.scene.render.s_k * step_scale * p.footprint;  // the step wanted there
   p.min_step = kMinDifferentialStepFraction * s.min_spacing;
   if (s.camera.orthographic) {
+    p.k = at_focus;
     p.step = std::max(p.k, p.min_step);  // constant footprint: uniform at that step
     return p;
   }
+  // k^2 + 2 k g = at_focus^2 (the central ray: |dD/dx| = pixel_du), in the form without
+  // cancellation when g >> at_focus.
+  const double g = p.pixel_du * focus;
+  p.k = at_focus * at_focus / (g + std::sqrt(g * g + at_focus * at_focus));
   p.differential = true;
   return p;
 }

@@ -6,11 +6,16 @@
 // computed from j (never accumulated), relative to the box entry (a local origin: no
 // cancellation for a camera far away). Uniform sampling: A = 0, B = the step.
 // Differential sampling (Knoll eq. 14-18): the eye-based sequence T(x) = a x^2 / 2 + b x with
-// b = k = s_k * |u dx + v dy| (the world-space footprint of a pixel's diagonal on the image
-// plane through the camera's focal point) and a = k * |dD/dx| (eq. 10, per ray), entered at
-// the box: A = a, B = max(b + a * x_enter, min_step), where T(x_enter) is the eye-to-entry
-// distance. The step t_{j+1} - t_j grows by a per sample. Orthographic cameras have a constant
-// footprint: differential sampling there is uniform at step max(k, min_step).
+// b = k and a = k * |dD/dx| (eq. 10, per ray), entered at the box: A = a,
+// B = max(b + a * x_enter, min_step), where T(x_enter) is the eye-to-entry distance. The step
+// t_{j+1} - t_j grows by a per sample, so at a distance d from the eye it is
+// sqrt(k^2 + 2 k |dD/dx| d). k is chosen so that s_k means what it says: where the central ray
+// crosses the focal plane (through the camera's center, at distance f) the step is s_k * F,
+// F = |u dx + v dy| f the world-space footprint of a pixel's diagonal there:
+// k^2 + 2 k g = (s_k F)^2 with g = |dD/dx| f (Knoll's k = s_k * F would put that step at
+// about sqrt(2 s_k) F instead). Nearer than f the step is longer than s_k times the local
+// footprint (by about sqrt(f / d)), farther it is shorter. Orthographic cameras have a constant
+// footprint: differential sampling there is uniform at step max(s_k * F, min_step).
 // Adaptive sampling (Knoll §6.2): a macrocell with multiplier M visits every M-th lattice index
 // from its first (eq. 19 is exactly that for the differential lattice); each sample stands for
 // the steps up to the next one (the cell's last: up to the cell's end), t_{j+m} - t_j, so the
@@ -37,7 +42,8 @@ constexpr double kMinDifferentialStepFraction = 1.0 / 64.0;
 struct SamplingPlan {
   bool differential = false;  // perspective camera with sampling = differential
   double step = 1.0;          // uniform step (also orthographic "differential")
-  double k = 0.0;             // differential: s_k * pixel-diagonal footprint at the focal distance
+  double k = 0.0;             // differential: b of Knoll's eq. 17 (see above)
+  double footprint = 0.0;     // differential: F, a pixel diagonal's footprint at the focal distance
   double min_step = 0.0;      // differential: lower bound of every step
   double pixel_du = 0.0;      // image-plane pixel width per unit depth (|u dx| in eq. 10)
 };

@@ -98,11 +98,13 @@ TEST(Differential, AgainstUniformOnACloseUpAtEqualSamples) {
                                    {1.0, 1.0, 1.0, 1.0, 0.0}}}};
   std::printf("%-22s %5s %9s %12s %12s %10s\n", "scene", "s_k", "samples", "diff_dB", "uniform_dB", "step_u");
   for (const auto& [name, tf, et] : {std::tuple{"band", kBandTf, false}, std::tuple{"opaque, early stop", opaque, true}})
-    for (double sk : {1.0, 4.0}) {
+    // s_k 1.5 and 4 put the step at the focal plane at 1.5 and 4 pixel footprints: about the
+    // sample budgets (75 and 18 per ray) at which the bound below was measured.
+    for (double sk : {1.5, 4.0}) {
       const EqualCost r = differential_vs_uniform(*v, gv, tf, sk, et);
       std::printf("%-22s %5.1f %9.1f %12.2f %12.2f %10.3f\n", name, sk, r.samples, r.psnr_diff, r.psnr_uniform,
                   r.uniform_step);
-      // Measured on llvmpipe: differential 0.15-0.65 dB below uniform at the same sample count.
+      // Measured on llvmpipe: differential 0.1-0.75 dB below uniform at the same sample count.
       // Knoll's construction (eq. 14-17) grows the step by a = k |dD/dx| per sample, a few per
       // cent over these rays, so it samples almost uniformly at the footprint-derived step; the
       // per-ray converged image rewards no particular depth. The bound catches a broken lattice
@@ -183,9 +185,14 @@ TEST(Differential, SkSweepIsStableAndConverges) {
     EXPECT_EQ(st.rays_at_cap, 0);
   }
   // Falling all the way (each at most 5% above the one before: 1e3 and 1e2 both take one sample
-  // per ray); below s_k ~ 0.01 the minimum step holds the first step and only the growth a
-  // still shrinks with s_k.
-  for (size_t i = 1; i < rmse.size(); ++i) EXPECT_LT(rmse[i], rmse[i - 1] * 1.05) << "s_k " << sks[i];
+  // per ray) down to the floor: from s_k ~ 0.01 the minimum step holds the first step, and the
+  // error (9.1e-5 and 9.6e-5 at s_k 0.01 and 0.001, measured on llvmpipe) is the float
+  // arithmetic's and the converged reference's (tolerance 1e-4), where it only has to stay.
+  const double floor = 2e-4;
+  for (size_t i = 1; i < rmse.size(); ++i) {
+    if (rmse[i - 1] > floor) EXPECT_LT(rmse[i], rmse[i - 1] * 1.05) << "s_k " << sks[i];
+    else EXPECT_LT(rmse[i], floor) << "s_k " << sks[i];
+  }
   EXPECT_LT(rmse.back(), rmse.front() * 0.01);
 }
 
