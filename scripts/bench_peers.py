@@ -17,8 +17,14 @@ VTK's time is Render() + glFinish, peakcast's the whole frame with its 8-bit rea
 With --backends cpu,gl, peakcast's candidates run under each backend (PEAKCAST_BACKEND) in the
 same run, one row each; the default is whatever auto chooses on this machine.
 
+It follows an independent protocol: post and preint candidates at steps 0.5, 0.75, 1, 1.5, 2, 3
+and 4 voxels for every scene, each timed as `peakcast-bench scene --frames 5 --orbit 20` and scored
+by `peakcast render` at the first camera; VTK at 1 voxel, timed over the same 5 frames after two
+warm-up renders. It adds the blobs scene to the protocol's Marschner-Lobb and em.
+
 Usage: scripts/bench_peers.py [--peakcast build/server/peakcast] [--sizes 512,1024]
-       [--scenes blobs,ml-peak,em] [--frames 7] [--data-dir bench-data/peers] [--backends auto]
+       [--scenes blobs,ml-peak,em] [--frames 5] [--no-preint] [--steps LIST] [--data-dir bench-data/peers]
+       [--backends auto]
 Runs itself under xvfb-run when there is no DISPLAY. Needs python3-vtk9 and python3-pil.
 """
 import argparse, json, math, os, pathlib, re, shutil, statistics, subprocess, sys, tempfile, time
@@ -26,20 +32,22 @@ import argparse, json, math, os, pathlib, re, shutil, statistics, subprocess, sy
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 # name: volume generator args, TF (as fractions of the value range), camera direction, peakcast
-# render settings, peakcast candidate steps (voxels).
+# render settings.
+# peakcast's candidate steps (voxels), for every scene: the independent protocol's.
+STEPS = [0.5, 0.75, 1, 1.5, 2, 3, 4]
 SCENES = {
     "blobs": dict(kind="blobs", dims=(256, 256, 256), type="uint8",
                   tf=[(0.0, 0, 0, 0, 0), (0.3, 0.2, 0.4, 1.0, 0.0), (0.6, 1.0, 0.8, 0.4, 0.3), (1.0, 1, 1, 1, 0.6)],
-                  view=(0.55, 0.45, 0.7), render={}, steps=[1, 1.5, 2, 3, 4, 6]),
+                  view=(0.55, 0.45, 0.7), render={}),
     "ml-peak": dict(kind="marschner-lobb", dims=(128, 128, 128), type="float32",
                     tf=[(0.0, 0.2, 0.4, 1.0, 0.0), (0.49, 0.2, 0.4, 1.0, 0.0), (0.5, 1.0, 0.8, 0.3, 0.8),
                         (0.51, 0.2, 0.4, 1.0, 0.0), (1.0, 0.2, 0.4, 1.0, 0.0)],
-                    view=(0.55, 0.45, 0.7), render={}, steps=[0.5, 1, 1.5, 2, 3, 4, 5, 6]),
+                    view=(0.55, 0.45, 0.7), render={}),
     "em": dict(kind="em", dims=(900, 500, 930), type="uint8",
                # the quality suite's em_band (tests/bench/quality/em_band.json): a band at 0.2 of the range
                tf=[(0.0, 0, 0, 0, 0), (0.18, 0.9, 0.8, 0.5, 0.0), (0.2, 0.9, 0.8, 0.5, 0.6), (0.22, 0.9, 0.8, 0.5, 0.0),
                    (1.0, 0, 0, 0, 0)],
-               view=(0.55, 0.45, 0.7), render={}, steps=[0.5, 0.75, 1, 1.5, 2, 3, 4]),
+               view=(0.55, 0.45, 0.7), render={}),
 }
 
 
@@ -181,13 +189,15 @@ def main():
                     help="the peakcast executable; peakcast-bench is taken from beside it")
     ap.add_argument("--sizes", default="512,1024")
     ap.add_argument("--scenes", default=",".join(SCENES))
-    ap.add_argument("--frames", type=int, default=7)
+    ap.add_argument("--frames", type=int, default=5)
     ap.add_argument("--orbit", type=float, default=20.0)
     ap.add_argument("--data-dir", default=str(ROOT / "bench-data/peers"))
     ap.add_argument("--converged-step", type=float, default=0.05, help="voxels, VTK GPU mapper")
     ap.add_argument("--keep", help="keep the images in this directory")
-    ap.add_argument("--preint", action="store_true", help="also preintegrated candidates (DVR of the same TF)")
-    ap.add_argument("--steps", help="candidate steps in voxels, e.g. 1,2,4 (default: each scene's list)")
+    ap.add_argument("--no-preint", action="store_true", help="postclassified candidates only (default: also "
+                    "preintegrated ones, DVR of the same TF)")
+    ap.add_argument("--preint", action="store_true", help="(the default now; accepted so recorded commands still run)")
+    ap.add_argument("--steps", help="candidate steps in voxels, e.g. 1,2,4 (default: " + ",".join(map(str, STEPS)) + ")")
     ap.add_argument("--backends", default="auto", help="peakcast backends to compare, e.g. cpu,gl")
     ap.add_argument("--vtk-scene")
     ap.add_argument("--vtk-mapper")
@@ -229,11 +239,10 @@ def main():
             for backend in backends:
                 btag = f"{tag}_{backend}"
                 # peakcast at each candidate step. Postclassified at each step, and preintegrated
-                # (--preint) at the same steps: both are DVR of the same TF, so both may be picked
-                # "at equal error".
+                # at the same steps: both are DVR of the same TF, so both may be picked "at equal error".
                 pc = []
-                for method in ["post"] + (["preint"] if args.preint else []):
-                    for step in ([float(x) for x in args.steps.split(",")] if args.steps else spec["steps"]):
+                for method in ["post"] + ([] if args.no_preint else ["preint"]):
+                    for step in ([float(x) for x in args.steps.split(",")] if args.steps else STEPS):
                         sp = work / f"{btag}_{method}_{step}.json"
                         j = scene_json(spec, volume, lo, hi, size, step)
                         if method == "preint":
