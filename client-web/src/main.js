@@ -167,6 +167,7 @@ disposer.listen(stream, 'frame', (e) => {
   canvas.dataset.frames = String((+canvas.dataset.frames || 0) + 1);
   canvas.dataset.final = String(frame.final);
   canvas.dataset.cameraVersion = String(frame.cameraVersion);
+  canvas.dataset.tfVersion = String(frame.tfVersion);
   canvas.dataset.renderVersion = String(frame.renderVersion);
   canvas.dataset.png = String(frame.png);
   stats.frameShown(frame);

@@ -94,7 +94,8 @@ test('an isosurface preset with peak finding shows a surface', async () => {
   await page.check('input[name=shading]');
   await page.fill('#tf-iso', '200');
   await page.selectOption('#tf-preset', 'iso');
-  await waitFinal(page, { afterFrames: n + 1 });
+  // The final frame of the preset's TF (the one before it may show the grey ramp with peaks on).
+  await waitFinal(page, { afterFrames: n + 1, currentTf: true });
   await page.waitForFunction(() => /peaks/.test(document.querySelector('#variant').textContent), null, { timeout: 20000 });
   const peaks = await canvasSummary(page);
   const peakCount = await page.evaluate(() => window.peakcast.tfEditor.points.length);

@@ -56,12 +56,15 @@ export async function openClient(browser, url, { width = 1200, height = 700 } = 
   return page;
 }
 
-// Waits for a final frame showing at least `cameraVersion`, after `afterFrames` frames.
-export async function waitFinal(page, { afterFrames = 0, cameraVersion = 0, timeout = 30000 } = {}) {
-  await page.waitForFunction(([n, v]) => {
+// Waits for a final frame showing at least `cameraVersion`, after `afterFrames` frames. With
+// `currentTf`, the frame must also show the TF editor's newest version: several edits in a row
+// may be slower than the still delay, and a final frame come between them.
+export async function waitFinal(page, { afterFrames = 0, cameraVersion = 0, currentTf = false, timeout = 30000 } = {}) {
+  await page.waitForFunction(([n, v, tf]) => {
     const c = document.querySelector('#frame');
-    return c.dataset.final === 'true' && +(c.dataset.frames || 0) > n && +(c.dataset.cameraVersion || 0) >= v;
-  }, [afterFrames, cameraVersion], { timeout });
+    const tfShown = !tf || +(c.dataset.tfVersion || 0) >= window.peakcast.tfEditor.version;
+    return c.dataset.final === 'true' && +(c.dataset.frames || 0) > n && +(c.dataset.cameraVersion || 0) >= v && tfShown;
+  }, [afterFrames, cameraVersion, currentTf], { timeout });
 }
 
 // Records every text `selector` shows from now on (a load's progress line comes and goes faster
