@@ -61,33 +61,30 @@ Volume ramp(const Dims& dims, SourceType type = SourceType::U16) {
   return generate_volume(s);
 }
 
+// Writes `v` to `file`, loads it back while `r` records the progress, and checks the voxels.
+void write_and_load(const fs::path& file, const Volume& v, WriteOptions w, Recorder& r) {
+  write_volume(file, v, w);
+  EXPECT_TRUE(test::same_volume(v, load_volume(file, r.options())));
+}
+
 TEST(LoadProgress, RawReadInPiecesRisesToOne) {
   test::TempDir dir;
-  const Volume v = ramp({256, 256, 160});  // 20 MiB: read in 8 MiB pieces on one thread
-  write_volume(dir / "v.nrrd", v);
   Recorder r;
-  Volume back = load_volume(dir / "v.nrrd", r.options());
-  EXPECT_TRUE(test::same_volume(v, back));
+  write_and_load(dir / "v.nrrd", ramp({256, 256, 160}), {}, r);  // 20 MiB: 8 MiB pieces on one thread
   r.expect_a_rising_count_to_one(2);
 }
 
 TEST(LoadProgress, ParallelRawReadTellsOneAtATime) {
   test::TempDir dir;
-  const Volume v = ramp({256, 256, 512});  // 64 MiB: read by the workers, 8 MiB a pread
-  write_volume(dir / "v.nhdr", v);
   Recorder r;
-  Volume back = load_volume(dir / "v.nhdr", r.options());
-  EXPECT_TRUE(test::same_volume(v, back));
+  write_and_load(dir / "v.nhdr", ramp({256, 256, 512}), {}, r);  // 64 MiB: the workers, 8 MiB a pread
   r.expect_a_rising_count_to_one(7);
 }
 
 TEST(LoadProgress, GzipCountsInflatedBytes) {
   test::TempDir dir;
-  const Volume v = ramp({128, 128, 128});  // 4 MiB inflated, 1 MiB at a time
-  write_volume(dir / "v.nrrd", v, {true});
   Recorder r;
-  Volume back = load_volume(dir / "v.nrrd", r.options());
-  EXPECT_TRUE(test::same_volume(v, back));
+  write_and_load(dir / "v.nrrd", ramp({128, 128, 128}), {true}, r);  // 4 MiB inflated, 1 MiB at a time
   r.expect_a_rising_count_to_one(3);
 }
 
