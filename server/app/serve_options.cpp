@@ -101,6 +101,9 @@ void add_serve_options(CLI::App& s, ServeOptions& o) {
   s.add_option("--idle-timeout", o.idle_seconds, "seconds without a client message before closing")
       ->check(CLI::Range(1, 86400));
   s.add_option("--max-fps", c.max_fps, "frames per second per session")->check(CLI::Range(1.0, 240.0));
+  s.add_option("--max-kbps", c.max_kbps,
+               "a video stream's bit-rate ceiling, kbit/s: what a session starts with and may not exceed")
+      ->check(CLI::Range(limits::kMinKbps, limits::kMaxKbps));
   s.add_option("--gpu-budget-mib", o.gpu_budget_mib, "MiB of volume textures on the GPU")
       ->check(CLI::Range(int64_t(1), int64_t(1) << 24));
   s.add_option("--max-queued-stills", c.max_queued_stills,

@@ -33,6 +33,7 @@ struct ServerConfig {
   int max_sessions = limits::kDefaultMaxSessions;
   std::chrono::seconds idle_timeout = limits::kDefaultIdleTimeout;
   double max_fps = limits::kDefaultMaxFps;
+  int max_kbps = limits::kDefaultMaxKbps;  // a video session's bit-rate ceiling (docs/streaming.md)
   int64_t gpu_budget_bytes = limits::kDefaultGpuBudgetBytes;
   size_t max_queued_stills = limits::kDefaultMaxQueuedStills;
   double max_still_samples = limits::kDefaultMaxStillSamples;

@@ -3,6 +3,7 @@
 #include <chrono>
 
 #include "core/ray_texture_png.h"
+#include "encode/video.h"
 #include "net/connection_slot.h"
 #include "render/variant.h"
 #include "session/protocol.h"
@@ -207,7 +208,11 @@ void WsSession::handle(const std::string& text) {
             app_.render.notify();
           });
         }
-        if constexpr (std::is_same_v<T, QualityMsg>) session_->set_quality(m);
+        if constexpr (std::is_same_v<T, QualityMsg>) {
+          if (m.kbps) m.kbps = std::min(*m.kbps, app_.config.max_kbps);  // the server's ceiling
+          session_->set_quality(m);
+        }
+        if constexpr (std::is_same_v<T, KeyframeMsg>) session_->request_key_frame();
         if constexpr (std::is_same_v<T, ViewportMsg>) session_->set_viewport(m.viewport);
         if constexpr (std::is_same_v<T, AckMsg>) session_->ack(m.frame);
         if constexpr (std::is_same_v<T, ProbeMsg>) probe(m);
@@ -256,6 +261,9 @@ void WsSession::start_session(const protocol::Hello& hello, std::shared_ptr<Volu
                               std::optional<std::shared_ptr<const RayTextureSpec>> texture) {
   auto session = std::make_shared<Session>("s" + std::to_string(app_.next_session++), weak_from_this(),
                                            app_.png_locator());
+  protocol::QualityMsg ceiling;
+  ceiling.kbps = app_.config.max_kbps;
+  session->set_quality(ceiling);
   session->start(volume, hello.viewport, hello.state, texture);
   session_ = session;
   nlohmann::json vols = nlohmann::json::array();
@@ -266,6 +274,7 @@ void WsSession::start_session(const protocol::Hello& hello, std::shared_ptr<Volu
   welcome.volumes = vols;
   welcome.state = session_->state_json();
   welcome.capabilities = render::capabilities();
+  welcome.capabilities["codecs"] = encode::available_codecs();  // interactive frames: quality.codec
   welcome.gl_renderer = app_.render.gl_renderer();
   welcome.backend = app_.render.backend();
   welcome.limits = {{"max_message_bytes", limits::kMaxWsMessageBytes},
@@ -275,7 +284,8 @@ void WsSession::start_session(const protocol::Hello& hello, std::shared_ptr<Volu
                     {"max_tf_points", kMaxTfPoints},
                     {"idle_timeout_s", app_.config.idle_timeout.count()},
                     {"still_delay_ms", limits::kStillDelay.count()},
-                    {"max_fps", app_.config.max_fps}};
+                    {"max_fps", app_.config.max_fps},
+                    {"max_kbps", app_.config.max_kbps}};
   queue_text(protocol::welcome_message(welcome));
   app_.render.add_session(session_);
 }
@@ -291,9 +301,10 @@ void WsSession::queue_text(std::string text) {
   enqueue(std::move(o));
 }
 
-void WsSession::deliver_frame(std::vector<uint8_t> bytes, uint32_t frame_id, bool final) {
+void WsSession::deliver_frame(std::vector<uint8_t> bytes, uint32_t frame_id, bool final, bool video) {
   Outgoing o;
   o.binary = true;
+  o.video = video;
   o.frame = std::make_shared<const std::vector<uint8_t>>(std::move(bytes));
   o.frame_id = frame_id;
   o.final = final;
@@ -312,9 +323,11 @@ void WsSession::enqueue(Outgoing out) {
     return;
   }
   if (out.binary) {
-    // The newest frame replaces a frame still waiting (not the one being written).
+    // The newest frame replaces a frame still waiting (not the one being written), unless that
+    // one is a video frame: the frames after it are coded against it. The flow control before
+    // rendering (at most kMaxFramesInFlight un-acknowledged) bounds what waits.
     for (size_t k = writing_ ? 1 : 0; k < queue_.size(); ++k)
-      if (queue_[k].binary) {
+      if (queue_[k].binary && !queue_[k].video) {
         if (session_) session_->frame_dropped(queue_[k].frame_id);
         app_.metrics.add("peakcast_frames_dropped_total", "", 1);
         queue_.erase(queue_.begin() + long(k));

@@ -26,7 +26,7 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   void shut_down();
 
   // FrameSink: called from encode threads.
-  void deliver_frame(std::vector<uint8_t> bytes, uint32_t frame_id, bool final) override;
+  void deliver_frame(std::vector<uint8_t> bytes, uint32_t frame_id, bool final, bool video) override;
   void deliver_text(std::string text) override;
 
  private:
@@ -36,6 +36,7 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
     std::shared_ptr<const std::vector<uint8_t>> frame;
     uint32_t frame_id = 0;
     bool final = false;
+    bool video = false;  // a video stream's frame: the next one refers to it, so it is never replaced
   };
   void read();
   void on_message();

@@ -25,27 +25,46 @@ void encode_viewer_frame(encode::JpegEncoder& enc, const RenderedFrame& f, Frame
   const auto t0 = Clock::now();
   const bool png = job.final && job.quality.final_png;
   const int q = job.final ? job.quality.final_quality : job.quality.interactive_quality;
-  std::vector<uint8_t> bytes = encode_image(enc, f.rgb, f.width, f.height, png, q,
-                                            job.final ? encode::Subsampling::S444 : encode::Subsampling::S420);
+  nlohmann::json stats = f.stats;
+  std::optional<VideoFrameOut> video;
+  if (job.video) {
+    std::string error;
+    video = job.video->encode(f.video_ticket, job.video_settings, f.rgb.data(), f.width, f.height, error);
+    if (!video) {  // this frame goes out as JPEG; the stream's next frame is a key frame
+      metrics.add("peakcast_video_failures_total", "", 1);
+      stats["warnings"].push_back("video encode failed, this frame sent as JPEG: " + error);
+    }
+  }
+  std::vector<uint8_t> bytes =
+      video ? std::move(video->packet.bytes)
+            : encode_image(enc, f.rgb, f.width, f.height, png, q,
+                           job.final ? encode::Subsampling::S444 : encode::Subsampling::S420);
   const auto encoded = Clock::now();
-  const char* kind = job.final ? "kind=\"final\"" : "kind=\"interactive\"";
+  const char* kind = job.final ? "kind=\"final\"" : video ? "kind=\"video\"" : "kind=\"interactive\"";
   metrics.observe("peakcast_encode_ms", kind, ms_between(t0, encoded));
   protocol::FrameHeader h;
   h.frame_id = job.frame_id;
   h.flags = (job.final ? protocol::FrameHeader::kFinal : protocol::FrameHeader::kInteractive) |
-            (png ? protocol::FrameHeader::kPng : 0u);
+            (png ? protocol::FrameHeader::kPng : 0u) | (video ? protocol::FrameHeader::kVideo : 0u) |
+            (video && video->packet.key ? protocol::FrameHeader::kKey : 0u);
   h.camera_version = job.camera_version;
   h.tf_version = job.tf_version;
   h.render_version = job.render_version;
-  h.width = uint32_t(f.width);
-  h.height = uint32_t(f.height);
+  h.width = uint32_t(video ? video->width : f.width);
+  h.height = uint32_t(video ? video->height : f.height);
   h.quality = png ? 100u : uint32_t(q);
+  stats["codec"] = video ? encode::to_string(job.video_settings.codec) : png ? "png" : "jpeg";
+  if (video) {
+    stats["kbps"] = video->kbps;
+    stats["key"] = video->packet.key;
+    stats["encoder"] = video->encoder;
+  }
   h.t_input_us = micros(job.input_time);
   h.t_render_done_us = micros(f.rendered);
   h.t_encode_done_us = micros(encoded);
   const size_t image_bytes = bytes.size();
-  sink.deliver_frame(protocol::encode_frame(h, bytes), job.frame_id, job.final);
-  sink.deliver_text(protocol::stats_message(job.frame_id, job.final, f.width, f.height, f.stats,
+  sink.deliver_frame(protocol::encode_frame(h, bytes), job.frame_id, job.final, bool(video));
+  sink.deliver_text(protocol::stats_message(job.frame_id, job.final, f.width, f.height, stats,
                                             ms_between(t0, encoded), image_bytes));
 }
 

@@ -26,6 +26,7 @@ struct RenderedFrame {
   int width = 0, height = 0;
   nlohmann::json stats;      // RenderStats' JSON form
   Clock::time_point rendered;
+  uint64_t video_ticket = 0;  // a video frame's place in its stream (VideoChannel::take_ticket)
 };
 
 // Encodes and hands the frame and its stats to the sink. Encode thread.

@@ -33,6 +33,8 @@ constexpr int kMaxPingIdLength = 64;                     // characters
 constexpr size_t kMaxTokenLength = 256;                  // characters of an access token (hello.token, ?token=, Bearer)
 constexpr size_t kMaxVolumeNameLength = 1024;            // characters of a volume name (hello.volume, volume, REST)
 constexpr int kMinJpegQuality = 10, kMaxJpegQuality = 100;  // JPEG quality, streamed frames and stills
+constexpr int kMinKbps = 100, kMaxKbps = 200000;         // a video stream's bit-rate ceiling, kbit/s
+constexpr int kDefaultMaxKbps = 8000;                    // (cfg) the ceiling a session starts with and may not exceed
 constexpr size_t kDefaultMaxQueuedStills = 4;            // (cfg) REST stills waiting or rendering; beyond: 503 + Retry-After
 constexpr double kDefaultMaxStillSamples = 8e9;          // (cfg) estimated samples (pixels x samples per ray) of one still; beyond: 422
 constexpr double kStillBandSamples = 1.5e7;              // estimated samples per band of a still: bounds a viewer's wait (~50-100 ms on llvmpipe)

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "encode/video.h"
 #include "session/limits.h"
 
 namespace peakcast::protocol {
@@ -154,7 +155,8 @@ ClientMessage parse_client_message(const std::string& text) {
     return RenderMsg{j["render"]};
   }
   if (type == "quality") {
-    only_keys(j, "quality", {"interactive_scale", "interactive_ms", "interactive_quality", "final_quality", "final_format"});
+    only_keys(j, "quality", {"interactive_scale", "interactive_ms", "interactive_quality", "final_quality", "final_format",
+                             "codec", "kbps"});
     QualityMsg q;
     if (j.contains("interactive_scale")) q.interactive_scale = number_in(j["interactive_scale"], "quality.interactive_scale", 0.1, 1.0);
     if (j.contains("interactive_ms")) q.interactive_ms = number_in(j["interactive_ms"], "quality.interactive_ms", 0.0, 1000.0);
@@ -164,6 +166,15 @@ ClientMessage parse_client_message(const std::string& text) {
       q.final_format = string_of(j["final_format"], "quality.final_format", 8);
       if (*q.final_format != "jpeg" && *q.final_format != "png") bad("quality.final_format: jpeg or png");
     }
+    if (j.contains("codec")) {
+      q.codec = string_of(j["codec"], "quality.codec", 16);
+      if (!encode::codec_available(*q.codec)) {
+        std::string known;
+        for (const auto& c : encode::available_codecs()) known += (known.empty() ? "" : ", ") + c;
+        bad("quality.codec: '" + *q.codec + "' is not a codec this server encodes (" + known + ")");
+      }
+    }
+    if (j.contains("kbps")) q.kbps = int_in(j["kbps"], "quality.kbps", limits::kMinKbps, limits::kMaxKbps);
     return q;
   }
   if (type == "viewport") {
@@ -182,6 +193,10 @@ ClientMessage parse_client_message(const std::string& text) {
     if (!j.contains("frame") || !j["frame"].is_number_unsigned() || j["frame"].get<uint64_t>() > 0xffffffffull)
       bad("ack.frame: must be an unsigned 32-bit integer");
     return AckMsg{j["frame"].get<uint32_t>()};
+  }
+  if (type == "keyframe") {
+    only_keys(j, "keyframe", {});
+    return KeyframeMsg{};
   }
   if (type == "ping") {
     only_keys(j, "ping", {"id"});

@@ -60,7 +60,11 @@ struct QualityMsg {
   std::optional<double> interactive_ms;     // 0..1000; 0: a fixed interactive scale
   std::optional<int> interactive_quality, final_quality;  // 10..100
   std::optional<std::string> final_format;  // jpeg | png
+  std::optional<std::string> codec;         // interactive frames: jpeg, or a video codec this server encodes
+  std::optional<int> kbps;                  // the stream's bit-rate ceiling (capped by --max-kbps)
 };
+// A video client lost or could not decode a frame: the next interactive frame is a key frame.
+struct KeyframeMsg {};
 struct ViewportMsg {
   Viewport viewport;
 };
@@ -87,7 +91,7 @@ struct ProbeMsg {
   int x = 0, y = 0;
 };
 using ClientMessage = std::variant<Hello, CameraMsg, TfMsg, RenderMsg, QualityMsg, ViewportMsg, VolumeMsg, AckMsg,
-                                   PingMsg, StrokeMsg, ProbeMsg>;
+                                   PingMsg, StrokeMsg, ProbeMsg, KeyframeMsg>;
 
 // Throws ProtocolError (bad_json, too_large, bad_message, unknown_type).
 ClientMessage parse_client_message(const std::string& text);
@@ -116,12 +120,13 @@ std::string welcome_message(const Welcome& w);
 std::string stats_message(uint32_t frame, bool final, int width, int height, const nlohmann::json& render_stats,
                           double encode_ms, size_t bytes);
 
-// Binary frame: this header, then the image bytes (JPEG, or PNG for a final frame when asked).
+// Binary frame: this header, then the image bytes (JPEG, or PNG for a final frame when asked), or
+// for a video session's interactive frames one access unit of its codec (kVideo; kKey: a key frame).
 struct FrameHeader {
   static constexpr uint32_t kMagic = 0x31464350;  // "PCF1" little-endian
   static constexpr uint16_t kVersion = 1;
   static constexpr uint16_t kSize = 64;
-  enum Flags : uint32_t { kFinal = 1, kInteractive = 2, kPng = 4 };
+  enum Flags : uint32_t { kFinal = 1, kInteractive = 2, kPng = 4, kVideo = 8, kKey = 16 };
   uint32_t frame_id = 0;
   uint32_t flags = 0;
   uint32_t camera_version = 0, tf_version = 0, render_version = 0;

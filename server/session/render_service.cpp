@@ -150,6 +150,7 @@ void RenderService::collect_frame() {
     f.rgb = std::move(out.rgb8.rgb);
     f.stats = st.to_json();
     f.job = std::move(s.job);
+    if (f.job.video) f.video_ticket = f.job.video->take_ticket();  // encoded in the order rendered
     pool_->submit([this, f = std::move(f), sink = s.sink](encode::JpegEncoder& enc) {
       encode_viewer_frame(enc, f, *sink, metrics_);
     });

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 #include "render/variant.h"
 #include "session/limits.h"
@@ -151,6 +152,8 @@ void Session::set_quality(const protocol::QualityMsg& q) {
   if (q.interactive_quality) quality_.interactive_quality = *q.interactive_quality;
   if (q.final_quality) quality_.final_quality = *q.final_quality;
   if (q.final_format) quality_.final_png = *q.final_format == "png";
+  if (q.codec) quality_.codec = *q.codec;
+  if (q.kbps) quality_.kbps = *q.kbps;
   final_pending_ = true;  // re-send the still at the new quality
 }
 
@@ -159,6 +162,8 @@ void Session::set_viewport(const protocol::Viewport& vp) {
   viewport_ = vp;
   touch();
 }
+
+void Session::request_key_frame() { video_->request_key_frame(); }
 
 void Session::ack(uint32_t frame_id) {
   std::lock_guard lock(m_);
@@ -260,6 +265,17 @@ std::optional<FrameJob> Session::take_job(Clock::time_point now, std::chrono::mi
   } catch (const std::exception&) {
     dirty_ = final_pending_ = false;  // validated on input; nothing renderable
     return std::nullopt;
+  }
+  if (!job.final && quality_.codec != "jpeg") {
+    // Video: one coded size per view (the view at interactive_scale); frames the budget renders
+    // smaller are scaled up to it, so only a resize or a setting starts a new stream.
+    job.video = video_;
+    auto& v = job.video_settings;
+    v.codec = *encode::video_codec_from_name(quality_.codec);
+    std::tie(v.width, v.height) = video_coded_size(job.scene.scene.width, job.scene.scene.height,
+                                                   quality_.interactive_scale);
+    v.kbps = quality_.kbps;
+    v.quality = quality_.interactive_quality;
   }
   if (!job.final) {  // reduced resolution and coarser sampling while the input moves
     const double scale = interactive_scale(job.scene.scene.width, job.scene.scene.height);

@@ -17,6 +17,7 @@
 #include "core/ray_texture_png.h"
 #include "core/scene.h"
 #include "session/protocol.h"
+#include "session/video_channel.h"
 #include "session/volume_store.h"
 
 namespace peakcast {
@@ -28,7 +29,9 @@ using Clock = std::chrono::steady_clock;
 class FrameSink {
  public:
   virtual ~FrameSink() = default;
-  virtual void deliver_frame(std::vector<uint8_t> bytes, uint32_t frame_id, bool final) = 0;
+  // `video`: one frame of the session's video stream, which the next one refers to: never
+  // replaced by a newer frame once encoded (docs/streaming.md).
+  virtual void deliver_frame(std::vector<uint8_t> bytes, uint32_t frame_id, bool final, bool video) = 0;
   virtual void deliver_text(std::string text) = 0;
 };
 
@@ -42,6 +45,8 @@ struct Quality {
   int interactive_quality = 70;    // JPEG, 4:2:0
   int final_quality = 95;          // JPEG, 4:4:4
   bool final_png = false;
+  std::string codec = "jpeg";  // interactive frames: jpeg, h264, vp9 or av1 (docs/streaming.md)
+  int kbps = 8000;             // a video stream's bit-rate ceiling (the server's --max-kbps at the start)
 };
 
 // Everything the render thread needs for one frame.
@@ -53,6 +58,9 @@ struct FrameJob {
   uint32_t camera_version = 0, tf_version = 0, render_version = 0;
   Quality quality;
   Clock::time_point input_time;
+  // An interactive frame of a video session: the session's stream and its settings now.
+  std::shared_ptr<VideoChannel> video;
+  encode::VideoSettings video_settings;
 };
 
 class Session {
@@ -81,6 +89,7 @@ class Session {
   size_t add_stroke(const Stroke& stroke);
   void set_quality(const protocol::QualityMsg& q);
   void set_viewport(const protocol::Viewport& vp);
+  void request_key_frame();  // a video client lost a frame: the next interactive frame is a key frame
   void ack(uint32_t frame_id);
   // The render thread's report of an interactive frame: its pixels and render time, which set
   // the next interactive frames' resolution (Quality::interactive_ms).
@@ -117,6 +126,7 @@ class Session {
   // The resolution ratio of the next interactive frame of a width x height view (m_ held).
   double interactive_scale(int width, int height) const;
   Quality quality_;
+  std::shared_ptr<VideoChannel> video_ = std::make_shared<VideoChannel>();
   // Interactive render ms as a fixed part plus a part per pixel (a distributed frame's broadcast
   // and compositing, a tile's set-up): a least-squares line through the last frames, each
   // weighted 0.4 and the older ones 0.6 as much at every new frame. w == 0: none yet.

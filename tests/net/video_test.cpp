@@ -4,15 +4,20 @@
 
 #include <cmath>
 #include <cstdio>
+#include <thread>
 #include <vector>
 
 #include "encode/video.h"
+#include "session/video_channel.h"
 
 namespace peakcast::encode {
-namespace {
 
 // A soft blob that moves with t over a gradient: what an orbit of a volume looks like to a codec.
-std::vector<uint8_t> picture(int w, int h, int t) {
+std::vector<uint8_t> picture(int w, int h, int t);
+
+namespace {
+
+std::vector<uint8_t> picture_impl(int w, int h, int t) {
   std::vector<uint8_t> rgb(size_t(w) * h * 3);
   const double cx = w * (0.3 + 0.02 * t), cy = h * 0.5, r = w * 0.2;
   for (int y = 0; y < h; ++y)
@@ -26,6 +31,12 @@ std::vector<uint8_t> picture(int w, int h, int t) {
     }
   return rgb;
 }
+
+}  // namespace
+
+std::vector<uint8_t> picture(int w, int h, int t) { return picture_impl(w, h, t); }
+
+namespace {
 
 double psnr(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
   double se = 0;
@@ -122,3 +133,64 @@ TEST(Video, BadSettingsAreRefusedByName) {
 
 }  // namespace
 }  // namespace peakcast::encode
+
+namespace peakcast {
+namespace {
+
+using encode::VideoSettings;
+
+VideoSettings small(int kbps = 2000) {
+  VideoSettings s;
+  s.width = 64;
+  s.height = 48;
+  s.kbps = kbps;
+  return s;
+}
+
+TEST(VideoChannel, TicketsAreEncodedInTheOrderTaken) {
+  // Two encode threads pick up frames 0 and 1; frame 1's thread gets there first. Frame 0 must
+  // still be encoded first: it is the key frame and frame 1 refers to it.
+  VideoChannel ch;
+  const auto img = encode::picture(64, 48, 0);
+  const uint64_t t0 = ch.take_ticket(), t1 = ch.take_ticket();
+  std::optional<VideoFrameOut> out1;
+  std::string e1, e0;
+  std::thread late([&] { out1 = ch.encode(t1, small(), img.data(), 64, 48, e1); });
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  auto out0 = ch.encode(t0, small(), img.data(), 64, 48, e0);
+  late.join();
+  ASSERT_TRUE(out0 && out1) << e0 << e1;
+  EXPECT_TRUE(out0->packet.key);
+  EXPECT_FALSE(out1->packet.key);
+}
+
+TEST(VideoChannel, KeyFramesOnASettingTheClientsRequestAndAfterAFailure) {
+  VideoChannel ch;
+  const auto img = encode::picture(64, 48, 0);
+  std::string err;
+  auto next = [&](const VideoSettings& s) {
+    auto out = ch.encode(ch.take_ticket(), s, img.data(), 64, 48, err);
+    return out ? int(out->packet.key) : -1;
+  };
+  EXPECT_EQ(next(small()), 1);
+  EXPECT_EQ(next(small()), 0);
+  EXPECT_EQ(next(small(3000)), 1);  // a new bit rate: a new encoder
+  EXPECT_EQ(ch.encoders_opened(), 2);
+  ch.request_key_frame();
+  EXPECT_EQ(next(small(3000)), 1);
+  EXPECT_EQ(next(small(3000)), 0);
+  VideoSettings odd = small(3000);
+  odd.width = 63;  // refused by the encoder: this frame fails, and is served (no hang)
+  EXPECT_EQ(next(odd), -1);
+  EXPECT_NE(err.find("even"), std::string::npos) << err;
+  EXPECT_EQ(next(small(3000)), 1);  // the stream restarts with a key frame
+}
+
+TEST(VideoChannel, TheCodedSizeIsTheViewAtTheInteractiveScaleMadeEven) {
+  EXPECT_EQ(video_coded_size(320, 240, 0.5), std::make_pair(160, 120));
+  EXPECT_EQ(video_coded_size(801, 599, 0.5), std::make_pair(400, 300));
+  EXPECT_EQ(video_coded_size(10, 10, 0.5), std::make_pair(16, 16));
+}
+
+}  // namespace
+}  // namespace peakcast
