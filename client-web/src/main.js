@@ -7,6 +7,7 @@ import { RenderControls } from './controls.js';
 import { Disposer } from './disposer.js';
 import { readState, stateUrl, takeTokenFromUrl, writeState } from './state-url.js';
 import { StatsOverlay } from './stats.js';
+import { CodecPicker } from './codec-picker.js';
 import { Stream } from './stream.js';
 import { TfEditor } from './tf-editor.js';
 import { VolumePicker } from './volume-picker.js';
@@ -61,6 +62,7 @@ function helloFor() {
 
 const stream = new Stream({ url: `${location.protocol === 'https:' ? 'wss' : 'ws'}://${location.host}/ws`, helloFor });
 disposer.add(() => stream.dispose());
+const codecPicker = new CodecPicker({ select: $('codec'), kbps: $('kbps'), stream, disposer });
 const brush = new Brush({ section: $('ray-texture'), controls: $('rt-controls'), canvas, view: $('view'), outline: $('brush-outline'),
   previewBox: $('rt-preview-box'), preview: $('rt-preview'), legend: $('rt-legend'), status: $('rt-status'), undo: $('rt-undo'),
   clear: $('rt-clear') }, { stream, camera, scene: () => ({ camera: app.camera, volume: app.volumeInfo }) }, disposer);
@@ -107,6 +109,7 @@ disposer.listen(stream, 'welcome', (e) => {
   app.volumes = w.volumes;
   controls.build(w.capabilities, w.state.render);
   brush.welcome(w.capabilities, w.state);
+  codecPicker.welcome(w.capabilities, w.limits);
   app.welcomed = true;
   document.title = titleOf(w.volume);
 });

@@ -1,6 +1,6 @@
 // The binary frame header of proto/messages.md (64 bytes, little-endian).
 export const FRAME_MAGIC = 0x31464350;
-export const FLAG_FINAL = 1, FLAG_INTERACTIVE = 2, FLAG_PNG = 4;
+export const FLAG_FINAL = 1, FLAG_INTERACTIVE = 2, FLAG_PNG = 4, FLAG_VIDEO = 8, FLAG_KEY = 16;
 
 export function parseFrame(buffer) {
   const v = new DataView(buffer);
@@ -13,6 +13,8 @@ export function parseFrame(buffer) {
     tInputUs: u64(40), tRenderUs: u64(48), tEncodeUs: u64(56),
     get final() { return (this.flags & FLAG_FINAL) !== 0; },
     get png() { return (this.flags & FLAG_PNG) !== 0; },
+    get video() { return (this.flags & FLAG_VIDEO) !== 0; },  // one access unit of the session's codec
+    get key() { return (this.flags & FLAG_KEY) !== 0; },
     image: new Uint8Array(buffer, 64),
   };
 }

@@ -61,8 +61,9 @@ export class StatsOverlay {
     this.el.textContent = [
       `${f.final ? 'final' : 'interactive'} ${f.width}×${f.height}  ${this.#shown.length} fps`,
       `input→frame p50 ${ms(this.percentile('interactive', 0.5))} / final ${ms(this.percentile('final', 0.5))}`,
-      `${((s.bytes ?? f.image.byteLength) / 1024).toFixed(1)} KiB/frame  q${f.quality}`,
-      `render ${ms(s.render_ms)}  encode ${ms(s.encode_ms)}`,
+      `${s.codec ?? 'jpeg'}  ${((s.bytes ?? f.image.byteLength) / 1024).toFixed(1)} KiB/frame  ` +
+        (Number.isFinite(s.kbps) ? `${s.kbps.toFixed(0)} kbit/s` : `q${f.quality}`),
+      `render ${ms(s.render_ms)}  encode ${ms(s.encode_ms)}  decode ${ms(f.decodeMs ?? (f.decodedAt - f.receivedAt))}`,
       `samples/ray ${s.samples_per_ray?.toFixed(1) ?? '–'}`,
     ].join('\n');
   }

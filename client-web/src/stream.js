@@ -1,7 +1,9 @@
 // The WebSocket stream (proto/messages.md): hello, newest-frame-only decoding with
-// createImageBitmap, an ack per frame, reconnection that resumes the session state, and a status
-// for the page (connecting, live, disconnected, refused).
+// createImageBitmap (video frames: every one, in order, through WebCodecs), an ack per frame,
+// reconnection that resumes the session state, and a status for the page (connecting, live,
+// disconnected, refused).
 import { parseFrame } from './protocol.js';
+import { VideoFrames } from './video-decoder.js';
 
 export class Stream extends EventTarget {
   #ws = null;
@@ -10,11 +12,28 @@ export class Stream extends EventTarget {
   #closed = false;
   #retryMs = 500;
   #timer = 0;
+  #shownId = 0;         // the newest frame handed on: an older one decoded late is not drawn over it
+  #video;
+  codec = 'jpeg';       // interactive frames: jpeg or a video codec (asked for after every welcome)
+  kbps = null;          // the video bit-rate ceiling asked for (null: the server's)
 
   constructor({ url, helloFor }) {
     super();
     this.url = url;
     this.helloFor = helloFor;  // () => hello message (with the state to resume)
+    this.#video = new VideoFrames({
+      onPicture: ({ frame, picture }) => this.#show(frame, picture),
+      ack: (id) => this.send({ type: 'ack', frame: id }),
+      askKey: () => this.send({ type: 'keyframe' }),
+      onError: (message) => this.#emit('error', { code: 'decode', message }),
+    });
+  }
+
+  // Interactive frames as `codec` from now on (and after every reconnect).
+  setCodec(codec, kbps = this.kbps) {
+    this.codec = codec;
+    this.kbps = kbps;
+    this.send({ type: 'quality', codec, ...(kbps ? { kbps } : {}) });
   }
 
   connect() {
@@ -23,7 +42,12 @@ export class Stream extends EventTarget {
     const ws = new WebSocket(this.url);
     ws.binaryType = 'arraybuffer';
     this.#ws = ws;
-    ws.onopen = () => { this.#retryMs = 500; ws.send(JSON.stringify(this.helloFor())); };
+    ws.onopen = () => {
+      this.#retryMs = 500;
+      this.#shownId = 0;  // a new session counts its frames from 1
+      this.#video.close();
+      ws.send(JSON.stringify(this.helloFor()));
+    };
     ws.onmessage = (ev) => (typeof ev.data === 'string' ? this.#onText(ev.data) : this.#onFrame(ev.data));
     ws.onclose = (ev) => this.#onClose(ev);
   }
@@ -39,13 +63,17 @@ export class Stream extends EventTarget {
     clearTimeout(this.#timer);
     if (this.#ws) { this.#ws.onclose = null; this.#ws.close(); }
     this.#pending = null;
+    this.#video.close();
   }
 
   #emit(type, detail) { this.dispatchEvent(new CustomEvent(type, { detail })); }
 
   #onText(text) {
     const msg = JSON.parse(text);
-    if (msg.type === 'welcome') this.#emit('status', { state: 'live' });
+    if (msg.type === 'welcome') {
+      this.#emit('status', { state: 'live' });
+      if (this.codec !== 'jpeg' && msg.capabilities?.codecs?.includes(this.codec)) this.setCodec(this.codec);
+    }
     if (msg.type === 'error' && msg.code === 'unauthorized') this.refused = 'unauthorized';
     this.#emit(msg.type, msg);
   }
@@ -53,6 +81,7 @@ export class Stream extends EventTarget {
   #onFrame(buffer) {
     const frame = parseFrame(buffer);
     frame.receivedAt = performance.now();
+    if (frame.video) return this.#video.push(frame, this.codec);
     if (this.#pending) this.send({ type: 'ack', frame: this.#pending.id });  // superseded, never shown
     this.#pending = frame;
     if (!this.#decoding) this.#decodeNewest();
@@ -71,7 +100,7 @@ export class Stream extends EventTarget {
           break;
         }
         frame.decodedAt = performance.now();
-        this.#emit('frame', { frame, bitmap });  // the listener owns and closes the bitmap
+        this.#show(frame, bitmap);
       } catch (e) {
         this.#emit('error', { code: 'decode', message: String(e) });
       } finally {
@@ -79,6 +108,13 @@ export class Stream extends EventTarget {
       }
     }
     this.#decoding = false;
+  }
+
+  // The listener owns and closes the picture (an ImageBitmap or a VideoFrame).
+  #show(frame, picture) {
+    if (frame.id < this.#shownId) return picture.close();
+    this.#shownId = frame.id;
+    this.#emit('frame', { frame, bitmap: picture });
   }
 
   #onClose(ev) {

@@ -1,0 +1,175 @@
+// Video streams in Debian's Chromium (docs/streaming.md): H.264 and VP9 decoded by WebCodecs
+// match the lossless render, an orbit keeps up, a reconnect and a resize start again at a key
+// frame, every VideoFrame is closed, and a codec the server does not encode is refused by name.
+import assert from 'node:assert/strict';
+import { after, before, test } from 'node:test';
+import { launch, screenshot, startServer, waitFinal } from './harness.mjs';
+
+let server, browser;
+before(async () => { server = await startServer(['--max-kbps', '20000']); browser = await launch(); });
+after(async () => { await browser?.close(); await server?.stop(); });
+
+// Before the page's scripts: keep every WebSocket, count the VideoFrames decoded and closed, and
+// after each frame is drawn keep the canvas of the newest video frame.
+function instrument(page) {
+  return page.addInitScript(() => {
+    window.__sockets = [];
+    const WS = window.WebSocket;
+    window.WebSocket = class extends WS {
+      constructor(...a) { super(...a); window.__sockets.push(this); }
+    };
+    window.__video = { decoded: 0, closed: 0, keys: [], shown: [] };
+    const close = VideoFrame.prototype.close;
+    VideoFrame.prototype.close = function () { if (!this.__closed) { this.__closed = true; window.__video.closed++; } return close.call(this); };
+    const Decoder = window.VideoDecoder;
+    window.VideoDecoder = class extends Decoder {
+      constructor(init) { super({ ...init, output: (f) => { window.__video.decoded++; init.output(f); } }); }
+    };
+  });
+}
+
+async function open(view = { width: 1100, height: 640 }) {
+  const page = await browser.newPage({ viewport: view });
+  page.errors = [];
+  page.on('pageerror', (e) => page.errors.push(e.message));
+  await instrument(page);
+  await page.goto(server.url);
+  await waitFinal(page);
+  // After the client's own listener has drawn a frame: note it, and keep the newest video frame's pixels.
+  await page.evaluate(() => window.peakcast.stream.addEventListener('frame', (e) => {
+    const f = e.detail.frame;
+    window.__video.shown.push({ id: f.id, video: f.video, key: f.key, final: f.final });
+    if (f.video) {
+      const c = document.querySelector('#frame');
+      window.__video.last = c.getContext('2d').getImageData(0, 0, c.width, c.height);
+    }
+  }));
+  return page;
+}
+
+// Resolves once a final frame is shown after `action` (a setting the server answers with a still).
+async function settled(page, action) {
+  const n = await page.evaluate(() => window.__video.shown.length);
+  await action();
+  await page.waitForFunction((k) => window.__video.shown.slice(k).some((f) => f.final), n, { timeout: 30000 });
+}
+
+async function useCodec(page, codec) {
+  await page.waitForFunction(() => document.querySelector('#codec').dataset.ready === 'true');
+  await settled(page, () => page.selectOption('#codec', codec));
+}
+
+// A mouse orbit of `steps` moves; resolves with the frames shown meanwhile and the seconds it took.
+async function orbit(page, steps = 30, dx = 10) {
+  const box = await page.locator('#frame').boundingBox();
+  const n0 = await page.evaluate(() => window.__video.shown.length);
+  const t0 = Date.now();
+  await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+  await page.mouse.down();
+  for (let i = 1; i <= steps; i++) {
+    await page.mouse.move(box.x + box.width / 2 + i * dx, box.y + box.height / 2 + i * 2);
+    await page.waitForTimeout(33);
+  }
+  await page.mouse.up();
+  const seconds = (Date.now() - t0) / 1000;
+  const shown = await page.evaluate((n) => window.__video.shown.slice(n), n0);
+  return { shown, seconds, interactive: shown.filter((f) => !f.final) };
+}
+
+// PSNR (dB) of the last video frame drawn against the canvas now (the lossless final frame).
+const psnrLastVideoAgainstCanvas = (page) => page.evaluate(() => {
+  const c = document.querySelector('#frame');
+  const a = window.__video.last.data, b = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+  let se = 0, n = 0;
+  for (let i = 0; i < a.length; i += 4) for (let k = 0; k < 3; k++) { se += (a[i + k] - b[i + k]) ** 2; n++; }
+  return 10 * Math.log10(255 * 255 / (se / n));
+});
+
+test('this Chromium decodes H.264 and VP9, and the panel offers them', async () => {
+  const page = await open();
+  await page.waitForFunction(() => document.querySelector('#codec').dataset.ready === 'true');
+  const offered = await page.$$eval('#codec option', (o) => o.map((x) => x.value));
+  assert.ok(offered.includes('h264') && offered.includes('vp9'), `offered: ${offered}`);
+  assert.equal(offered[0], 'jpeg');
+  await page.close();
+});
+
+for (const codec of ['h264', 'vp9']) {
+  test(`${codec}: interactive frames are video, match the lossless render, and every VideoFrame is closed`, async () => {
+    const page = await open();
+    // Full-size interactive frames with differential sampling (s_k counts pixels, so an
+    // interactive frame renders exactly what the final frame does) and a lossless final frame:
+    // the last video frame and the final frame show the same pixels but for the codec's loss.
+    await page.evaluate(() => {
+      window.peakcast.stream.send({ type: 'quality', interactive_scale: 1, interactive_ms: 0, final_format: 'png' });
+      window.peakcast.stream.send({ type: 'render', render: { sampling: 'differential' } });
+    });
+    await useCodec(page, codec);
+    const run = await orbit(page, 20);
+    assert.ok(run.interactive.length >= 3, `only ${run.interactive.length} interactive frames`);
+    assert.ok(run.interactive.every((f) => f.video), JSON.stringify(run.interactive));
+    const version = await page.evaluate(() => window.peakcast.app.cameraVersion);
+    await waitFinal(page, { cameraVersion: version });
+    const stats = await page.textContent('#stats');
+    assert.match(stats, /png|jpeg/);  // the final frame is a still
+    // The last video frame shows the camera the final frame does when the orbit ended on it.
+    const db = await psnrLastVideoAgainstCanvas(page);
+    console.log(`${codec}: last video frame vs the lossless final frame: ${db.toFixed(1)} dB`);
+    assert.ok(db > 30, `${codec}: ${db.toFixed(1)} dB`);
+    const v = await page.evaluate(() => window.__video);
+    assert.ok(v.decoded >= run.interactive.length, JSON.stringify(v));
+    assert.equal(v.closed, v.decoded, 'a VideoFrame was not closed');
+    assert.deepEqual(page.errors, []);
+    await screenshot(page, `video-${codec}`);
+    await page.close();
+  });
+}
+
+test('a video orbit keeps up with a JPEG one', async () => {
+  const page = await open();
+  const jpeg = await orbit(page, 40);
+  await waitFinal(page);
+  await useCodec(page, 'h264');
+  const video = await orbit(page, 40, -10);
+  const fps = (r) => r.interactive.length / r.seconds;
+  console.log(`orbit: jpeg ${fps(jpeg).toFixed(1)} frames/s, h264 ${fps(video).toFixed(1)} frames/s`);
+  assert.ok(video.interactive.every((f) => f.video));
+  assert.ok(fps(video) >= 0.7 * fps(jpeg), `h264 ${fps(video).toFixed(1)} vs jpeg ${fps(jpeg).toFixed(1)} frames/s`);
+  const pending = await page.evaluate(() => window.__video.decoded - window.__video.closed);
+  assert.equal(pending, 0);
+  await page.close();
+});
+
+test('a reconnect and a resize start again at a key frame', async () => {
+  const page = await open();
+  await useCodec(page, 'vp9');
+  const first = await orbit(page, 10);
+  assert.ok(first.interactive[0].video && first.interactive[0].key, JSON.stringify(first.interactive[0]));
+  await waitFinal(page);
+  // The connection drops: the client reconnects, asks for vp9 again, and the new stream opens with a key frame.
+  // The first video frame shown after `action` and `orbit`, and the video frames after it.
+  const videoAfter = async (action) => {
+    const n = await page.evaluate(() => window.__video.shown.length);
+    await settled(page, action);
+    await orbit(page, 10, -10);
+    await waitFinal(page);
+    return (await page.evaluate((k) => window.__video.shown.slice(k), n)).filter((f) => f.video);
+  };
+  const again = await videoAfter(() => page.evaluate(() => window.__sockets.at(-1).close()));
+  assert.equal(await page.evaluate(() => window.__sockets.length), 2);
+  assert.ok(again.length > 1 && again[0].key, `no key frame after the reconnect: ${JSON.stringify(again)}`);
+  assert.ok(again.slice(1).every((f) => !f.key), JSON.stringify(again));
+  const resized = await videoAfter(() => page.setViewportSize({ width: 1200, height: 560 }));
+  assert.ok(resized.length > 1 && resized[0].key, `no key frame after the resize: ${JSON.stringify(resized)}`);
+  assert.ok(resized.slice(1).every((f) => !f.key), JSON.stringify(resized));
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+test('a codec the server does not encode is refused by name', async () => {
+  const page = await open();
+  await page.evaluate(() => window.peakcast.stream.setCodec('mpeg2'));
+  await page.waitForFunction(() => !document.querySelector('#error').hidden);
+  assert.match(await page.textContent('#error'), /'mpeg2' is not a codec this server encodes \(jpeg, h264, vp9/);
+  await page.close();
+});
