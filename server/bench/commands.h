@@ -20,5 +20,6 @@ void add_frame_commands(CLI::App& app, Runner& run);          // readback, volum
 void add_raytex_command(CLI::App& app, Runner& run);          // raytex
 void add_quality_command(CLI::App& app, Runner& run);         // quality
 void add_scene_command(CLI::App& app, Runner& run);           // scene
+void add_stream_command(CLI::App& app, Runner& run);          // stream
 
 }  // namespace peakcast::bench

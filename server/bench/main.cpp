@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   peakcast::bench::add_soak_command(app, run);
   peakcast::bench::add_sampling_command(app, run);
   peakcast::bench::add_frame_commands(app, run);
+  peakcast::bench::add_stream_command(app, run);
   peakcast::bench::add_raytex_command(app, run);
   peakcast::bench::add_quality_command(app, run);
   peakcast::bench::add_scene_command(app, run);
