@@ -59,7 +59,7 @@ NON_DEFAULT = {"bind": "0.0.0.0", "port": "9123", "max-sessions": "5", "idle-tim
                "encode-threads": "3", "web-dir": "/tmp", "shader-dir": "/tmp", "egl-device": "surfaceless",
                "program-cache": "off", "upload-dir": "/tmp/peakcast-config-test-uploads", "max-upload-mib": "64",
                "upload-budget-mib": "128", "max-uploads": "3", "upload-timeout": "5",
-               "uploads-per-minute": "10",
+               "uploads-per-minute": "10", "max-kbps": "2500",
                "backend": "cpu"}
 
 
