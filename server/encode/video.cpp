@@ -5,6 +5,8 @@
 #include <mutex>
 #include <stdexcept>
 
+#include "core/parallel.h"
+
 extern "C" {
 #include <libavcodec/avcodec.h>
 #include <libavutil/imgutils.h>
@@ -125,6 +127,33 @@ ContextPtr open_encoder(const char* name, const VideoSettings& s, std::string& w
   return ctx;
 }
 
+// RGB (full range, row 0 at the top) to BT.709 limited-range 4:2:0 of the same size, in 16-bit
+// fixed point (coefficients x 65536, rounded), chroma from each 2x2 block's mean. swscale's
+// RGB24 input path took about 4 ms of a 1024^2 frame on one core; this splits the rows over the
+// cores (bench stream: see docs/performance.md). Width and height are even.
+void rgb_to_yuv420_bt709(const uint8_t* rgb, int w, int h, AVFrame* f) {
+  parallel_chunks(size_t(h / 2), [&](size_t r0, size_t r1, int) {
+    for (size_t r = r0; r < r1; ++r) {
+      const int y0 = int(2 * r);
+      uint8_t* cb = f->data[1] + r * f->linesize[1];
+      uint8_t* cr = f->data[2] + r * f->linesize[2];
+      const uint8_t* row[2] = {rgb + size_t(y0) * w * 3, rgb + size_t(y0 + 1) * w * 3};
+      uint8_t* yrow[2] = {f->data[0] + size_t(y0) * f->linesize[0], f->data[0] + size_t(y0 + 1) * f->linesize[0]};
+      for (int k = 0; k < 2; ++k)
+        for (int x = 0; x < w; ++x) {
+          const uint8_t* p = row[k] + 3 * x;
+          yrow[k][x] = uint8_t((11966 * p[0] + 40254 * p[1] + 4064 * p[2] + (16 << 16) + 32768) >> 16);
+        }
+      for (int x = 0; x < w / 2; ++x) {
+        const uint8_t *a = row[0] + 6 * x, *b = row[1] + 6 * x;
+        const int R = a[0] + a[3] + b[0] + b[3], G = a[1] + a[4] + b[1] + b[4], B = a[2] + a[5] + b[2] + b[5];
+        cb[x] = uint8_t((-6597 * R - 22187 * G + 28784 * B + (512 << 16) + 131072) >> 18);
+        cr[x] = uint8_t((28784 * R - 26148 * G - 2637 * B + (512 << 16) + 131072) >> 18);
+      }
+    }
+  });
+}
+
 void quiet_logs() {
   static std::once_flag once;
   // Failures come back as exceptions that name the encoder; a probe of an absent NVIDIA driver
@@ -185,6 +214,7 @@ struct VideoEncoder::Impl {
   SwsPtr sws;
   int sws_w = 0, sws_h = 0;
   int64_t pts = 0;
+  static void scale_into_frame_impl(Impl& m, const uint8_t* rgb, int width, int height);
 };
 
 VideoEncoder::VideoEncoder(const VideoSettings& s) : impl_(std::make_unique<Impl>()) {
@@ -216,8 +246,8 @@ VideoEncoder::~VideoEncoder() = default;
 const VideoSettings& VideoEncoder::settings() const { return impl_->settings; }
 const char* VideoEncoder::encoder_name() const { return impl_->name; }
 
-VideoPacket VideoEncoder::encode(const uint8_t* rgb, int width, int height, bool force_key) {
-  Impl& m = *impl_;
+// A frame of another size (rendered smaller by the frame budget): scaled by swscale.
+void VideoEncoder::Impl::scale_into_frame_impl(Impl& m, const uint8_t* rgb, int width, int height) {
   if (!m.sws || m.sws_w != width || m.sws_h != height) {
     // RGB (full range) to BT.709 limited-range 4:2:0, scaled to the coded size where it differs.
     m.sws.reset(sws_getContext(width, height, AV_PIX_FMT_RGB24, m.settings.width, m.settings.height,
@@ -228,10 +258,19 @@ VideoPacket VideoEncoder::encode(const uint8_t* rgb, int width, int height, bool
     m.sws_w = width;
     m.sws_h = height;
   }
-  if (av_frame_make_writable(m.frame.get()) < 0) throw std::runtime_error("video: frame not writable");
   const uint8_t* src[1] = {rgb};
   const int stride[1] = {width * 3};
   sws_scale(m.sws.get(), src, stride, 0, height, m.frame->data, m.frame->linesize);
+}
+
+VideoPacket VideoEncoder::encode(const uint8_t* rgb, int width, int height, bool force_key) {
+  Impl& m = *impl_;
+  if (av_frame_make_writable(m.frame.get()) < 0) throw std::runtime_error("video: frame not writable");
+  if (width == m.settings.width && height == m.settings.height) {
+    rgb_to_yuv420_bt709(rgb, width, height, m.frame.get());
+  } else {
+    Impl::scale_into_frame_impl(m, rgb, width, height);
+  }
   m.frame->pts = m.pts++;
   m.frame->pict_type = force_key ? AV_PICTURE_TYPE_I : AV_PICTURE_TYPE_NONE;
   m.frame->key_frame = force_key ? 1 : 0;
