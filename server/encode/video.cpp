@@ -74,7 +74,7 @@ void configure(AVCodecContext* ctx, const char* name, const VideoSettings& s) {
   const std::string crf = std::to_string(int(std::lround(crf_for(s.codec, s.quality))));
   if (n == "libx264") {
     set(ctx, "preset", "superfast");
-    set(ctx, "tune", "zerolatency");
+    set(ctx, "tune", "zerolatency,psnr");
     set(ctx, "crf", crf);
     set(ctx, "forced-idr", "1");
   } else if (n == "libvpx-vp9") {
