@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <filesystem>
 
+#include <glm/gtc/matrix_transform.hpp>
+
 #include "core/generators.h"
 #include "core/volume_io.h"
 
@@ -27,6 +29,13 @@ ResolvedScene bench_scene(const Volume& vol, int size, const std::string& filter
   const glm::dvec3 c = s.camera.center;
   s.camera.eye = c + (s.camera.eye - c).z * glm::dvec3(0.55, 0.45, 0.7);
   return s;
+}
+
+Camera orbit_camera(const Camera& c, double deg) {
+  const glm::dmat4 rot = glm::rotate(glm::dmat4(1.0), glm::radians(deg), glm::normalize(c.up));
+  Camera o = c;
+  o.eye = c.center + glm::dvec3(rot * glm::dvec4(c.eye - c.center, 0.0));
+  return o;
 }
 
 BenchRenderer make_bench_renderer() {

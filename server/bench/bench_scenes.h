@@ -14,6 +14,8 @@ namespace peakcast::bench {
 // A file, or a generator kind made in memory at a modest size (ML 128^3, the others 256^3).
 std::shared_ptr<Volume> bench_volume(const std::string& what);
 ResolvedScene bench_scene(const Volume& vol, int size, const std::string& filter);
+// The camera turned by `deg` about its up axis through the centre (an orbit).
+Camera orbit_camera(const Camera& c, double deg);
 
 // The renderer a benchmark draws with: PEAKCAST_BACKEND's (auto: the CPU backend on a software
 // rasteriser), its line printed.

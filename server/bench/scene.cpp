@@ -29,14 +29,6 @@ struct SceneBenchArgs {
   bool json = false, bare = false;
 };
 
-// The scene's camera turned by `deg` about its up axis through the centre (an orbit).
-Camera orbit_camera(const Camera& c, double deg) {
-  const glm::dmat4 rot = glm::rotate(glm::dmat4(1.0), glm::radians(deg), glm::normalize(c.up));
-  Camera o = c;
-  o.eye = c.center + glm::dvec3(rot * glm::dvec4(c.eye - c.center, 0.0));
-  return o;
-}
-
 int run_scene_bench(const SceneBenchArgs& a) {
   const auto t_load = std::chrono::steady_clock::now();
   LoadedScene ls = load_scene_file(a.scene);

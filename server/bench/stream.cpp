@@ -8,7 +8,6 @@
 #include <cstdio>
 #include <memory>
 
-#include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>
 
 #include "bench/bench_scenes.h"
@@ -38,13 +37,6 @@ double psnr(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
   return mse == 0 ? 99.0 : 10 * std::log10(255.0 * 255.0 / mse);
 }
 
-Camera turned(const Camera& c, double deg) {
-  const glm::dmat4 rot = glm::rotate(glm::dmat4(1.0), glm::radians(deg), glm::normalize(c.up));
-  Camera o = c;
-  o.eye = c.center + glm::dvec3(rot * glm::dvec4(c.eye - c.center, 0.0));
-  return o;
-}
-
 int run_stream(const StreamArgs& a) {
   int w = 0, h = 0;
   if (std::sscanf(a.size.c_str(), "%dx%d", &w, &h) != 2 || w < 16 || h < 16 || w % 2 || h % 2)
@@ -68,7 +60,7 @@ int run_stream(const StreamArgs& a) {
   req.output = render::RenderOutput::Rgb8;
   const auto t_render = Clock::now();
   for (int f = 0; f < frames; ++f) {
-    s.camera = turned(start, a.orbit_deg_per_s * f / a.fps);
+    s.camera = orbit_camera(start, a.orbit_deg_per_s * f / a.fps);
     renders.push_back(b.renderer->render(*resident, s, req, nullptr).rgb8.rgb);
   }
   const double render_s = std::chrono::duration<double>(Clock::now() - t_render).count();

@@ -208,10 +208,7 @@ void WsSession::handle(const std::string& text) {
             app_.render.notify();
           });
         }
-        if constexpr (std::is_same_v<T, QualityMsg>) {
-          if (m.kbps) m.kbps = std::min(*m.kbps, app_.config.max_kbps);  // the server's ceiling
-          session_->set_quality(m);
-        }
+        if constexpr (std::is_same_v<T, QualityMsg>) session_->set_quality(m, app_.config.max_kbps);
         if constexpr (std::is_same_v<T, KeyframeMsg>) session_->request_key_frame();
         if constexpr (std::is_same_v<T, ViewportMsg>) session_->set_viewport(m.viewport);
         if constexpr (std::is_same_v<T, AckMsg>) session_->ack(m.frame);
@@ -261,9 +258,9 @@ void WsSession::start_session(const protocol::Hello& hello, std::shared_ptr<Volu
                               std::optional<std::shared_ptr<const RayTextureSpec>> texture) {
   auto session = std::make_shared<Session>("s" + std::to_string(app_.next_session++), weak_from_this(),
                                            app_.png_locator());
-  protocol::QualityMsg ceiling;
-  ceiling.kbps = app_.config.max_kbps;
-  session->set_quality(ceiling);
+  protocol::QualityMsg start_rate;  // a video stream starts at the server's ceiling
+  start_rate.kbps = app_.config.max_kbps;
+  session->set_quality(start_rate);
   session->start(volume, hello.viewport, hello.state, texture);
   session_ = session;
   nlohmann::json vols = nlohmann::json::array();

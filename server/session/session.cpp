@@ -145,7 +145,7 @@ size_t Session::add_stroke(const Stroke& stroke) {
   return ray_texture_->strokes.size();
 }
 
-void Session::set_quality(const protocol::QualityMsg& q) {
+void Session::set_quality(const protocol::QualityMsg& q, int max_kbps) {
   std::lock_guard lock(m_);
   if (q.interactive_scale) quality_.interactive_scale = *q.interactive_scale;
   if (q.interactive_ms) quality_.interactive_ms = *q.interactive_ms;
@@ -153,7 +153,7 @@ void Session::set_quality(const protocol::QualityMsg& q) {
   if (q.final_quality) quality_.final_quality = *q.final_quality;
   if (q.final_format) quality_.final_png = *q.final_format == "png";
   if (q.codec) quality_.codec = *q.codec;
-  if (q.kbps) quality_.kbps = *q.kbps;
+  if (q.kbps) quality_.kbps = std::min(*q.kbps, max_kbps);
   final_pending_ = true;  // re-send the still at the new quality
 }
 

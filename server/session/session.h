@@ -16,6 +16,7 @@
 
 #include "core/ray_texture_png.h"
 #include "core/scene.h"
+#include "session/limits.h"
 #include "session/protocol.h"
 #include "session/video_channel.h"
 #include "session/volume_store.h"
@@ -87,7 +88,7 @@ class Session {
   // renderer applies just this stroke). Returns the texture's stroke count. Throws
   // ProtocolError when the session has no ray texture or it is full.
   size_t add_stroke(const Stroke& stroke);
-  void set_quality(const protocol::QualityMsg& q);
+  void set_quality(const protocol::QualityMsg& q, int max_kbps = limits::kMaxKbps);  // kbps above max_kbps: max_kbps
   void set_viewport(const protocol::Viewport& vp);
   void request_key_frame();  // a video client lost a frame: the next interactive frame is a key frame
   void ack(uint32_t frame_id);
