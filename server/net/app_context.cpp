@@ -4,6 +4,7 @@
 #include <string>
 
 #include "core/volume_io.h"
+#include "encode/video.h"
 
 namespace peakcast::net {
 
@@ -18,7 +19,11 @@ AppContext::AppContext(ServerConfig c)
                                                    limits::kStillDelay, config.max_fps},
                                   config.egl_device, config.backend, config.program_cache, config.wrap_renderer,
                                   config.ranks}),
-      ws_sessions(config.max_sessions) {}
+      ws_sessions(config.max_sessions) {
+  // Which video encoders open is tried once, here, before serving: not on an io thread at the
+  // first welcome (opening libaom and libx264 takes tens of ms).
+  encode::available_codecs();
+}
 
 PngLocator AppContext::png_locator() const {
   return [dirs = config.data_dirs](const std::string& png) {
