@@ -13,7 +13,8 @@ install_node_modules
 declare -a part_names part_secs
 tally=$(mktemp)  # "passed failed" lines from every part (parts may run in subshells)
 failures=$(mktemp)  # "part: test" for every test that failed, repeated at the end of the output
-trap 'rm -f "$tally" "$failures"' EXIT
+details=$(mktemp)  # why each failed: the telling lines of its output, repeated at the very end
+trap 'rm -f "$tally" "$failures" "$details"' EXIT
 # with_env VAR=value... CMD: runs CMD (a function too) with those variables, in a subshell.
 with_env() {
   (
@@ -46,6 +47,14 @@ ctest_counted() {
   # CTest lists them after "The following tests FAILED:", one "\t<n> - <name> (<why>)" a line.
   sed -n '/The following tests FAILED:/,$p' "$log" | grep -E '^[[:space:]]+[0-9]+ - ' |
     sed "s|^[[:space:]]*|${dir##*/}: |" >>"$failures"
+  # A CI log is read from its end: each failed test's own lines that say why, there too.
+  local name
+  for name in $(sed -n '/The following tests FAILED:/,$p' "$log" | sed -nE 's/^[[:space:]]+[0-9]+ - ([^ ]+) .*/\1/p'); do
+    echo "-- ${dir##*/}: $name" >>"$details"
+    awk -v t="$name" '$0 ~ "^[0-9]+/[0-9]+ Test: " t "$" {on = 1} on && /^<end of output>/ {exit} on' \
+      "$dir/Testing/Temporary/LastTest.log" 2>/dev/null |
+      grep -E 'FAIL|rror|ssert|not ok|✖|Sanitizer|Which is|Expected|Timeout|timed out' | head -n 25 >>"$details" || true
+  done
   rm -f "$log"
   return "$rc"
 }
@@ -99,6 +108,8 @@ passed=$(awk '{p += $1} END {print p + 0}' "$tally")
 failed=$(awk '{f += $2} END {print f + 0}' "$tally")
 echo "$passed passed, $failed failed"
 if [[ -s $failures ]]; then
+  echo "== why (the lines of each failed test's output that say so; whole output above)"
+  cat "$details"
   echo "== failed tests (build folder: ctest number - name)"
   cat "$failures"
 fi

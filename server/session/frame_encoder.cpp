@@ -20,21 +20,14 @@ std::vector<uint8_t> encode_image(encode::JpegEncoder& enc, const std::vector<ui
   return png ? encode::encode_png(rgb.data(), width, height) : enc.encode(rgb.data(), width, height, quality, sub);
 }
 
-void encode_viewer_frame(encode::JpegEncoder& enc, const RenderedFrame& f, FrameSink& sink, Metrics& metrics) {
+namespace {
+
+// Encodes (unless `video` holds the frame already) and hands the frame and its stats to the sink.
+void send_viewer_frame(encode::JpegEncoder& enc, const RenderedFrame& f, std::optional<VideoFrameOut> video,
+                       Clock::time_point t0, FrameSink& sink, Metrics& metrics, nlohmann::json stats) {
   const FrameJob& job = f.job;
-  const auto t0 = Clock::now();
   const bool png = job.final && job.quality.final_png;
   const int q = job.final ? job.quality.final_quality : job.quality.interactive_quality;
-  nlohmann::json stats = f.stats;
-  std::optional<VideoFrameOut> video;
-  if (job.video) {
-    std::string error;
-    video = job.video->encode(f.video_ticket, job.video_settings, f.rgb.data(), f.width, f.height, error);
-    if (!video) {  // this frame goes out as JPEG; the stream's next frame is a key frame
-      metrics.add("peakcast_video_failures_total", "", 1);
-      stats["warnings"].push_back("video encode failed, this frame sent as JPEG: " + error);
-    }
-  }
   std::vector<uint8_t> bytes =
       video ? std::move(video->packet.bytes)
             : encode_image(enc, f.rgb, f.width, f.height, png, q,
@@ -66,6 +59,24 @@ void encode_viewer_frame(encode::JpegEncoder& enc, const RenderedFrame& f, Frame
   sink.deliver_frame(protocol::encode_frame(h, bytes), job.frame_id, job.final, bool(video));
   sink.deliver_text(protocol::stats_message(job.frame_id, job.final, f.width, f.height, stats,
                                             ms_between(t0, encoded), image_bytes));
+}
+
+}  // namespace
+
+void encode_viewer_frame(encode::JpegEncoder& enc, const RenderedFrame& f, FrameSink& sink, Metrics& metrics) {
+  const auto t0 = Clock::now();
+  if (!f.job.video) return send_viewer_frame(enc, f, std::nullopt, t0, sink, metrics, f.stats);
+  // A video frame goes to the sink in its stream's turn, so the wire has the frames in the order
+  // they were encoded.
+  f.job.video->encode(f.video_ticket, f.job.video_settings, f.rgb.data(), f.width, f.height,
+                      [&](std::optional<VideoFrameOut> video, const std::string& error) {
+                        nlohmann::json stats = f.stats;
+                        if (!video) {  // this frame goes out as JPEG; the stream's next frame is a key frame
+                          metrics.add("peakcast_video_failures_total", "", 1);
+                          stats["warnings"].push_back("video encode failed, this frame sent as JPEG: " + error);
+                        }
+                        send_viewer_frame(enc, f, std::move(video), t0, sink, metrics, std::move(stats));
+                      });
 }
 
 void encode_still(encode::JpegEncoder& enc, StillWork& w, Metrics& metrics) {

@@ -46,7 +46,13 @@ constexpr double kUploadsPerMinutePerClient = 60;           // (cfg) per client 
 constexpr double kUploadBurst = 10;
 constexpr std::chrono::seconds kDefaultUploadIdleTimeout{30};  // (cfg) no upload bytes for this long: the upload ends
 constexpr size_t kMaxUploadNameLength = 200;                // characters of an upload's name
-constexpr std::chrono::milliseconds kShutdownGrace{4000};  // SIGTERM -> forced exit, if the graceful path has not finished
+// SIGTERM -> forced exit, if the graceful path has not finished. Sanitizer builds wait longer: a
+// report being written (stacks symbolized, seconds on a loaded machine) must not be cut off.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+constexpr std::chrono::milliseconds kShutdownGrace{30000};
+#else
+constexpr std::chrono::milliseconds kShutdownGrace{4000};
+#endif
 constexpr std::chrono::milliseconds kCloseFlush{1000};   // SIGTERM: time given to WebSocket close frames and answers
 
 }  // namespace peakcast::limits

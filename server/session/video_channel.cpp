@@ -20,6 +20,16 @@ bool same(const encode::VideoSettings& a, const encode::VideoSettings& b) {
 
 std::optional<VideoFrameOut> VideoChannel::encode(uint64_t ticket, const encode::VideoSettings& settings,
                                                   const uint8_t* rgb, int width, int height, std::string& error) {
+  std::optional<VideoFrameOut> result;
+  encode(ticket, settings, rgb, width, height, [&](std::optional<VideoFrameOut> out, const std::string& e) {
+    result = std::move(out);
+    error = e;
+  });
+  return result;
+}
+
+void VideoChannel::encode(uint64_t ticket, const encode::VideoSettings& settings, const uint8_t* rgb, int width,
+                          int height, const Then& then) {
   std::unique_lock lock(m_);
   turn_.wait(lock, [&] { return serving_ == ticket; });
   struct Next {  // the next ticket's turn, whatever happens here
@@ -29,6 +39,8 @@ std::optional<VideoFrameOut> VideoChannel::encode(uint64_t ticket, const encode:
       c.turn_.notify_all();
     }
   } next{*this};
+  std::optional<VideoFrameOut> result;
+  std::string error;
   try {
     if (!encoder_ || !same(current_, settings)) {
       encoder_.reset();
@@ -49,12 +61,12 @@ std::optional<VideoFrameOut> VideoChannel::encode(uint64_t ticket, const encode:
     size_t bytes = 0;
     for (const auto& s : sent_) bytes += s.second;
     out.kbps = double(bytes) * 8.0 / 1000.0;
-    return out;
+    result = std::move(out);
   } catch (const std::exception& e) {
     error = e.what();
     encoder_.reset();  // the next frame starts a new encoder, with a key frame
-    return std::nullopt;
   }
+  then(std::move(result), error);  // still this ticket's turn
 }
 
 std::pair<int, int> video_coded_size(int width, int height, double interactive_scale) {

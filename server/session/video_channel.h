@@ -13,6 +13,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -38,6 +39,12 @@ class VideoChannel {
   // ticket (a failed encode returns nullopt with `error` set, and the next frame is a key frame).
   std::optional<VideoFrameOut> encode(uint64_t ticket, const encode::VideoSettings& settings, const uint8_t* rgb,
                                       int width, int height, std::string& error);
+  // The same, and `then` hands the frame on (to the session's send queue) before the next ticket's
+  // turn: frames reach the wire in the order rendered, or a delta frame could arrive before the key
+  // frame it refers to. `then` gets the frame, or nullopt and the error.
+  using Then = std::function<void(std::optional<VideoFrameOut>, const std::string& error)>;
+  void encode(uint64_t ticket, const encode::VideoSettings& settings, const uint8_t* rgb, int width, int height,
+              const Then& then);
   void request_key_frame();  // the client's keyframe message
 
   // For the tests: encoders opened so far (each new one starts with a key frame).

@@ -4,7 +4,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <mutex>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "encode/video.h"
@@ -162,6 +164,30 @@ TEST(VideoChannel, TicketsAreEncodedInTheOrderTaken) {
   ASSERT_TRUE(out0 && out1) << e0 << e1;
   EXPECT_TRUE(out0->packet.key);
   EXPECT_FALSE(out1->packet.key);
+}
+
+TEST(VideoChannel, FramesAreHandedOnInTheOrderTaken) {
+  // Frame 0's hand-off to the send queue is slow; frame 1's thread is waiting. Frame 1 must not
+  // reach the queue first: the client would get a delta frame before the key frame it refers to.
+  VideoChannel ch;
+  const auto img = encode::picture(64, 48, 0);
+  const uint64_t t0 = ch.take_ticket(), t1 = ch.take_ticket();
+  std::mutex m;
+  std::vector<std::pair<uint64_t, bool>> queue;  // (ticket, key) in the order handed on
+  auto hand_on = [&](uint64_t t, int delay_ms) {
+    return [&, t, delay_ms](std::optional<VideoFrameOut> out, const std::string& e) {
+      ASSERT_TRUE(out) << e;
+      std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+      std::lock_guard lock(m);
+      queue.emplace_back(t, out->packet.key);
+    };
+  };
+  std::thread late([&] { ch.encode(t1, small(), img.data(), 64, 48, hand_on(t1, 0)); });
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  ch.encode(t0, small(), img.data(), 64, 48, hand_on(t0, 100));
+  late.join();
+  const std::vector<std::pair<uint64_t, bool>> want{{t0, true}, {t1, false}};
+  EXPECT_EQ(queue, want);
 }
 
 TEST(VideoChannel, KeyFramesOnASettingTheClientsRequestAndAfterAFailure) {
