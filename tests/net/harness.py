@@ -107,10 +107,12 @@ class Server:
         self.stop()
 
 
-def http(server, path, method="GET", body=None, headers=None):
+def http(server, path, method="GET", body=None, headers=None, timeout=180):
+    """One request; the answer's (status, headers, body). The timeout only ends a hung test: a
+    sanitizer build on a loaded 2-core machine takes tens of seconds over a peaks still."""
     req = urllib.request.Request(server.base + path, data=body, method=method, headers=headers or {})
     try:
-        with urllib.request.urlopen(req, timeout=60) as r:
+        with urllib.request.urlopen(req, timeout=timeout) as r:
             return r.status, dict(r.headers), r.read()
     except urllib.error.HTTPError as e:
         return e.code, dict(e.headers), e.read()
