@@ -49,12 +49,13 @@ ctest_counted() {
     sed "s|^[[:space:]]*|${dir##*/}: |" >>"$failures"
   # A CI log is read from its end: each failed test's own lines that say why, there too.
   local name
-  for name in $(sed -n '/The following tests FAILED:/,$p' "$log" | sed -nE 's/^[[:space:]]+[0-9]+ - ([^ ]+) .*/\1/p'); do
-    echo "-- ${dir##*/}: $name" >>"$details"
-    awk -v t="$name" '$0 ~ "^[0-9]+/[0-9]+ Test: " t "$" {on = 1} on && /^<end of output>/ {exit} on' \
-      "$dir/Testing/Temporary/LastTest.log" 2>/dev/null |
-      grep -E 'FAIL|rror|ssert|not ok|✖|Sanitizer|Which is|Expected|Timeout|timed out' | head -n 25 >>"$details" || true
-  done
+  sed -n '/The following tests FAILED:/,$p' "$log" | sed -nE 's/^[[:space:]]+[0-9]+ - ([^ ]+) .*/\1/p' |
+    while read -r name; do
+      echo "-- ${dir##*/}: $name" >>"$details"
+      awk -v t="$name" '{s = $0} sub(/^[0-9]+\/[0-9]+ Test: /, "", s) && s == t {on = 1} on && /^<end of output>/ {exit} on' \
+        "$dir/Testing/Temporary/LastTest.log" 2>/dev/null |
+        grep -E 'FAIL|rror|ssert|not ok|✖|Sanitizer|Which is|Expected|timed out' | head -n 25 >>"$details" || true
+    done
   rm -f "$log"
   return "$rc"
 }

@@ -88,7 +88,8 @@ class Server:
         if self.alive():
             self.proc.send_signal(signal.SIGTERM)
             try:
-                self.proc.wait(10)
+                # Past the sanitizer builds' shutdown grace (30 s): a report being written finishes.
+                self.proc.wait(40)
             except subprocess.TimeoutExpired:
                 self.proc.kill()
         # A sanitizer build reports on the server's stderr: a report fails the test that ran it.
