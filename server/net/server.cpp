@@ -63,6 +63,10 @@ void Server::stop() {
   ioc_.stop();
   for (auto& t : threads_) t.join();
   threads_.clear();
+  // Volume loads and probes still running hold their connections; they finish now and post their
+  // answers into the stopped io_context, which frees them while it still exists (it is
+  // destroyed before app_: a job ending after it would close a socket on freed memory).
+  app_->loader.join();
 }
 
 }  // namespace peakcast::net
