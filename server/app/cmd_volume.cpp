@@ -2,11 +2,15 @@
 #include <sys/resource.h>
 
 #include <chrono>
+#include <cctype>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
 
 #include "app/commands.h"
+#include "chunked/chunked_volume.h"
+#include "chunked/zarr_writer.h"
 #include "core/generators.h"
 #include "core/macrocells.h"
 #include "core/volume_io.h"
@@ -29,13 +33,60 @@ struct MakeVolumeArgs {
   bool gzip = false;
 };
 
+// Which level, time point and channel of a chunked volume (OME-Zarr, Neuroglancer precomputed).
+struct ChunkSelectArgs {
+  int level = 0;
+  int64_t time = 0, channel = 0;
+  LoadOptions options() const {
+    LoadOptions o;
+    o.level = level;
+    o.time_point = time;
+    o.channel = channel;
+    return o;
+  }
+};
+
+void add_chunk_select(CLI::App* cmd, ChunkSelectArgs& a) {
+  cmd->add_option("--level", a.level, "chunked volumes: pyramid level (0: full resolution)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--time", a.time, "chunked volumes: time point (OME-Zarr t axis)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--channel", a.channel, "chunked volumes: channel (OME-Zarr c axis, precomputed channels)")
+      ->check(CLI::NonNegativeNumber);
+}
+
+std::string lower_ext(const std::string& path) {
+  std::string e = std::filesystem::path(path).extension().string();
+  for (auto& ch : e) ch = char(std::tolower(static_cast<unsigned char>(ch)));
+  return e;
+}
+
+struct ConvertArgs {
+  std::string in, out, compressor = "blosc";
+  bool gzip = false, pyramid = false;
+  int64_t chunk = 128;
+  ChunkSelectArgs select;
+};
+
 struct InfoArgs {
+  ChunkSelectArgs select;
   std::string file;
   bool macrocells = false;
   int cell = 0;
   std::string nonfinite = "replace";
   int64_t max_voxels = int64_t(1) << 32;
 };
+
+// A chunked volume's levels, from its metadata alone.
+void print_pyramid(const std::string& path) {
+  if (!chunked::is_chunked_volume(path)) return;
+  const auto cv = chunked::open_chunked(path);
+  std::printf("format: %s, %zu level%s\n", cv->format(), cv->levels().size(), cv->levels().size() == 1 ? "" : "s");
+  for (size_t i = 0; i < cv->levels().size(); ++i) {
+    const auto& L = cv->levels()[i];
+    std::printf("  level %zu (%s): %lldx%lldx%lld in chunks of %lldx%lldx%lld, spacing %g %g %g\n", i, L.name.c_str(),
+                (long long)L.dims[0], (long long)L.dims[1], (long long)L.dims[2], (long long)L.chunk[0],
+                (long long)L.chunk[1], (long long)L.chunk[2], L.spacing.x, L.spacing.y, L.spacing.z);
+  }
+}
 
 }  // namespace
 
@@ -68,17 +119,36 @@ void add_volume_commands(CLI::App& app, Runner& run) {
     };
   });
 
-  auto ca = std::make_shared<std::pair<std::string, std::string>>();
-  auto gz = std::make_shared<bool>(false);
-  auto* conv = app.add_subcommand("convert", "Load a volume and write it again (.raw+.json, .nrrd, .nhdr, .mhd, .mha)");
-  conv->add_option("in", ca->first, "volume file or TIFF directory")->required();
-  conv->add_option("out", ca->second, "output file; the format follows the extension")->required();
-  conv->add_flag("--gzip", *gz, "gzip-compress the data (.raw, .nrrd, .nhdr)");
-  conv->callback([ca, gz, &run] {
-    run = [ca, gz] {
-      Volume v = load_volume(ca->first);
-      write_volume(ca->second, v, {*gz});
-      std::printf("wrote %s: %s\n", ca->second.c_str(), v.to_string().c_str());
+  auto ca = std::make_shared<ConvertArgs>();
+  auto* conv = app.add_subcommand("convert", "Load a volume and write it again: .raw+.json, .nrrd, .nhdr, .mhd, .mha, "
+                                             "or an OME-Zarr folder (.zarr, with --pyramid for Neuroglancer and BigDataViewer)");
+  conv->add_option("in", ca->in, "volume file, TIFF directory, OME-Zarr or Neuroglancer precomputed folder")->required();
+  conv->add_option("out", ca->out, "output; the format follows the extension (.zarr: OME-Zarr)")->required();
+  conv->add_flag("--gzip", ca->gzip, "gzip-compress the data (.raw, .nrrd, .nhdr)");
+  conv->add_flag("--pyramid", ca->pyramid, "OME-Zarr: add 2x2x2-mean levels until one fits a chunk");
+  conv->add_option("--chunk", ca->chunk, "OME-Zarr: chunk edge in voxels (default 128)")->check(CLI::Range(1, 512));
+  conv->add_option("--compressor", ca->compressor, "OME-Zarr: blosc (zstd, byte shuffle; default) | zstd | zlib | gzip | none")
+      ->check(CLI::IsMember({"blosc", "zstd", "zlib", "gzip", "none"}));
+  add_chunk_select(conv, ca->select);
+  conv->callback([ca, &run] {
+    run = [ca] {
+      const bool zarr = lower_ext(ca->out) == ".zarr";
+      if (!zarr && (ca->pyramid || ca->compressor != "blosc" || ca->chunk != 128))
+        throw std::invalid_argument("--pyramid, --chunk and --compressor are for an OME-Zarr output (OUT.zarr)");
+      if (zarr && ca->gzip) throw std::invalid_argument("--gzip is for .raw, .nrrd and .nhdr; OME-Zarr takes --compressor");
+      const Volume v = load_volume(ca->in, ca->select.options());
+      if (!zarr) {
+        write_volume(ca->out, v, {ca->gzip});
+        std::printf("wrote %s: %s\n", ca->out.c_str(), v.to_string().c_str());
+        return 0;
+      }
+      chunked::ZarrWriteOptions zo;
+      zo.chunk = ca->chunk;
+      zo.pyramid = ca->pyramid;
+      zo.compressor = chunked::compressor_by_name(ca->compressor);
+      const auto r = chunked::write_ome_zarr(v, ca->out, zo);
+      std::printf("wrote %s: OME-Zarr, %d level%s, %lld chunks, %.1f MiB (%s)\n", ca->out.c_str(), r.levels,
+                  r.levels == 1 ? "" : "s", (long long)r.chunks, double(r.bytes) / 1048576.0, v.to_string().c_str());
       return 0;
     };
   });
@@ -91,9 +161,11 @@ void add_volume_commands(CLI::App& app, Runner& run) {
   info->add_option("--nonfinite", ia->nonfinite, "float NaN/Inf voxels: replace | refuse")
       ->check(CLI::IsMember({"replace", "refuse"}));
   info->add_option("--max-voxels", ia->max_voxels, "refuse volumes with more voxels (default 2^32)");
+  add_chunk_select(info, ia->select);
   info->callback([ia, &run] {
     run = [ia] {
-      LoadOptions opt;
+      print_pyramid(ia->file);
+      LoadOptions opt = ia->select.options();
       opt.max_voxels = ia->max_voxels;
       opt.nonfinite = ia->nonfinite == "refuse" ? NonFinitePolicy::Refuse : NonFinitePolicy::Replace;
       Volume v = load_volume(ia->file, opt);

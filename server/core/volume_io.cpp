@@ -13,6 +13,7 @@
 #include <limits>
 #include <memory>
 
+#include "chunked/chunked_volume.h"
 #include "core/parallel.h"
 #include "core/volume_io_detail.h"
 
@@ -286,7 +287,8 @@ Volume load_volume(const fs::path& path, const LoadOptions& options) {
   if (!fs::exists(path, ec)) throw VolumeError(path, "no such file");
   const std::string ext = lower(path.extension().string());
   Volume v;
-  if (fs::is_directory(path, ec)) {
+  const bool chunked = chunked::is_chunked_volume(path);
+  if (!chunked && fs::is_directory(path, ec)) {
     // A folder of slices described by one header (headsq/quarter.nhdr): that header. TIFF slices
     // without one: the stack.
     std::vector<fs::path> headers;
@@ -305,7 +307,10 @@ Volume load_volume(const fs::path& path, const LoadOptions& options) {
       throw VolumeError(path, "a folder with " + std::to_string(headers.size()) +
                                   " volume headers: open one of them (" + headers[0].filename().string() + ", ...)");
   }
-  if (fs::is_directory(path, ec) || ext == ".tif" || ext == ".tiff") {
+  if (chunked) {
+    const auto cv = chunked::open_chunked(path, {options.time_point, options.channel});
+    v = chunked::read_level(*cv, options.level, options);
+  } else if (fs::is_directory(path, ec) || ext == ".tif" || ext == ".tiff") {
     if (options.region) throw VolumeError(path, "a region of a TIFF stack cannot be read (use NRRD, MetaImage or raw)");
     v = read_tiff(path, options);
   } else if (ext == ".nrrd" || ext == ".nhdr") {
@@ -316,8 +321,8 @@ Volume load_volume(const fs::path& path, const LoadOptions& options) {
     v = read_raw_json(path, options);
   } else {
     throw VolumeError(path, "unknown volume format '" + ext +
-                                "' (expected .nrrd .nhdr .mhd .mha .raw+.json .tif or a "
-                                "directory of TIFF slices)");
+                                "' (expected .nrrd .nhdr .mhd .mha .raw+.json .tif, a "
+                                "directory of TIFF slices, an OME-Zarr or a Neuroglancer precomputed folder)");
   }
   v.name = path.filename().string();
   v.source_path = path.string();

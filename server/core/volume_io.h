@@ -47,10 +47,16 @@ struct LoadOptions {
   // 1 once the volume is whole (statistics done). Called from the loading thread or its workers,
   // never two calls at once. Empty: nobody is told.
   std::function<void(double)> progress;
+  // Chunked volumes (OME-Zarr, Neuroglancer precomputed; docs/chunked-volumes.md): the pyramid
+  // level (0: full resolution) and, where the array has them, the time point and channel.
+  int level = 0;
+  int64_t time_point = 0;
+  int64_t channel = 0;
 };
 
 // Format by name: .nrrd/.nhdr, .mhd/.mha, .json (sidecar) or .raw with a sidecar,
-// .tif/.tiff (multi-page), or a directory of numbered 2D TIFFs.
+// .tif/.tiff (multi-page), a directory of numbered 2D TIFFs, or a chunked volume's directory
+// (OME-Zarr, Neuroglancer precomputed: one level of it, options.level).
 Volume load_volume(const std::filesystem::path& path, const LoadOptions& options = {});
 
 // A volume as the server loads it (session/volume_store.h): the volume and the bytes of voxels

@@ -1,0 +1,120 @@
+#include "chunked/chunked_volume.h"
+
+#include <algorithm>
+#include <cstring>
+
+#include "chunked/formats.h"
+#include "core/parallel.h"
+#include "core/volume_io_detail.h"
+
+namespace fs = std::filesystem;
+
+namespace peakcast::chunked {
+
+bool is_chunked_volume(const fs::path& dir) {
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return false;
+  return fs::is_regular_file(dir / ".zattrs", ec) || fs::is_regular_file(dir / ".zarray", ec) ||
+         fs::is_regular_file(dir / "info", ec);
+}
+
+std::unique_ptr<ChunkedVolume> open_chunked(const fs::path& dir, const ChunkSelect& select) {
+  std::error_code ec;
+  if (fs::is_regular_file(dir / "info", ec) && !fs::exists(dir / ".zattrs", ec) && !fs::exists(dir / ".zarray", ec))
+    return open_precomputed(dir, select);
+  if (fs::is_regular_file(dir / ".zattrs", ec) || fs::is_regular_file(dir / ".zarray", ec))
+    return open_zarr(dir, select);
+  throw VolumeError(dir, "not a chunked volume (no .zattrs, .zarray or Neuroglancer info)");
+}
+
+namespace {
+
+// Copies the chunk box `cb` (voxels in `bytes`, or the fill value) into the region box of `dst`.
+void place_chunk(const std::vector<uint8_t>* bytes, const std::vector<uint8_t>& fill, const Dims& clo,
+                 const Dims& chi, const Dims& rlo, const Dims& rhi, size_t bpv, uint8_t* dst) {
+  Dims a{}, b{};
+  for (int i = 0; i < 3; ++i) {
+    a[i] = std::max(clo[i], rlo[i]);
+    b[i] = std::min(chi[i], rhi[i]);
+  }
+  const int64_t cx = chi[0] - clo[0], cy = chi[1] - clo[1];
+  const int64_t rx = rhi[0] - rlo[0], ry = rhi[1] - rlo[1];
+  const size_t run = size_t(b[0] - a[0]) * bpv;
+  for (int64_t z = a[2]; z < b[2]; ++z)
+    for (int64_t y = a[1]; y < b[1]; ++y) {
+      uint8_t* d = dst + ((size_t((z - rlo[2]) * ry + (y - rlo[1])) * rx + size_t(a[0] - rlo[0])) * bpv);
+      if (bytes) {
+        const size_t s = (size_t((z - clo[2]) * cy + (y - clo[1])) * cx + size_t(a[0] - clo[0])) * bpv;
+        std::memcpy(d, bytes->data() + s, run);
+      } else {
+        for (size_t o = 0; o < run; o += bpv) std::memcpy(d + o, fill.data(), bpv);
+      }
+    }
+}
+
+}  // namespace
+
+Volume read_level(const ChunkedVolume& cv, int level, const LoadOptions& options) {
+  if (level < 0 || level >= int(cv.levels().size()))
+    throw VolumeError(cv.root(), "level " + std::to_string(level) + " does not exist (the pyramid has " +
+                                     std::to_string(cv.levels().size()) + ")");
+  const ChunkLevel& L = cv.levels()[size_t(level)];
+  VolumeHeader h;
+  h.dims = L.dims;
+  h.spacing = L.spacing;
+  h.origin = L.origin;
+  h.source = cv.source();
+  h.big_endian = cv.big_endian();
+  Dims rlo{0, 0, 0}, rhi = L.dims;
+  if (options.region) {
+    for (int a = 0; a < 3; ++a) {
+      const auto& r = *options.region;
+      if (r.lo[a] < 0 || r.hi[a] > L.dims[a] || r.lo[a] >= r.hi[a])
+        throw VolumeError(cv.root(), "region [" + std::to_string(r.lo[a]) + ", " + std::to_string(r.hi[a]) +
+                                         ") on axis " + std::to_string(a) + " is not inside the volume's " +
+                                         std::to_string(L.dims[a]) + " voxels");
+      rlo[a] = r.lo[a];
+      rhi[a] = r.hi[a];
+      h.dims[a] = r.hi[a] - r.lo[a];
+      h.origin[a] = L.origin[a] + double(r.lo[a]) * L.spacing[a];
+    }
+  }
+  LoadOptions local = options;
+  local.region.reset();
+  detail::check_header(cv.root(), h, local);
+  Volume v(h);
+  const size_t bpv = source_bytes(h.source);
+  std::vector<Dims> chunks;  // the chunk indices that meet the box
+  Dims c0{}, c1{};
+  for (int a = 0; a < 3; ++a) {
+    c0[a] = rlo[a] / L.chunk[a];
+    c1[a] = (rhi[a] - 1) / L.chunk[a] + 1;
+  }
+  for (int64_t z = c0[2]; z < c1[2]; ++z)
+    for (int64_t y = c0[1]; y < c1[1]; ++y)
+      for (int64_t x = c0[0]; x < c1[0]; ++x) chunks.push_back({x, y, z});
+  detail::LoadProgress progress(options, size_t(h.voxel_count()) * bpv);
+  parallel_for(chunks.size(), [&](size_t i) {  // rethrows the first refusal
+    const Dims& c = chunks[i];
+    Dims clo{}, chi{}, rb{};
+    size_t placed = bpv;
+    for (int a = 0; a < 3; ++a) {
+      clo[a] = c[a] * L.chunk[a];
+      chi[a] = std::min(clo[a] + L.chunk[a], L.dims[a]);
+      rb[a] = std::min(chi[a], rhi[a]) - std::max(clo[a], rlo[a]);
+      placed *= size_t(rb[a]);
+    }
+    const auto bytes = cv.read_chunk(level, c);
+    place_chunk(bytes ? &*bytes : nullptr, cv.fill(level), clo, chi, rlo, rhi, bpv, v.data());
+    progress.add(placed);
+  });
+  detail::finish_volume(cv.root(), v, h.big_endian, local);
+  if (options.region) {
+    v.source_dims = L.dims;
+    v.region_lo = rlo;
+  }
+  progress.done();
+  return v;
+}
+
+}  // namespace peakcast::chunked

@@ -1,0 +1,78 @@
+// Volumes kept as chunked multiresolution pyramids (docs/chunked-volumes.md): OME-Zarr (NGFF 0.4
+// multiscales over zarr v2 arrays, or one bare zarr array) and Neuroglancer precomputed, as local
+// directories. Opening reads metadata only; voxels are read a box at a time, chunk by chunk.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "core/volume.h"
+#include "core/volume_io.h"
+
+namespace peakcast::chunked {
+
+// One resolution level: a box of voxels cut into chunks (x fastest, as Volume).
+struct ChunkLevel {
+  Dims dims{0, 0, 0};
+  Dims chunk{0, 0, 0};
+  glm::dvec3 spacing{1.0, 1.0, 1.0};
+  glm::dvec3 origin{0.0, 0.0, 0.0};
+  std::string name;  // the level's folder, relative to the root (for messages)
+  Dims chunk_grid() const {
+    return {(dims[0] + chunk[0] - 1) / chunk[0], (dims[1] + chunk[1] - 1) / chunk[1], (dims[2] + chunk[2] - 1) / chunk[2]};
+  }
+};
+
+// Which 3D volume of a 4D or 5D array (OME-Zarr t, c; a precomputed volume's channel).
+struct ChunkSelect {
+  int64_t time = 0;
+  int64_t channel = 0;
+};
+
+class ChunkedVolume {
+ public:
+  virtual ~ChunkedVolume() = default;
+  const std::filesystem::path& root() const { return root_; }
+  const char* format() const { return format_; }
+  const std::vector<ChunkLevel>& levels() const { return levels_; }
+  SourceType source() const { return source_; }
+  bool big_endian() const { return big_endian_; }
+  // One voxel's bytes (file byte order) for a level's chunks that are not stored.
+  const std::vector<uint8_t>& fill(int level) const { return fills_[size_t(level)]; }
+
+  // The chunk at chunk index `c` of `level`, cut to the level's box: (chunk box ∩ dims) voxels, x
+  // fastest, in the file's byte order. Nothing when the chunk is not stored (it reads as fill).
+  // Throws VolumeError naming the chunk's file when it is there but wrong. Thread-safe.
+  virtual std::optional<std::vector<uint8_t>> read_chunk(int level, const Dims& c) const = 0;
+
+ protected:
+  std::filesystem::path root_;
+  const char* format_ = "";
+  std::vector<ChunkLevel> levels_;
+  SourceType source_ = SourceType::U8;
+  bool big_endian_ = false;
+  std::vector<std::vector<uint8_t>> fills_;  // per level
+};
+
+// A directory that holds a chunked volume: .zattrs with "multiscales", a .zarray, or a
+// Neuroglancer `info`.
+bool is_chunked_volume(const std::filesystem::path& dir);
+
+// Reads metadata only. Throws VolumeError naming the file and what is wrong or unsupported.
+std::unique_ptr<ChunkedVolume> open_chunked(const std::filesystem::path& dir, const ChunkSelect& select = {});
+
+// The box options.region (default: all) of `level`, read chunk by chunk on the machine's cores and
+// finished as every reader finishes (byte order, signed shift, non-finite policy, statistics).
+// A region read's volume carries source_dims and region_lo as other formats' do.
+Volume read_level(const ChunkedVolume& volume, int level, const LoadOptions& options);
+
+// The largest size of one decoded chunk a reader accepts.
+constexpr int64_t kMaxChunkBytes = int64_t(1) << 30;
+
+}  // namespace peakcast::chunked

@@ -1,0 +1,176 @@
+#include "chunked/zarr_writer.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "core/parallel.h"
+#include "core/volume_io.h"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace peakcast::chunked {
+namespace {
+
+// One level's voxels in the volume's storage type (signed types shifted, as Volume keeps them).
+struct Level {
+  Dims dims{};
+  std::vector<uint8_t> bytes;
+};
+
+template <typename T>
+void halve(const Level& in, Level& out) {
+  for (int a = 0; a < 3; ++a) out.dims[a] = (in.dims[a] + 1) / 2;
+  out.bytes.assign(size_t(out.dims[0] * out.dims[1] * out.dims[2]) * sizeof(T), 0);
+  const T* src = reinterpret_cast<const T*>(in.bytes.data());
+  T* dst = reinterpret_cast<T*>(out.bytes.data());
+  const Dims d = in.dims, o = out.dims;
+  parallel_chunks(size_t(o[2]), [&](size_t z0, size_t z1, int) {
+    for (int64_t z = int64_t(z0); z < int64_t(z1); ++z)
+      for (int64_t y = 0; y < o[1]; ++y)
+        for (int64_t x = 0; x < o[0]; ++x) {
+          double sum = 0.0;
+          int n = 0;
+          for (int64_t k = 2 * z; k < std::min(2 * z + 2, d[2]); ++k)
+            for (int64_t j = 2 * y; j < std::min(2 * y + 2, d[1]); ++j)
+              for (int64_t i = 2 * x; i < std::min(2 * x + 2, d[0]); ++i, ++n) sum += double(src[(k * d[1] + j) * d[0] + i]);
+          const double mean = sum / n;
+          dst[(z * o[1] + y) * o[0] + x] = std::is_floating_point_v<T> ? T(mean) : T(std::lround(mean));
+        }
+  });
+}
+
+const char* dtype_of(SourceType t) {
+  switch (t) {
+    case SourceType::U8: return "|u1";
+    case SourceType::I8: return "|i1";
+    case SourceType::U16: return "<u2";
+    case SourceType::I16: return "<i2";
+    case SourceType::F32: return "<f4";
+  }
+  return "";
+}
+
+void write_file(const fs::path& file, const void* data, size_t n) {
+  std::ofstream out(file, std::ios::binary | std::ios::trunc);
+  out.write(static_cast<const char*>(data), std::streamsize(n));
+  out.close();
+  if (!out) throw VolumeError(file, "write failed");
+}
+
+void write_json(const fs::path& file, const json& j) {
+  const std::string s = j.dump(2) + "\n";
+  write_file(file, s.data(), s.size());
+}
+
+// The chunk at `c` of a level, padded to the full chunk shape `e` with zeros, in the source type.
+std::vector<uint8_t> chunk_bytes(const Level& L, const Dims& c, const Dims& e, SourceType source) {
+  const size_t bpv = source_bytes(source);
+  std::vector<uint8_t> out(size_t(e[0] * e[1] * e[2]) * bpv, 0);
+  Dims lo{}, box{};
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = c[a] * e[a];
+    box[a] = std::min(e[a], L.dims[a] - lo[a]);
+  }
+  for (int64_t z = 0; z < box[2]; ++z)
+    for (int64_t y = 0; y < box[1]; ++y)
+      std::memcpy(out.data() + size_t((z * e[1] + y) * e[0]) * bpv,
+                  L.bytes.data() + size_t(((lo[2] + z) * L.dims[1] + lo[1] + y) * L.dims[0] + lo[0]) * bpv,
+                  size_t(box[0]) * bpv);
+  // Back to the source type: signed integers un-shifted; the padding stays 0.
+  const uint8_t flip = source == SourceType::I8 ? 0x80 : 0;
+  const uint16_t flip16 = source == SourceType::I16 ? 0x8000 : 0;
+  for (int64_t z = 0; z < box[2] && (flip || flip16); ++z)
+    for (int64_t y = 0; y < box[1]; ++y)
+      for (int64_t x = 0; x < box[0]; ++x) {
+        const size_t i = size_t((z * e[1] + y) * e[0] + x);
+        if (flip) out[i] ^= flip;
+        else reinterpret_cast<uint16_t*>(out.data())[i] ^= flip16;
+      }
+  return out;
+}
+
+}  // namespace
+
+ZarrWriteReport write_ome_zarr(const Volume& volume, const fs::path& out, const ZarrWriteOptions& options) {
+  if (options.chunk < 1 || options.chunk > 512) throw std::invalid_argument("chunk edge must be 1..512 voxels");
+  if (!volume.has_voxels()) throw std::invalid_argument("the volume has no voxels here");
+  std::error_code ec;
+  if (fs::exists(out, ec)) throw VolumeError(out, "already exists (remove it first)");
+  const fs::path tmp = out.string() + ".partial";
+  fs::remove_all(tmp, ec);
+  if (!fs::create_directories(tmp, ec)) throw VolumeError(tmp, "cannot be created: " + ec.message());
+  std::vector<Level> levels(1);
+  levels[0].dims = volume.dims();
+  levels[0].bytes.assign(volume.data(), volume.data() + volume.byte_size());
+  while (options.pyramid && std::max({levels.back().dims[0], levels.back().dims[1], levels.back().dims[2]}) > options.chunk) {
+    Level next;
+    switch (volume.type()) {
+      case VoxelType::U8: halve<uint8_t>(levels.back(), next); break;
+      case VoxelType::U16: halve<uint16_t>(levels.back(), next); break;
+      case VoxelType::F32: halve<float>(levels.back(), next); break;
+    }
+    levels.push_back(std::move(next));
+  }
+  ZarrWriteReport report;
+  report.levels = int(levels.size());
+  json datasets = json::array();
+  std::atomic<int64_t> chunks{0}, bytes{0};
+  for (size_t k = 0; k < levels.size(); ++k) {
+    const Level& L = levels[k];
+    const fs::path dir = tmp / std::to_string(k);
+    fs::create_directories(dir);
+    Dims e{};  // the chunk edge, no larger than the level (a thin slab gets thin chunks)
+    for (int a = 0; a < 3; ++a) e[a] = std::min(options.chunk, L.dims[a]);
+    write_json(dir / ".zarray", {{"zarr_format", 2},
+                                 {"shape", {L.dims[2], L.dims[1], L.dims[0]}},
+                                 {"chunks", {e[2], e[1], e[0]}},
+                                 {"dtype", dtype_of(volume.source_type())},
+                                 {"compressor", compressor_json(options.compressor)},
+                                 {"fill_value", 0},
+                                 {"order", "C"},
+                                 {"filters", nullptr},
+                                 {"dimension_separator", "/"}});
+    const Dims grid{(L.dims[0] + e[0] - 1) / e[0], (L.dims[1] + e[1] - 1) / e[1], (L.dims[2] + e[2] - 1) / e[2]};
+    for (int64_t z = 0; z < grid[2]; ++z) fs::create_directories(dir / std::to_string(z));
+    for (int64_t z = 0; z < grid[2]; ++z)
+      for (int64_t y = 0; y < grid[1]; ++y) fs::create_directories(dir / std::to_string(z) / std::to_string(y));
+    parallel_for(size_t(grid[0] * grid[1] * grid[2]), [&](size_t i) {
+      const Dims c{int64_t(i) % grid[0], int64_t(i) / grid[0] % grid[1], int64_t(i) / (grid[0] * grid[1])};
+      const auto raw = chunk_bytes(L, c, e, volume.source_type());
+      const auto packed = encode_chunk(options.compressor, raw.data(), raw.size(), source_bytes(volume.source_type()));
+      write_file(dir / std::to_string(c[2]) / std::to_string(c[1]) / std::to_string(c[0]), packed.data(), packed.size());
+      ++chunks;
+      bytes += int64_t(packed.size());
+    });
+    const double f = std::ldexp(1.0, int(k));  // this level's voxel edge in level-0 voxels
+    json scale = json::array(), shift = json::array();
+    for (int a = 2; a >= 0; --a) {
+      scale.push_back(volume.spacing[a] * f);
+      shift.push_back(volume.origin[a] + 0.5 * (f - 1.0) * volume.spacing[a]);  // the mean's centre
+    }
+    datasets.push_back({{"path", std::to_string(k)},
+                        {"coordinateTransformations",
+                         {{{"type", "scale"}, {"scale", scale}}, {{"type", "translation"}, {"translation", shift}}}}});
+  }
+  json axes = json::array();
+  for (const char* n : {"z", "y", "x"}) axes.push_back({{"name", n}, {"type", "space"}});
+  write_json(tmp / ".zgroup", {{"zarr_format", 2}});
+  write_json(tmp / ".zattrs", {{"multiscales", {{{"version", "0.4"},
+                                                 {"name", volume.name},
+                                                 {"axes", axes},
+                                                 {"datasets", datasets},
+                                                 {"type", "mean"},
+                                                 {"metadata", {{"method", "2x2x2 mean, sizes rounded up"}}}}}}});
+  fs::rename(tmp, out, ec);
+  if (ec) throw VolumeError(out, "cannot be put in place: " + ec.message());
+  report.chunks = chunks;
+  report.bytes = bytes;
+  return report;
+}
+
+}  // namespace peakcast::chunked
