@@ -9,11 +9,10 @@ seconds=${1:-30}
 shift || true
 FUZZ_DIR=${PEAKCAST_FUZZ_BUILD_DIR:-$PEAKCAST_ROOT/build-fuzz}
 command -v clang++ >/dev/null || install_packages clang libclang-rt-14-dev
-if [[ ! -f $FUZZ_DIR/CMakeCache.txt ]]; then
-  cmake -S "$PEAKCAST_ROOT" -B "$FUZZ_DIR" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
-    -DCMAKE_CXX_COMPILER=clang++ -DPEAKCAST_FUZZ=ON -DPEAKCAST_WITH_GL=OFF -DPEAKCAST_BUILD_TESTS=OFF \
-    $(peakcast_ccache_flags) >/dev/null
-fi
+# Configured every run (incremental): a target added since the last run is then known.
+cmake -S "$PEAKCAST_ROOT" -B "$FUZZ_DIR" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
+  -DCMAKE_CXX_COMPILER=clang++ -DPEAKCAST_FUZZ=ON -DPEAKCAST_WITH_GL=OFF -DPEAKCAST_BUILD_TESTS=OFF \
+  $(peakcast_ccache_flags) >/dev/null
 targets=("$@")
 if [[ ${#targets[@]} -eq 0 ]]; then
   for f in "$PEAKCAST_ROOT"/tests/fuzz/fuzz_*.cpp; do targets+=("$(basename "${f%.cpp}")"); done

@@ -9,6 +9,8 @@
 #include "app/cmd_render_mpi.h"
 #include "app/commands.h"
 #include "app/scene_file.h"
+#include "core/volume_io.h"
+#include "distributed/brick_sequence.h"
 #include "encode/png.h"
 #include "reference/cpu_raycaster.h"
 #include "reference/metrics.h"
@@ -19,6 +21,7 @@ namespace {
 
 struct RenderArgs {
   std::string scene, out, stats, path = "fragment", backend, program_cache;
+  int64_t memory_budget_mib = 0;  // 0: no budget, the volume is read whole
 };
 
 struct ReferenceArgs {
@@ -31,6 +34,40 @@ struct ReferenceArgs {
 struct CompareArgs {
   std::string a, b;
 };
+
+// `render --memory-budget-mib`: a volume whose voxels exceed the budget, drawn by bricks
+// (distributed/brick_sequence.h). -1 when it fits: the caller reads it whole.
+int render_within_budget(const RenderArgs& a) {
+  const ParsedSceneFile parsed = parse_scene_file(a.scene);
+  const int64_t budget = a.memory_budget_mib << 20;
+  LoadOptions one;
+  one.region = VoxelRegion{{0, 0, 0}, {1, 1, 1}};
+  const Volume head = load_volume(parsed.volume, one);
+  const Dims& d = head.source_dims;
+  const int64_t bytes = d[0] * d[1] * d[2] * int64_t(voxel_bytes(head.type()));
+  if (bytes <= budget) return -1;
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto stats = distributed::sequence_statistics(parsed.volume.string(), {}, budget);
+  const ResolvedScene scene = resolve_scene(parsed.scene, stats.box);
+  render::RenderBackend b = render::open_backend(render::requested_backend(a.backend), "", {}, a.program_cache);
+  const auto r = distributed::render_sequence(*b.renderer, parsed.volume.string(), {}, stats, scene, budget);
+  encode::write_png(r.image, a.out);
+  const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("wrote %s: %dx%d by %d bricks (ghost %d, largest %.1f MiB; budget %lld MiB for %.1f MiB of voxels), "
+              "statistics %.0f ms, read %.0f ms, render %.0f ms, wall %.0f ms, %s\n",
+              a.out.c_str(), r.image.width, r.image.height, r.bricks, r.ghost, double(r.largest_brick_bytes) / 1048576.0,
+              (long long)a.memory_budget_mib, double(bytes) / 1048576.0, stats.ms, r.read_ms, r.render_ms, wall,
+              b.description().c_str());
+  if (!a.stats.empty()) {
+    const nlohmann::json j = {{"bricks", r.bricks}, {"ghost", r.ghost}, {"largest_brick_bytes", r.largest_brick_bytes},
+                              {"statistics_bricks", stats.bricks}, {"bytes_read", stats.bytes_read + r.bytes_read},
+                              {"statistics_ms", stats.ms}, {"read_ms", r.read_ms}, {"render_ms", r.render_ms},
+                              {"wall_ms", wall}, {"backend", render::to_string(b.backend)},
+                              {"renderer", b.renderer->description()}};
+    std::ofstream(a.stats) << j.dump(2) << "\n";
+  }
+  return 0;
+}
 
 }  // namespace
 
@@ -52,6 +89,10 @@ void add_render_commands(CLI::App& app, Runner& run) {
   render->add_option("--program-cache", ra->program_cache,
                      "GL: where linked shader programs are kept between runs: auto | off | a folder "
                      "(default: PEAKCAST_PROGRAM_CACHE, else auto, ~/.cache/peakcast/programs)");
+  render->add_option("--memory-budget-mib", ra->memory_budget_mib,
+                     "host memory for voxels: a volume larger than this is drawn by bricks, front to back, "
+                     "read one after another (docs/chunked-volumes.md)")
+      ->check(CLI::PositiveNumber);
   render->callback([ra, &run] {
     run = [ra] {
       if (mpi_world_size_hint() > 1) {  // under mpirun -np N (N > 1): one brick per rank
@@ -61,6 +102,10 @@ void add_render_commands(CLI::App& app, Runner& run) {
         throw std::invalid_argument("launched by mpirun with several ranks, but this peakcast was built without MPI "
                                     "(install libopenmpi-dev and paraview-dev, rebuild with PEAKCAST_WITH_MPI=ON)");
 #endif
+      }
+      if (ra->memory_budget_mib > 0) {
+        const int code = render_within_budget(*ra);
+        if (code >= 0) return code;  // -1: the volume fits the budget, read whole as usual
       }
       LoadedScene ls = load_scene_file(ra->scene);
       render::RenderBackend b = render::open_backend(render::requested_backend(ra->backend), "", {}, ra->program_cache);

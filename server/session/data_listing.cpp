@@ -4,6 +4,7 @@
 #include <fstream>
 #include <map>
 
+#include "chunked/chunked_volume.h"
 #include "core/volume_io.h"
 
 namespace fs = std::filesystem;
@@ -32,8 +33,10 @@ bool raw_with_sidecar(const fs::path& p) {
   return false;
 }
 
-// What a folder opens as: TIFF slices without a header, or exactly one header.
+// What a folder opens as: a chunked volume (OME-Zarr, Neuroglancer precomputed), TIFF slices
+// without a header, or exactly one header.
 bool opens_as_stack(const fs::path& dir) {
+  if (chunked::is_chunked_volume(dir)) return true;
   std::error_code ec;
   int headers = 0;
   bool tiffs = false;

@@ -1,0 +1,152 @@
+// Out-of-core stills (distributed/brick_sequence.h): a volume larger than a host memory budget,
+// read brick after brick from its file (OME-Zarr chunks or a NRRD's rows) and drawn front to back,
+// must give the image one process renders of the whole volume, for every method, within the
+// bound the brick tests hold (brick_test.cpp: 1/255; rays run until opaque in both). Its
+// statistics (range, histogram, macrocell grids), reduced brick by brick, must equal the whole
+// volume's.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "chunked/zarr_writer.h"
+#include "core/generators.h"
+#include "core/macrocells.h"
+#include "core/volume_io.h"
+#include "distributed/brick_sequence.h"
+#include "gpu/gpu_fixture.h"
+#include "unit/test_util.h"
+
+using namespace peakcast;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Case {
+  std::string render, tf, camera;
+};
+
+// A generated volume written as OME-Zarr in 8-voxel chunks; the path of the .zarr folder.
+fs::path zarr_of(const test::TempDir& tmp, GeneratorKind kind, const Dims& dims, SourceType type, glm::dvec3 spacing) {
+  const fs::path nrrd = tmp / (std::string(to_string(kind)) + ".nrrd");
+  GeneratorSpec g;
+  g.kind = kind;
+  g.dims = dims;
+  g.type = type;
+  g.spacing = spacing;
+  generate_to_file(g, nrrd.string());
+  const fs::path out = tmp / (std::string(to_string(kind)) + ".zarr");
+  chunked::ZarrWriteOptions o;
+  o.chunk = 8;
+  chunked::write_ome_zarr(load_volume(nrrd), out, o);
+  return out;
+}
+
+double max_abs(const Image& a, const Image& b) {
+  double m = 0.0;
+  for (size_t k = 0; k < a.rgba.size(); ++k) m = std::max(m, double(std::abs(a.rgba[k] - b.rgba[k])));
+  return m;
+}
+
+// The whole volume's statistics must come out of the bricks unchanged.
+void expect_same_statistics(const Volume& whole, const distributed::SequenceStatistics& s) {
+  EXPECT_EQ(s.box.min_value, whole.min_value);
+  EXPECT_EQ(s.box.max_value, whole.max_value);
+  EXPECT_EQ(s.box.histogram, whole.histogram);
+  const VolumeMacrocells cells = build_volume_macrocells(whole);
+  for (auto [a, b] : {std::pair{cells.trilinear, s.cells.trilinear}, {cells.tricubic, s.cells.tricubic}}) {
+    EXPECT_EQ(a->grid, b->grid);
+    EXPECT_EQ(a->min, b->min);
+    EXPECT_EQ(a->max, b->max);
+  }
+}
+
+const int64_t kBudget = 96 << 10;  // bytes of voxels: the 41^3 float volume (270 KiB) takes >= 6 bricks
+
+double sequence_error(const Case& c, const fs::path& path, int64_t budget = kBudget) {
+  const Volume whole = load_volume(path);
+  const std::string text = std::string(R"({"volume": "v", "image": {"width": 96, "height": 80}, "render": )") + c.render +
+                           (c.tf.empty() ? "" : R"(, "tf": {"points": )" + c.tf + "}") +
+                           (c.camera.empty() ? "" : R"(, "camera": )" + c.camera) + R"(, "background": [0.1, 0.2, 0.3]})";
+  Scene scene = parse_scene_text(text);
+  scene.render.early_termination = 1.0;  // bricks run until opaque: so does the one-process image
+  render::Renderer& renderer = *test::gpu().caster;
+  auto resident = renderer.make_resident(std::make_shared<Volume>(load_volume(path)));
+  const Image one = renderer.render(*resident, resolve_scene(scene, whole));
+
+  const auto stats = distributed::sequence_statistics(path.string(), {}, budget);
+  expect_same_statistics(whole, stats);
+  const ResolvedScene rs = resolve_scene(scene, stats.box);
+  const auto r = distributed::render_sequence(renderer, path.string(), {}, stats, rs, budget);
+  EXPECT_LE(2 * r.largest_brick_bytes, budget) << "two bricks are held at once";
+  EXPECT_GE(r.bricks, 2 * whole.byte_size() > size_t(budget) ? 2 : 1);
+  const double e = max_abs(one, r.image);
+  std::printf("  %s: %d bricks (ghost %d), max abs %.3g\n", c.render.c_str(), r.bricks, r.ghost, e);
+  return e;
+}
+
+// What the brick tests hold (brick_test.cpp kBound; measured there).
+constexpr double kBound = 1.0 / 255.0;
+
+}  // namespace
+
+TEST(OutOfCore, EveryMethodEqualsTheInCoreStill) {
+  test::TempDir tmp;
+  const fs::path ml = zarr_of(tmp, GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32, {1, 1, 1});
+  const std::string ml_tf = R"([[0, 0.2, 0.4, 1, 0], [0.45, 0.2, 0.4, 1, 0], [0.5, 1, 0.8, 0.3, 0.8], [0.55, 0.2, 0.4, 1, 0], [1, 0.2, 0.4, 1, 0.05]])";
+  const std::string ml_cam = R"({"eye": [90, 70, 110], "center": [20, 20, 20], "up": [0, 1, 0], "fov_y": 30})";
+  for (const char* r : {R"({"step": 0.7})", R"({"step": 1.5, "classification": "preint"})",
+                        R"({"step": 1, "classification": "peaks"})", R"({"step": 1, "classification": "peaks", "peak_mode": "xor"})",
+                        R"({"step": 0.5, "filter": "tricubic", "shading": true})",
+                        R"({"sampling": "differential", "s_k": 1.5, "classification": "preint"})",
+                        R"({"sampling": "differential", "s_k": 3, "classification": "peaks"})",
+                        R"({"step": 2, "virtual_samples": 3, "classification": "peaks"})",
+                        R"({"step": 2, "virtual_samples": 7, "classification": "preint"})"})
+    EXPECT_LE(sequence_error({r, ml_tf, ml_cam}, ml), kBound) << r;
+
+  const fs::path blobs = zarr_of(tmp, GeneratorKind::Blobs, {64, 56, 48}, SourceType::U16, {0.8, 1.0, 1.7});
+  const std::string cam = R"({"eye": [-40, 90, -30], "center": [19, 19, 30], "up": [0, 0, 1], "fov_y": 35})";
+  const std::string tf = R"([[0, 0, 0, 0, 0], [15000, 0.9, 0.5, 0.2, 0], [30000, 0.9, 0.5, 0.2, 0.4], [65535, 1, 1, 1, 0.9]])";
+  const std::string terminate =
+      R"({"channel": "termination", "center": [0.45, 0.5], "radius": 0.3, "falloff": 0.5, "value": 0.25})";
+  const std::string step = R"({"channel": "step", "center": [0.6, 0.4], "radius": 0.25, "value": 2.5})";
+  const double bound = test::gpu().gl ? 0.015 : kBound;  // GL: brick_test's bound for 8-bit filter weights
+  for (const std::string& r :
+       {std::string(R"({"step": 0.5, "adaptive": true, "classification": "preint"})"),
+        std::string(R"({"step": 1, "virtual_samples": 3})"),
+        R"({"step": 1, "classification": "preint", "ray_texture": {"mapping": "view", "size": [32, 32], "strokes": [)" +
+            terminate + ", " + step + "]}}"})
+    EXPECT_LE(sequence_error({r, tf, cam}, blobs, 200 << 10), bound) << r;
+  // Adaptive steps with virtual samples and shading need 16 ghost voxels: a budget for 2 bricks.
+  EXPECT_LE(sequence_error({R"({"step": 0.7, "adaptive": true, "virtual_samples": 3, "shading": true})", tf, cam}, blobs,
+                           600 << 10),
+            bound);  // GL: brick_test's 8-bit bound
+}
+
+// A real volume from its NRRD (rows read per brick), with a Dirac-like peak, and the default TF
+// and camera (derived from the statistics the bricks reduce).
+TEST(OutOfCore, RealVolumeFromRowsWithDerivedTfAndCamera) {
+  const fs::path heptane = test::data_dir() / "heptane_151.nrrd";
+  EXPECT_LE(sequence_error({R"({"step": 1, "classification": "peaks"})",
+                            R"([[0, 0, 0, 0, 0], [100, 0, 0, 0, 0], [100.5, 1, 0.6, 0.2, 1], [101, 0, 0, 0, 0], [255, 0, 0, 0, 0]])", ""},
+                           heptane, 1 << 20),
+            kBound);
+  EXPECT_LE(sequence_error({R"({"step": 1})", "", ""}, heptane, 1 << 20), kBound);
+}
+
+TEST(OutOfCore, BudgetsThatCannotHoldABrickAreRefused) {
+  const distributed::Index3 dims{64, 64, 64};
+  EXPECT_EQ(distributed::bricks_for_budget(dims, 0, 1, 64 * 64 * 64, 1), 1);
+  auto held = [&](int bricks) {  // bytes of the two largest-brick reads held at once, 2 bytes a voxel
+    int64_t m = 0;
+    for (const auto& b : distributed::kd_split(dims, bricks, 3).bricks) m = std::max(m, b.voxels_read());
+    return 2 * 2 * m;
+  };
+  const int n = distributed::bricks_for_budget(dims, 3, 2, 200000, 2);
+  EXPECT_LE(held(n), 200000);
+  EXPECT_GT(held(n - 1), 200000) << "the fewest bricks that fit";
+  EXPECT_THROW(distributed::bricks_for_budget(dims, 3, 4, 1000, 2), std::invalid_argument);
+}
