@@ -21,5 +21,6 @@ void add_raytex_command(CLI::App& app, Runner& run);          // raytex
 void add_quality_command(CLI::App& app, Runner& run);         // quality
 void add_scene_command(CLI::App& app, Runner& run);           // scene
 void add_stream_command(CLI::App& app, Runner& run);          // stream
+void add_outofcore_command(CLI::App& app, Runner& run);       // outofcore
 
 }  // namespace peakcast::bench

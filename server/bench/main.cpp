@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   peakcast::bench::add_sampling_command(app, run);
   peakcast::bench::add_frame_commands(app, run);
   peakcast::bench::add_stream_command(app, run);
+  peakcast::bench::add_outofcore_command(app, run);
   peakcast::bench::add_raytex_command(app, run);
   peakcast::bench::add_quality_command(app, run);
   peakcast::bench::add_scene_command(app, run);

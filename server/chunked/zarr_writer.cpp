@@ -67,91 +67,79 @@ void write_json(const fs::path& file, const json& j) {
   write_file(file, s.data(), s.size());
 }
 
-// The chunk at `c` of a level, padded to the full chunk shape `e` with zeros, in the source type.
-std::vector<uint8_t> chunk_bytes(const Level& L, const Dims& c, const Dims& e, SourceType source) {
-  const size_t bpv = source_bytes(source);
-  std::vector<uint8_t> out(size_t(e[0] * e[1] * e[2]) * bpv, 0);
-  Dims lo{}, box{};
-  for (int a = 0; a < 3; ++a) {
-    lo[a] = c[a] * e[a];
-    box[a] = std::min(e[a], L.dims[a] - lo[a]);
-  }
-  for (int64_t z = 0; z < box[2]; ++z)
-    for (int64_t y = 0; y < box[1]; ++y)
-      std::memcpy(out.data() + size_t((z * e[1] + y) * e[0]) * bpv,
-                  L.bytes.data() + size_t(((lo[2] + z) * L.dims[1] + lo[1] + y) * L.dims[0] + lo[0]) * bpv,
-                  size_t(box[0]) * bpv);
-  // Back to the source type: signed integers un-shifted; the padding stays 0.
-  const uint8_t flip = source == SourceType::I8 ? 0x80 : 0;
-  const uint16_t flip16 = source == SourceType::I16 ? 0x8000 : 0;
-  for (int64_t z = 0; z < box[2] && (flip || flip16); ++z)
-    for (int64_t y = 0; y < box[1]; ++y)
-      for (int64_t x = 0; x < box[0]; ++x) {
-        const size_t i = size_t((z * e[1] + y) * e[0] + x);
-        if (flip) out[i] ^= flip;
-        else reinterpret_cast<uint16_t*>(out.data())[i] ^= flip16;
-      }
-  return out;
+// Un-shifts a run of a Volume's stored voxels back to the source type (int8 - 128, int16 - 32768).
+void unshift(uint8_t* p, size_t n, SourceType source) {
+  if (source == SourceType::I8)
+    for (size_t i = 0; i < n; ++i) p[i] ^= 0x80;
+  if (source == SourceType::I16)
+    for (size_t i = 0; i < n; ++i) reinterpret_cast<uint16_t*>(p)[i] ^= 0x8000;
 }
 
 }  // namespace
 
-ZarrWriteReport write_ome_zarr(const Volume& volume, const fs::path& out, const ZarrWriteOptions& options) {
+int pyramid_levels(const Dims& dims, int64_t chunk) {
+  int n = 1;
+  for (Dims d = dims; std::max({d[0], d[1], d[2]}) > chunk; ++n)
+    for (auto& x : d) x = (x + 1) / 2;
+  return n;
+}
+
+ZarrWriteReport write_ome_zarr_levels(const fs::path& out, const VolumeHeader& h, int levels, const std::string& name,
+                                      const ZarrWriteOptions& options, const ChunkFill& fill) {
   if (options.chunk < 1 || options.chunk > 512) throw std::invalid_argument("chunk edge must be 1..512 voxels");
-  if (!volume.has_voxels()) throw std::invalid_argument("the volume has no voxels here");
+  if (levels < 1) throw std::invalid_argument("a pyramid has at least one level");
   std::error_code ec;
   if (fs::exists(out, ec)) throw VolumeError(out, "already exists (remove it first)");
   const fs::path tmp = out.string() + ".partial";
   fs::remove_all(tmp, ec);
   if (!fs::create_directories(tmp, ec)) throw VolumeError(tmp, "cannot be created: " + ec.message());
-  std::vector<Level> levels(1);
-  levels[0].dims = volume.dims();
-  levels[0].bytes.assign(volume.data(), volume.data() + volume.byte_size());
-  while (options.pyramid && std::max({levels.back().dims[0], levels.back().dims[1], levels.back().dims[2]}) > options.chunk) {
-    Level next;
-    switch (volume.type()) {
-      case VoxelType::U8: halve<uint8_t>(levels.back(), next); break;
-      case VoxelType::U16: halve<uint16_t>(levels.back(), next); break;
-      case VoxelType::F32: halve<float>(levels.back(), next); break;
-    }
-    levels.push_back(std::move(next));
-  }
+  const size_t bpv = source_bytes(h.source);
   ZarrWriteReport report;
-  report.levels = int(levels.size());
+  report.levels = levels;
   json datasets = json::array();
   std::atomic<int64_t> chunks{0}, bytes{0};
-  for (size_t k = 0; k < levels.size(); ++k) {
-    const Level& L = levels[k];
+  Dims dims = h.dims;
+  for (int k = 0; k < levels; ++k, dims = Dims{(dims[0] + 1) / 2, (dims[1] + 1) / 2, (dims[2] + 1) / 2}) {
     const fs::path dir = tmp / std::to_string(k);
     fs::create_directories(dir);
     Dims e{};  // the chunk edge, no larger than the level (a thin slab gets thin chunks)
-    for (int a = 0; a < 3; ++a) e[a] = std::min(options.chunk, L.dims[a]);
+    for (int a = 0; a < 3; ++a) e[a] = std::min(options.chunk, dims[a]);
     write_json(dir / ".zarray", {{"zarr_format", 2},
-                                 {"shape", {L.dims[2], L.dims[1], L.dims[0]}},
+                                 {"shape", {dims[2], dims[1], dims[0]}},
                                  {"chunks", {e[2], e[1], e[0]}},
-                                 {"dtype", dtype_of(volume.source_type())},
+                                 {"dtype", dtype_of(h.source)},
                                  {"compressor", compressor_json(options.compressor)},
                                  {"fill_value", 0},
                                  {"order", "C"},
                                  {"filters", nullptr},
                                  {"dimension_separator", "/"}});
-    const Dims grid{(L.dims[0] + e[0] - 1) / e[0], (L.dims[1] + e[1] - 1) / e[1], (L.dims[2] + e[2] - 1) / e[2]};
-    for (int64_t z = 0; z < grid[2]; ++z) fs::create_directories(dir / std::to_string(z));
+    const Dims grid{(dims[0] + e[0] - 1) / e[0], (dims[1] + e[1] - 1) / e[1], (dims[2] + e[2] - 1) / e[2]};
     for (int64_t z = 0; z < grid[2]; ++z)
       for (int64_t y = 0; y < grid[1]; ++y) fs::create_directories(dir / std::to_string(z) / std::to_string(y));
     parallel_for(size_t(grid[0] * grid[1] * grid[2]), [&](size_t i) {
       const Dims c{int64_t(i) % grid[0], int64_t(i) / grid[0] % grid[1], int64_t(i) / (grid[0] * grid[1])};
-      const auto raw = chunk_bytes(L, c, e, volume.source_type());
-      const auto packed = encode_chunk(options.compressor, raw.data(), raw.size(), source_bytes(volume.source_type()));
+      Dims lo{}, box{};
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = c[a] * e[a];
+        box[a] = std::min(e[a], dims[a] - lo[a]);
+      }
+      std::vector<uint8_t> part(size_t(box[0] * box[1] * box[2]) * bpv);
+      fill(k, lo, box, part.data());
+      std::vector<uint8_t> whole(size_t(e[0] * e[1] * e[2]) * bpv, 0);  // zarr stores full chunks: 0-padded
+      for (int64_t z = 0; z < box[2]; ++z)
+        for (int64_t y = 0; y < box[1]; ++y)
+          std::memcpy(whole.data() + size_t((z * e[1] + y) * e[0]) * bpv, part.data() + size_t((z * box[1] + y) * box[0]) * bpv,
+                      size_t(box[0]) * bpv);
+      const auto packed = encode_chunk(options.compressor, whole.data(), whole.size(), bpv);
       write_file(dir / std::to_string(c[2]) / std::to_string(c[1]) / std::to_string(c[0]), packed.data(), packed.size());
       ++chunks;
       bytes += int64_t(packed.size());
     });
-    const double f = std::ldexp(1.0, int(k));  // this level's voxel edge in level-0 voxels
+    const double f = std::ldexp(1.0, k);  // this level's voxel edge in level-0 voxels
     json scale = json::array(), shift = json::array();
     for (int a = 2; a >= 0; --a) {
-      scale.push_back(volume.spacing[a] * f);
-      shift.push_back(volume.origin[a] + 0.5 * (f - 1.0) * volume.spacing[a]);  // the mean's centre
+      scale.push_back(h.spacing[a] * f);
+      shift.push_back(h.origin[a] + 0.5 * (f - 1.0) * h.spacing[a]);  // the mean's centre
     }
     datasets.push_back({{"path", std::to_string(k)},
                         {"coordinateTransformations",
@@ -161,7 +149,7 @@ ZarrWriteReport write_ome_zarr(const Volume& volume, const fs::path& out, const 
   for (const char* n : {"z", "y", "x"}) axes.push_back({{"name", n}, {"type", "space"}});
   write_json(tmp / ".zgroup", {{"zarr_format", 2}});
   write_json(tmp / ".zattrs", {{"multiscales", {{{"version", "0.4"},
-                                                 {"name", volume.name},
+                                                 {"name", name},
                                                  {"axes", axes},
                                                  {"datasets", datasets},
                                                  {"type", "mean"},
@@ -171,6 +159,42 @@ ZarrWriteReport write_ome_zarr(const Volume& volume, const fs::path& out, const 
   report.chunks = chunks;
   report.bytes = bytes;
   return report;
+}
+
+ZarrWriteReport write_ome_zarr(const Volume& volume, const fs::path& out, const ZarrWriteOptions& options) {
+  if (options.chunk < 1 || options.chunk > 512) throw std::invalid_argument("chunk edge must be 1..512 voxels");
+  if (!volume.has_voxels()) throw std::invalid_argument("the volume has no voxels here");
+  std::error_code ec;
+  if (fs::exists(out, ec)) throw VolumeError(out, "already exists (remove it first)");
+  std::vector<Level> levels(1);
+  levels[0].dims = volume.dims();
+  levels[0].bytes.assign(volume.data(), volume.data() + volume.byte_size());
+  const int n = options.pyramid ? pyramid_levels(volume.dims(), options.chunk) : 1;
+  while (int(levels.size()) < n) {
+    Level next;
+    switch (volume.type()) {
+      case VoxelType::U8: halve<uint8_t>(levels.back(), next); break;
+      case VoxelType::U16: halve<uint16_t>(levels.back(), next); break;
+      case VoxelType::F32: halve<float>(levels.back(), next); break;
+    }
+    levels.push_back(std::move(next));
+  }
+  VolumeHeader h;
+  h.dims = volume.dims();
+  h.spacing = volume.spacing;
+  h.origin = volume.origin;
+  h.source = volume.source_type();
+  const size_t bpv = source_bytes(h.source);
+  return write_ome_zarr_levels(out, h, n, volume.name, options, [&](int k, const Dims& lo, const Dims& box, uint8_t* dst) {
+    const Level& L = levels[size_t(k)];
+    for (int64_t z = 0; z < box[2]; ++z)
+      for (int64_t y = 0; y < box[1]; ++y) {
+        uint8_t* row = dst + size_t((z * box[1] + y) * box[0]) * bpv;
+        std::memcpy(row, L.bytes.data() + size_t(((lo[2] + z) * L.dims[1] + lo[1] + y) * L.dims[0] + lo[0]) * bpv,
+                    size_t(box[0]) * bpv);
+        unshift(row, size_t(box[0]), h.source);
+      }
+  });
 }
 
 }  // namespace peakcast::chunked

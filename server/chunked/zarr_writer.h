@@ -3,6 +3,8 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <string>
 
 #include "chunked/chunk_codec.h"
 #include "core/volume.h"
@@ -20,6 +22,19 @@ struct ZarrWriteReport {
   int levels = 0;
   int64_t chunks = 0, bytes = 0;  // chunk files written and their bytes
 };
+
+// A level's box [lo, lo + box) of voxels to fill: box voxels, x fastest, in the source type
+// (little-endian; signed types as signed). Called from several threads at once.
+using ChunkFill = std::function<void(int level, const Dims& lo, const Dims& box, uint8_t* out)>;
+
+// A pyramid written chunk by chunk from `fill`, never whole in memory: level k has dims
+// ceil(dims / 2^k), spacing 2^k times level 0's and its first voxel at the centre of level 0's
+// first 2^k block. `levels` levels (1: no pyramid). Same folder rules as write_ome_zarr.
+ZarrWriteReport write_ome_zarr_levels(const std::filesystem::path& out, const VolumeHeader& level0, int levels,
+                                      const std::string& name, const ZarrWriteOptions& options, const ChunkFill& fill);
+
+// Levels a pyramid of `dims` gets: halved until the largest axis fits `chunk`.
+int pyramid_levels(const Dims& dims, int64_t chunk);
 
 // Writes `volume` (with voxels) in its source type to the folder `out`, which must not exist: it
 // is written as `out`.partial and renamed when whole, so no half-written pyramid is ever read.

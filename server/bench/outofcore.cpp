@@ -1,0 +1,181 @@
+// `bench outofcore`: a synthetic OME-Zarr pyramid larger than this machine's memory (4096^3 uint8
+// = 64 GiB of voxels by default), written chunk by chunk, then what a viewer pays: opening it from
+// its metadata, the first interactive frame from the finest level that fits the memory budget,
+// and a full-resolution still by bricks (distributed/brick_sequence.h) with its bytes read and
+// peak RSS against the budget. The pyramid is deleted after (unless --keep).
+#include <sys/resource.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <string>
+
+#include "bench/bench_scenes.h"
+#include "bench/bench_util.h"
+#include "bench/commands.h"
+#include "chunked/chunked_volume.h"
+#include "chunked/zarr_writer.h"
+#include "core/volume_io.h"
+#include "distributed/brick_sequence.h"
+
+namespace fs = std::filesystem;
+
+namespace peakcast::bench {
+namespace {
+
+struct OutOfCoreArgs {
+  int64_t size = 4096, chunk = 128, budget_mib = 4096;
+  int image = 1024;
+  std::string dir;
+  bool keep = false, json = false;
+};
+
+using Clock = std::chrono::steady_clock;
+
+// The process's peak RSS since the last reset_peak_rss (VmHWM), MiB.
+double peak_rss_mib() {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  return 0.0;
+}
+void reset_peak_rss() { std::ofstream("/proc/self/clear_refs") << "5"; }
+
+// Level k's voxel i along an axis of n level-0 voxels: a product of sines through the centre of
+// its 2^k block (about the block's mean), period n/6, so the volume holds a lattice of blobs,
+// quantised to 32 grey levels so that zstd keeps 64 GiB of voxels to a few GiB of disk.
+std::vector<float> axis_table(int64_t n0, int64_t n, int k) {
+  std::vector<float> t(static_cast<size_t>(n));
+  const double f = std::ldexp(1.0, k);
+  for (int64_t i = 0; i < n; ++i)
+    t[size_t(i)] = float(std::sin(2.0 * std::numbers::pi * 6.0 * (f * double(i) + 0.5 * (f - 1.0)) / double(n0)));
+  return t;
+}
+
+int run_outofcore(const OutOfCoreArgs& a) {
+  const fs::path dir = a.dir.empty() ? fs::temp_directory_path() : fs::path(a.dir);
+  const fs::path path = dir / ("peakcast-outofcore-" + std::to_string(a.size) + ".zarr");
+  std::error_code ec;
+  fs::remove_all(path, ec);
+  const int64_t budget = a.budget_mib << 20;
+  nlohmann::json out = {{"size", a.size}, {"chunk", a.chunk}, {"budget_mib", a.budget_mib}, {"image", a.image}};
+
+  // 1. The pyramid, chunk by chunk (zstd level 1: the writer's time is not what is measured).
+  VolumeHeader h;
+  h.dims = {a.size, a.size, a.size};
+  h.source = SourceType::U8;
+  const int levels = chunked::pyramid_levels(h.dims, a.chunk);
+  std::vector<std::array<std::vector<float>, 3>> tables(static_cast<size_t>(levels));
+  for (int k = 0; k < levels; ++k) {
+    const int64_t n = (a.size + (int64_t(1) << k) - 1) >> k;
+    for (int ax = 0; ax < 3; ++ax) tables[size_t(k)][size_t(ax)] = axis_table(a.size, n, k);
+  }
+  chunked::ZarrWriteOptions zo;
+  zo.chunk = a.chunk;
+  zo.compressor = {chunked::Compressor::Zstd, 1};
+  auto t = Clock::now();
+  const auto written = chunked::write_ome_zarr_levels(
+      path, h, levels, "synthetic", zo, [&](int k, const Dims& lo, const Dims& box, uint8_t* dst) {
+        const auto& tb = tables[size_t(k)];
+        for (int64_t z = 0; z < box[2]; ++z)
+          for (int64_t y = 0; y < box[1]; ++y) {
+            const float yz = tb[1][size_t(lo[1] + y)] * tb[2][size_t(lo[2] + z)];
+            uint8_t* row = dst + (z * box[1] + y) * box[0];
+            for (int64_t x = 0; x < box[0]; ++x)
+              row[x] = uint8_t(8 * int(std::lround(16.f + 15.f * tb[0][size_t(lo[0] + x)] * yz)));
+          }
+      });
+  out["write_s"] = ms_between(t, Clock::now()) / 1000.0;
+  out["levels"] = written.levels;
+  out["disk_gib"] = double(written.bytes) / double(1 << 30);
+  std::fprintf(stderr, "wrote %s: %d levels, %lld chunks, %.2f GiB on disk, %.0f s\n", path.c_str(), written.levels,
+               (long long)written.chunks, out["disk_gib"].get<double>(), out["write_s"].get<double>());
+
+  // 2. Open: metadata only.
+  t = Clock::now();
+  const auto cv = chunked::open_chunked(path);
+  out["open_ms"] = ms_between(t, Clock::now());
+
+  // 3. The first interactive frame: the finest level whose voxels fit the budget, read, resident,
+  // one frame of the default scene (derived TF, three-quarter view).
+  BenchRenderer b = make_bench_renderer();
+  int level = 0;
+  while (level + 1 < int(cv->levels().size())) {
+    const Dims& d = cv->levels()[size_t(level)].dims;
+    if (d[0] * d[1] * d[2] <= budget) break;
+    ++level;
+  }
+  t = Clock::now();
+  LoadOptions lo;
+  lo.level = level;
+  auto coarse = std::make_shared<Volume>(chunked::read_level(*cv, level, lo));
+  const double read_ms = ms_between(t, Clock::now());
+  Scene scene = parse_scene_text(R"({"volume": "v"})");
+  scene.width = scene.height = a.image;
+  auto resident = b.renderer->make_resident(coarse);
+  b.renderer->render(*resident, resolve_scene(scene, *coarse));
+  out["interactive_level"] = level;
+  out["interactive_dims"] = coarse->dims();
+  out["interactive_read_ms"] = read_ms;
+  out["first_frame_ms"] = ms_between(t, Clock::now()) + out["open_ms"].get<double>();
+  resident.reset();
+  coarse.reset();
+
+  // 4. The full-resolution still by bricks, its peak RSS from here on.
+  reset_peak_rss();
+  const double rss_before = rss_mib();
+  t = Clock::now();
+  const auto stats = distributed::sequence_statistics(path.string(), {}, budget);
+  const ResolvedScene rs = resolve_scene(scene, stats.box);
+  const auto r = distributed::render_sequence(*b.renderer, path.string(), {}, stats, rs, budget);
+  out["still_s"] = ms_between(t, Clock::now()) / 1000.0;
+  out["still_statistics_s"] = stats.ms / 1000.0;
+  out["still_bricks"] = r.bricks;
+  out["still_statistics_bricks"] = stats.bricks;
+  out["still_bytes_read_gib"] = double(stats.bytes_read + r.bytes_read) / double(1 << 30);
+  out["still_peak_rss_mib"] = peak_rss_mib();
+  out["rss_before_still_mib"] = rss_before;  // the process without voxels: libraries, the renderer
+  out["still_rss_over_before_mib"] = out["still_peak_rss_mib"].get<double>() - rss_before;
+  out["backend"] = b.description();
+  if (!a.keep) fs::remove_all(path, ec);
+  if (a.json) {
+    std::printf("%s\n", out.dump().c_str());
+  } else {
+    std::printf("outofcore %lld^3 uint8 (%.1f GiB of voxels), budget %lld MiB, %s\n", (long long)a.size,
+                double(a.size) * double(a.size) * double(a.size) / double(1 << 30), (long long)a.budget_mib,
+                b.description().c_str());
+    std::printf("  open (metadata)       %8.1f ms   (goal <= 1000)\n", out["open_ms"].get<double>());
+    std::printf("  first interactive     %8.1f ms   (goal <= 2000; level %d, read %.0f ms)\n",
+                out["first_frame_ms"].get<double>(), level, read_ms);
+    std::printf("  full-resolution still %8.1f s    (%d bricks; statistics %.1f s over %d bricks; %.1f GiB read)\n",
+                out["still_s"].get<double>(), r.bricks, stats.ms / 1000.0, stats.bricks,
+                out["still_bytes_read_gib"].get<double>());
+    std::printf("  peak RSS during still %8.1f MiB  (%.1f MiB over the %.1f MiB before it; goal <= budget + 10%% = %.0f)\n",
+                out["still_peak_rss_mib"].get<double>(), out["still_peak_rss_mib"].get<double>() - rss_before, rss_before,
+                1.1 * double(a.budget_mib));
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_outofcore_command(CLI::App& bench, Runner& run) {
+  auto args = std::make_shared<OutOfCoreArgs>();
+  auto* c = bench.add_subcommand("outofcore", "A synthetic pyramid larger than memory: open, first frame, full-resolution still");
+  c->add_option("--size", args->size, "edge of the uint8 cube (default 4096: 64 GiB)")->check(CLI::Range(64, 16384));
+  c->add_option("--chunk", args->chunk, "chunk edge (default 128)")->check(CLI::Range(16, 512));
+  c->add_option("--budget-mib", args->budget_mib, "host memory budget for voxels (default 4096)")->check(CLI::PositiveNumber);
+  c->add_option("--image", args->image, "frame and still edge in pixels (default 1024)")->check(CLI::Range(16, 8192));
+  c->add_option("--dir", args->dir, "where to write the pyramid (default: the temp folder)");
+  c->add_flag("--keep", args->keep, "keep the pyramid");
+  c->add_flag("--json", args->json, "one JSON object");
+  c->callback([args, &run] { run = [args] { return run_outofcore(*args); }; });
+}
+
+}  // namespace peakcast::bench
