@@ -68,6 +68,7 @@ net::ServerConfig ServeOptions::resolved() const {
   for (auto& v : volumes) c.volumes.emplace_back(v);
   c.idle_timeout = std::chrono::seconds(idle_seconds);
   c.gpu_budget_bytes = gpu_budget_mib << 20;
+  c.memory_budget_bytes = memory_budget_mib << 20;
   c.web_dir = web_dir;
   c.shader_dir = shader_dir;
   c.upload_dir = upload_dir;
@@ -106,6 +107,10 @@ void add_serve_options(CLI::App& s, ServeOptions& o) {
       ->check(CLI::Range(limits::kMinKbps, limits::kMaxKbps));
   s.add_option("--gpu-budget-mib", o.gpu_budget_mib, "MiB of volume textures on the GPU")
       ->check(CLI::Range(int64_t(1), int64_t(1) << 24));
+  s.add_option("--memory-budget-mib", o.memory_budget_mib,
+               "MiB of host memory for one volume's voxels: a pyramid (OME-Zarr, Neuroglancer) opens at its "
+               "finest level that fits, a larger volume of another format is refused; 0: no budget")
+      ->check(CLI::Range(int64_t(0), int64_t(1) << 24));
   s.add_option("--max-queued-stills", c.max_queued_stills,
                "REST stills waiting or rendering at once; beyond, 503 with Retry-After")
       ->check(CLI::Range(size_t(1), size_t(1024)));

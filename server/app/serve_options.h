@@ -21,6 +21,7 @@ struct ServeOptions {
   std::vector<std::string> data, volumes;
   int idle_seconds = 0;
   int64_t gpu_budget_mib = 0;
+  int64_t memory_budget_mib = 0;
   std::string web_dir, shader_dir;
   std::string upload_dir;
   int64_t max_upload_mib = limits::kDefaultMaxUploadBytes >> 20, upload_budget_mib = limits::kDefaultUploadBudgetBytes >> 20;

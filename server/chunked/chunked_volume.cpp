@@ -54,6 +54,18 @@ void place_chunk(const std::vector<uint8_t>* bytes, const std::vector<uint8_t>& 
 
 }  // namespace
 
+int finest_level_within(const ChunkedVolume& cv, int from, int64_t budget_bytes) {
+  const int64_t bpv = int64_t(voxel_bytes(storage_type(cv.source())));
+  for (int k = std::max(from, 0); k < int(cv.levels().size()); ++k) {
+    const Dims& d = cv.levels()[size_t(k)].dims;
+    if (double(d[0]) * double(d[1]) * double(d[2]) * double(bpv) <= double(budget_bytes)) return k;
+  }
+  const Dims& d = cv.levels().back().dims;
+  throw VolumeError(cv.root(), "even the coarsest level (" + std::to_string(d[0]) + "x" + std::to_string(d[1]) + "x" +
+                                   std::to_string(d[2]) + ") exceeds the memory budget of " +
+                                   std::to_string(budget_bytes >> 20) + " MiB");
+}
+
 Volume read_level(const ChunkedVolume& cv, int level, const LoadOptions& options) {
   if (level < 0 || level >= int(cv.levels().size()))
     throw VolumeError(cv.root(), "level " + std::to_string(level) + " does not exist (the pyramid has " +

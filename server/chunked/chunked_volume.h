@@ -72,6 +72,10 @@ std::unique_ptr<ChunkedVolume> open_chunked(const std::filesystem::path& dir, co
 // A region read's volume carries source_dims and region_lo as other formats' do.
 Volume read_level(const ChunkedVolume& volume, int level, const LoadOptions& options);
 
+// The finest level from `from` on whose voxels (in memory) fit `budget_bytes`. Throws VolumeError
+// when even the coarsest does not.
+int finest_level_within(const ChunkedVolume& volume, int from, int64_t budget_bytes);
+
 // The largest size of one decoded chunk a reader accepts.
 constexpr int64_t kMaxChunkBytes = int64_t(1) << 30;
 

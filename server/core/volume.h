@@ -94,6 +94,9 @@ class Volume {
   // them; for a whole read source_dims is {0, 0, 0}.
   Dims source_dims{0, 0, 0};
   Dims region_lo{0, 0, 0};
+  // A level of a chunked pyramid (chunked/): which one, of how many, and level 0's dims.
+  int pyramid_level = 0, pyramid_levels = 1;
+  Dims full_dims{0, 0, 0};
   double load_ms = 0.0;        // the whole load_volume call
   double statistics_ms = 0.0;  // of it: range and histogram (finalize_statistics)
   std::string name;

@@ -110,6 +110,11 @@ void check_header(const fs::path& file, const VolumeHeader& h, const LoadOptions
   for (int a = 0; a < 3; ++a)
     if (!(h.spacing[a] > 0) || !std::isfinite(h.spacing[a]))
       throw VolumeError(file, "spacing must be finite and > 0");
+  const int64_t voxel_mem = count * int64_t(voxel_bytes(storage_type(h.source)));
+  if (options.memory_budget_bytes > 0 && !options.region && voxel_mem > options.memory_budget_bytes)
+    throw VolumeError(file, std::to_string(voxel_mem >> 20) + " MiB of voxels exceeds the memory budget of " +
+                                std::to_string(options.memory_budget_bytes >> 20) +
+                                " MiB; a pyramid opens at a level that fits (peakcast convert IN OUT.zarr --pyramid)");
 }
 
 namespace {
@@ -309,7 +314,13 @@ Volume load_volume(const fs::path& path, const LoadOptions& options) {
   }
   if (chunked) {
     const auto cv = chunked::open_chunked(path, {options.time_point, options.channel});
-    v = chunked::read_level(*cv, options.level, options);
+    const int level = options.memory_budget_bytes > 0 && !options.region
+                          ? chunked::finest_level_within(*cv, options.level, options.memory_budget_bytes)
+                          : options.level;
+    v = chunked::read_level(*cv, level, options);
+    v.pyramid_level = level;
+    v.pyramid_levels = int(cv->levels().size());
+    v.full_dims = cv->levels()[0].dims;
   } else if (fs::is_directory(path, ec) || ext == ".tif" || ext == ".tiff") {
     if (options.region) throw VolumeError(path, "a region of a TIFF stack cannot be read (use NRRD, MetaImage or raw)");
     v = read_tiff(path, options);

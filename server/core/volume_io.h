@@ -52,6 +52,10 @@ struct LoadOptions {
   int level = 0;
   int64_t time_point = 0;
   int64_t channel = 0;
+  // Host memory for the voxels of a whole read (0: none, the voxel limit alone). A chunked volume
+  // is read at its finest level from `level` on that fits; any other volume past it is refused
+  // (docs/chunked-volumes.md).
+  int64_t memory_budget_bytes = 0;
 };
 
 // Format by name: .nrrd/.nhdr, .mhd/.mha, .json (sidecar) or .raw with a sidecar,

@@ -8,10 +8,20 @@
 
 namespace peakcast::net {
 
+namespace {
+
+LoadOptions load_options(const ServerConfig& c) {
+  LoadOptions o;
+  o.memory_budget_bytes = c.memory_budget_bytes;
+  return o;
+}
+
+}  // namespace
+
 AppContext::AppContext(ServerConfig c)
     : config(std::move(c)),
       residency(config.gpu_budget_bytes),
-      volumes(config.data_dirs, residency, LoadOptions{}, config.volume_loader),
+      volumes(config.data_dirs, residency, load_options(config), config.volume_loader),
       uploads(config.upload_dir, config.upload_limits, volumes),
       render(residency, metrics,
              RenderServiceOptions{config.shader_dir, config.encode_threads,

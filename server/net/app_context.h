@@ -35,6 +35,7 @@ struct ServerConfig {
   double max_fps = limits::kDefaultMaxFps;
   int max_kbps = limits::kDefaultMaxKbps;  // a video session's bit-rate ceiling (docs/streaming.md)
   int64_t gpu_budget_bytes = limits::kDefaultGpuBudgetBytes;
+  int64_t memory_budget_bytes = 0;  // host memory for one volume's voxels (0: none); LoadOptions
   size_t max_queued_stills = limits::kDefaultMaxQueuedStills;
   double max_still_samples = limits::kDefaultMaxStillSamples;
   double still_band_samples = limits::kStillBandSamples;

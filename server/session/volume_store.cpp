@@ -27,6 +27,11 @@ nlohmann::json VolumeEntry::info(bool with_histogram) const {
                         {"macrocells_ms", macrocells.build_ms}}},
                       {"nonfinite_replaced", v.nonfinite_replaced}};
   if (const double up = upload_ms.load(); up >= 0) j["load_phases"]["upload_ms"] = up;
+  if (v.pyramid_levels > 1 || v.pyramid_level > 0) {  // a chunked pyramid: the level shown
+    j["level"] = v.pyramid_level;
+    j["levels"] = v.pyramid_levels;
+    j["full_dims"] = {v.full_dims[0], v.full_dims[1], v.full_dims[2]};
+  }
   if (with_histogram) j["histogram"] = v.histogram;
   return j;
 }

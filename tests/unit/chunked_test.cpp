@@ -11,6 +11,7 @@
 #include "chunked/chunked_volume.h"
 #include "chunked/zarr_writer.h"
 #include "core/volume_io.h"
+#include "core/volume_writer.h"
 #include "unit/test_util.h"
 
 namespace fs = std::filesystem;
@@ -374,4 +375,30 @@ TEST(ChunkCodec, CorruptStreamsAreRefused) {
     } catch (const VolumeError&) {
     }
   }
+}
+
+TEST(Zarr, MemoryBudgetPicksTheFinestLevelThatFits) {
+  test::TempDir tmp;
+  const Volume src = test::anisotropic_blobs(SourceType::U16, {40, 30, 20});  // 48000 bytes
+  ZarrWriteOptions o;
+  o.chunk = 8;
+  o.pyramid = true;
+  write_ome_zarr(src, tmp / "p.zarr", o);
+  LoadOptions budget;
+  budget.memory_budget_bytes = 48000;
+  EXPECT_EQ(load_volume(tmp / "p.zarr", budget).pyramid_level, 0);
+  budget.memory_budget_bytes = 47999;
+  const Volume l1 = load_volume(tmp / "p.zarr", budget);
+  EXPECT_EQ(l1.pyramid_level, 1);
+  EXPECT_EQ(l1.dims(), (Dims{20, 15, 10}));
+  EXPECT_EQ(l1.full_dims, src.dims());
+  EXPECT_EQ(l1.pyramid_levels, 4);  // 40, 20, 10, 5 (<= 8)
+  budget.memory_budget_bytes = 10;
+  EXPECT_NE(refusal(tmp / "p.zarr", budget).find("even the coarsest level (5x4x3) exceeds"), std::string::npos);
+  // Other formats are refused past the budget, before anything is allocated; regions are not.
+  write_volume(tmp / "v.nrrd", src);
+  budget.memory_budget_bytes = 47999;
+  EXPECT_NE(refusal(tmp / "v.nrrd", budget).find("exceeds the memory budget"), std::string::npos);
+  budget.region = VoxelRegion{{0, 0, 0}, {40, 30, 10}};
+  EXPECT_EQ(refusal(tmp / "v.nrrd", budget), "");
 }
