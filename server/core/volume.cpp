@@ -181,6 +181,40 @@ void Volume::finalize_statistics() {
     for (int b = 0; b < kHistogramBins; ++b) histogram[b] += h[b];
 }
 
+std::vector<uint64_t> Volume::box_value_counts(const Dims& lo, const Dims& hi) const {
+  for (int a = 0; a < 3; ++a)
+    if (lo[a] < 0 || hi[a] > dims_[a] || lo[a] > hi[a]) throw std::invalid_argument("box_value_counts: box outside the volume");
+  if (!has_voxels()) throw std::logic_error("box_value_counts: the voxels were dropped");
+  if (type_ == VoxelType::F32) throw std::logic_error("box_value_counts: float voxels have no finite set of values");
+  const size_t values = type_ == VoxelType::U8 ? 256 : 65536;
+  std::vector<std::vector<uint64_t>> parts(static_cast<size_t>(hardware_threads()));
+  parallel_chunks(size_t(hi[2] - lo[2]), [&](size_t begin, size_t end, int worker) {
+    auto& c = parts[size_t(worker)];
+    c.assign(values, 0);
+    for (int64_t k = lo[2] + int64_t(begin); k < lo[2] + int64_t(end); ++k)
+      for (int64_t j = lo[1]; j < hi[1]; ++j) {
+        const size_t row = size_t(dims_[0] * (j + dims_[1] * k));
+        if (type_ == VoxelType::U8)
+          for (int64_t i = lo[0]; i < hi[0]; ++i) ++c[data_[row + size_t(i)]];
+        else
+          for (int64_t i = lo[0]; i < hi[0]; ++i) ++c[reinterpret_cast<const uint16_t*>(data_.get())[row + size_t(i)]];
+      }
+  });
+  std::vector<uint64_t> all(values, 0);
+  for (const auto& c : parts)
+    for (size_t v = 0; v < c.size(); ++v) all[v] += c[v];
+  return all;
+}
+
+std::vector<uint64_t> Volume::histogram_of_counts(const std::vector<uint64_t>& counts, double stored_lo, double stored_hi) {
+  const double span = stored_hi - stored_lo;
+  const double scale = span > 0 ? kHistogramBins / span : 0.0;
+  std::vector<uint64_t> h(kHistogramBins, 0);
+  for (size_t v = 0; v < counts.size(); ++v)
+    if (counts[v]) h[size_t(histogram_bin(double(v), stored_lo, scale, kHistogramBins))] += counts[v];
+  return h;
+}
+
 std::vector<uint64_t> Volume::box_histogram(const Dims& lo, const Dims& hi, double stored_lo, double stored_hi) const {
   for (int a = 0; a < 3; ++a)
     if (lo[a] < 0 || hi[a] > dims_[a] || lo[a] > hi[a]) throw std::invalid_argument("box_histogram: box outside the volume");

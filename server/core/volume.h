@@ -110,6 +110,13 @@ class Volume {
   // the stored range [stored_lo, stored_hi], binned as finalize_statistics bins: a distributed
   // volume's histogram is the sum of its bricks' own boxes (distributed/).
   std::vector<uint64_t> box_histogram(const Dims& lo, const Dims& hi, double stored_lo, double stored_hi) const;
+  // Integer volumes: how many voxels of the box hold each stored value (256 or 65536 counts),
+  // from which range and histogram follow exactly (histogram_of_counts), one pass over the voxels.
+  // std::logic_error for float volumes.
+  std::vector<uint64_t> box_value_counts(const Dims& lo, const Dims& hi) const;
+  // The kHistogramBins bins over [stored_lo, stored_hi] of those counts: box_histogram's bins.
+  static std::vector<uint64_t> histogram_of_counts(const std::vector<uint64_t>& counts, double stored_lo,
+                                                   double stored_hi);
   std::string to_string() const;
 
  private:

@@ -229,7 +229,7 @@ void finish_volume(const fs::path& file, Volume& v, bool big_endian, const LoadO
       }
     }
   }
-  v.finalize_statistics();
+  if (options.statistics) v.finalize_statistics();
 }
 
 Volume read_payload(const fs::path& header_file, const VolumeHeader& h, const PayloadSpec& payload,

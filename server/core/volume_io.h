@@ -56,6 +56,8 @@ struct LoadOptions {
   // is read at its finest level from `level` on that fits; any other volume past it is refused
   // (docs/chunked-volumes.md).
   int64_t memory_budget_bytes = 0;
+  // false: no range and histogram (a brick whose caller reduces the whole volume's; saves a pass).
+  bool statistics = true;
 };
 
 // Format by name: .nrrd/.nhdr, .mhd/.mha, .json (sidecar) or .raw with a sidecar,

@@ -34,8 +34,10 @@ struct SequenceStatistics {
   double ms = 0.0;
 };
 
-// Two passes over the bricks (at most budget_bytes of voxels held): the finite range, then the
-// histogram and the macrocell grids over that range. `base` carries level, time point, channel
+// The bricks of a sequence take 90% of budget_bytes; the rest is for decoding chunks, the image
+// layers and the grids. Statistics: integer volumes in one pass over the bricks (each stored
+// value counted: range and histogram exactly, and the macrocell shares); float volumes in two,
+// the finite range, then the histogram and the macrocell grids over that range. `base` carries level, time point, channel
 // and the non-finite policy (Refuse throws VolumeError as a whole read would).
 SequenceStatistics sequence_statistics(const std::string& path, const LoadOptions& base, int64_t budget_bytes,
                                        const std::function<void(double)>& progress = {});
@@ -49,7 +51,7 @@ struct SequenceResult {
 };
 
 // `scene` (resolved against stats.box) drawn by bricks with `renderer`, holding at most two
-// bricks (budget_bytes in all). progress: the share of bricks composited.
+// bricks (90% of budget_bytes in all). progress: the share of bricks composited.
 SequenceResult render_sequence(render::Renderer& renderer, const std::string& path, const LoadOptions& base,
                                const SequenceStatistics& stats, const ResolvedScene& scene, int64_t budget_bytes,
                                const std::function<void(double)>& progress = {});

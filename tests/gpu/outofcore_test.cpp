@@ -64,7 +64,7 @@ void expect_same_statistics(const Volume& whole, const distributed::SequenceStat
   }
 }
 
-const int64_t kBudget = 96 << 10;  // bytes of voxels: the 41^3 float volume (270 KiB) takes >= 6 bricks
+const int64_t kBudget = 108 << 10;  // bytes of voxels: the 41^3 float volume (270 KiB) takes >= 6 bricks
 
 double sequence_error(const Case& c, const fs::path& path, int64_t budget = kBudget) {
   const Volume whole = load_volume(path);
@@ -81,7 +81,7 @@ double sequence_error(const Case& c, const fs::path& path, int64_t budget = kBud
   expect_same_statistics(whole, stats);
   const ResolvedScene rs = resolve_scene(scene, stats.box);
   const auto r = distributed::render_sequence(renderer, path.string(), {}, stats, rs, budget);
-  EXPECT_LE(2 * r.largest_brick_bytes, budget) << "two bricks are held at once";
+  EXPECT_LE(2 * r.largest_brick_bytes, budget / 10 * 9) << "two bricks are held at once, in 90% of the budget";
   EXPECT_GE(r.bricks, 2 * whole.byte_size() > size_t(budget) ? 2 : 1);
   const double e = max_abs(one, r.image);
   std::printf("  %s: %d bricks (ghost %d), max abs %.3g\n", c.render.c_str(), r.bricks, r.ghost, e);
