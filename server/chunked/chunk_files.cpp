@@ -1,5 +1,6 @@
 // What the chunked readers share: bounded file reads, metadata JSON, paths kept inside the
 // volume's folder, overflow-checked sizes.
+#include <cmath>
 #include <cstring>
 #include <fstream>
 
@@ -11,7 +12,9 @@ namespace peakcast::chunked {
 
 std::optional<std::vector<uint8_t>> read_file_if_there(const fs::path& file, int64_t limit) {
   std::error_code ec;
-  if (!fs::exists(file, ec)) return std::nullopt;
+  const bool there = fs::exists(file, ec);
+  if (ec) throw VolumeError(file, "cannot be read: " + ec.message());  // not "missing": no fill value for it
+  if (!there) return std::nullopt;
   if (!fs::is_regular_file(file, ec)) throw VolumeError(file, "not a regular file");
   const auto size = fs::file_size(file, ec);
   if (ec) throw VolumeError(file, "cannot read its size: " + ec.message());
@@ -40,6 +43,20 @@ fs::path inside(const fs::path& dir, const std::string& rel, const fs::path& met
     if (part.empty() || part == ".." || part == ".") ok = false;
   if (!ok) throw VolumeError(meta, "path '" + rel + "' must be a relative path inside the volume's folder");
   return dir / p;
+}
+
+void check_levels(const std::vector<ChunkLevel>& levels, const fs::path& file) {
+  for (const ChunkLevel& L : levels) {
+    int64_t count = 1;
+    for (int a = 0; a < 3; ++a) {
+      if (L.dims[a] < 1 || L.dims[a] > kMaxLevelEdge || L.chunk[a] < 1)
+        throw VolumeError(file, "level " + L.name + ": sizes must be 1.." + std::to_string(kMaxLevelEdge));
+      if (__builtin_mul_overflow(count, L.dims[a], &count))
+        throw VolumeError(file, "level " + L.name + ": sizes overflow a 64-bit voxel count");
+      if (!(L.spacing[a] > 0) || !std::isfinite(L.spacing[a]) || !std::isfinite(L.origin[a]))
+        throw VolumeError(file, "level " + L.name + ": spacing must be finite and > 0, the origin finite");
+    }
+  }
 }
 
 int64_t checked_bytes(const std::vector<int64_t>& factors, const fs::path& file, const char* what) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <nlohmann/json.hpp>
 
 #include "chunked/formats.h"
 #include "core/parallel.h"
@@ -20,11 +21,19 @@ bool is_chunked_volume(const fs::path& dir) {
 
 std::unique_ptr<ChunkedVolume> open_chunked(const fs::path& dir, const ChunkSelect& select) {
   std::error_code ec;
-  if (fs::is_regular_file(dir / "info", ec) && !fs::exists(dir / ".zattrs", ec) && !fs::exists(dir / ".zarray", ec))
-    return open_precomputed(dir, select);
-  if (fs::is_regular_file(dir / ".zattrs", ec) || fs::is_regular_file(dir / ".zarray", ec))
-    return open_zarr(dir, select);
-  throw VolumeError(dir, "not a chunked volume (no .zattrs, .zarray or Neuroglancer info)");
+  std::unique_ptr<ChunkedVolume> v;
+  try {  // a metadata value of the wrong JSON type is a refusal like any other
+    if (fs::is_regular_file(dir / "info", ec) && !fs::exists(dir / ".zattrs", ec) && !fs::exists(dir / ".zarray", ec))
+      v = open_precomputed(dir, select);
+    else if (fs::is_regular_file(dir / ".zattrs", ec) || fs::is_regular_file(dir / ".zarray", ec))
+      v = open_zarr(dir, select);
+    else
+      throw VolumeError(dir, "not a chunked volume (no .zattrs, .zarray or Neuroglancer info)");
+  } catch (const nlohmann::json::exception& e) {
+    throw VolumeError(dir, std::string("metadata: ") + e.what());
+  }
+  check_levels(v->levels(), dir);
+  return v;
 }
 
 namespace {
@@ -96,18 +105,20 @@ Volume read_level(const ChunkedVolume& cv, int level, const LoadOptions& options
   detail::check_header(cv.root(), h, local);
   Volume v(h);
   const size_t bpv = source_bytes(h.source);
-  std::vector<Dims> chunks;  // the chunk indices that meet the box
-  Dims c0{}, c1{};
+  Dims c0{}, n{};  // the chunks that meet the box: from c0, n per axis
   for (int a = 0; a < 3; ++a) {
     c0[a] = rlo[a] / L.chunk[a];
-    c1[a] = (rhi[a] - 1) / L.chunk[a] + 1;
+    n[a] = (rhi[a] - 1) / L.chunk[a] + 1 - c0[a];
   }
-  for (int64_t z = c0[2]; z < c1[2]; ++z)
-    for (int64_t y = c0[1]; y < c1[1]; ++y)
-      for (int64_t x = c0[0]; x < c1[0]; ++x) chunks.push_back({x, y, z});
+  const double count = double(n[0]) * double(n[1]) * double(n[2]);
+  if (count > double(kMaxChunksPerRead))
+    throw VolumeError(cv.root(), "level " + L.name + ": " + std::to_string(int64_t(count)) + " chunks of " +
+                                     std::to_string(L.chunk[0]) + "x" + std::to_string(L.chunk[1]) + "x" +
+                                     std::to_string(L.chunk[2]) + " voxels for one read; chunks this small are refused");
   detail::LoadProgress progress(options, size_t(h.voxel_count()) * bpv);
-  parallel_for(chunks.size(), [&](size_t i) {  // rethrows the first refusal
-    const Dims& c = chunks[i];
+  parallel_for(size_t(count), [&](size_t i) {  // rethrows the first refusal
+    const int64_t k = int64_t(i);
+    const Dims c{c0[0] + k % n[0], c0[1] + k / n[0] % n[1], c0[2] + k / (n[0] * n[1])};
     Dims clo{}, chi{}, rb{};
     size_t placed = bpv;
     for (int a = 0; a < 3; ++a) {

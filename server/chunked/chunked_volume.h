@@ -76,7 +76,11 @@ Volume read_level(const ChunkedVolume& volume, int level, const LoadOptions& opt
 // when even the coarsest does not.
 int finest_level_within(const ChunkedVolume& volume, int from, int64_t budget_bytes);
 
-// The largest size of one decoded chunk a reader accepts.
-constexpr int64_t kMaxChunkBytes = int64_t(1) << 30;
+// The largest size of one decoded chunk a reader accepts, and the most chunks one read visits
+// (a level cut into chunks of a few voxels is refused rather than stat'ed chunk by chunk).
+constexpr int64_t kMaxChunkBytes = int64_t(512) << 20;
+constexpr int64_t kMaxChunksPerRead = int64_t(1) << 24;
+// The largest edge of a level, in voxels (sizes and offsets then never overflow 64 bits).
+constexpr int64_t kMaxLevelEdge = int64_t(1) << 40;
 
 }  // namespace peakcast::chunked

@@ -26,6 +26,9 @@ nlohmann::json read_json_file(const std::filesystem::path& file);
 // or empty parts. Throws VolumeError naming `meta` otherwise.
 std::filesystem::path inside(const std::filesystem::path& dir, const std::string& rel,
                              const std::filesystem::path& meta);
+// Every level: an edge of 1..kMaxLevelEdge voxels, a voxel count that fits 64 bits, finite
+// spacing > 0 and a finite origin. Throws VolumeError naming `file`.
+void check_levels(const std::vector<ChunkLevel>& levels, const std::filesystem::path& file);
 // a * b * ..., refused (VolumeError naming `file`) on overflow or past kMaxChunkBytes.
 int64_t checked_bytes(const std::vector<int64_t>& factors, const std::filesystem::path& file, const char* what);
 // Copies the box `box` (x, y, z sizes) out of a larger x-fastest block of `full` sizes, from its

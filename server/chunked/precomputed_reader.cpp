@@ -37,7 +37,7 @@ class PrecomputedVolume : public ChunkedVolume {
     const json info = read_json_file(file);
     if (info.contains("type") && info["type"] != "image")
       throw VolumeError(file, "type " + info["type"].dump() + " is not an image (segmentations are not volumes to render)");
-    const std::string dt = info.value("data_type", std::string());
+    const std::string dt = info.contains("data_type") && info["data_type"].is_string() ? info["data_type"].get<std::string>() : "";
     static const std::pair<const char*, SourceType> kinds[] = {{"uint8", SourceType::U8},   {"int8", SourceType::I8},
                                                               {"uint16", SourceType::U16}, {"int16", SourceType::I16},
                                                               {"float32", SourceType::F32}};
@@ -71,7 +71,7 @@ class PrecomputedVolume : public ChunkedVolume {
       Dims offset{};
       for (int a = 0; a < 3; ++a) {
         auto whole = [&](double v, const char* what, bool positive) {
-          if (v != double(int64_t(v)) || (positive ? v < 1 : false) || std::abs(v) > 1e15)
+          if (!(std::abs(v) <= 1e15) || v != std::floor(v) || (positive && v < 1))
             throw VolumeError(file, std::string(what) + " must be whole numbers" + (positive ? " >= 1" : ""));
           return int64_t(v);
         };
@@ -80,7 +80,7 @@ class PrecomputedVolume : public ChunkedVolume {
         offset[a] = whole(off[size_t(a)], "voxel_offset", false);
         if (!(res[size_t(a)] > 0) || !std::isfinite(res[size_t(a)])) throw VolumeError(file, "resolution must be finite and > 0");
         L.spacing[a] = res[size_t(a)];
-        L.origin[a] = double(offset[a]) * res[size_t(a)];
+        L.origin[a] = (double(offset[a]) + 0.5) * res[size_t(a)];  // voxel i spans [i, i+1): its centre
       }
       checked_bytes({L.chunk[0], L.chunk[1], L.chunk[2], channels_, int64_t(source_bytes(source_))}, file, "a chunk");
       levels_.push_back(L);
@@ -110,8 +110,22 @@ class PrecomputedVolume : public ChunkedVolume {
       raw = read_file_if_there(file, limit);
     }
     if (!raw) return std::nullopt;
-    std::vector<uint8_t> all = looks_gzip(*raw) ? decode_chunk({Compressor::Gzip}, *raw, expected, file)
-                                                : decode_chunk({Compressor::None}, *raw, expected, file);
+    // Gzip when the name says so or the bytes start as gzip does and inflate to the chunk; a raw
+    // chunk whose first voxels happen to read 1f 8b is raw (a gzip stream may also happen to be
+    // exactly the raw chunk's size: that alone tells nothing).
+    std::vector<uint8_t> all;
+    if (file.extension() == ".gz") {
+      all = decode_chunk({Compressor::Gzip}, *raw, expected, file);
+    } else if (looks_gzip(*raw)) {
+      try {
+        all = decode_chunk({Compressor::Gzip}, *raw, expected, file);
+      } catch (const VolumeError&) {
+        if (raw->size() != expected) throw;
+        all = std::move(*raw);
+      }
+    } else {
+      all = decode_chunk({Compressor::None}, *raw, expected, file);
+    }
     if (channels_ == 1) return all;
     const auto* first = all.data() + size_t(channel_) * one;  // channels outermost: [c][z][y][x]
     return std::vector<uint8_t>(first, first + one);

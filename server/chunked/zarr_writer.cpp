@@ -7,6 +7,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include <unistd.h>
+
 #include "core/parallel.h"
 #include "core/volume_io.h"
 
@@ -75,24 +77,9 @@ void unshift(uint8_t* p, size_t n, SourceType source) {
     for (size_t i = 0; i < n; ++i) reinterpret_cast<uint16_t*>(p)[i] ^= 0x8000;
 }
 
-}  // namespace
-
-int pyramid_levels(const Dims& dims, int64_t chunk) {
-  int n = 1;
-  for (Dims d = dims; std::max({d[0], d[1], d[2]}) > chunk; ++n)
-    for (auto& x : d) x = (x + 1) / 2;
-  return n;
-}
-
-ZarrWriteReport write_ome_zarr_levels(const fs::path& out, const VolumeHeader& h, int levels, const std::string& name,
-                                      const ZarrWriteOptions& options, const ChunkFill& fill) {
-  if (options.chunk < 1 || options.chunk > 512) throw std::invalid_argument("chunk edge must be 1..512 voxels");
-  if (levels < 1) throw std::invalid_argument("a pyramid has at least one level");
+ZarrWriteReport write_levels(const fs::path& out, const fs::path& tmp, const VolumeHeader& h, int levels,
+                             const std::string& name, const ZarrWriteOptions& options, const ChunkFill& fill) {
   std::error_code ec;
-  if (fs::exists(out, ec)) throw VolumeError(out, "already exists (remove it first)");
-  const fs::path tmp = out.string() + ".partial";
-  fs::remove_all(tmp, ec);
-  if (!fs::create_directories(tmp, ec)) throw VolumeError(tmp, "cannot be created: " + ec.message());
   const size_t bpv = source_bytes(h.source);
   ZarrWriteReport report;
   report.levels = levels;
@@ -159,6 +146,36 @@ ZarrWriteReport write_ome_zarr_levels(const fs::path& out, const VolumeHeader& h
   report.chunks = chunks;
   report.bytes = bytes;
   return report;
+}
+
+}  // namespace
+
+int pyramid_levels(const Dims& dims, int64_t chunk) {
+  int n = 1;
+  for (Dims d = dims; std::max({d[0], d[1], d[2]}) > chunk; ++n)
+    for (auto& x : d) x = (x + 1) / 2;
+  return n;
+}
+
+ZarrWriteReport write_ome_zarr_levels(const fs::path& out, const VolumeHeader& h, int levels, const std::string& name,
+                                      const ZarrWriteOptions& options, const ChunkFill& fill) {
+  if (options.chunk < 1 || options.chunk > 512) throw std::invalid_argument("chunk edge must be 1..512 voxels");
+  if (levels < 1) throw std::invalid_argument("a pyramid has at least one level");
+  std::error_code ec;
+  if (fs::exists(out, ec)) throw VolumeError(out, "already exists (remove it first)");
+  // Written beside OUT under a name of this process's, renamed when whole.
+  const fs::path tmp = out.string() + ".partial-" + std::to_string(::getpid());
+  fs::remove_all(tmp, ec);
+  if (!fs::create_directories(tmp, ec)) throw VolumeError(tmp, "cannot be created: " + ec.message());
+  try {
+    return write_levels(out, tmp, h, levels, name, options, fill);
+  } catch (const fs::filesystem_error& e) {
+    fs::remove_all(tmp, ec);
+    throw VolumeError(out, e.what());
+  } catch (...) {
+    fs::remove_all(tmp, ec);
+    throw;
+  }
 }
 
 ZarrWriteReport write_ome_zarr(const Volume& volume, const fs::path& out, const ZarrWriteOptions& options) {

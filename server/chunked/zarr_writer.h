@@ -37,7 +37,7 @@ ZarrWriteReport write_ome_zarr_levels(const std::filesystem::path& out, const Vo
 int pyramid_levels(const Dims& dims, int64_t chunk);
 
 // Writes `volume` (with voxels) in its source type to the folder `out`, which must not exist: it
-// is written as `out`.partial and renamed when whole, so no half-written pyramid is ever read.
+// is written as `out`.partial-PID and renamed when whole, so no half-written pyramid is ever read.
 // Throws VolumeError (out exists, a write fails) or std::invalid_argument (a chunk edge < 1).
 ZarrWriteReport write_ome_zarr(const Volume& volume, const std::filesystem::path& out, const ZarrWriteOptions& options);
 

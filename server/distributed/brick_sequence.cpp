@@ -60,16 +60,22 @@ int bricks_for_budget(const Index3& dims, int ghost, size_t voxel_bytes, int64_t
   auto fits = [&](int n) {
     return double(largest_read(kd_split(dims, n, ghost))) * double(voxel_bytes) * holding <= double(budget_bytes);
   };
-  int hi = 1;
+  // No fewer bricks than the bytes need; no more than kMaxBricks (a budget of a few bytes is
+  // refused before a split into millions of bricks is tried).
+  constexpr int kMaxBricks = 1 << 20;
+  const double need = double(dims[0]) * double(dims[1]) * double(dims[2]) * double(voxel_bytes) * holding;
+  const double least = std::ceil(need / std::max(double(budget_bytes), 1.0));
+  int hi = int(std::clamp(least, 1.0, double(kMaxBricks) + 1.0));
   try {
-    while (!fits(hi)) hi *= 2;
+    while (hi <= kMaxBricks && !fits(hi)) hi = hi * 2 > kMaxBricks && hi < kMaxBricks ? kMaxBricks : hi * 2;
+    if (hi > kMaxBricks) throw std::invalid_argument("too many bricks");
   } catch (const std::invalid_argument&) {  // the split ran out of planes to cut
     char mib[32];
     std::snprintf(mib, sizeof mib, "%.2f", double(budget_bytes) / 1048576.0);
     throw std::invalid_argument(std::string("a memory budget of ") + mib + " MiB cannot hold " +
                                 std::to_string(holding) + " bricks of this volume with their ghost voxels");
   }
-  int lo = hi / 2 + 1;  // fewest that fits in (hi/2, hi]
+  int lo = std::max(int(least), hi / 2 + 1);  // the fewest that fits lies in [lo, hi]
   while (lo < hi) {
     const int mid = (lo + hi) / 2;
     if (fits(mid)) hi = mid;

@@ -1,6 +1,7 @@
 // Chunked volumes (server/chunked/): OME-Zarr written and read back at every level, regions read
 // chunk by chunk, hand-made zarr and Neuroglancer precomputed folders, and each refusal.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstring>
@@ -62,7 +63,7 @@ TEST(Zarr, WrittenPyramidReadsBackAtEveryLevel) {
       o.compressor = compressor_by_name(comp);
       const auto report = write_ome_zarr(src, out, o);
       EXPECT_EQ(report.levels, 4);  // 37 -> 19 -> 10 -> 5 (<= 8)
-      EXPECT_FALSE(fs::exists(out.string() + ".partial"));
+      EXPECT_FALSE(fs::exists(out.string() + ".partial-" + std::to_string(::getpid())));
       const Volume back = load_volume(out);
       EXPECT_TRUE(test::same_volume(src, back));
       const auto cv = open_chunked(out);
@@ -244,6 +245,16 @@ TEST(Zarr, Refusals) {
             }).find("axes must be [t,] [c,] z, y, x"), std::string::npos);
   EXPECT_NE(variant("nojson", [&](const fs::path& p) { test::write_file(p / ".zattrs", "{not json"); })
                 .find("not valid JSON"), std::string::npos);
+  EXPECT_NE(variant("jsontype", [&](const fs::path& p) { edit_zarray(p, [](json& j) { j["zarr_format"] = "2"; }); })
+                .find("metadata: "), std::string::npos);
+  EXPECT_NE(variant("tiny", [&](const fs::path& p) {
+              edit_zarray(p, [](json& j) { j["shape"] = {1600, 1600, 1600}; j["chunks"] = {1, 1, 1}; });
+            }).find("chunks this small are refused"), std::string::npos);
+  EXPECT_NE(variant("origin", [&](const fs::path& p) {
+              edit_zattrs(p, [](json& j) {
+                j["multiscales"][0]["coordinateTransformations"] = {{{"type", "scale"}, {"scale", {1e308, 1e308, 1e308}}}};  // times 2: inf
+              });
+            }).find("finite"), std::string::npos);
   LoadOptions small;
   small.max_voxels = 100;
   EXPECT_NE(refusal(tmp / "ok.zarr", small).find("exceeds the limit"), std::string::npos);
@@ -309,8 +320,8 @@ TEST(Precomputed, RawAndGzipChunksAndChannels) {
       const Volume v = load_volume(root, o);
       ASSERT_EQ(v.dims(), (Dims{10, 7, 5}));
       EXPECT_DOUBLE_EQ(v.spacing.z, 2.0);
-      EXPECT_DOUBLE_EQ(v.origin.x, 100.0);
-      EXPECT_DOUBLE_EQ(v.origin.z, 100.0);
+      EXPECT_DOUBLE_EQ(v.origin.x, 100.5);  // voxel 100 spans [100, 101) nm: its centre
+      EXPECT_DOUBLE_EQ(v.origin.z, 101.0);
       int64_t wrong = 0;
       for (int z = 0; z < 5; ++z)
         for (int y = 0; y < 7; ++y)

@@ -165,8 +165,8 @@ def precomputed(tmp):
     out = os.path.join(tmp, "ng.raw")
     run("convert", root, out)
     meta = json.load(open(out + ".json"))
-    check(np.array_equal(read_raw(out), vol) and meta["spacing"] == [8, 8, 40] and meta["origin"] == [128, 0, 160],
-          "Neuroglancer precomputed (raw, gzip and .gz chunks): voxels, spacing (nm) and origin")
+    check(np.array_equal(read_raw(out), vol) and meta["spacing"] == [8, 8, 40] and meta["origin"] == [132, 4, 180],
+          "Neuroglancer precomputed (raw, gzip and .gz chunks): voxels, spacing (nm) and origin (first voxel's centre)")
 
 
 with tempfile.TemporaryDirectory() as tmp:
