@@ -23,13 +23,21 @@ double ms_between(std::chrono::steady_clock::time_point a, std::chrono::steady_c
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
-double rss_mib() {
+namespace {
+
+double status_mib(const char* key) {  // a "Vm...:" line of /proc/self/status, in MiB
   std::ifstream in("/proc/self/status");
-  std::string line;
-  while (std::getline(in, line))
-    if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  const std::string prefix = std::string(key) + ":";
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind(prefix, 0) == 0) return std::stod(line.substr(prefix.size())) / 1024.0;
   return 0.0;
 }
+
+}  // namespace
+
+double rss_mib() { return status_mib("VmRSS"); }
+double peak_rss_mib() { return status_mib("VmHWM"); }
+void reset_peak_rss() { std::ofstream("/proc/self/clear_refs") << "5"; }
 
 HttpAnswer http_request(uint16_t port, http::verb verb, const std::string& target, const std::string& body) {
   HttpAnswer a;

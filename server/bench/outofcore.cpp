@@ -37,16 +37,6 @@ struct OutOfCoreArgs {
 
 using Clock = std::chrono::steady_clock;
 
-// The process's peak RSS since the last reset_peak_rss (VmHWM), MiB.
-double peak_rss_mib() {
-  std::ifstream in("/proc/self/status");
-  std::string line;
-  while (std::getline(in, line))
-    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
-  return 0.0;
-}
-void reset_peak_rss() { std::ofstream("/proc/self/clear_refs") << "5"; }
-
 // Level k's voxel i along an axis of n level-0 voxels: a product of sines through the centre of
 // its 2^k block (about the block's mean), period n/6, so the volume holds a lattice of blobs,
 // quantised to 32 grey levels so that zstd keeps 64 GiB of voxels to a few GiB of disk.
