@@ -7,14 +7,15 @@
 #include <limits>
 #include <memory>
 #include <stdexcept>
+#include <utility>
 
 #include "core/macrocell_share.h"
 #include "distributed/brick_frame.h"
 
 namespace peakcast::distributed {
+using Clock = std::chrono::steady_clock;
 namespace {
 
-using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
 int64_t largest_read(const KdSplit& s) {
@@ -84,137 +85,182 @@ int bricks_for_budget(const Index3& dims, int ghost, size_t voxel_bytes, int64_t
   return hi;
 }
 
-SequenceStatistics sequence_statistics(const std::string& path, const LoadOptions& base, int64_t budget_bytes,
-                                       const std::function<void(double)>& progress) {
-  const auto t0 = Clock::now();
-  SequenceStatistics s;
-  LoadOptions one = base;
+StatisticsRun::StatisticsRun(std::string path, LoadOptions base, int64_t budget_bytes)
+    : path_(std::move(path)), base_(std::move(base)), t0_(Clock::now()) {
+  LoadOptions one = base_;
   one.region = VoxelRegion{{0, 0, 0}, {1, 1, 1}};
   one.progress = nullptr;
-  const Volume head = load_volume(path, one);
-  const Index3 dims{head.source_dims[0], head.source_dims[1], head.source_dims[2]};
-  s.box = VolumeBox{dims, head.spacing, head.origin, 0.0, 0.0, {}};
-  s.source = head.source_type();
-  const size_t bpv = voxel_bytes(head.type());
-  s.bricks = bricks_for_budget(dims, 0, bpv, voxel_share(budget_bytes), 1);
-  const KdSplit split = kd_split(dims, s.bricks, 0);
-  MacrocellShare shares[2];
+  const Volume head = load_volume(path_, one);
+  dims_ = Index3{head.source_dims[0], head.source_dims[1], head.source_dims[2]};
+  s_.box = VolumeBox{dims_, head.spacing, head.origin, 0.0, 0.0, {}};
+  s_.source = head.source_type();
+  floats_ = head.type() == VoxelType::F32;
+  offset_ = storage_offset(head.source_type());
+  s_.bricks = bricks_for_budget(dims_, 0, voxel_bytes(head.type()), voxel_share(budget_bytes), 1);
+  split_ = kd_split(dims_, s_.bricks, 0);
+  if (floats_) histogram_.assign(Volume::kHistogramBins, 0);
+}
+
+StatisticsRun::~StatisticsRun() = default;
+
+int StatisticsRun::total_steps() const { return int(split_.bricks.size()) * (floats_ ? 2 : 1); }
+
+double StatisticsRun::progress() const { return double(steps_) / double(total_steps()); }
+
+bool StatisticsRun::done() const { return steps_ >= total_steps(); }
+
+void StatisticsRun::add_shares(const Volume& v, size_t k) {
   const FilterSupport supports[2] = {FilterSupport::Trilinear, FilterSupport::Tricubic};
-  auto add_shares = [&](const Volume& v, size_t k) {
-    for (int g = 0; g < 2; ++g) {
-      MacrocellShare share = brick_macrocell_share(v, split.bricks[k], dims, supports[g]);
-      if (k == 0) shares[g] = std::move(share);
-      else add_share(shares[g], share);
-    }
-  };
-  if (head.type() != VoxelType::F32) {
+  for (int g = 0; g < 2; ++g) {
+    MacrocellShare share = brick_macrocell_share(v, split_.bricks[k], dims_, supports[g]);
+    if (k == 0) shares_[g] = std::move(share);
+    else add_share(shares_[g], share);
+  }
+}
+
+void StatisticsRun::step() {
+  if (done()) return;
+  const size_t n = split_.bricks.size(), k = size_t(steps_) % n;
+  const bool second_pass = size_t(steps_) >= n;
+  const auto v = read_brick_voxels(path_, base_, split_.bricks[k]);
+  s_.bytes_read += int64_t(v->byte_size());
+  const auto [own_lo, own_hi] = counted_box(split_.bricks[k], dims_);
+  const Dims lo{own_lo[0], own_lo[1], own_lo[2]}, hi{own_hi[0], own_hi[1], own_hi[2]};
+  if (!floats_) {
     // Integers: one pass. Each stored value's count gives the range and the histogram exactly
     // (Volume::histogram_of_counts); the macrocell shares need no range.
-    std::vector<uint64_t> counts;
-    for (size_t k = 0; k < split.bricks.size(); ++k) {
-      const auto v = read_brick_voxels(path, base, split.bricks[k]);
-      s.bytes_read += int64_t(v->byte_size());
-      const auto [own_lo, own_hi] = counted_box(split.bricks[k], dims);
-      const auto c = v->box_value_counts(Dims{own_lo[0], own_lo[1], own_lo[2]}, Dims{own_hi[0], own_hi[1], own_hi[2]});
-      if (counts.empty()) counts.assign(c.size(), 0);
-      for (size_t i = 0; i < c.size(); ++i) counts[i] += c[i];
-      add_shares(*v, k);
-      if (progress) progress(double(k + 1) / double(split.bricks.size()));
+    const auto c = v->box_value_counts(lo, hi);
+    if (counts_.empty()) counts_.assign(c.size(), 0);
+    for (size_t i = 0; i < c.size(); ++i) counts_[i] += c[i];
+    add_shares(*v, k);
+  } else if (!second_pass) {
+    // Floats, pass 1: the finite range and the non-finite count.
+    s_.nonfinite += count_nonfinite(*v, own_lo, own_hi);
+    const auto [f_lo, f_hi] = finite_extremes(*v);
+    if (f_lo <= f_hi) {
+      lo_ = std::min(lo_, double(f_lo));
+      hi_ = std::max(hi_, double(f_hi));
     }
-    size_t lo = 0, hi = counts.size() - 1;
-    while (lo < counts.size() && counts[lo] == 0) ++lo;
-    while (hi > lo && counts[hi] == 0) --hi;
-    const double offset = storage_offset(head.source_type());
-    s.box.min_value = double(lo) + offset;
-    s.box.max_value = double(hi) + offset;
-    s.box.histogram = Volume::histogram_of_counts(counts, double(lo), double(hi));
   } else {
-    const double steps = 2.0 * double(split.bricks.size());
-    // Pass 1: the finite range and the non-finite count.
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (size_t k = 0; k < split.bricks.size(); ++k) {
-      const auto v = read_brick_voxels(path, base, split.bricks[k]);
-      s.bytes_read += int64_t(v->byte_size());
-      const auto [own_lo, own_hi] = counted_box(split.bricks[k], dims);
-      s.nonfinite += count_nonfinite(*v, own_lo, own_hi);
-      const auto [f_lo, f_hi] = finite_extremes(*v);
-      if (f_lo <= f_hi) {
-        lo = std::min(lo, double(f_lo));
-        hi = std::max(hi, double(f_hi));
-      }
-      if (progress) progress(double(k + 1) / steps);
-    }
-    if (s.nonfinite > 0 && base.nonfinite == NonFinitePolicy::Refuse)
-      throw VolumeError(path, std::to_string(s.nonfinite) + " NaN/Inf voxels (policy: refuse)");
-    if (!(lo <= hi)) lo = hi = 0.0;  // nothing finite anywhere: 0, as one process
-    s.box.min_value = lo;
-    s.box.max_value = hi;
     // Pass 2: the histogram over that range and the macrocell grids, each voxel counted once.
-    std::vector<uint64_t> histogram(Volume::kHistogramBins, 0);
-    for (size_t k = 0; k < split.bricks.size(); ++k) {
-      const auto v = read_brick_voxels(path, base, split.bricks[k]);
-      s.bytes_read += int64_t(v->byte_size());
-      replace_with(*v, s);
-      const auto [own_lo, own_hi] = counted_box(split.bricks[k], dims);
-      const auto h = v->box_histogram(Dims{own_lo[0], own_lo[1], own_lo[2]}, Dims{own_hi[0], own_hi[1], own_hi[2]}, lo, hi);
-      for (size_t i = 0; i < h.size(); ++i) histogram[i] += h[i];
-      add_shares(*v, k);
-      if (progress) progress(double(split.bricks.size() + k + 1) / steps);
-    }
-    s.box.histogram = std::move(histogram);
+    replace_with(*v, s_);
+    const auto h = v->box_histogram(lo, hi, s_.box.min_value, s_.box.max_value);
+    for (size_t i = 0; i < h.size(); ++i) histogram_[i] += h[i];
+    add_shares(*v, k);
   }
-  s.cells.trilinear = std::make_shared<const MacrocellGrid>(grid_from_share(shares[0]));
-  s.cells.tricubic = std::make_shared<const MacrocellGrid>(grid_from_share(shares[1]));
-  s.ms = ms_since(t0);
-  return s;
+  steps_++;
+  if (floats_ && size_t(steps_) == n) {  // the first pass is over: the range the second uses
+    if (s_.nonfinite > 0 && base_.nonfinite == NonFinitePolicy::Refuse)
+      throw VolumeError(path_, std::to_string(s_.nonfinite) + " NaN/Inf voxels (policy: refuse)");
+    if (!(lo_ <= hi_)) lo_ = hi_ = 0.0;  // nothing finite anywhere: 0, as one process
+    s_.box.min_value = lo_;
+    s_.box.max_value = hi_;
+  }
+  if (done()) finish();
+}
+
+void StatisticsRun::finish() {
+  if (!floats_) {
+    size_t lo = 0, hi = counts_.size() - 1;
+    while (lo < counts_.size() && counts_[lo] == 0) ++lo;
+    while (hi > lo && counts_[hi] == 0) --hi;
+    s_.box.min_value = double(lo) + offset_;
+    s_.box.max_value = double(hi) + offset_;
+    s_.box.histogram = Volume::histogram_of_counts(counts_, double(lo), double(hi));
+  } else {
+    s_.box.histogram = std::move(histogram_);
+  }
+  s_.cells.trilinear = std::make_shared<const MacrocellGrid>(grid_from_share(shares_[0]));
+  s_.cells.tricubic = std::make_shared<const MacrocellGrid>(grid_from_share(shares_[1]));
+  s_.ms = ms_since(t0_);
+}
+
+SequenceStatistics StatisticsRun::take() {
+  if (!done()) throw std::logic_error("StatisticsRun::take before the last brick");
+  return std::move(s_);
+}
+
+SequenceStatistics sequence_statistics(const std::string& path, const LoadOptions& base, int64_t budget_bytes,
+                                       const std::function<void(double)>& progress) {
+  StatisticsRun run(path, base, budget_bytes);
+  while (!run.done()) {
+    run.step();
+    if (progress) progress(run.progress());
+  }
+  return run.take();
+}
+
+SequenceRun::SequenceRun(std::string path, LoadOptions base, std::shared_ptr<const SequenceStatistics> stats,
+                         ResolvedScene scene, int64_t budget_bytes)
+    : path_(std::move(path)), base_(std::move(base)), stats_(std::move(stats)), scene_(std::move(scene)) {
+  const Index3& dims = stats_->box.dims;
+  r_.ghost = brick_ghost(scene_);
+  const size_t bpv = voxel_bytes(storage_type(stats_->source));
+  r_.bricks = bricks_for_budget(dims, r_.ghost, bpv, voxel_share(budget_bytes), 2);
+  split_ = kd_split(dims, r_.bricks, r_.ghost);
+  r_.largest_brick_bytes = largest_read(split_) * int64_t(bpv);
+  const glm::dvec3 eye = (scene_.camera.eye - stats_->box.origin) / stats_->box.spacing;
+  const glm::dvec3 dir = glm::normalize((scene_.camera.center - scene_.camera.eye) / stats_->box.spacing);
+  order_ = visibility_order(split_, eye, dir, scene_.camera.orthographic);
+  acc_.assign(size_t(scene_.scene.width) * size_t(scene_.scene.height) * 4, 0.f);
+  next_ = read_ahead(order_[0]);
+}
+
+SequenceRun::~SequenceRun() {
+  if (next_.valid()) next_.wait();  // a read in flight uses this object's members
+}
+
+std::future<SequenceRun::Read> SequenceRun::read_ahead(int k) {
+  return std::async(std::launch::async, [this, k] {
+    const auto t = Clock::now();
+    auto v = read_brick_voxels(path_, base_, split_.bricks[size_t(k)]);
+    replace_with(*v, *stats_);
+    v->min_value = stats_->box.min_value;  // the whole volume's range and histogram, as a rank's brick
+    v->max_value = stats_->box.max_value;
+    v->histogram = stats_->box.histogram;
+    return Read{std::move(v), ms_since(t)};
+  });
+}
+
+bool SequenceRun::done() const { return next_brick_ >= order_.size(); }
+
+double SequenceRun::progress() const { return double(next_brick_) / double(order_.size()); }
+
+void SequenceRun::step(render::Renderer& renderer) {
+  if (done()) return;
+  auto [voxels, read_ms] = next_.get();
+  r_.read_ms += read_ms;
+  r_.bytes_read += int64_t(voxels->byte_size());
+  const size_t i = next_brick_++;
+  if (i + 1 < order_.size()) next_ = read_ahead(order_[i + 1]);  // read-ahead
+  const auto t = Clock::now();
+  auto resident = renderer.make_resident(voxels, stats_->cells);
+  voxels.reset();
+  resident->drop_host_voxels();
+  render::Brick b = frame_brick(split_.bricks[size_t(order_[i])], stats_->box.dims);
+  if (scene_.ray_texture) b.front_opacity = front_;
+  const Image layer = renderer.render_brick(*resident, scene_, b);
+  resident.reset();
+  if (scene_.ray_texture) front_ = std::make_shared<const std::vector<float>>(opacity_over(front_.get(), layer));
+  acc_ = composite_over({acc_, layer.rgba}, {0, 1});
+  r_.render_ms += ms_since(t);
+}
+
+SequenceResult SequenceRun::take() {
+  if (!done()) throw std::logic_error("SequenceRun::take before the last brick");
+  r_.image = finish_composite(acc_, scene_.scene.width, scene_.scene.height, scene_.scene.background);
+  return std::move(r_);
 }
 
 SequenceResult render_sequence(render::Renderer& renderer, const std::string& path, const LoadOptions& base,
                                const SequenceStatistics& stats, const ResolvedScene& scene, int64_t budget_bytes,
                                const std::function<void(double)>& progress) {
-  SequenceResult r;
-  const Index3& dims = stats.box.dims;
-  r.ghost = brick_ghost(scene);
-  const size_t bpv = voxel_bytes(storage_type(stats.source));
-  r.bricks = bricks_for_budget(dims, r.ghost, bpv, voxel_share(budget_bytes), 2);
-  const KdSplit split = kd_split(dims, r.bricks, r.ghost);
-  r.largest_brick_bytes = largest_read(split) * int64_t(bpv);
-  const glm::dvec3 eye = (scene.camera.eye - stats.box.origin) / stats.box.spacing;
-  const glm::dvec3 dir = glm::normalize((scene.camera.center - scene.camera.eye) / stats.box.spacing);
-  const std::vector<int> order = visibility_order(split, eye, dir, scene.camera.orthographic);
-  const int w = scene.scene.width, h = scene.scene.height;
-  std::vector<float> acc(size_t(w) * size_t(h) * 4, 0.f);
-  std::shared_ptr<const std::vector<float>> front;
-  auto read = [&](int k) {
-    const auto t = Clock::now();
-    auto v = read_brick_voxels(path, base, split.bricks[size_t(k)]);
-    replace_with(*v, stats);
-    v->min_value = stats.box.min_value;  // the whole volume's range and histogram, as a rank's brick
-    v->max_value = stats.box.max_value;
-    v->histogram = stats.box.histogram;
-    return std::make_pair(v, ms_since(t));
-  };
-  std::future<std::pair<std::shared_ptr<Volume>, double>> next = std::async(std::launch::async, read, order[0]);
-  for (size_t i = 0; i < order.size(); ++i) {
-    auto [voxels, read_ms] = next.get();
-    r.read_ms += read_ms;
-    r.bytes_read += int64_t(voxels->byte_size());
-    if (i + 1 < order.size()) next = std::async(std::launch::async, read, order[i + 1]);  // read-ahead
-    const auto t = Clock::now();
-    auto resident = renderer.make_resident(voxels, stats.cells);
-    voxels.reset();
-    resident->drop_host_voxels();
-    render::Brick b = frame_brick(split.bricks[size_t(order[i])], dims);
-    if (scene.ray_texture) b.front_opacity = front;
-    const Image layer = renderer.render_brick(*resident, scene, b);
-    resident.reset();
-    if (scene.ray_texture) front = std::make_shared<const std::vector<float>>(opacity_over(front.get(), layer));
-    acc = composite_over({acc, layer.rgba}, {0, 1});
-    r.render_ms += ms_since(t);
-    if (progress) progress(double(i + 1) / double(order.size()));
+  SequenceRun run(path, base, std::make_shared<const SequenceStatistics>(stats), scene, budget_bytes);
+  while (!run.done()) {
+    run.step(renderer);
+    if (progress) progress(run.progress());
   }
-  r.image = finish_composite(acc, w, h, scene.scene.background);
-  return r;
+  return run.take();
 }
 
 }  // namespace peakcast::distributed

@@ -6,11 +6,17 @@
 // Neuroglancer precomputed read only the chunks a brick meets.
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <functional>
+#include <future>
+#include <limits>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "core/image.h"
+#include "core/macrocell_share.h"
 #include "core/macrocells.h"
 #include "core/scene.h"
 #include "core/volume_io.h"
@@ -39,6 +45,34 @@ struct SequenceStatistics {
 // value counted: range and histogram exactly, and the macrocell shares); float volumes in two,
 // the finite range, then the histogram and the macrocell grids over that range. `base` carries level, time point, channel
 // and the non-finite policy (Refuse throws VolumeError as a whole read would).
+// The same, one brick read at a time (a server's render thread steps it between viewers' frames).
+class StatisticsRun {
+ public:
+  StatisticsRun(std::string path, LoadOptions base, int64_t budget_bytes);  // reads the header
+  ~StatisticsRun();
+  void step();  // the next brick; throws VolumeError as a whole read would
+  bool done() const;
+  double progress() const;  // share of the brick reads done
+  SequenceStatistics take();  // once done
+
+ private:
+  int total_steps() const;
+  void add_shares(const Volume& v, size_t k);
+  void finish();
+  std::string path_;
+  LoadOptions base_;
+  std::chrono::steady_clock::time_point t0_;
+  SequenceStatistics s_;
+  Index3 dims_{};
+  KdSplit split_;
+  bool floats_ = false;
+  double offset_ = 0.0;
+  int steps_ = 0;
+  MacrocellShare shares_[2];
+  std::vector<uint64_t> counts_, histogram_;
+  double lo_ = std::numeric_limits<double>::infinity(), hi_ = -std::numeric_limits<double>::infinity();
+};
+
 SequenceStatistics sequence_statistics(const std::string& path, const LoadOptions& base, int64_t budget_bytes,
                                        const std::function<void(double)>& progress = {});
 
@@ -55,5 +89,39 @@ struct SequenceResult {
 SequenceResult render_sequence(render::Renderer& renderer, const std::string& path, const LoadOptions& base,
                                const SequenceStatistics& stats, const ResolvedScene& scene, int64_t budget_bytes,
                                const std::function<void(double)>& progress = {});
+
+// The same, one brick at a time: step() composites the next brick (the one after it is read
+// meanwhile). A server's render thread steps it between viewers' frames.
+class SequenceRun {
+ public:
+  SequenceRun(std::string path, LoadOptions base, std::shared_ptr<const SequenceStatistics> stats, ResolvedScene scene,
+              int64_t budget_bytes);
+  ~SequenceRun();  // waits for a read in flight
+  SequenceRun(const SequenceRun&) = delete;
+  SequenceRun& operator=(const SequenceRun&) = delete;
+  void step(render::Renderer& renderer);
+  bool done() const;
+  double progress() const;  // share of the bricks composited
+  int bricks() const { return r_.bricks; }
+  SequenceResult take();  // once done
+
+ private:
+  struct Read {
+    std::shared_ptr<Volume> voxels;
+    double ms = 0.0;
+  };
+  std::future<Read> read_ahead(int k);
+  std::string path_;
+  LoadOptions base_;
+  std::shared_ptr<const SequenceStatistics> stats_;
+  ResolvedScene scene_;
+  KdSplit split_;
+  std::vector<int> order_;
+  size_t next_brick_ = 0;
+  std::vector<float> acc_;
+  std::shared_ptr<const std::vector<float>> front_;
+  std::future<Read> next_;
+  SequenceResult r_;
+};
 
 }  // namespace peakcast::distributed
