@@ -17,6 +17,8 @@ using Response = http::response<http::string_body>;
 
 Response json_response(const Request& req, http::status status, const std::string& body);
 Response error_response(const Request& req, http::status status, const std::string& code, const std::string& message);
+// Counts a request in peakcast_http_requests_total{route, code}.
+void count(AppContext& app, const char* route, http::status status);
 
 // Calls `send` exactly once, on any thread (the caller re-posts onto its strand). `cancelled` is
 // set by the connection when its client goes away before the answer: a queued or rendering still

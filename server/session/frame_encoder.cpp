@@ -101,6 +101,7 @@ void encode_still(encode::JpegEncoder& enc, StillWork& w, Metrics& metrics) {
   r.wait_ms = ms_between(w.queued, w.started);
   r.samples_per_ray = w.rays_hit ? w.samples_total / double(w.rays_hit) : 0.0;
   r.bands = w.bands;
+  r.bricks = w.by_bricks() ? w.bands : 0;
   r.variant = w.variant;
   metrics.add("peakcast_stills_total", "outcome=\"done\"", 1);
   w.job.done(std::move(r));

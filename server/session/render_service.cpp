@@ -5,6 +5,7 @@
 #include <future>
 #include <tuple>
 
+#include "distributed/brick_sequence.h"
 #include "encode/png.h"
 #include "render/backend.h"
 #include "session/frame_encoder.h"
@@ -164,6 +165,7 @@ void RenderService::render_band(Scheduler::Work& w) {
   StillWork& sw = *w.still;
   if (sw.bands == 0) metrics_.observe("peakcast_still_wait_ms", "", std::chrono::duration<double, std::milli>(
                                                                           sw.started - sw.queued).count());
+  if (sw.by_bricks()) return render_brick(w);
   try {
     // Float output, as `peakcast render` does: the assembled still equals the CLI's image.
     render::RenderStats st;
@@ -178,11 +180,49 @@ void RenderService::render_band(Scheduler::Work& w) {
     sw.variant = st.variant;
     sw.bands++;
     sw.next_row += w.rows;
+    still_progress_ = double(sw.next_row) / double(sw.job.scene.scene.height);
     metrics_.observe("peakcast_render_ms", "kind=\"still_band\"", st.render_ms);
   } catch (const std::exception& e) {
     scheduler_.still_failed(w.still);
     return refuse(sw.job, "render_failed", e.what());
   }
+  still_turn_done(w);
+}
+
+void RenderService::render_brick(Scheduler::Work& w) {
+  StillWork& sw = *w.still;
+  const FullResolution& full = *sw.job.volume->full;
+  try {
+    // The first turn opens the sequence (and starts reading its first brick): a still waiting in
+    // the queue holds no voxels.
+    if (!sw.bricks)
+      sw.bricks = std::make_shared<distributed::SequenceRun>(full.path.string(), full.options, sw.job.full_statistics,
+                                                             sw.job.scene, full.budget_bytes);
+    const auto t0 = Clock::now();
+    sw.bricks->step(*impl_->backend.renderer);
+    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    sw.render_ms += ms;
+    sw.bands++;
+    still_progress_ = sw.bricks->progress();
+    metrics_.observe("peakcast_render_ms", "kind=\"still_brick\"", ms);
+    if (sw.bricks->done()) {
+      distributed::SequenceResult r = sw.bricks->take();
+      sw.image = std::move(r.image);
+      sw.variant = "bricks";
+      sw.bricks.reset();  // no voxels held while the still is encoded
+      sw.bricks_done = true;
+    }
+  } catch (const std::exception& e) {
+    sw.bricks.reset();
+    scheduler_.still_failed(w.still);
+    return refuse(sw.job, "render_failed", e.what());
+  }
+  still_turn_done(w);
+}
+
+// After a band or a brick: a cancelled still is answered, a complete one encoded.
+void RenderService::still_turn_done(Scheduler::Work& w) {
+  StillWork& sw = *w.still;
   if (sw.job.cancelled->load()) {
     scheduler_.still_failed(w.still);
     return scheduler_.shutting_down() ? refuse(sw.job, "shutting_down", "the server is shutting down")

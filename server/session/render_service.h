@@ -5,6 +5,7 @@
 // deliver to the session's connection or answer the still.
 #pragma once
 
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <string>
@@ -52,6 +53,8 @@ class RenderService {
   // False when the still queue is full or the server is stopping: the caller answers 503.
   bool submit_still(StillJob job);
   size_t stills_pending() const { return scheduler_.stills_pending(); }
+  // The share of the latest still done: its bands, or its bricks (a pyramid's finest level).
+  double still_progress() const { return still_progress_; }
 
  private:
   struct Impl;
@@ -59,6 +62,8 @@ class RenderService {
   bool submit_frame(Scheduler::Work& w);  // false: not submitted (the viewer went away, or it failed)
   void collect_frame();  // the oldest frame submitted: to the encode pool
   void render_band(Scheduler::Work& w);
+  void render_brick(Scheduler::Work& w);  // the next brick of a still of a pyramid's finest level
+  void still_turn_done(Scheduler::Work& w);
   void refuse(StillJob& job, const std::string& code, const std::string& message);
 
   GpuResidency& residency_;
@@ -70,6 +75,7 @@ class RenderService {
   std::unique_ptr<Impl> impl_;  // touched only by the render thread
   std::thread thread_;
   bool stopped_ = false;
+  std::atomic<double> still_progress_{0.0};
 };
 
 }  // namespace peakcast

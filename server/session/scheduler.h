@@ -20,12 +20,17 @@
 #include "session/session.h"
 
 namespace peakcast {
+namespace distributed {
+struct SequenceStatistics;
+class SequenceRun;
+}  // namespace distributed
 
 struct StillResult {
   std::vector<uint8_t> bytes;
   std::string content_type;
   double render_ms = 0, encode_ms = 0, wait_ms = 0, samples_per_ray = 0;
   int bands = 0, width = 0, height = 0;
+  int bricks = 0;  // a still of a pyramid's finest level: the bricks drawn (bands is the same)
   std::string variant;
   std::string error, error_code;  // error: the job failed (message for the client; code from proto/)
 };
@@ -38,6 +43,9 @@ struct StillJob {
   bool png = true;
   bool raw_rgb = false;  // the 8-bit RGB bytes themselves (format=rgb), no encoding
   int quality = 95;
+  // Set for a pyramid held coarser than its finest level (VolumeEntry::full): the still draws the
+  // finest level brick after brick, `scene` resolved against these statistics' box.
+  std::shared_ptr<const distributed::SequenceStatistics> full_statistics;
   std::function<void(StillResult)> done;
   // Set by the connection when its client goes away: the still stops at the next band.
   std::shared_ptr<std::atomic<bool>> cancelled = std::make_shared<std::atomic<bool>>(false);
@@ -61,7 +69,11 @@ struct StillWork {
   double render_ms = 0, samples_total = 0;
   int64_t rays_hit = 0;
   std::string variant;
-  bool complete() const { return next_row >= job.scene.scene.height; }
+  // A still of the finest level: one brick per turn instead of a band (job.full_statistics).
+  std::shared_ptr<distributed::SequenceRun> bricks;
+  bool bricks_done = false;
+  bool by_bricks() const { return job.full_statistics != nullptr; }
+  bool complete() const { return by_bricks() ? bricks_done : next_row >= job.scene.scene.height; }
 };
 
 struct SchedulerOptions {

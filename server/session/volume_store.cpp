@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "distributed/brick_sequence.h"
+
 namespace fs = std::filesystem;
 
 namespace peakcast {
@@ -37,7 +39,7 @@ nlohmann::json VolumeEntry::info(bool with_histogram) const {
 }
 
 VolumeStore::VolumeStore(std::vector<fs::path> dirs, GpuResidency& residency, LoadOptions options, VolumeLoader loader)
-    : dirs_(std::move(dirs)), residency_(residency), options_(options), loader_(std::move(loader)) {
+    : dirs_(std::move(dirs)), residency_(residency), options_(options), loader_(std::move(loader)), in_process_(!loader_) {
   if (!loader_)
     loader_ = [](const fs::path& path, const LoadOptions& o) {
       auto v = std::make_shared<Volume>(load_volume(path, o));
@@ -61,6 +63,16 @@ std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::p
   e->volume = std::move(loaded.volume);
   e->resident_bytes = loaded.resident_bytes;
   e->preloaded = preloaded;
+  if (in_process_ && e->volume->pyramid_level > options.level && options.memory_budget_bytes > 0) {
+    auto full = std::make_shared<FullResolution>();
+    full->path = path;
+    full->options = options_;
+    full->options.level = 0;
+    full->options.memory_budget_bytes = 0;
+    full->budget_bytes = options.memory_budget_bytes;
+    full->dims = e->volume->full_dims;
+    e->full = std::move(full);
+  }
   // The residency owns the budget; when the volume does not fit it lets the store drop volumes
   // no session views (the store holds the only reference), oldest id first.
   residency_.admit(e, [this] {
@@ -75,6 +87,15 @@ std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::p
   entries_[id] = e;
   if (default_.empty()) default_ = id;
   return e;
+}
+
+std::shared_ptr<const distributed::SequenceStatistics> VolumeStore::full_statistics(VolumeEntry& entry) {
+  FullResolution& f = *entry.full;
+  std::lock_guard lock(f.m);
+  if (!f.statistics)
+    f.statistics = std::make_shared<const distributed::SequenceStatistics>(
+        distributed::sequence_statistics(f.path.string(), f.options, f.budget_bytes));
+  return f.statistics;
 }
 
 std::shared_ptr<VolumeEntry> VolumeStore::preload(const fs::path& path) {

@@ -20,6 +20,21 @@
 #include "session/gpu_residency.h"
 
 namespace peakcast {
+namespace distributed {
+struct SequenceStatistics;
+}
+
+// A pyramid the memory budget opened at a coarser level than its finest: viewers see that level,
+// while stills draw the finest one brick after another (distributed/brick_sequence.h). The whole
+// volume's statistics for those bricks are reduced once, at the first such still, and kept.
+struct FullResolution {
+  std::filesystem::path path;
+  LoadOptions options;  // level 0, the time point and channel shown
+  int64_t budget_bytes = 0;
+  Dims dims{};  // the finest level's
+  std::mutex m;  // one reduction at a time; a second still waits for the first's
+  std::shared_ptr<const distributed::SequenceStatistics> statistics;
+};
 
 struct VolumeEntry {
   std::string id;
@@ -35,6 +50,7 @@ struct VolumeEntry {
   bool preloaded = false;
   bool uploaded = false;  // sent by a client (POST /api/volumes); `name` is the one it gave
   std::string name;       // empty: the file's name
+  std::shared_ptr<FullResolution> full;  // set when the level held is not the finest
   nlohmann::json info(bool with_histogram) const;
 };
 
@@ -68,6 +84,9 @@ class VolumeStore {
                        nlohmann::json info);
   void remove_upload(const std::string& id);
   bool known(const std::string& id) const;  // loaded, or an upload that can be
+  // The finest level's statistics for entry.full's stills: reduced by bricks on the caller's
+  // thread the first time (a loader-pool thread; seconds to minutes), then kept. Throws VolumeError.
+  static std::shared_ptr<const distributed::SequenceStatistics> full_statistics(VolumeEntry& entry);
 
  private:
   std::shared_ptr<VolumeEntry> add(const std::string& id, const std::filesystem::path& path, bool preloaded,
@@ -83,6 +102,7 @@ class VolumeStore {
   GpuResidency& residency_;
   LoadOptions options_;
   VolumeLoader loader_;
+  bool in_process_ = false;  // the store's own loader (not the ranks'): pyramids can draw full stills
   mutable std::mutex m_;
   std::mutex load_m_;  // one load at a time: a second request for the same file waits, then finds it
   std::map<std::string, std::shared_ptr<VolumeEntry>> entries_;

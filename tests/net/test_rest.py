@@ -5,6 +5,7 @@ import asyncio, io, json, pathlib, re, subprocess, sys, tempfile
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from harness import *  # noqa: F401,F403
+from PIL import ImageChops, ImageStat
 
 SERVER = None
 SCENE = {"volume": "heptane_151", "image": {"width": 200, "height": 160},
@@ -258,6 +259,26 @@ def test_pyramid_opens_at_the_level_the_memory_budget_holds():
             info = [v for v in json.loads(http(s, "/api/volumes")[2])["volumes"] if v["id"] == "blobs.zarr"][0]
             assert info["level"] == 1 and info["levels"] == 4 and info["dims"] == [80, 75, 70], info
             assert info["full_dims"] == [160, 150, 140] and info["spacing"] == [2, 2, 2], info
+            # A still draws the finest level brick after brick (1 MiB cannot hold it), and equals
+            # the in-core render of the full-resolution file; ?resolution=held draws level 1.
+            for render in ({"step": 1}, {"step": 1.5, "classification": "preint"},
+                           {"step": 1, "classification": "peaks", "shading": True}):
+                scene = {"volume": "blobs.zarr", "image": {"width": 64, "height": 48}, "render": render}
+                status, headers, png = http(s, "/api/render", "POST", json.dumps(scene).encode())
+                assert status == 200 and headers["X-Level"] == "0" and int(headers["X-Bricks"]) > 1, (status, headers)
+                pathlib.Path(tmp, "s.json").write_text(json.dumps(dict(scene, volume=big)))
+                subprocess.run([PEAKCAST, "render", f"{tmp}/s.json", "-o", f"{tmp}/cli.png"], check=True,
+                               capture_output=True)
+                a, b = decode_image(png), Image.open(f"{tmp}/cli.png").convert("RGB")
+                worst = max(hi for _, hi in ImageChops.difference(a, b).getextrema())
+                spread = max(ImageStat.Stat(a).stddev)
+                print(f"  {render}: {headers['X-Bricks']} bricks, max abs {worst}/255 against the in-core file")
+                assert worst <= 1 and spread > 1, (render, worst, spread)
+            health = json.loads(http(s, "/api/health")[2])
+            assert health["still_progress"] == 1.0, health
+            status, headers, held = http(s, "/api/render?resolution=held", "POST", json.dumps(scene).encode())
+            assert status == 200 and headers["X-Level"] == "1" and "X-Bricks" not in headers, headers
+            assert http(s, "/api/render?resolution=half", "POST", json.dumps(scene).encode())[0] == 400
             status, _, body = http(s, "/api/render", "POST", json.dumps(
                 {"volume": "blobs.nrrd", "image": {"width": 8, "height": 8}}).encode())
             message = json.loads(body)["message"]

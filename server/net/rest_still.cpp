@@ -1,0 +1,176 @@
+#include "net/rest_still.h"
+
+#include <cstdio>
+
+#include <boost/asio/post.hpp>
+
+#include "distributed/brick_sequence.h"
+#include "session/limits.h"
+
+namespace asio = boost::asio;
+
+namespace peakcast::net {
+namespace {
+
+// The scene is valid and its volume loaded: resolve, queue on the render thread, answer later.
+// `full`: the finest level's statistics, for a pyramid held coarser (drawn by bricks).
+void submit_still(AppContext& app, const Request& req, const Scene& scene, std::shared_ptr<VolumeEntry> vol,
+                  std::function<void(Response)> send, std::shared_ptr<std::atomic<bool>> cancelled,
+                  std::shared_ptr<const distributed::SequenceStatistics> full = nullptr) {
+  StillJob job;
+  job.cancelled = std::move(cancelled);
+  const int level = full ? 0 : vol->volume->pyramid_level;
+  try {
+    job.scene = full ? resolve_scene(scene, full->box) : resolve_scene(scene, *vol->volume);
+    job.full_statistics = std::move(full);
+  } catch (const SceneError& e) {
+    count(app, "render", http::status::bad_request);
+    return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
+  }
+  // The cost cap: a still whose estimated samples exceed it would hold the render thread for
+  // minutes; refused before it queues, naming the limit.
+  const double cost = estimated_still_samples(job.scene);
+  if (cost > app.config.max_still_samples) {
+    count(app, "render", http::status::unprocessable_entity);
+    app.metrics.add("peakcast_stills_total", "outcome=\"refused_cost\"", 1);
+    char text[256];
+    std::snprintf(text, sizeof text,
+                  "this still needs about %.3g samples (%d x %d pixels x %.0f samples per ray); the server's limit "
+                  "max_still_samples is %.3g: use a smaller image or a larger render.step",
+                  cost, job.scene.scene.width, job.scene.scene.height, estimated_samples_per_ray(job.scene),
+                  app.config.max_still_samples);
+    auto res = error_response(req, http::status::unprocessable_entity, "too_costly", text);
+    return send(std::move(res));
+  }
+  const std::string format = query_param(std::string(req.target()), "format");
+  const std::string accept(req[http::field::accept]);
+  if (!format.empty() && format != "png" && format != "jpeg" && format != "jpg" && format != "rgb") {
+    count(app, "render", http::status::bad_request);
+    return send(error_response(req, http::status::bad_request, "bad_request", "format must be png, jpeg or rgb"));
+  }
+  job.raw_rgb = format == "rgb";  // packed 8-bit RGB rows from the top: what a script puts in an array
+  job.png = !(format == "jpeg" || format == "jpg" ||
+              (format.empty() && accept.find("image/jpeg") != std::string::npos && accept.find("image/png") == std::string::npos));
+  const std::string q = query_param(std::string(req.target()), "quality");
+  if (!q.empty()) {
+    try {
+      job.quality = std::stoi(q);
+    } catch (...) {
+      job.quality = -1;
+    }
+    if (job.quality < limits::kMinJpegQuality || job.quality > limits::kMaxJpegQuality) {
+      count(app, "render", http::status::bad_request);
+      return send(error_response(req, http::status::bad_request, "bad_request",
+                                 "quality must be " + std::to_string(limits::kMinJpegQuality) + ".." +
+                                     std::to_string(limits::kMaxJpegQuality)));
+    }
+  }
+  job.volume = std::move(vol);
+  const unsigned version = req.version();
+  const bool keep_alive = req.keep_alive();
+  // Of the scene: whether its TF was derived, and what it asks for that it will not get.
+  const std::string tf_source = job.scene.tf_derived ? "auto" : "scene";
+  const std::vector<std::string> warnings = job.scene.warnings;
+  job.done = [&app, send, version, keep_alive, tf_source, warnings, level](StillResult r) {
+    if (!r.error.empty()) {
+      const auto status = r.error_code == "shutting_down" || r.error_code == "cancelled"
+                              ? http::status::service_unavailable
+                              : http::status::internal_server_error;
+      count(app, "render", status);
+      Request fake;
+      fake.version(version);
+      fake.keep_alive(false);
+      return send(error_response(fake, status, r.error_code.empty() ? "render_failed" : r.error_code, r.error));
+    }
+    Response res{http::status::ok, version};
+    res.set(http::field::content_type, r.content_type);
+    res.set("X-Render-Ms", std::to_string(r.render_ms));
+    res.set("X-Encode-Ms", std::to_string(r.encode_ms));
+    res.set("X-Samples-Per-Ray", std::to_string(r.samples_per_ray));
+    res.set("X-Variant", r.variant);
+    res.set("X-Wait-Ms", std::to_string(r.wait_ms));
+    res.set("X-Bands", std::to_string(r.bands));
+    res.set("X-Level", std::to_string(level));  // the pyramid level drawn (0: the finest)
+    if (r.bricks > 0) res.set("X-Bricks", std::to_string(r.bricks));
+    res.set("X-TF-Source", tf_source);
+    res.set("X-Image-Width", std::to_string(r.width));
+    res.set("X-Image-Height", std::to_string(r.height));
+    for (const std::string& w : warnings) res.insert("X-Warning", w);
+    res.body().assign(r.bytes.begin(), r.bytes.end());
+    res.keep_alive(keep_alive);
+    res.prepare_payload();
+    count(app, "render", http::status::ok);
+    send(std::move(res));
+  };
+  if (!app.render.submit_still(std::move(job))) {
+    const bool stopping = app.stopping.load();
+    count(app, "render", http::status::service_unavailable);
+    app.metrics.add("peakcast_stills_total", stopping ? "outcome=\"shutting_down\"" : "outcome=\"refused_queue\"", 1);
+    auto res = stopping ? error_response(req, http::status::service_unavailable, "shutting_down",
+                                         "the server is shutting down")
+                        : error_response(req, http::status::service_unavailable, "queue_full",
+                                         "the still queue holds its maximum of " +
+                                             std::to_string(app.config.max_queued_stills) +
+                                             " renders (max_queued_stills); retry later");
+    res.set(http::field::retry_after, std::to_string(limits::kStillRetryAfter.count()));
+    send(std::move(res));
+  }
+}
+
+}  // namespace
+
+void render_still(AppContext& app, const Request& req, std::function<void(Response)> send,
+                  std::shared_ptr<std::atomic<bool>> cancelled) {
+  Scene scene;
+  try {
+    scene = parse_scene_text(req.body());
+  } catch (const SceneError& e) {
+    count(app, "render", http::status::bad_request);
+    return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
+  }
+  const bool png = scene.render.ray_texture && !scene.render.ray_texture->png.empty();
+  // A pyramid held coarser than its finest level draws the finest by bricks, unless the script
+  // asks for the level held (?resolution=held, a quick look).
+  const std::string resolution = query_param(std::string(req.target()), "resolution");
+  if (!resolution.empty() && resolution != "full" && resolution != "held") {
+    count(app, "render", http::status::bad_request);
+    return send(error_response(req, http::status::bad_request, "bad_request", "resolution must be full or held"));
+  }
+  const bool finest = resolution != "held";
+  if (auto vol = app.volumes.find(scene.volume); vol && !png && !(vol->full && finest))
+    return submit_still(app, req, scene, std::move(vol), std::move(send), std::move(cancelled));
+  // A volume not loaded yet, or a ray-texture PNG: read on the loader pool, never on this io thread.
+  asio::post(app.loader, [&app, req, scene, finest, send = std::move(send), cancelled]() mutable {
+    try {
+      scene.render.ray_texture = load_ray_texture_png(scene.render.ray_texture, app.png_locator());
+    } catch (const SceneError& e) {
+      count(app, "render", http::status::bad_request);
+      return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
+    } catch (const std::exception& e) {  // nothing escapes a loader-pool handler
+      count(app, "render", http::status::internal_server_error);
+      return send(error_response(req, http::status::internal_server_error, "internal", e.what()));
+    }
+    std::shared_ptr<VolumeEntry> vol;
+    try {
+      vol = app.volumes.get(scene.volume);
+    } catch (const VolumeError& e) {
+      count(app, "render", http::status::not_found);
+      return send(error_response(req, http::status::not_found, "volume_error", e.what()));
+    } catch (const std::exception& e) {  // e.g. out of memory: an answer, never std::terminate
+      count(app, "render", http::status::internal_server_error);
+      return send(error_response(req, http::status::internal_server_error, "internal", e.what()));
+    }
+    std::shared_ptr<const distributed::SequenceStatistics> full;
+    if (vol->full && finest) {
+      try {  // the first still of this pyramid's finest level reduces its statistics by bricks
+        full = VolumeStore::full_statistics(*vol);
+      } catch (const std::exception& e) {
+        count(app, "render", http::status::internal_server_error);
+        return send(error_response(req, http::status::internal_server_error, "volume_error", e.what()));
+      }
+    }
+    submit_still(app, req, scene, std::move(vol), send, cancelled, std::move(full));
+  });
+}
+
+}  // namespace peakcast::net

@@ -1,0 +1,13 @@
+// POST /api/render (docs/rest.md): a scene checked, its volume loaded on the loader pool when it
+// is not yet, queued as a still on the render thread, answered when drawn. A pyramid held coarser
+// than its finest level (serve --memory-budget-mib) draws the finest brick after brick.
+#pragma once
+
+#include "net/rest_routes.h"
+
+namespace peakcast::net {
+
+void render_still(AppContext& app, const Request& req, std::function<void(Response)> send,
+                  std::shared_ptr<std::atomic<bool>> cancelled);
+
+}  // namespace peakcast::net
