@@ -133,7 +133,19 @@ disposer.listen(stream, 'pong', (e) => brush.sync.onPong(e.detail));
 // What the scene asks for that it will not get (peak finding with a TF without a peak): shown
 // for as long as the server says so, gone with the next frame that has no warning.
 const warningEl = $('warning');
+// A pyramid held coarser than its finest level: the view at rest is drawn again at the finest,
+// brick by brick (docs/chunked-volumes.md); the line under the volume picker says how far.
+const refineEl = $('volume-progress');
+const refining = (text) => {  // the picker's own loading text wins
+  if (!text && !refineEl.dataset.refining) return;
+  if (text && refineEl.textContent !== '' && !refineEl.dataset.refining) return;
+  refineEl.textContent = text;
+  refineEl.dataset.refining = text ? '1' : '';
+};
+disposer.listen(stream, 'refining', (e) => refining(`full resolution: ${Math.floor(100 * e.detail.fraction)}% of ${e.detail.bricks} bricks`));
 disposer.listen(stream, 'stats', (e) => {
+  if (e.detail.refining) refining('full resolution: starting…');
+  else if (refineEl.dataset.refining) refining('');
   stats.stats(e.detail);
   $('variant').textContent = e.detail.variant;
   const warnings = e.detail.warnings ?? [];

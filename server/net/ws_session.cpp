@@ -136,38 +136,6 @@ void WsSession::guarded(const std::function<void()>& fn) {
   }
 }
 
-void WsSession::with_volume(const std::string& id, std::function<void(std::shared_ptr<VolumeEntry>)> then) {
-  if (auto e = app_.volumes.find(id)) return then(e);
-  asio::post(app_.loader, [self = shared_from_this(), id, then = std::move(then)] {
-    std::shared_ptr<VolumeEntry> entry;
-    std::string error;
-    // The client hears how far the read is: the first percent, then at most every 100 ms, and the
-    // end (a loading message of 1 comes before the welcome or volume message).
-    auto last = std::chrono::steady_clock::now() - std::chrono::seconds(1);
-    auto progress = [&self, &id, &last](double fraction) {
-      const auto now = std::chrono::steady_clock::now();
-      if (fraction < 1 && now - last < std::chrono::milliseconds(100)) return;
-      last = now;
-      asio::post(self->ws_.get_executor(), [self, message = protocol::loading_message(id, fraction)]() mutable {
-        if (!self->closing_) self->queue_text(std::move(message));
-      });
-    };
-    try {
-      entry = self->app_.volumes.get(id, progress);
-    } catch (const std::exception& e) {
-      error = e.what();
-    }
-    asio::post(self->ws_.get_executor(), [self, entry, error, then] {
-      if (self->closing_) return;
-      if (!error.empty()) {
-        self->starting_ = false;
-        return self->send_error("volume_error", error);
-      }
-      self->guarded([&] { then(entry); });
-    });
-  });
-}
-
 void WsSession::handle(const std::string& text) {
   using namespace protocol;
   ClientMessage msg = parse_client_message(text);
@@ -217,6 +185,7 @@ void WsSession::handle(const std::string& text) {
         if constexpr (std::is_same_v<T, VolumeMsg>) {
           with_volume(m.volume, [this](std::shared_ptr<VolumeEntry> entry) {
             session_->set_volume(entry);
+            prepare_finest(entry);
             queue_text(volume_message(entry->info(true), session_->state_json()));
             app_.render.notify();
           });
@@ -224,34 +193,6 @@ void WsSession::handle(const std::string& text) {
       },
       msg);
   app_.render.notify();
-}
-
-void WsSession::with_png(const nlohmann::json& render, TextureThen then) {
-  const bool png = render.is_object() && render.contains("ray_texture") && render["ray_texture"].is_object() &&
-                   render["ray_texture"].contains("png");
-  if (!png) return then(std::nullopt);
-  paused_ = true;
-  asio::post(app_.loader, [self = shared_from_this(), j = render["ray_texture"], then = std::move(then)] {
-    std::shared_ptr<const RayTextureSpec> texture;
-    std::string error;
-    try {
-      texture = load_ray_texture_png(std::make_shared<const RayTextureSpec>(parse_ray_texture(j)),
-                                     self->app_.png_locator());
-    } catch (const std::exception& e) {
-      error = e.what();
-    }
-    asio::post(self->ws_.get_executor(), [self, texture, error, then] {
-      self->paused_ = false;
-      if (self->closing_) return;
-      if (!error.empty()) {
-        self->starting_ = false;  // a hello whose PNG failed may be sent again
-        self->send_error("bad_message", error);
-      } else {
-        self->guarded([&] { then(texture); });
-      }
-      if (!self->closing_) self->read_when_allowed();
-    });
-  });
 }
 
 void WsSession::start_session(const protocol::Hello& hello, std::shared_ptr<VolumeEntry> volume,
@@ -263,6 +204,7 @@ void WsSession::start_session(const protocol::Hello& hello, std::shared_ptr<Volu
   session->set_quality(start_rate);
   session->start(volume, hello.viewport, hello.state, texture);
   session_ = session;
+  prepare_finest(volume);
   nlohmann::json vols = nlohmann::json::array();
   for (const auto& v : app_.volumes.listing()) vols.push_back(v);
   protocol::Welcome welcome;

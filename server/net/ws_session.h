@@ -49,6 +49,9 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   // it. then(nullopt) at once when the patch names no PNG (the session parses it inline).
   using TextureThen = std::function<void(std::optional<std::shared_ptr<const RayTextureSpec>>)>;
   void with_png(const nlohmann::json& render, TextureThen then);
+  // A pyramid held coarser than its finest level: that level's statistics reduced on the loader
+  // pool (once per volume), after which the session's final frames are followed by the finest.
+  void prepare_finest(const std::shared_ptr<VolumeEntry>& entry);
   void start_session(const protocol::Hello& hello, std::shared_ptr<VolumeEntry> volume,
                      std::optional<std::shared_ptr<const RayTextureSpec>> texture);
   void handle(const std::string& text);

@@ -79,6 +79,26 @@ void encode_viewer_frame(encode::JpegEncoder& enc, const RenderedFrame& f, Frame
                       });
 }
 
+void deliver_refined_frame(FrameSink& sink, uint32_t frame_id, const FrameJob& job, StillResult r) {
+  const bool png = r.content_type == "image/png";
+  protocol::FrameHeader h;
+  h.frame_id = frame_id;
+  h.flags = protocol::FrameHeader::kFinal | (png ? protocol::FrameHeader::kPng : 0u);
+  h.camera_version = job.camera_version;
+  h.tf_version = job.tf_version;
+  h.render_version = job.render_version;
+  h.width = uint32_t(r.width);
+  h.height = uint32_t(r.height);
+  h.quality = png ? 100u : uint32_t(job.quality.final_quality);
+  h.t_input_us = micros(job.input_time);
+  h.t_render_done_us = h.t_encode_done_us = micros(Clock::now());
+  const nlohmann::json stats = {{"render_ms", r.render_ms}, {"variant", r.variant}, {"codec", png ? "png" : "jpeg"},
+                                {"level", 0}, {"bricks", r.bricks}};
+  const size_t bytes = r.bytes.size();
+  sink.deliver_frame(protocol::encode_frame(h, r.bytes), frame_id, true, false);
+  sink.deliver_text(protocol::stats_message(frame_id, true, r.width, r.height, stats, r.encode_ms, bytes));
+}
+
 void encode_still(encode::JpegEncoder& enc, StillWork& w, Metrics& metrics) {
   StillResult r;
   const auto t0 = Clock::now();

@@ -32,6 +32,10 @@ struct RenderedFrame {
 // Encodes and hands the frame and its stats to the sink. Encode thread.
 void encode_viewer_frame(encode::JpegEncoder& enc, const RenderedFrame& frame, FrameSink& sink, Metrics& metrics);
 
+// A final frame of a pyramid's finest level (FrameJob::refine), encoded as a still: to the
+// viewer as a final frame with the versions of `job`, and its stats (level 0, bricks).
+void deliver_refined_frame(FrameSink& sink, uint32_t frame_id, const FrameJob& job, StillResult r);
+
 // Encodes a finished still and answers its job. Encode thread.
 void encode_still(encode::JpegEncoder& enc, StillWork& still, Metrics& metrics);
 

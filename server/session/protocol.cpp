@@ -233,6 +233,10 @@ std::string loading_message(const std::string& volume, double fraction) {
   return json{{"type", "loading"}, {"volume", volume}, {"fraction", std::clamp(fraction, 0.0, 1.0)}}.dump();
 }
 
+std::string refining_message(double fraction, int bricks) {
+  return json{{"type", "refining"}, {"fraction", std::clamp(fraction, 0.0, 1.0)}, {"bricks", bricks}}.dump();
+}
+
 std::pair<int, int> parse_pixel(const json& p, const std::string& where) {
   auto coordinate = [](const json& c) { return c.is_number_unsigned() && c.get<uint64_t>() <= 1u << 20; };
   if (!p.is_array() || p.size() != 2 || !coordinate(p[0]) || !coordinate(p[1]))

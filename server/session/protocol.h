@@ -109,6 +109,8 @@ std::string probe_message(uint32_t id, const nlohmann::json& answer);
 std::pair<int, int> parse_pixel(const nlohmann::json& j, const std::string& where);
 // A volume being read for this client (hello or volume message): the fraction read so far.
 std::string loading_message(const std::string& volume, double fraction);
+// The view at rest being drawn at a pyramid's finest level, brick by brick: the share done.
+std::string refining_message(double fraction, int bricks);
 // A volume switch: the new volume's info (with histogram) and the session's reset state.
 std::string volume_message(const nlohmann::json& volume_info, const nlohmann::json& state);
 struct Welcome {

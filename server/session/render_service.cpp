@@ -150,15 +150,45 @@ void RenderService::collect_frame() {
     f.height = out.rgb8.height;
     f.rgb = std::move(out.rgb8.rgb);
     f.stats = st.to_json();
+    if (const Volume& v = *s.job.volume->volume; v.pyramid_levels > 1) f.stats["level"] = v.pyramid_level;
+    if (s.job.refine) f.stats["refining"] = true;  // the finest level's frame follows
     f.job = std::move(s.job);
     if (f.job.video) f.video_ticket = f.job.video->take_ticket();  // encoded in the order rendered
+    const std::shared_ptr<const FrameJob::Refinement> refine = f.job.refine;
+    FrameJob done = f.job;  // what the finest level's frame echoes (versions, quality)
     pool_->submit([this, f = std::move(f), sink = s.sink](encode::JpegEncoder& enc) {
       encode_viewer_frame(enc, f, *sink, metrics_);
     });
+    if (refine) queue_refinement(s.session, s.sink, std::move(done));
   } catch (const std::exception& e) {
     s.session->frame_dropped(s.job.frame_id);
     s.sink->deliver_text(protocol::error_message("render_failed", e.what()));
   }
+}
+
+void RenderService::queue_refinement(const std::shared_ptr<Session>& session, const std::shared_ptr<FrameSink>& sink,
+                                     FrameJob job) {
+  StillJob still;
+  still.volume = job.volume;
+  still.scene = job.refine->scene;
+  still.full_statistics = job.refine->statistics;
+  still.png = job.quality.final_png;
+  still.quality = job.quality.final_quality;
+  still.cancelled = job.refine->cancelled;
+  const std::weak_ptr<FrameSink> weak_sink = sink;
+  const std::weak_ptr<Session> weak_session = session;
+  still.progress = [weak_sink, cancelled = still.cancelled](double share, int bricks) {
+    if (auto s = weak_sink.lock(); s && !cancelled->load()) s->deliver_text(protocol::refining_message(share, bricks));
+  };
+  still.done = [weak_sink, weak_session, cancelled = still.cancelled, job = std::move(job)](StillResult r) {
+    auto s = weak_sink.lock();
+    auto session = weak_session.lock();
+    if (!s || !session || cancelled->load()) return;  // stale: the view moved on
+    if (!r.error.empty()) return s->deliver_text(protocol::error_message("render_failed", r.error));
+    deliver_refined_frame(*s, session->refined_frame_id(), job, std::move(r));
+  };
+  // A full queue (scripts' stills) leaves the view at the level held.
+  if (scheduler_.submit_still(std::move(still))) metrics_.set("peakcast_stills_queued", "", double(scheduler_.stills_pending()));
 }
 
 void RenderService::render_band(Scheduler::Work& w) {
@@ -204,6 +234,7 @@ void RenderService::render_brick(Scheduler::Work& w) {
     sw.render_ms += ms;
     sw.bands++;
     still_progress_ = sw.bricks->progress();
+    if (sw.job.progress) sw.job.progress(sw.bricks->progress(), sw.bricks->bricks());
     metrics_.observe("peakcast_render_ms", "kind=\"still_brick\"", ms);
     if (sw.bricks->done()) {
       distributed::SequenceResult r = sw.bricks->take();

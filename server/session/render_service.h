@@ -62,6 +62,9 @@ class RenderService {
   bool submit_frame(Scheduler::Work& w);  // false: not submitted (the viewer went away, or it failed)
   void collect_frame();  // the oldest frame submitted: to the encode pool
   void render_band(Scheduler::Work& w);
+  // After a final frame of a pyramid held coarser: the same view at the finest level, queued as
+  // a still whose progress and image go to the viewer (FrameJob::refine).
+  void queue_refinement(const std::shared_ptr<Session>& session, const std::shared_ptr<FrameSink>& sink, FrameJob job);
   void render_brick(Scheduler::Work& w);  // the next brick of a still of a pyramid's finest level
   void still_turn_done(Scheduler::Work& w);
   void refuse(StillJob& job, const std::string& code, const std::string& message);

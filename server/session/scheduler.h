@@ -47,6 +47,8 @@ struct StillJob {
   // finest level brick after brick, `scene` resolved against these statistics' box.
   std::shared_ptr<const distributed::SequenceStatistics> full_statistics;
   std::function<void(StillResult)> done;
+  // Optional, on the render thread after each brick of a still by bricks: the share done, and of how many.
+  std::function<void(double share, int bricks)> progress;
   // Set by the connection when its client goes away: the still stops at the next band.
   std::shared_ptr<std::atomic<bool>> cancelled = std::make_shared<std::atomic<bool>>(false);
 };

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <tuple>
 
+#include "distributed/brick_sequence.h"
 #include "render/variant.h"
 #include "session/limits.h"
 
@@ -30,15 +31,36 @@ void Session::touch() {
   dirty_ = true;
   final_pending_ = true;
   last_input_ = Clock::now();
+  cancel_refinement();
 }
 
-ResolvedScene Session::resolve() const {
+void Session::cancel_refinement() {
+  refinement_cancelled_->store(true);
+  refinement_cancelled_ = std::make_shared<std::atomic<bool>>(false);
+}
+
+void Session::set_full_statistics(const std::shared_ptr<VolumeEntry>& volume,
+                                  std::shared_ptr<const distributed::SequenceStatistics> statistics) {
+  std::lock_guard lock(m_);
+  if (volume != volume_) return;
+  full_statistics_ = std::move(statistics);
+  if (!dirty_) final_pending_ = true;  // the view at rest now gets its finest frame too
+}
+
+uint32_t Session::refined_frame_id() {
+  std::lock_guard lock(m_);
+  const uint32_t id = next_frame_id_++;
+  outstanding_.insert(id);
+  return id;
+}
+
+ResolvedScene Session::resolve(const VolumeBox* box) const {
   Scene s = scene_;
   s.render = parse_scene({{"volume", "x"}, {"render", render_json_}}).render;
   s.render.ray_texture = ray_texture_;
   s.width = viewport_.pixel_width();
   s.height = viewport_.pixel_height();
-  ResolvedScene r = resolve_scene(s, *volume_->volume);
+  ResolvedScene r = box ? resolve_scene(s, *box) : resolve_scene(s, *volume_->volume);
   r.tf_derived = tf_derived_;  // derived once, when the volume was opened, and kept since
   return r;
 }
@@ -80,6 +102,7 @@ void Session::start(std::shared_ptr<VolumeEntry> volume, const protocol::Viewpor
 void Session::set_volume(std::shared_ptr<VolumeEntry> volume) {
   std::lock_guard lock(m_);
   volume_ = std::move(volume);
+  full_statistics_.reset();
   scene_.volume = volume_->id;
   scene_.camera.reset();
   scene_.tf.reset();
@@ -155,6 +178,7 @@ void Session::set_quality(const protocol::QualityMsg& q, int max_kbps) {
   if (q.codec) quality_.codec = *q.codec;
   if (q.kbps) quality_.kbps = std::min(*q.kbps, max_kbps);
   final_pending_ = true;  // re-send the still at the new quality
+  cancel_refinement();
 }
 
 void Session::set_viewport(const protocol::Viewport& vp) {
@@ -294,6 +318,17 @@ std::optional<FrameJob> Session::take_job(Clock::time_point now, std::chrono::mi
   last_frame_ = now;
   dirty_ = false;
   if (job.final) final_pending_ = false;
+  if (job.final && full_statistics_ && volume_->full) {
+    auto refine = std::make_shared<FrameJob::Refinement>();
+    try {
+      refine->scene = resolve(&full_statistics_->box);
+    } catch (const std::exception&) {
+      return job;  // the held level's frame goes alone
+    }
+    refine->statistics = full_statistics_;
+    refine->cancelled = refinement_cancelled_;
+    job.refine = std::move(refine);
+  }
   return job;
 }
 

@@ -3,6 +3,7 @@
 // un-acknowledged frames; a client that stops acking gets no more frames and costs no more memory.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <memory>
@@ -22,6 +23,9 @@
 #include "session/volume_store.h"
 
 namespace peakcast {
+namespace distributed {
+struct SequenceStatistics;
+}
 
 using Clock = std::chrono::steady_clock;
 
@@ -62,6 +66,14 @@ struct FrameJob {
   // An interactive frame of a video session: the session's stream and its settings now.
   std::shared_ptr<VideoChannel> video;
   encode::VideoSettings video_settings;
+  // A final frame of a pyramid held coarser than its finest level (VolumeEntry::full): the same
+  // view at the finest level, drawn by bricks after this frame (docs/chunked-volumes.md).
+  struct Refinement {
+    ResolvedScene scene;  // resolved against the finest level
+    std::shared_ptr<const distributed::SequenceStatistics> statistics;
+    std::shared_ptr<std::atomic<bool>> cancelled;  // set by the session's next input
+  };
+  std::shared_ptr<const Refinement> refine;
 };
 
 class Session {
@@ -100,6 +112,13 @@ class Session {
   // The volume and the scene of the session's next final frame (the viewport's full size): what
   // a probe looks at. Throws SceneError when the state does not resolve.
   std::pair<std::shared_ptr<VolumeEntry>, ResolvedScene> view() const;
+  // The finest level's statistics of `volume` (a pyramid held coarser), once reduced: from then
+  // on each final frame of it is followed by one of the finest level. Ignored when the session
+  // has moved to another volume meanwhile.
+  void set_full_statistics(const std::shared_ptr<VolumeEntry>& volume,
+                           std::shared_ptr<const distributed::SequenceStatistics> statistics);
+  // A frame id for a final frame of the finest level, counted in flight like any frame.
+  uint32_t refined_frame_id();
 
   // Render-thread side. When there is nothing to do now, `wake` says when to ask again
   // (Clock::time_point::max() when only new input can create work).
@@ -109,11 +128,12 @@ class Session {
 
  private:
   void touch();  // a state change arrived (lock held)
+  void cancel_refinement();  // the finest level's frame being drawn is stale (lock held)
   // Takes render.ray_texture out of a render patch: the new texture (its PNG read), or null
   // for none; nullopt when the patch does not name it. Throws ProtocolError.
   std::optional<std::shared_ptr<const RayTextureSpec>> take_ray_texture(
       nlohmann::json& patch, const std::optional<std::shared_ptr<const RayTextureSpec>>& loaded) const;
-  ResolvedScene resolve() const;  // lock held
+  ResolvedScene resolve(const VolumeBox* box = nullptr) const;  // lock held; box: another level's
   std::string id_;
   std::weak_ptr<FrameSink> sink_;
   mutable std::mutex m_;
@@ -144,6 +164,8 @@ class Session {
   Clock::time_point last_input_{}, last_frame_{};
   uint32_t next_frame_id_ = 1;
   std::set<uint32_t> outstanding_;
+  std::shared_ptr<const distributed::SequenceStatistics> full_statistics_;  // null: no refinement
+  std::shared_ptr<std::atomic<bool>> refinement_cancelled_ = std::make_shared<std::atomic<bool>>(false);
 };
 
 }  // namespace peakcast

@@ -1,0 +1,127 @@
+#!/usr/bin/env python3
+"""A pyramid larger than the memory budget (serve --memory-budget-mib, docs/chunked-volumes.md):
+it opens at the finest level that fits, while stills and the viewer's view at rest draw the finest
+level brick after brick, equal to the in-core render of the full-resolution file. A viewer sees
+the bricks' progress, and new input drops a finest-level frame that became stale."""
+import asyncio, json, pathlib, subprocess, sys, tempfile
+
+sys.path.insert(0, str(pathlib.Path(__file__).parent))
+from harness import *  # noqa: F401,F403
+from PIL import ImageChops, ImageStat
+
+TMP = tempfile.TemporaryDirectory()
+BIG = f"{TMP.name}/blobs.nrrd"
+
+
+def max_abs(a, b):
+    return max(hi for _, hi in ImageChops.difference(a.convert("RGB"), b.convert("RGB")).getextrema())
+
+
+def cli_render(scene, name):
+    """The in-core render of the full-resolution file, as `peakcast render` draws it."""
+    pathlib.Path(TMP.name, f"{name}.json").write_text(json.dumps(dict(scene, volume=BIG)))
+    subprocess.run([PEAKCAST, "render", f"{TMP.name}/{name}.json", "-o", f"{TMP.name}/{name}.png"], check=True,
+                   capture_output=True)
+    return Image.open(f"{TMP.name}/{name}.png")
+
+
+def test_pyramid_opens_at_the_level_the_memory_budget_holds():
+    """serve --memory-budget-mib: an OME-Zarr pyramid opens at its finest level that fits (listed as
+    a volume by the file browser), renders, and says which level; a larger NRRD is refused by
+    name with the way out."""
+    with Server("--data", TMP.name, "--memory-budget-mib", "1", volumes=()) as s:
+        status, _, body = http(s, "/api/files")
+        kinds = {e["name"]: e["kind"] for e in json.loads(body)["entries"]}
+        assert kinds["blobs.zarr"] == "stack", kinds
+        status, headers, png = http(s, "/api/render", "POST", json.dumps(
+            {"volume": "blobs.zarr", "image": {"width": 64, "height": 48}}).encode())
+        assert status == 200 and decode_image(png).size == (64, 48), (status, png[:200])
+        info = [v for v in json.loads(http(s, "/api/volumes")[2])["volumes"] if v["id"] == "blobs.zarr"][0]
+        assert info["level"] == 1 and info["levels"] == 4 and info["dims"] == [80, 75, 70], info
+        assert info["full_dims"] == [160, 150, 140] and info["spacing"] == [2, 2, 2], info
+        # A still draws the finest level brick after brick (1 MiB cannot hold it), and equals
+        # the in-core render of the full-resolution file; ?resolution=held draws level 1.
+        for render in ({"step": 1}, {"step": 1.5, "classification": "preint"},
+                       {"step": 1, "classification": "peaks", "shading": True}):
+            scene = {"volume": "blobs.zarr", "image": {"width": 64, "height": 48}, "render": render}
+            status, headers, png = http(s, "/api/render", "POST", json.dumps(scene).encode())
+            assert status == 200 and headers["X-Level"] == "0" and int(headers["X-Bricks"]) > 1, (status, headers)
+            a = decode_image(png)
+            worst, spread = max_abs(a, cli_render(scene, "still")), max(ImageStat.Stat(a).stddev)
+            print(f"  {render}: {headers['X-Bricks']} bricks, max abs {worst}/255 against the in-core file")
+            assert worst <= 1 and spread > 1, (render, worst, spread)
+        health = json.loads(http(s, "/api/health")[2])
+        assert health["still_progress"] == 1.0, health
+        status, headers, held = http(s, "/api/render?resolution=held", "POST", json.dumps(scene).encode())
+        assert status == 200 and headers["X-Level"] == "1" and "X-Bricks" not in headers, headers
+        assert http(s, "/api/render?resolution=half", "POST", json.dumps(scene).encode())[0] == 400
+        status, _, body = http(s, "/api/render", "POST", json.dumps(
+            {"volume": "blobs.nrrd", "image": {"width": 8, "height": 8}}).encode())
+        message = json.loads(body)["message"]
+        assert status == 404 and "exceeds the memory budget of 1 MiB" in message and "--pyramid" in message, (status, body)
+        assert TMP.name not in message, message
+
+
+async def test_a_viewer_sees_the_finest_level_after_the_level_held():
+    """A viewer's final frame shows the level held (stats level 1, refining), then refining
+    messages count the bricks, then a final frame of level 0 with the same versions equals the
+    in-core render of the full-resolution file. A camera move while the bricks are drawn drops
+    that frame: no level-0 frame of the old camera comes after the move."""
+    with Server("--data", TMP.name, "--memory-budget-mib", "1", volumes=()) as s:
+        c = await Client.connect(s)
+        w = await c.hello(96, 72, volume="blobs.zarr", state={"render": {"step": 1, "classification": "preint"}})
+        assert w["volume"]["level"] == 1, w["volume"]
+        await c.send({"type": "quality", "final_format": "png"})
+
+        async def final_of_level(level):
+            """The next final frame and its stats message."""
+            while True:
+                f = await c.next_frame(final=True, timeout=120)
+                st = await c.next_text("stats")
+                assert st["frame"] == f["id"], (st, f)
+                if st.get("level") == level and f["png"]:
+                    return f, st
+
+        held, held_stats = await final_of_level(1)
+        assert held_stats["refining"] is True, held_stats
+        n_texts = len(c.texts)
+        fine, fine_stats = await final_of_level(0)
+        refining = [t for t in c.texts[n_texts:] if t["type"] == "refining"]
+        assert refining and refining[-1]["fraction"] == 1.0, refining
+        assert all(a["fraction"] <= b["fraction"] for a, b in zip(refining, refining[1:])), refining
+        assert fine_stats["bricks"] == refining[-1]["bricks"] > 1, (fine_stats, refining[-1])
+        assert fine["camera_version"] == held["camera_version"] and fine["tf_version"] == held["tf_version"]
+        state = w["state"]
+        scene = {"volume": "blobs.zarr", "image": {"width": 96, "height": 72}, "camera": state["camera"],
+                 "tf": state["tf"], "render": {"step": 1, "classification": "preint"}}
+        worst = max_abs(decode_image(fine["image"]), cli_render(scene, "viewer"))
+        print(f"  the viewer's finest frame: {fine_stats['bricks']} bricks, max abs {worst}/255 against the in-core file")
+        assert worst <= 1, worst
+        assert max_abs(decode_image(fine["image"]), decode_image(held["image"])) > 8  # level 1 differs
+
+        # A camera move while the finest level is being drawn: that frame is dropped.
+        cam = dict(state["camera"], eye=[e + d for e, d in zip(state["camera"]["eye"], (40, -30, 20))])
+        await c.send({"type": "camera", "camera": cam})
+        held2, _ = await final_of_level(1)
+        while True:
+            t = await c.recv(60)
+            if isinstance(t, dict) and t.get("type") == "refining" and t["fraction"] < 0.5:
+                break
+        moved = dict(cam, eye=[e + 10 for e in cam["eye"]])
+        await c.send({"type": "camera", "camera": moved})
+        mark = len(c.frames)
+        last, last_stats = await final_of_level(0)
+        assert last["camera_version"] > held2["camera_version"], (last, held2)
+        stale = [f for f in c.frames[mark:] if f["final"] and f["camera_version"] == held2["camera_version"]]
+        assert not stale, f"{len(stale)} frames of the camera the move replaced"
+        await c.close()
+
+
+if __name__ == "__main__":
+    subprocess.run([PEAKCAST, "make-volume", "blobs", "--dims", "160", "150", "140", "--type", "uint16", "-o", BIG],
+                   check=True, capture_output=True)
+    subprocess.run([PEAKCAST, "convert", BIG, f"{TMP.name}/blobs.zarr", "--pyramid", "--chunk", "32"], check=True,
+                   capture_output=True)
+    # 1 MiB holds level 1 (80x75x70x2 = 0.8 MiB), not level 0 (6.4 MiB).
+    run_tests([test_pyramid_opens_at_the_level_the_memory_budget_holds,
+               test_a_viewer_sees_the_finest_level_after_the_level_held])
