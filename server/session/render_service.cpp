@@ -184,7 +184,11 @@ void RenderService::queue_refinement(const std::shared_ptr<Session>& session, co
     auto s = weak_sink.lock();
     auto session = weak_session.lock();
     if (!s || !session || cancelled->load()) return;  // stale: the view moved on
-    if (!r.error.empty()) return s->deliver_text(protocol::error_message("render_failed", r.error));
+    if (!r.error.empty()) {  // shutting down or cancelled: nothing to say; a failure: say why
+      if (r.error_code == "render_failed" || r.error_code == "encode_failed")
+        s->deliver_text(protocol::error_message("render_failed", "the finest level: " + r.error));
+      return;
+    }
     deliver_refined_frame(*s, session->refined_frame_id(), job, std::move(r));
   };
   // A full queue (scripts' stills) leaves the view at the level held.
