@@ -215,12 +215,35 @@ def test_nonfinite_voxels_take_the_whole_volumes_extremes():
     print(f"  NaN/Inf slabs in different bricks: max abs {e:.4f}")
 
 
+def test_ranks_read_their_bricks_of_an_ome_zarr():
+    # A chunked volume under mpirun: each rank reads its brick (and ghosts) as a region of the
+    # OME-Zarr, decoding only the chunks it meets, and the picture equals one process's of the
+    # NRRD it was converted from.
+    zarr = TMP / "ml_64.zarr"
+    run([PEAKCAST, "convert", ML, zarr, "--pyramid", "--chunk", 16])
+    s = scene("ml_zarr_preint", zarr, {"step": 1.5, "classification": "preint"}, ML_TF, ML_CAM)
+    one = TMP / "ml_zarr_1.png"
+    run([PEAKCAST, "render", scene("ml_nrrd_preint", ML, {"step": 1.5, "classification": "preint"}, ML_TF, ML_CAM),
+         "-o", one, "--backend", "cpu"])
+    for n in (2, 3):
+        out, stats = TMP / f"ml_zarr_{n}.png", TMP / f"ml_zarr_{n}.json"
+        mpi(n, "render", s, "-o", out, "--stats", stats)
+        st = json.loads(stats.read_text())
+        whole = 64 ** 3
+        for r in st["per_rank"]:
+            assert r["voxels"] < whole * 0.7 and r["voxel_bytes"] == 4 * r["voxels"], r
+        e = max_abs(one, out)
+        assert e <= BOUND, f"{n} ranks from OME-Zarr: max abs {e}"
+        print(f"  OME-Zarr on {n} ranks: max abs {e:.4f}, largest brick {max(r['voxels'] for r in st['per_rank'])} "
+              f"of {whole} voxels")
+
+
 def main():
     failed = 0
     tests = [test_ranks_equal_one_process, test_each_rank_holds_its_brick_and_ghosts, test_a_rank_that_dies_ends_the_job,
              test_a_rank_that_fails_to_read_ends_the_job,
              test_nonfinite_voxels_take_the_whole_volumes_extremes, test_gl_ranks_equal_one_process,
-             test_ranks_on_different_backends_are_refused]
+             test_ranks_on_different_backends_are_refused, test_ranks_read_their_bricks_of_an_ome_zarr]
     for t in tests:
         try:
             t()
