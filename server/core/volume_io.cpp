@@ -370,6 +370,18 @@ std::pair<float, float> finite_extremes(const Volume& v) {
   return {f.lo, f.hi};
 }
 
+int64_t count_nonfinite(const Volume& v, const Dims& lo, const Dims& hi) {
+  if (v.type() != VoxelType::F32) return 0;
+  const auto* p = reinterpret_cast<const float*>(v.data());
+  int64_t n = 0;
+  for (int64_t k = lo[2]; k < hi[2]; ++k)
+    for (int64_t j = lo[1]; j < hi[1]; ++j) {
+      const float* row = p + v.dims()[0] * (j + v.dims()[1] * k);
+      for (int64_t i = lo[0]; i < hi[0]; ++i) n += !std::isfinite(row[i]);
+    }
+  return n;
+}
+
 void replace_nonfinite(Volume& v, float lo, float hi) {
   if (v.type() != VoxelType::F32) return;
   auto* p = reinterpret_cast<float*>(v.data());

@@ -76,6 +76,8 @@ using VolumeLoader = std::function<LoadedVolume(const std::filesystem::path&, co
 
 // A float volume's finite extremes (lo > hi when no voxel is finite; other types: their range).
 std::pair<float, float> finite_extremes(const Volume& v);
+// A float volume's NaN/Inf voxels inside [lo, hi) (a brick's own box); 0 for other types.
+int64_t count_nonfinite(const Volume& v, const Dims& lo, const Dims& hi);
 // Replaces a float volume's NaN and -Inf voxels by lo and +Inf by hi, counts them in
 // nonfinite_replaced and computes the statistics anew. Nothing for other types.
 void replace_nonfinite(Volume& v, float lo, float hi);

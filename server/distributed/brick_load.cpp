@@ -13,18 +13,6 @@
 namespace peakcast::distributed {
 namespace {
 
-// Non-finite voxels of a float brick inside [lo, hi) (brick coordinates).
-int64_t count_nonfinite(const Volume& v, const Dims& lo, const Dims& hi) {
-  if (v.type() != VoxelType::F32) return 0;
-  const auto* p = reinterpret_cast<const float*>(v.data());
-  int64_t n = 0;
-  for (int64_t k = lo[2]; k < hi[2]; ++k)
-    for (int64_t j = lo[1]; j < hi[1]; ++j) {
-      const float* row = p + v.dims()[0] * (j + v.dims()[1] * k);
-      for (int64_t i = lo[0]; i < hi[0]; ++i) n += !std::isfinite(row[i]);
-    }
-  return n;
-}
 
 // The whole volume's macrocell grid of a filter support, reduced from every rank's share
 // (core/macrocell_share.h): each rank then walks the cells one process walks.

@@ -34,15 +34,6 @@ std::shared_ptr<Volume> read_brick_voxels(const std::string& path, const LoadOpt
   return std::make_shared<Volume>(load_volume(path, o));
 }
 
-int64_t count_nonfinite(const Volume& v, const Index3& lo, const Index3& hi) {
-  if (v.type() != VoxelType::F32) return 0;
-  const auto* p = reinterpret_cast<const float*>(v.data());
-  int64_t n = 0;
-  for (int64_t k = lo[2]; k < hi[2]; ++k)
-    for (int64_t j = lo[1]; j < hi[1]; ++j)
-      for (int64_t i = lo[0]; i < hi[0]; ++i) n += !std::isfinite(p[(k * v.dims()[1] + j) * v.dims()[0] + i]);
-  return n;
-}
 
 // The brick's voxels with NaN/Inf as one process replaces them (finite extremes of the whole).
 void replace_with(Volume& v, const SequenceStatistics& s) {
