@@ -111,6 +111,10 @@ void add_serve_options(CLI::App& s, ServeOptions& o) {
                "MiB of host memory for one volume's voxels: a pyramid (OME-Zarr, Neuroglancer) opens at its "
                "finest level that fits, a larger volume of another format is refused; 0: no budget")
       ->check(CLI::Range(int64_t(0), int64_t(1) << 24));
+  s.add_option("--preview-voxels", c.preview_voxels,
+               "with --memory-budget-mib: a pyramid whose level within the budget has more voxels opens first at "
+               "its finest level within this many (a first look), then at the level within the budget; 0: off")
+      ->check(CLI::Range(int64_t(0), int64_t(1) << 40));
   s.add_option("--max-queued-stills", c.max_queued_stills,
                "REST stills waiting or rendering at once; beyond, 503 with Retry-After")
       ->check(CLI::Range(size_t(1), size_t(1024)));

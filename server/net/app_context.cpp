@@ -3,6 +3,8 @@
 #include <cctype>
 #include <string>
 
+#include <boost/asio/post.hpp>
+
 #include "core/volume_io.h"
 #include "encode/video.h"
 
@@ -33,6 +35,14 @@ AppContext::AppContext(ServerConfig c)
   // Which video encoders open is tried once, here, before serving: not on an io thread at the
   // first welcome (opening libaom and libx264 takes tens of ms).
   encode::available_codecs();
+  volumes.set_preview(config.preview_voxels, [this](std::function<void()> fn) {
+    boost::asio::post(pyramid, [fn = std::move(fn)] {
+      try {
+        fn();
+      } catch (...) {  // nothing escapes a pool's handler (read_finer logs its own failures)
+      }
+    });
+  });
 }
 
 PngLocator AppContext::png_locator() const {

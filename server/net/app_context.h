@@ -36,6 +36,7 @@ struct ServerConfig {
   int max_kbps = limits::kDefaultMaxKbps;  // a video session's bit-rate ceiling (docs/streaming.md)
   int64_t gpu_budget_bytes = limits::kDefaultGpuBudgetBytes;
   int64_t memory_budget_bytes = 0;  // host memory for one volume's voxels (0: none); LoadOptions
+  int64_t preview_voxels = int64_t(1) << 24;  // a pyramid's first look (VolumeStore::set_preview); 0: off
   size_t max_queued_stills = limits::kDefaultMaxQueuedStills;
   double max_still_samples = limits::kDefaultMaxStillSamples;
   double still_band_samples = limits::kStillBandSamples;
@@ -69,6 +70,9 @@ struct AppContext {
   // Volume loads run here, never on an io thread (an 800 MB stack takes seconds). Declared last:
   // joined first on destruction, while the volumes it fills still exist.
   boost::asio::thread_pool loader{1};
+  // A pyramid's long reads (its finest level's statistics, the level within the budget after a
+  // preview): apart from the loader, so that minutes of reading hold up no load, PNG or probe.
+  boost::asio::thread_pool pyramid{1};
 
   explicit AppContext(ServerConfig c);
   // Ray-texture PNGs, like volumes given by path, are read only from inside the data directories.

@@ -137,8 +137,11 @@ void render_still(AppContext& app, const Request& req, std::function<void(Respon
     return send(error_response(req, http::status::bad_request, "bad_request", "resolution must be full or held"));
   }
   const bool finest = resolution != "held";
-  if (auto vol = app.volumes.find(scene.volume); vol && !png && !(vol->full && finest))
-    return submit_still(app, req, scene, std::move(vol), std::move(send), std::move(cancelled));
+  if (auto vol = app.volumes.find(scene.volume); vol && !png) {
+    if (!(vol->full && finest)) return submit_still(app, req, scene, std::move(vol), std::move(send), std::move(cancelled));
+    if (auto known = vol->full->statistics())  // reduced before: no wait
+      return submit_still(app, req, scene, std::move(vol), std::move(send), std::move(cancelled), std::move(known));
+  }
   // A volume not loaded yet, or a ray-texture PNG: read on the loader pool, never on this io thread.
   asio::post(app.loader, [&app, req, scene, finest, send = std::move(send), cancelled]() mutable {
     try {
@@ -160,16 +163,19 @@ void render_still(AppContext& app, const Request& req, std::function<void(Respon
       count(app, "render", http::status::internal_server_error);
       return send(error_response(req, http::status::internal_server_error, "internal", e.what()));
     }
-    std::shared_ptr<const distributed::SequenceStatistics> full;
-    if (vol->full && finest) {
-      try {  // the first still of this pyramid's finest level reduces its statistics by bricks
-        full = VolumeStore::full_statistics(*vol);
+    if (!(vol->full && finest)) return submit_still(app, req, scene, std::move(vol), send, cancelled);
+    // The first still of this pyramid's finest level reduces its statistics by bricks: minutes for
+    // terabytes, so on the pyramid pool, which holds up no other load.
+    asio::post(app.pyramid, [&app, req, scene, vol, send, cancelled]() mutable {
+      std::shared_ptr<const distributed::SequenceStatistics> full;
+      try {
+        full = VolumeStore::full_statistics(*vol, app.stopping);
       } catch (const std::exception& e) {
         count(app, "render", http::status::internal_server_error);
         return send(error_response(req, http::status::internal_server_error, "volume_error", e.what()));
       }
-    }
-    submit_still(app, req, scene, std::move(vol), send, cancelled, std::move(full));
+      submit_still(app, req, scene, std::move(vol), send, cancelled, std::move(full));
+    });
   });
 }
 

@@ -67,6 +67,7 @@ void Server::stop() {
   // answers into the stopped io_context, which frees them while it still exists (it is
   // destroyed before app_: a job ending after it would close a socket on freed memory).
   app_->loader.join();
+  app_->pyramid.join();  // a reduction of the finest level stops at its next brick (app_->stopping)
 }
 
 }  // namespace peakcast::net

@@ -72,9 +72,9 @@ void WsSession::with_png(const nlohmann::json& render, TextureThen then) {
 
 void WsSession::prepare_finest(const std::shared_ptr<VolumeEntry>& entry) {
   if (!entry->full) return;
-  asio::post(app_.loader, [self = shared_from_this(), entry, session = session_] {
+  asio::post(app_.pyramid, [self = shared_from_this(), entry, session = session_] {
     try {
-      auto statistics = VolumeStore::full_statistics(*entry);
+      auto statistics = VolumeStore::full_statistics(*entry, self->app_.stopping);
       session->set_full_statistics(entry, std::move(statistics));
       self->app_.render.notify();
     } catch (const std::exception& e) {  // the view stays at the level held, and says why

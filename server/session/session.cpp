@@ -42,7 +42,7 @@ void Session::cancel_refinement() {
 void Session::set_full_statistics(const std::shared_ptr<VolumeEntry>& volume,
                                   std::shared_ptr<const distributed::SequenceStatistics> statistics) {
   std::lock_guard lock(m_);
-  if (volume != volume_) return;
+  if (!volume_ || volume->full != volume_->full) return;  // another volume now (a preview's finer level shares it)
   full_statistics_ = std::move(statistics);
   if (!dirty_) final_pending_ = true;  // the view at rest now gets its finest frame too
 }
@@ -266,6 +266,15 @@ std::optional<FrameJob> Session::take_job(Clock::time_point now, std::chrono::mi
                                           std::chrono::duration<double> min_interval, Clock::time_point& wake) {
   std::lock_guard lock(m_);
   wake = Clock::time_point::max();
+  if (volume_) {
+    // A preview's finer level has been read: the same world box, so the view stays; it is drawn again.
+    if (auto newer = volume_->newer()) {
+      while (auto next = newer->newer()) newer = std::move(next);
+      volume_ = std::move(newer);
+      final_pending_ = true;  // at rest: a final frame of it, no interactive one
+      cancel_refinement();
+    }
+  }
   if (!volume_ || !(dirty_ || final_pending_)) return std::nullopt;
   if (int(outstanding_.size()) >= limits::kMaxFramesInFlight) return std::nullopt;  // an ack wakes us
   const bool quiet = now - last_input_ >= still_delay;

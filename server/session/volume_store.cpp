@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "chunked/chunked_volume.h"
+#include "core/log.h"
 #include "distributed/brick_sequence.h"
 
 namespace fs = std::filesystem;
@@ -59,17 +61,40 @@ std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::p
   e->name = upload_name;
   LoadOptions options = options_;
   options.progress = std::move(progress);
+  int finer = -1;  // a preview: the level within the budget, read after
+  if (in_process_ && preview_voxels_ > 0 && options.memory_budget_bytes > 0 && chunked::is_chunked_volume(path)) {
+    const auto cv = chunked::open_chunked(path, {options.time_point, options.channel});
+    const int held = chunked::finest_level_within(*cv, options.level, options.memory_budget_bytes);
+    const auto& levels = cv->levels();
+    auto voxels = [&](int l) { return levels[size_t(l)].dims[0] * levels[size_t(l)].dims[1] * levels[size_t(l)].dims[2]; };
+    int preview = held;
+    while (preview + 1 < int(levels.size()) && voxels(preview) > preview_voxels_) preview++;
+    if (preview > held) {
+      finer = held;
+      options.level = preview;
+      options.memory_budget_bytes = 0;  // that level, as asked
+    }
+  }
   LoadedVolume loaded = loader_(path, options);
   e->volume = std::move(loaded.volume);
   e->resident_bytes = loaded.resident_bytes;
   e->preloaded = preloaded;
-  if (in_process_ && e->volume->pyramid_level > options.level && options.memory_budget_bytes > 0) {
+  finish_entry(e);
+  std::lock_guard lock(m_);
+  entries_[id] = e;
+  if (default_.empty()) default_ = id;
+  if (finer >= 0) background_([this, e, finer] { read_finer(e, finer); });
+  return e;
+}
+
+void VolumeStore::finish_entry(const std::shared_ptr<VolumeEntry>& e) {
+  if (in_process_ && e->volume->pyramid_level > options_.level && options_.memory_budget_bytes > 0 && !e->full) {
     auto full = std::make_shared<FullResolution>();
-    full->path = path;
+    full->path = e->path;
     full->options = options_;
     full->options.level = 0;
     full->options.memory_budget_bytes = 0;
-    full->budget_bytes = options.memory_budget_bytes;
+    full->budget_bytes = options_.memory_budget_bytes;
     full->dims = e->volume->full_dims;
     e->full = std::move(full);
   }
@@ -83,19 +108,70 @@ std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::p
   // Here, on the loader pool, not on the render thread at first use (GpuVolume takes them): the
   // em volume's two grids take ~0.6 s of CPU. After admission, so a refused volume costs none.
   if (e->volume->has_voxels()) e->macrocells = build_volume_macrocells(*e->volume);
-  std::lock_guard lock(m_);
-  entries_[id] = e;
-  if (default_.empty()) default_ = id;
-  return e;
 }
 
-std::shared_ptr<const distributed::SequenceStatistics> VolumeStore::full_statistics(VolumeEntry& entry) {
+void VolumeStore::set_preview(int64_t voxels, std::function<void(std::function<void()>)> background) {
+  preview_voxels_ = background ? voxels : 0;
+  background_ = std::move(background);
+}
+
+void VolumeStore::read_finer(const std::shared_ptr<VolumeEntry>& preview, int level) {
+  auto e = std::make_shared<VolumeEntry>();
+  e->id = preview->id;
+  e->path = preview->path;
+  e->preloaded = preview->preloaded;
+  e->full = preview->full;  // one reduction of the finest level serves both
+  try {
+    LoadOptions options = options_;
+    options.level = level;
+    options.memory_budget_bytes = 0;
+    LoadedVolume loaded = loader_(e->path, options);
+    e->volume = std::move(loaded.volume);
+    e->resident_bytes = loaded.resident_bytes;
+    finish_entry(e);
+  } catch (const std::exception& ex) {  // the preview stays: it is a picture of the same volume
+    log::warn("the level within the memory budget could not be read", {{"volume", e->id}, {"error", ex.what()}});
+    return;
+  }
+  std::lock_guard lock(m_);
+  auto it = entries_.find(e->id);
+  if (it == entries_.end() || it->second != preview) return;  // dropped or replaced meanwhile
+  it->second = e;
+  preview->set_newer(e);
+}
+
+std::shared_ptr<VolumeEntry> VolumeEntry::newer() const {
+  std::lock_guard lock(newer_m_);
+  return newer_;
+}
+
+void VolumeEntry::set_newer(std::shared_ptr<VolumeEntry> e) {
+  std::lock_guard lock(newer_m_);
+  newer_ = std::move(e);
+}
+
+std::shared_ptr<const distributed::SequenceStatistics> VolumeStore::full_statistics(VolumeEntry& entry,
+                                                                                   const std::atomic<bool>& stop) {
   FullResolution& f = *entry.full;
-  std::lock_guard lock(f.m);
-  if (!f.statistics)
-    f.statistics = std::make_shared<const distributed::SequenceStatistics>(
-        distributed::sequence_statistics(f.path.string(), f.options, f.budget_bytes));
-  return f.statistics;
+  std::lock_guard lock(f.reduce);
+  if (auto known = f.statistics()) return known;
+  distributed::StatisticsRun run(f.path.string(), f.options, f.budget_bytes);
+  while (!run.done()) {
+    if (stop.load()) throw VolumeError(f.path, "the server is shutting down");
+    run.step();
+  }
+  f.set_statistics(std::make_shared<const distributed::SequenceStatistics>(run.take()));
+  return f.statistics();
+}
+
+std::shared_ptr<const distributed::SequenceStatistics> FullResolution::statistics() const {
+  std::lock_guard lock(ready_);
+  return statistics_;
+}
+
+void FullResolution::set_statistics(std::shared_ptr<const distributed::SequenceStatistics> s) {
+  std::lock_guard lock(ready_);
+  statistics_ = std::move(s);
 }
 
 std::shared_ptr<VolumeEntry> VolumeStore::preload(const fs::path& path) {

@@ -32,8 +32,14 @@ struct FullResolution {
   LoadOptions options;  // level 0, the time point and channel shown
   int64_t budget_bytes = 0;
   Dims dims{};  // the finest level's
-  std::mutex m;  // one reduction at a time; a second still waits for the first's
-  std::shared_ptr<const distributed::SequenceStatistics> statistics;
+  std::mutex reduce;  // one reduction at a time; a second asker waits for the first's
+  // Null until reduced (VolumeStore::full_statistics); never waits for a reduction.
+  std::shared_ptr<const distributed::SequenceStatistics> statistics() const;
+  void set_statistics(std::shared_ptr<const distributed::SequenceStatistics> s);
+
+ private:
+  mutable std::mutex ready_;
+  std::shared_ptr<const distributed::SequenceStatistics> statistics_;
 };
 
 struct VolumeEntry {
@@ -51,7 +57,15 @@ struct VolumeEntry {
   bool uploaded = false;  // sent by a client (POST /api/volumes); `name` is the one it gave
   std::string name;       // empty: the file's name
   std::shared_ptr<FullResolution> full;  // set when the level held is not the finest
+  // A preview (VolumeStore::set_preview): the entry of the finer level read since, which
+  // sessions viewing this one move to (the same world box: camera and TF stay).
+  std::shared_ptr<VolumeEntry> newer() const;
+  void set_newer(std::shared_ptr<VolumeEntry> e);
   nlohmann::json info(bool with_histogram) const;
+
+ private:
+  mutable std::mutex newer_m_;
+  std::shared_ptr<VolumeEntry> newer_;
 };
 
 class VolumeStore {
@@ -86,7 +100,13 @@ class VolumeStore {
   bool known(const std::string& id) const;  // loaded, or an upload that can be
   // The finest level's statistics for entry.full's stills: reduced by bricks on the caller's
   // thread the first time (a loader-pool thread; seconds to minutes), then kept. Throws VolumeError.
-  static std::shared_ptr<const distributed::SequenceStatistics> full_statistics(VolumeEntry& entry);
+  // `stop`: checked between bricks (a reduction of terabytes stops with the server).
+  static std::shared_ptr<const distributed::SequenceStatistics> full_statistics(VolumeEntry& entry,
+                                                                                const std::atomic<bool>& stop);
+  // Pyramids whose level within the memory budget has more than `voxels` voxels open first at
+  // their finest level within `voxels` (a first look in a second); the level within the budget
+  // is then read by `background` and replaces it (VolumeEntry::newer). voxels 0: off.
+  void set_preview(int64_t voxels, std::function<void(std::function<void()>)> background);
 
  private:
   std::shared_ptr<VolumeEntry> add(const std::string& id, const std::filesystem::path& path, bool preloaded,
@@ -103,6 +123,12 @@ class VolumeStore {
   LoadOptions options_;
   VolumeLoader loader_;
   bool in_process_ = false;  // the store's own loader (not the ranks'): pyramids can draw full stills
+  int64_t preview_voxels_ = 0;
+  std::function<void(std::function<void()>)> background_;
+  // The level within the budget of a pyramid opened at `preview`, read now (background_).
+  void read_finer(const std::shared_ptr<VolumeEntry>& preview, int level);
+  // After the loader: the finest statistics' handle, admission, the macrocell grids.
+  void finish_entry(const std::shared_ptr<VolumeEntry>& e);
   mutable std::mutex m_;
   std::mutex load_m_;  // one load at a time: a second request for the same file waits, then finds it
   std::map<std::string, std::shared_ptr<VolumeEntry>> entries_;

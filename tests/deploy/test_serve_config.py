@@ -54,7 +54,8 @@ def test_defaults_listed_for_every_option():
 
 # A value other than the default for every option: a new option without one fails the test below.
 NON_DEFAULT = {"bind": "0.0.0.0", "port": "9123", "max-sessions": "5", "idle-timeout": "30", "max-fps": "24",
-               "gpu-budget-mib": "512", "memory-budget-mib": "2048", "max-queued-stills": "2", "max-still-samples": "1e+09",
+               "gpu-budget-mib": "512", "memory-budget-mib": "2048", "preview-voxels": "1000",
+               "max-queued-stills": "2", "max-still-samples": "1e+09",
                "still-band-samples": "2e+07", "log-level": "debug", "log-format": "json", "io-threads": "3",
                "encode-threads": "3", "web-dir": "/tmp", "shader-dir": "/tmp", "egl-device": "surfaceless",
                "program-cache": "off", "upload-dir": "/tmp/peakcast-config-test-uploads", "max-upload-mib": "64",

@@ -117,6 +117,31 @@ async def test_a_viewer_sees_the_finest_level_after_the_level_held():
         await c.close()
 
 
+async def test_a_preview_level_first_then_the_level_within_the_budget():
+    """--preview-voxels: a pyramid opens first at its finest level within that many voxels (level
+    2 here), and moves to the level within the budget (level 1) once read, keeping the view: a
+    level-2 final frame, then a level-1 one of the same camera, then level 0 by bricks."""
+    with Server("--data", TMP.name, "--memory-budget-mib", "1", "--preview-voxels", "100000", volumes=()) as s:
+        c = await Client.connect(s)
+        w = await c.hello(96, 72, volume="blobs.zarr")
+        assert w["volume"]["level"] == 2 and w["volume"]["dims"] == [40, 38, 35], w["volume"]
+        # The frames' levels, in order: level 2 until level 1 is read (here in milliseconds: the
+        # first frame may already show level 1), then level 1, then level 0 by bricks.
+        levels, camera = [], None
+        while not levels or levels[-1] != 0:
+            f = await c.next_frame(timeout=120)
+            st = await c.next_text("stats")
+            assert camera in (None, f["camera_version"]), "the view changed with the level"
+            camera = f["camera_version"]
+            if not levels or levels[-1] != st["level"]:
+                levels.append(st["level"])
+        assert levels in ([2, 1, 0], [1, 0]), levels
+        print(f"  levels shown: {levels}")
+        info = [v for v in json.loads(http(s, "/api/volumes")[2])["volumes"] if v["id"] == "blobs.zarr"][0]
+        assert info["level"] == 1 and info["dims"] == [80, 75, 70], info
+        await c.close()
+
+
 if __name__ == "__main__":
     subprocess.run([PEAKCAST, "make-volume", "blobs", "--dims", "160", "150", "140", "--type", "uint16", "-o", BIG],
                    check=True, capture_output=True)
@@ -124,4 +149,5 @@ if __name__ == "__main__":
                    capture_output=True)
     # 1 MiB holds level 1 (80x75x70x2 = 0.8 MiB), not level 0 (6.4 MiB).
     run_tests([test_pyramid_opens_at_the_level_the_memory_budget_holds,
-               test_a_viewer_sees_the_finest_level_after_the_level_held])
+               test_a_viewer_sees_the_finest_level_after_the_level_held,
+               test_a_preview_level_first_then_the_level_within_the_budget])
