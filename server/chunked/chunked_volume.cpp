@@ -75,6 +75,14 @@ int finest_level_within(const ChunkedVolume& cv, int from, int64_t budget_bytes)
                                    std::to_string(budget_bytes >> 20) + " MiB");
 }
 
+int finest_level_of_voxels(const ChunkedVolume& cv, int from, int64_t voxels) {
+  const auto& levels = cv.levels();
+  int k = std::max(from, 0);
+  auto count = [&](int l) { return double(levels[size_t(l)].dims[0]) * double(levels[size_t(l)].dims[1]) * double(levels[size_t(l)].dims[2]); };
+  while (k + 1 < int(levels.size()) && count(k) > double(voxels)) ++k;
+  return k;
+}
+
 Volume read_level(const ChunkedVolume& cv, int level, const LoadOptions& options) {
   if (level < 0 || level >= int(cv.levels().size()))
     throw VolumeError(cv.root(), "level " + std::to_string(level) + " does not exist (the pyramid has " +

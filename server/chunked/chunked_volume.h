@@ -75,6 +75,9 @@ Volume read_level(const ChunkedVolume& volume, int level, const LoadOptions& opt
 // The finest level from `from` on whose voxels (in memory) fit `budget_bytes`. Throws VolumeError
 // when even the coarsest does not.
 int finest_level_within(const ChunkedVolume& volume, int from, int64_t budget_bytes);
+// A first look (serve --preview-voxels): the finest level from `from` on with at most `voxels`
+// voxels (the coarsest when none has so few).
+int finest_level_of_voxels(const ChunkedVolume& volume, int from, int64_t voxels);
 
 // The largest size of one decoded chunk a reader accepts, and the most chunks one read visits
 // (a level cut into chunks of a few voxels is refused rather than stat'ed chunk by chunk).

@@ -187,7 +187,14 @@ SequenceRun::SequenceRun(std::string path, LoadOptions base, std::shared_ptr<con
   const Index3& dims = stats_->box.dims;
   r_.ghost = brick_ghost(scene_);
   const size_t bpv = voxel_bytes(storage_type(stats_->source));
-  r_.bricks = bricks_for_budget(dims, r_.ghost, bpv, voxel_share(budget_bytes), 2);
+  // The image's buffers come out of the budget first: the layers composited so far, the brick's
+  // layer, the composite being made, the renderer's own buffers and what the allocator keeps of
+  // them. Measured (bench outofcore --size 1024 --budget-mib 256 --image 1024): 130 MiB beyond
+  // the two bricks at 1024², eight RGBA float images.
+  const int64_t image_bytes = 8 * int64_t(scene_.scene.width) * scene_.scene.height * 4 * int64_t(sizeof(float));
+  // A budget too small for them (a few KiB in tests) still gives the bricks half its share.
+  const int64_t share = voxel_share(budget_bytes);
+  r_.bricks = bricks_for_budget(dims, r_.ghost, bpv, std::max(share - image_bytes, share / 2), 2);
   split_ = kd_split(dims, r_.bricks, r_.ghost);
   r_.largest_brick_bytes = largest_read(split_) * int64_t(bpv);
   const glm::dvec3 eye = (scene_.camera.eye - stats_->box.origin) / stats_->box.spacing;

@@ -65,10 +65,7 @@ std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::p
   if (in_process_ && preview_voxels_ > 0 && options.memory_budget_bytes > 0 && chunked::is_chunked_volume(path)) {
     const auto cv = chunked::open_chunked(path, {options.time_point, options.channel});
     const int held = chunked::finest_level_within(*cv, options.level, options.memory_budget_bytes);
-    const auto& levels = cv->levels();
-    auto voxels = [&](int l) { return levels[size_t(l)].dims[0] * levels[size_t(l)].dims[1] * levels[size_t(l)].dims[2]; };
-    int preview = held;
-    while (preview + 1 < int(levels.size()) && voxels(preview) > preview_voxels_) preview++;
+    const int preview = chunked::finest_level_of_voxels(*cv, held, preview_voxels_);
     if (preview > held) {
       finer = held;
       options.level = preview;

@@ -64,7 +64,9 @@ void expect_same_statistics(const Volume& whole, const distributed::SequenceStat
   }
 }
 
-const int64_t kBudget = 108 << 10;  // bytes of voxels: the 41^3 float volume (270 KiB) takes >= 6 bricks
+// Bytes: the 41^3 float volume (270 KiB) takes >= 6 bricks. Budgets this small give the bricks
+// half their share (the rest is the image's: brick_sequence.cpp), so they are twice the voxels'.
+const int64_t kBudget = 216 << 10;
 
 double sequence_error(const Case& c, const fs::path& path, int64_t budget = kBudget) {
   const Volume whole = load_volume(path);
@@ -119,10 +121,10 @@ TEST(OutOfCore, EveryMethodEqualsTheInCoreStill) {
         std::string(R"({"step": 1, "virtual_samples": 3})"),
         R"({"step": 1, "classification": "preint", "ray_texture": {"mapping": "view", "size": [32, 32], "strokes": [)" +
             terminate + ", " + step + "]}}"})
-    EXPECT_LE(sequence_error({r, tf, cam}, blobs, 200 << 10), bound) << r;
+    EXPECT_LE(sequence_error({r, tf, cam}, blobs, 400 << 10), bound) << r;
   // Adaptive steps with virtual samples and shading need 16 ghost voxels: a budget for 2 bricks.
   EXPECT_LE(sequence_error({R"({"step": 0.7, "adaptive": true, "virtual_samples": 3, "shading": true})", tf, cam}, blobs,
-                           600 << 10),
+                           1200 << 10),
             bound);  // GL: brick_test's 8-bit bound
 }
 
@@ -132,9 +134,9 @@ TEST(OutOfCore, RealVolumeFromRowsWithDerivedTfAndCamera) {
   const fs::path heptane = test::data_dir() / "heptane_151.nrrd";
   EXPECT_LE(sequence_error({R"({"step": 1, "classification": "peaks"})",
                             R"([[0, 0, 0, 0, 0], [100, 0, 0, 0, 0], [100.5, 1, 0.6, 0.2, 1], [101, 0, 0, 0, 0], [255, 0, 0, 0, 0]])", ""},
-                           heptane, 1 << 20),
+                           heptane, 2 << 20),
             kBound);
-  EXPECT_LE(sequence_error({R"({"step": 1})", "", ""}, heptane, 1 << 20), kBound);
+  EXPECT_LE(sequence_error({R"({"step": 1})", "", ""}, heptane, 2 << 20), kBound);
 }
 
 TEST(OutOfCore, BudgetsThatCannotHoldABrickAreRefused) {
