@@ -119,6 +119,13 @@ void submit_still(AppContext& app, const Request& req, const Scene& scene, std::
 
 }  // namespace
 
+std::string without_volume_path(const VolumeEntry& entry, std::string message) {
+  const std::string from = entry.path.string();
+  for (size_t at = 0; !from.empty() && (at = message.find(from, at)) != std::string::npos; at += entry.id.size())
+    message.replace(at, from.size(), entry.id);
+  return message;
+}
+
 void render_still(AppContext& app, const Request& req, std::function<void(Response)> send,
                   std::shared_ptr<std::atomic<bool>> cancelled) {
   Scene scene;
@@ -172,7 +179,8 @@ void render_still(AppContext& app, const Request& req, std::function<void(Respon
         full = VolumeStore::full_statistics(*vol, app.stopping);
       } catch (const std::exception& e) {
         count(app, "render", http::status::internal_server_error);
-        return send(error_response(req, http::status::internal_server_error, "volume_error", e.what()));
+        return send(error_response(req, http::status::internal_server_error, "volume_error",
+                                   without_volume_path(*vol, e.what())));
       }
       submit_still(app, req, scene, std::move(vol), send, cancelled, std::move(full));
     });

@@ -10,4 +10,8 @@ namespace peakcast::net {
 void render_still(AppContext& app, const Request& req, std::function<void(Response)> send,
                   std::shared_ptr<std::atomic<bool>> cancelled);
 
+// A message about a volume's files (a chunk of its finest level) as a client may read it: the
+// server's path of the volume replaced by its id.
+std::string without_volume_path(const VolumeEntry& entry, std::string message);
+
 }  // namespace peakcast::net

@@ -5,6 +5,7 @@
 #include <boost/asio/post.hpp>
 
 #include "core/ray_texture_png.h"
+#include "net/rest_still.h"
 #include "net/ws_session.h"
 #include "session/protocol.h"
 
@@ -78,7 +79,7 @@ void WsSession::prepare_finest(const std::shared_ptr<VolumeEntry>& entry) {
       session->set_full_statistics(entry, std::move(statistics));
       self->app_.render.notify();
     } catch (const std::exception& e) {  // the view stays at the level held, and says why
-      asio::post(self->ws_.get_executor(), [self, message = std::string(e.what())] {
+      asio::post(self->ws_.get_executor(), [self, message = without_volume_path(*entry, e.what())] {
         if (!self->closing_) self->send_error("volume_error", "the finest level cannot be drawn: " + message);
       });
     }

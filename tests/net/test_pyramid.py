@@ -3,7 +3,7 @@
 it opens at the finest level that fits, while stills and the viewer's view at rest draw the finest
 level brick after brick, equal to the in-core render of the full-resolution file. A viewer sees
 the bricks' progress, and new input drops a finest-level frame that became stale."""
-import asyncio, json, pathlib, subprocess, sys, tempfile
+import asyncio, json, pathlib, shutil, subprocess, sys, tempfile
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from harness import *  # noqa: F401,F403
@@ -148,6 +148,34 @@ async def test_a_preview_level_first_then_the_level_within_the_budget():
         await c.close()
 
 
+async def test_a_finest_level_that_cannot_be_read_is_refused_by_name():
+    """A level-0 chunk truncated after the pyramid was written: the level held still shows, a
+    still of level 0 is refused (500, volume_error) naming the chunk inside the volume, not the
+    server's path, and a viewer hears why its view stays at the level held."""
+    broken = pathlib.Path(TMP.name, "broken.zarr")
+    shutil.copytree(f"{TMP.name}/blobs.zarr", broken)
+    chunk = sorted(p for p in (broken / "0").rglob("*") if p.is_file() and not p.name.startswith("."))[0]
+    chunk.write_bytes(chunk.read_bytes()[:10])
+    with Server("--data", TMP.name, "--memory-budget-mib", "1", volumes=()) as s:
+        scene = {"volume": "broken.zarr", "image": {"width": 32, "height": 24}}
+        status, _, body = http(s, "/api/render", "POST", json.dumps(scene).encode())
+        error = json.loads(body)
+        assert status == 500 and error["error"] == "volume_error", (status, body)
+        assert "broken.zarr/0/" in error["message"] and TMP.name not in error["message"], error
+        status, headers, _ = http(s, "/api/render?resolution=held", "POST", json.dumps(scene).encode())
+        assert status == 200 and headers["X-Level"] == "1", (status, headers)
+        c = await Client.connect(s)
+        await c.hello(32, 24, volume="broken.zarr")
+        said = await c.next_text("error", timeout=60)
+        assert said["code"] == "volume_error" and "the finest level cannot be drawn" in said["message"], said
+        assert TMP.name not in said["message"], said
+        f = await c.next_frame(final=True, timeout=60)
+        st = await c.next_text("stats")
+        assert st["frame"] == f["id"] and st["level"] == 1 and "refining" not in st, st
+        await c.close()
+    shutil.rmtree(broken)
+
+
 if __name__ == "__main__":
     subprocess.run([PEAKCAST, "make-volume", "blobs", "--dims", "160", "150", "140", "--type", "uint16", "-o", BIG],
                    check=True, capture_output=True)
@@ -156,4 +184,5 @@ if __name__ == "__main__":
     # 1 MiB holds level 1 (80x75x70x2 = 0.8 MiB), not level 0 (6.4 MiB).
     run_tests([test_pyramid_opens_at_the_level_the_memory_budget_holds,
                test_a_viewer_sees_the_finest_level_after_the_level_held,
-               test_a_preview_level_first_then_the_level_within_the_budget])
+               test_a_preview_level_first_then_the_level_within_the_budget,
+               test_a_finest_level_that_cannot_be_read_is_refused_by_name])
