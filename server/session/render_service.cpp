@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <deque>
 #include <future>
+#include <optional>
 #include <tuple>
 
 #include "distributed/brick_sequence.h"
@@ -154,12 +155,12 @@ void RenderService::collect_frame() {
     if (s.job.refine) f.stats["refining"] = true;  // the finest level's frame follows
     f.job = std::move(s.job);
     if (f.job.video) f.video_ticket = f.job.video->take_ticket();  // encoded in the order rendered
-    const std::shared_ptr<const FrameJob::Refinement> refine = f.job.refine;
-    FrameJob done = f.job;  // what the finest level's frame echoes (versions, quality)
+    std::optional<FrameJob> refined;  // only when a finest-level frame follows: what it echoes
+    if (f.job.refine) refined = f.job;
     pool_->submit([this, f = std::move(f), sink = s.sink](encode::JpegEncoder& enc) {
       encode_viewer_frame(enc, f, *sink, metrics_);
     });
-    if (refine) queue_refinement(s.session, s.sink, std::move(done));
+    if (refined) queue_refinement(s.session, s.sink, std::move(*refined));
   } catch (const std::exception& e) {
     s.session->frame_dropped(s.job.frame_id);
     s.sink->deliver_text(protocol::error_message("render_failed", e.what()));
