@@ -92,7 +92,6 @@ void VolumeStore::finish_entry(const std::shared_ptr<VolumeEntry>& e) {
     full->options.level = 0;
     full->options.memory_budget_bytes = 0;
     full->budget_bytes = options_.memory_budget_bytes;
-    full->dims = e->volume->full_dims;
     e->full = std::move(full);
   }
   // The residency owns the budget; when the volume does not fit it lets the store drop volumes

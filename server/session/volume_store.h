@@ -31,7 +31,6 @@ struct FullResolution {
   std::filesystem::path path;
   LoadOptions options;  // level 0, the time point and channel shown
   int64_t budget_bytes = 0;
-  Dims dims{};  // the finest level's
   std::mutex reduce;  // one reduction at a time; a second asker waits for the first's
   // Null until reduced (VolumeStore::full_statistics); never waits for a reduction.
   std::shared_ptr<const distributed::SequenceStatistics> statistics() const;
