@@ -11,6 +11,7 @@
 #   BASE_IMAGE              the base (default docker.io/library/debian:bookworm-slim)
 #   PEAKCAST_DEBIAN_MIRROR  the mirror for debootstrap (default: this host's, else deb.debian.org)
 #   PEAKCAST_IMAGE_LAYERS   set: buildah caches layers (fast rebuilds, many GB under vfs)
+#   PEAKCAST_IMAGE_NO_CCACHE set: do not lend the host's ccache ($CCACHE_DIR) to the build stage
 # Prints the image size and the build time at the end. The debootstrap base is made once and kept.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -83,7 +84,12 @@ fi
 # build keeps only its result and the base; PEAKCAST_IMAGE_LAYERS=1 caches layers anyway.
 layers=()
 [[ -n ${PEAKCAST_IMAGE_LAYERS:-} ]] && layers=(--layers)
-"${buildah[@]}" bud --isolation chroot --format docker "${layers[@]}" \
+# The host's ccache, lent to the build stage's RUN steps (a bind mount, not part of any layer):
+# the sources the host just built compile from the cache (scripts/common.sh sets the same keys).
+cache=()
+ccache_dir=${CCACHE_DIR:-$HOME/.cache/ccache}
+[[ -z ${PEAKCAST_IMAGE_NO_CCACHE:-} && -d $ccache_dir ]] && cache=(--volume "$ccache_dir:/ccache")
+"${buildah[@]}" bud --isolation chroot --format docker "${layers[@]}" "${cache[@]}" \
   -f "$root/docker/Dockerfile" --build-arg BASE_IMAGE="$base" -t "$tag" "$root"
 [[ -n ${PEAKCAST_IMAGE_LAYERS:-} ]] || "${buildah[@]}" rmi --prune >/dev/null 2>&1 || true  # the build stage, a replaced image
 size=$("${buildah[@]}" inspect --type image --format '{{.Docker.Size}}' "$tag" 2>/dev/null || echo 0)

@@ -66,9 +66,11 @@ install_node_modules() {
 # directories sharing sources, a second checkout of the same commit) reuse objects. The settings
 # are exported when this file is sourced, so the builds see them (an export inside $(...) is lost).
 # CCACHE_NOHASHDIR: debug builds (-g) would otherwise hash the build folder into every key.
+# CCACHE_COMPILERCHECK=content: the container's build stage (docker/build-image.sh lends it this
+# cache) has the same Debian compiler with another mtime, which the default check would count.
 # Exported whether or not ccache is there yet: the install step may bring it later.
 export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$PEAKCAST_ROOT} CCACHE_NOHASHDIR=1 CCACHE_DIR=${CCACHE_DIR:-$HOME/.cache/ccache} \
-  CCACHE_MAXSIZE=${CCACHE_MAXSIZE:-10G}
+  CCACHE_MAXSIZE=${CCACHE_MAXSIZE:-10G} CCACHE_COMPILERCHECK=${CCACHE_COMPILERCHECK:-content}
 peakcast_ccache_flags() {
   if command -v ccache >/dev/null; then
     echo "-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache"
@@ -85,5 +87,7 @@ build_peakcast() {
   fi
   local targets=()
   for t in ${PEAKCAST_TARGETS:-}; do targets+=(--target "$t"); done
-  cmake --build "$dir" -j"$(nproc)" "${targets[@]}"
+  # ccache keys hold the locale (it changes the compiler's messages): one locale for every build,
+  # so that the container's build stage (no LANG) finds what the host's build cached.
+  LANG=C.UTF-8 LC_ALL=C.UTF-8 LC_CTYPE=C.UTF-8 LC_MESSAGES=C.UTF-8 cmake --build "$dir" -j"$(nproc)" "${targets[@]}"
 }
