@@ -27,6 +27,7 @@ class RayCaster {
       : f_(f),
         segments_(f.key.peaks || f.key.preintegration || f.key.virtual_samples),
         varying_steps_(f.key.differential || f.key.adaptive || f.key.virtual_samples),
+        dense_(!f.key.peaks && !f.key.virtual_samples && !f.key.shading && !varying_steps_ && !f.brick),
         min_spacing_(std::min(f.spacing.x, std::min(f.spacing.y, f.spacing.z))) {}
 
   RayResult cast(float px, float py) { return setup(px, py) ? walk(0) : res_; }
@@ -108,10 +109,20 @@ class RayCaster {
   bool vs_push(float t, float fv, vec3 g, float dt, bool own);
   void vs_finish(int last, float t_exit);
   bool walk_leaps(float span_y, int first);
+  // From index i on, while the points lie in occupied cells: sample, classify and composite as
+  // sample_visit and consume would, bit for bit, with the ray's colour in locals (the loop-carried
+  // chain through res_ in memory cost a store and a reload per sample). Advances i and visited;
+  // true when the ray stopped.
+  // kCells false: every point (no space skipping), without the cell test.
+  template <bool kCells>
+  bool dense_run(int& i, int& visited, vec3 xo, vec3 dv, ivec3 grid);
   bool walk_cells(float span_x, float span_y);
 
   const CpuFrame& f_;
   const bool segments_, varying_steps_;
+  // Plain DVR (postclassified or preintegrated, unshaded, uniform steps, one process): runs of
+  // occupied points go through dense_run, which holds the colour in registers.
+  const bool dense_;
   float span_x_ = 0, span_y_ = 0;
   const float min_spacing_;
   Ray r_;

@@ -182,7 +182,11 @@ RayResult RayCaster::walk(int first) {
   const int behind = key.virtual_samples ? 2 : (segments_ ? 1 : 0);
   first = std::max(first, own_first_ - behind - 1);
   if (!key.space_skipping && !key.adaptive) {
-    for (int i = std::max(own_first_ - behind, 0); i <= last_ && !stopped; ++i) stopped = visit(i, 1);
+    int i = std::max(own_first_ - behind, 0), visited = -1;
+    if (dense_ && i <= last_) {  // the first point by itself (no segment into it), then the run
+      stopped = visit(i++, 1) || dense_run<false>(i, visited, vec3(0.f), vec3(0.f), ivec3(0));
+    }
+    for (; i <= last_ && !stopped; ++i) stopped = visit(i, 1);
   } else if (!key.adaptive && !key.cell_dda) {
     stopped = walk_leaps(span_y_, first);
   } else {

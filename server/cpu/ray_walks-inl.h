@@ -53,6 +53,7 @@ bool RayCaster::walk_leaps(float span_y, int first) {
       if (visit(i, 1)) return true;
       visited = i;
       ++i;
+      if (dense_ && dense_run<true>(i, visited, xo, dv, grid)) return true;
     } else {
       if (segments_ && visited == i - 1) {  // the segment out of the run
         if (visit(i, 1)) return true;
@@ -67,6 +68,46 @@ bool RayCaster::walk_leaps(float span_y, int first) {
     }
   }
   return false;
+}
+
+template <bool kCells>
+bool RayCaster::dense_run(int& i, int& visited, vec3 xo, vec3 dv, ivec3 grid) {
+  const bool preint = f_.key.preintegration;
+  vec4 acc = res_.acc;
+  float samples = res_.samples, prev_f = prev_f_;
+  const int first = i;
+  bool stopped = false;
+  while (i <= last_) {
+    if constexpr (kCells) {  // walk_leaps's cell test, as it would make it
+      const vec3 x = xo + lattice_t(L_, float(i)) * dv;
+      ivec3 c;
+      for (int a = 0; a < 3; ++a) c[a] = cell_of(x[a] * (1.f / f_.cell_edge), grid[a] - 1);
+      if (cell_byte(f_.cell_distance, f_, c) != 0) break;
+    }
+    const float fv = field_at(i, 1);
+    samples += 1.f;
+    vec4 s;
+    if (preint) {  // the segment from the previous point (visited without a gap)
+      if (preint_lookup(prev_f, fv, s)) acc += (1.f - acc.a) * dvr_weight_ * s;
+    } else if (tf_lookup(fv, s) && s.a > 0.f) {
+      const float w = (1.f - acc.a) * (correct_opacity(s.a, lattice_step(L_, float(i), 1.f)) * dvr_weight_);
+      acc += vec4(w * vec3(s), w);
+    }
+    prev_f = fv;
+    visited = i++;
+    if (acc.a >= stop_) {
+      stopped = true;
+      break;
+    }
+  }
+  res_.acc = acc;
+  res_.samples = samples;
+  if (i > first) {  // as the last consume leaves them
+    prev_t_ = lattice_t(L_, float(visited));
+    prev_f_ = prev_f;
+    expect_ = visited + 1;
+  }
+  return stopped;
 }
 
 // The 3D-DDA over the macrocells (Amanatides & Woo): adaptive multipliers, or the tests' CELL_DDA.
