@@ -67,6 +67,7 @@ class RayCaster {
   }
   // The value at lattice index i: from the current run, or a new run from i (stride m).
   float field_at(int i, int m);
+  float new_run(int i, int m);  // field_at's slow path: samples a new run from i
 
   // The TF table at s; false, leaving `out` alone, where its opacity is exactly zero.
   bool tf_lookup(float s, vec4& out) const;

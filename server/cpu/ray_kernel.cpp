@@ -39,13 +39,17 @@ namespace peakcast::cpu {
 namespace HWY_NAMESPACE {
 namespace {
 
-float RayCaster::field_at(int i, int m) {
+HWY_INLINE float RayCaster::field_at(int i, int m) {
   const int k = i - run_first_;
   if (run_stride_ == 1) {  // the common case, without integer divisions
     if (unsigned(k) < unsigned(run_count_)) return run_[k];
   } else if (run_count_ > 0 && k >= 0 && k % run_stride_ == 0 && k / run_stride_ < run_count_) {
     return run_[k / run_stride_];
   }
+  return new_run(i, m);
+}
+
+HWY_NOINLINE float RayCaster::new_run(int i, int m) {
   // Runs grow while the ray walks on without a gap, and start at one SIMD vector after one: a
   // leap or the end of an occupied run would waste the rest of a long run, and a vector costs
   // the same however few of its lanes are used.

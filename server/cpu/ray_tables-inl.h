@@ -22,7 +22,7 @@ namespace peakcast::cpu {
 namespace HWY_NAMESPACE {
 namespace {
 
-bool RayCaster::tf_lookup(float s, vec4& out) const {
+HWY_INLINE bool RayCaster::tf_lookup(float s, vec4& out) const {
   // GL_LINEAR between texel centres of an n-entry table, clamped: texel space u = s (n - 1).
   const float u = std::clamp(s, 0.f, 1.f) * float(f_.tf_size - 1);
   const int i = std::min(int(u), f_.tf_size - 2);
@@ -48,7 +48,7 @@ vec4 RayCaster::tf_exact(float v) const {
   return glm::mix(f_.tf_points[2 * (lo - 1) + 1], f_.tf_points[2 * lo + 1], (v - va) / (vb - va));
 }
 
-bool RayCaster::preint_lookup(float s_front, float s_back, vec4& out) const {
+HWY_INLINE bool RayCaster::preint_lookup(float s_front, float s_back, vec4& out) const {
   const int n = f_.preint_size;
   const float u = std::clamp(s_front, 0.f, 1.f) * float(n - 1), v = std::clamp(s_back, 0.f, 1.f) * float(n - 1);
   const int i = std::min(int(u), n - 2), j = std::min(int(v), n - 2);
