@@ -84,10 +84,14 @@ class RayCaster {
     const float ndotl = std::abs(glm::dot(n, -r_.d));  // head light: l = h = direction to the eye
     return rgb * (kAmbient + kDiffuse * ndotl) + vec3(kSpecular * std::pow(ndotl, kShininess));
   }
-  void composite(vec3 rgb, float alpha) {
-    const float w = (1.f - res_.acc.a) * alpha;
-    res_.acc += vec4(w * rgb, w);
+  // Front-to-back compositing into acc: a colour with its opacity, or a premultiplied colour
+  // (a preintegrated segment) weighted by `weight`. consume and dense_run share them.
+  static void blend(vec4& acc, vec3 rgb, float alpha) {
+    const float w = (1.f - acc.a) * alpha;
+    acc += vec4(w * rgb, w);
   }
+  static void blend_premultiplied(vec4& acc, vec4 c, float weight) { acc += (1.f - acc.a) * weight * c; }
+  void composite(vec3 rgb, float alpha) { blend(res_.acc, rgb, alpha); }
   vec3 sample_gradient(float t, vec3 g) {
     return f_.key.virtual_samples ? g : field_gradient(voxel_coords(r_.o + t * r_.d));
   }

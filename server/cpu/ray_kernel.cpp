@@ -91,7 +91,7 @@ bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
       if (key.shading) {
         if (c.a > 0.f) composite(shade(vec3(c) / c.a, sample_gradient(t, g)), c.a * dvr_weight_);
       } else {
-        res_.acc += (1.f - res_.acc.a) * dvr_weight_ * c;  // opacity-weighted already
+        blend_premultiplied(res_.acc, c, dvr_weight_);  // opacity-weighted already
       }
     }
   } else if (draw_ && !(key.peaks && key.peak_mode == PeakMode::PeaksOnly)) {

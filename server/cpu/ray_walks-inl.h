@@ -88,10 +88,9 @@ bool RayCaster::dense_run(int& i, int& visited, vec3 xo, vec3 dv, ivec3 grid) {
     samples += 1.f;
     vec4 s;
     if (preint) {  // the segment from the previous point (visited without a gap)
-      if (preint_lookup(prev_f, fv, s)) acc += (1.f - acc.a) * dvr_weight_ * s;
+      if (preint_lookup(prev_f, fv, s)) blend_premultiplied(acc, s, dvr_weight_);
     } else if (tf_lookup(fv, s) && s.a > 0.f) {
-      const float w = (1.f - acc.a) * (correct_opacity(s.a, lattice_step(L_, float(i), 1.f)) * dvr_weight_);
-      acc += vec4(w * vec3(s), w);
+      blend(acc, vec3(s), correct_opacity(s.a, lattice_step(L_, float(i), 1.f)) * dvr_weight_);
     }
     prev_f = fv;
     visited = i++;
