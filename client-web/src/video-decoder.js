@@ -25,6 +25,7 @@ export class VideoFrames {
   #codec = '';
   #size = '';
   #needKey = true;
+  #keyAsked = false;  // a key frame asked for and not yet come
   #headers = new Map();  // timestamp (frame id) -> header, until its picture comes out
 
   // onPicture({frame, picture}): the listener draws and closes the picture. ack(id), askKey().
@@ -39,11 +40,15 @@ export class VideoFrames {
   push(frame, codec) {
     const size = `${frame.width}x${frame.height}`;
     if (frame.key && (codec !== this.#codec || size !== this.#size || !this.#decoder)) this.#open(codec, size);
-    if (this.#needKey && !frame.key) {  // a delta frame without its reference: skipped, a key frame asked for
+    if (this.#needKey && !frame.key) {  // a delta frame without its reference: skipped, a key frame asked for (once)
       this.ack(frame.id);
+      if (!this.#keyAsked) {
+        this.#keyAsked = true;
+        this.askKey();
+      }
       return;
     }
-    this.#needKey = false;
+    this.#needKey = this.#keyAsked = false;
     frame.decodeStart = performance.now();
     this.#headers.set(frame.id, frame);
     try {
@@ -54,6 +59,7 @@ export class VideoFrames {
   }
 
   #open(codec, size) {
+    this.#ackPending();  // the old decoder's frames still inside it will not come out: acked, or the server would wait for them
     this.close();
     this.#codec = codec;
     this.#size = size;
@@ -74,17 +80,24 @@ export class VideoFrames {
 
   #failed(e) {
     this.onError?.(String(e?.message ?? e));
-    for (const id of this.#headers.keys()) this.ack(id);
-    this.#headers.clear();
+    this.#ackPending();
     this.close();
-    this.#needKey = true;
+    this.#keyAsked = true;
     this.askKey();
   }
 
+  #ackPending() {
+    for (const id of this.#headers.keys()) this.ack(id);
+    this.#headers.clear();
+  }
+
+  // Also on a new connection: frames of the old session are forgotten, not acked.
   close() {
     if (this.#decoder && this.#decoder.state !== 'closed') this.#decoder.close();
+    this.#headers.clear();
     this.#decoder = null;
     this.#codec = this.#size = '';
     this.#needKey = true;
+    this.#keyAsked = false;
   }
 }
