@@ -58,11 +58,11 @@ class Volume {
   // gathers load 4 bytes at a voxel's address (cpu/sampler.h).
   uint8_t* data() { return data_.get(); }
   const uint8_t* data() const { return data_.get(); }
-  // The voxels, freed once a GPU copy holds them (GpuResidency, the server): the volume's host
-  // memory is then its texture alone (at most 1.1x the voxel bytes). Everything but
-  // the voxels stays (dims, spacing, range, histogram). The one mutation of a shared volume:
-  // callers guarantee no other thread reads voxels any more (the server reads them only on the
-  // loader pool before the volume is published, and on the render thread for the upload).
+  // The voxels, freed once another copy holds them: a brick's once its backend copy is made
+  // (render --memory-budget-mib), a distributed volume's on the serving rank once the ranks'
+  // bricks hold them. Everything but the voxels stays (dims, spacing, range, histogram). The one
+  // mutation of a shared volume: callers guarantee no other thread reads voxels any more (the
+  // server keeps every other volume's voxels: its probes read them on the loader pool).
   void drop_voxels() const { data_.reset(); }
   bool has_voxels() const { return data_ != nullptr || voxel_count() == 0; }
 

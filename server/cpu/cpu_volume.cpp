@@ -1,6 +1,8 @@
 #include "cpu/cpu_volume.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <limits>
 
 #include "core/parallel.h"
@@ -31,12 +33,25 @@ VoxelGrid make_voxel_grid(const Volume& v, const uint8_t* data, VoxelType type, 
   return g;
 }
 
+// Float voxels can be read where they lie, mapped to TF coordinates per sample in float as
+// integers are, when that keeps the TF coordinate to within ~1e-5: the stored values and the bias
+// at most 64 ranges from 0 (no cancellation beyond 64 float ulps), and the scale a normal float
+// (no overflow, no denormal). Otherwise (an offset far larger than the range, a range near the
+// float limits) the copy in TF coordinates, computed in double.
+bool CpuVolume::floats_in_place(const Volume& v, double scale, double bias) {
+  constexpr double kReach = 64.0;
+  const double stored = std::max(std::abs(v.min_value - v.value_offset), std::abs(v.max_value - v.value_offset));
+  return std::isfinite(stored) && std::isnormal(float(scale)) && stored * scale <= kReach &&
+         std::abs(bias) <= kReach && stored <= 1e30;
+}
+
 CpuVolume::CpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells)
     : ResidentVolume(std::move(volume), std::move(cells)) {
   const auto t0 = std::chrono::steady_clock::now();
   const Volume& v = *volume_;
   const ValueRange range = table_range(v.min_value, v.max_value);
-  if (v.type() == VoxelType::F32) {
+  const double scale = 1.0 / (range.hi - range.lo), bias = (v.value_offset - range.lo) / (range.hi - range.lo);
+  if (v.type() == VoxelType::F32 && !floats_in_place(v, scale, bias)) {
     const size_t n = size_t(v.voxel_count());
     constexpr size_t kPad = Volume::kTailPadding / sizeof(float);
     unit_.reset(new float[n + kPad]());
@@ -46,8 +61,8 @@ CpuVolume::CpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cell
     });
     copy_bytes_ = n * sizeof(float);
   } else {
-    scale_ = float(1.0 / (range.hi - range.lo));
-    bias_ = float((v.value_offset - range.lo) / (range.hi - range.lo));
+    scale_ = float(scale);
+    bias_ = float(bias);
   }
   upload_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   ensure_trilinear_grid();

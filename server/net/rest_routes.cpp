@@ -91,7 +91,7 @@ void probe(AppContext& app, const Request& req, std::function<void(Response)> se
     }
     try {
       const ResolvedScene resolved = resolve_scene(scene, *vol->volume);
-      if (!vol->volume->has_voxels())
+      if (app.config.ranks > 1 || !vol->volume->has_voxels())  // rank 0 holds no voxels (checked before any read)
         return refuse(http::status::unprocessable_entity, "not_supported",
                       "probing needs the volume's voxels; under mpirun they live in the ranks' bricks");
       const auto p = reference::probe_reference(*vol->volume, resolved, x, y);

@@ -1,5 +1,7 @@
 // A viewer's probes (proto/messages.md, "Probes"): the CPU reference ray under a pixel, on the
 // loader pool, one at a time per connection; a probe arriving meanwhile waits, a newer replaces it.
+#include <stdexcept>
+
 #include <boost/asio/post.hpp>
 
 #include "net/ws_session.h"
@@ -18,6 +20,8 @@ void WsSession::probe(const protocol::ProbeMsg& m) {
   asio::post(app_.loader, [self = shared_from_this(), m, volume, scene = std::move(scene)] {
     std::string answer, error;
     try {
+      if (self->app_.config.ranks > 1)  // rank 0 holds no voxels (checked before any read)
+        throw std::invalid_argument("probing needs the volume's voxels; under mpirun they live in the ranks' bricks");
       const auto p = reference::probe_reference(*volume->volume, scene, m.x, m.y);
       answer = protocol::probe_message(m.id, protocol::probe_json(p.hit, p.position, p.value, p.distance, p.opacity));
     } catch (const std::exception& e) {

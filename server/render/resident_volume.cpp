@@ -12,6 +12,7 @@ namespace peakcast::render {
 ResidentVolume::ResidentVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells)
     : ResidentVolume(std::move(volume), std::move(cells), VoxelsElsewhere{}) {
   if (!volume_->has_voxels()) throw std::invalid_argument("ResidentVolume: the volume's voxels were dropped");
+  elsewhere_ = false;
 }
 
 ResidentVolume::ResidentVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells, VoxelsElsewhere)

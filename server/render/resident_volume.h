@@ -34,8 +34,11 @@ class ResidentVolume {
   double tf_lo() const { return lo_; }
   double tf_hi() const { return hi_; }
   // Frees the volume's host voxels (Volume::drop_voxels) when the backend holds its own copy
-  // and both grids exist; false (nothing freed) otherwise.
+  // and both grids exist; false (nothing freed) otherwise. The server calls it only for a copy
+  // whose voxels live elsewhere: its probes read the host voxels (GpuResidency).
   virtual bool drop_host_voxels() = 0;
+  // The voxels live in the ranks' bricks of a distributed volume, not in this process.
+  bool voxels_elsewhere() const { return elsewhere_; }
   uint64_t serial() const { return serial_; }  // unique per copy: caches key on it, not on addresses
 
  protected:
@@ -56,6 +59,7 @@ class ResidentVolume {
   double upload_ms_ = 0.0;
 
  private:
+  bool elsewhere_ = true;  // cleared by the constructor for a copy made here
   std::shared_ptr<const MacrocellGrid> cells_trilinear_;
   mutable std::shared_ptr<const MacrocellGrid> cells_tricubic_;
   mutable double macrocell_ms_ = 0.0;

@@ -59,10 +59,11 @@ render::ResidentVolume& GpuResidency::acquire(const std::shared_ptr<VolumeEntry>
   if (!c.gpu) {
     c.entry = e;
     c.gpu = renderer.make_resident(e->volume, e->macrocells);  // grids built by the loader
-    // Where the backend made a copy (the GL texture, the CPU's float volumes in TF
-    // coordinates), it is now the volume's one copy: the host voxels go. The copy lives as long
-    // as the entry, so they are never needed again.
-    c.gpu->drop_host_voxels();
+    // The host voxels stay: probes read them on the loader pool, at any time (ws_probe.cpp,
+    // rest_routes.cpp). The GL texture is in the GPU's own memory, and the CPU backend reads
+    // the voxels where they lie (docs/operations.md, "Host memory"). Only a distributed copy
+    // lets the whole volume go: its voxels are the ranks' bricks, and probes are refused there.
+    if (c.gpu->voxels_elsewhere()) c.gpu->drop_host_voxels();
     e->upload_ms = c.gpu->upload_ms();
   }
   return *c.gpu;

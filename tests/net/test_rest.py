@@ -192,6 +192,39 @@ def test_probe_refusals():
         assert json.loads(answer)["error"], answer
 
 
+def test_probes_answer_after_both_filters_have_drawn():
+    """Once a volume has been drawn with both filters (both macrocell grids exist), probes still
+    read its voxels: on GL (texture) and on the CPU backend, for an integer volume, a float one
+    read where it lies and a float one far from 0 that the CPU backend copies to TF coordinates."""
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run([PEAKCAST, "make-volume", "blobs", "--dims", "40", "36", "32", "--type", "float32",
+                        "-o", f"{tmp}/plain.nrrd"], check=True, capture_output=True)
+        n = 40 * 36 * 32
+        far = [1.0e4 + 0.5 + 0.5 * math.sin(i * 0.01) for i in range(n)]
+        pathlib.Path(tmp, "far.raw").write_bytes(struct.pack(f"<{n}f", *far))
+        pathlib.Path(tmp, "far.raw.json").write_text(json.dumps({"dims": [40, 36, 32], "dtype": "float32"}))
+        for backend in ("cpu", "gl"):
+            with Server("--data", tmp, "--backend", backend) as s:
+                for volume in ("plain.nrrd", "far.raw", "heptane_151"):
+                    load = {"volume": volume, "image": {"width": 8, "height": 8}}  # loads it, with the default TF
+                    assert http(s, "/api/render", "POST", json.dumps(load).encode())[0] == 200, volume
+                    status, _, body = http(s, f"/api/volumes/{volume}")
+                    info = json.loads(body)
+                    assert status == 200, (volume, body)
+                    lo, hi = info["range"]
+                    scene = {"volume": volume, "image": {"width": 64, "height": 48},
+                             "tf": {"points": [[lo, 1, 1, 1, 0.0], [hi, 1, 1, 1, 1.0]]}}
+                    ask = lambda: http(s, "/api/probe", "POST", json.dumps(dict(scene, pixel=[32, 24])).encode())
+                    status, _, first = ask()
+                    assert status == 200 and json.loads(first)["hit"], (backend, volume, status, first)
+                    for flt in ("tricubic", "trilinear"):
+                        still = dict(scene, render={"filter": flt})
+                        assert http(s, "/api/render", "POST", json.dumps(still).encode())[0] == 200, (backend, volume, flt)
+                    status, _, again = ask()
+                    assert status == 200 and json.loads(again) == json.loads(first), (backend, volume, status, again)
+            print(f"  {backend}: probes of 3 volumes answer alike before and after both filters drew them")
+
+
 def test_data_directory_listing():
     """GET /api/files: one folder of the data directories at a time, names relative to them."""
     with tempfile.TemporaryDirectory() as tmp:
@@ -244,4 +277,4 @@ if __name__ == "__main__":
                    test_rest_stills_honour_the_clip,
                    test_sixteen_sessions_share_one_gpu_copy, test_metrics_parse_as_prometheus_text,
                    test_static_client_is_served, test_probe_over_rest_and_websocket, test_probe_refusals,
-                   test_data_directory_listing])
+                   test_probes_answer_after_both_filters_have_drawn, test_data_directory_listing])

@@ -1,8 +1,9 @@
 // The CPU backend's sampler (server/cpu/sampler*.h): a SIMD run along a ray equals the scalar
 // sampler at every point, for every voxel type and both filters, on every SIMD target this
 // machine has, up to the volume's last voxel (whose +x neighbour read lands in the tail
-// padding); the scalar sampler is GL's clamp-to-edge trilinear; float volumes are held once, in
-// TF coordinates, and integer ones not copied at all.
+// padding); the scalar sampler is GL's clamp-to-edge trilinear; integer volumes and float ones of a
+// plain range are read where they lie, a float volume whose offset dwarfs its range is held in TF
+// coordinates.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -98,20 +99,63 @@ TEST(CpuSampler, AnAxisOfOneVoxelReadsThatVoxel) {
   }
 }
 
-TEST(CpuSampler, IntegerVoxelsAreReadWhereTheyLieFloatOnesHeldOnce) {
-  auto u8 = blobs(SourceType::U8, {16, 16, 16});
-  cpu::CpuVolume a(u8, build_volume_macrocells(*u8));
-  EXPECT_EQ(a.resident_bytes(), 0u);
-  EXPECT_EQ(a.grid(Filter::Trilinear).data, u8->data());
-  EXPECT_FALSE(a.drop_host_voxels()) << "integer voxels are the CPU copy: never dropped";
-  EXPECT_TRUE(u8->has_voxels());
+// The TF coordinate of a voxel, computed in double as the GL upload does.
+double unit_of(const Volume& v, int64_t i, int64_t j, int64_t k) {
+  return (v.value(i, j, k) - v.min_value) / (v.max_value - v.min_value);
+}
 
-  auto f32 = blobs(SourceType::F32, {16, 16, 16});
-  const float before = cpu::sample_field(cpu::CpuVolume(f32).grid(Filter::Trilinear), {3.5f, 7.25f, 9});
-  cpu::CpuVolume b(f32, build_volume_macrocells(*f32));
-  EXPECT_EQ(b.resident_bytes(), f32->byte_size());
+TEST(CpuSampler, IntegerAndPlainFloatVoxelsAreReadWhereTheyLie) {
+  for (SourceType type : {SourceType::U8, SourceType::F32}) {
+    auto v = blobs(type, {16, 16, 16});
+    cpu::CpuVolume a(v, build_volume_macrocells(*v));
+    EXPECT_EQ(a.resident_bytes(), 0u) << to_string(type);
+    EXPECT_EQ(a.grid(Filter::Trilinear).data, v->data()) << to_string(type);
+    EXPECT_FALSE(a.drop_host_voxels()) << "voxels read where they lie are the CPU copy: never dropped";
+    EXPECT_TRUE(v->has_voxels());
+    for (int k = 0; k < 16; k += 5)
+      EXPECT_NEAR(cpu::sample_field(a.grid(Filter::Trilinear), {3, 7, float(k)}), unit_of(*v, 3, 7, k), 1e-6);
+  }
+}
+
+// The TF coordinate between voxels, trilinear in double.
+double unit_between(const Volume& v, glm::dvec3 x) {
+  const glm::dvec3 f0 = glm::floor(x), f = x - f0;
+  double sum = 0.0;
+  for (int c = 0; c < 8; ++c) {
+    const int a = c & 1, b = (c >> 1) & 1, d = c >> 2;
+    sum += (a ? f.x : 1 - f.x) * (b ? f.y : 1 - f.y) * (d ? f.z : 1 - f.z) *
+           unit_of(v, int64_t(f0.x) + a, int64_t(f0.y) + b, int64_t(f0.z) + d);
+  }
+  return sum;
+}
+
+// A float volume whose values sit far from 0 for their range (1e4 + [0, 1]): mapped per sample in
+// float, the cancellation would cost ~1e-3 of the TF range. It is held in TF coordinates instead.
+TEST(CpuSampler, FloatVoxelsFarFromZeroAreHeldInTfCoordinates) {
+  auto v = blobs(SourceType::F32, {16, 16, 16});
+  float* f = reinterpret_cast<float*>(v->data());
+  for (int64_t i = 0; i < v->voxel_count(); ++i) f[i] = 1e4f + f[i] / float(v->max_value);
+  v->finalize_statistics();
+  cpu::CpuVolume b(v, build_volume_macrocells(*v));
+  EXPECT_EQ(b.resident_bytes(), v->byte_size());
+  EXPECT_NE(b.grid(Filter::Trilinear).data, v->data());
+  double worst = 0.0;
+  for (int k = 0; k < 15; ++k)
+    worst = std::max(worst, std::abs(cpu::sample_field(b.grid(Filter::Trilinear), {3.3f, 7.6f, k + 0.45f}) -
+                                     unit_between(*v, {3.3f, 7.6f, k + 0.45f})));
+  EXPECT_LT(worst, 2e-6) << "the copy keeps the TF coordinate to float precision";
+  const double span = v->max_value - v->min_value;
+  EXPECT_FALSE(cpu::CpuVolume::floats_in_place(*v, 1.0 / span, -v->min_value / span));
+  const cpu::VoxelGrid in_place = cpu::make_voxel_grid(*v, v->data(), VoxelType::F32, float(1.0 / span),
+                                                       float(-v->min_value / span), false);
+  double in_place_worst = 0.0;
+  for (int k = 0; k < 15; ++k)
+    in_place_worst = std::max(in_place_worst, std::abs(cpu::sample_field(in_place, {3.3f, 7.6f, k + 0.45f}) -
+                                                       unit_between(*v, {3.3f, 7.6f, k + 0.45f})));
+  EXPECT_GT(in_place_worst, 1e-4) << "why the copy: mapped in float, the TF coordinate would be this far off";
+  const float before = cpu::sample_field(b.grid(Filter::Trilinear), {3.5f, 7.25f, 9});
   EXPECT_TRUE(b.drop_host_voxels()) << "the copy in TF coordinates is what the sampler reads";
-  EXPECT_FALSE(f32->has_voxels());
+  EXPECT_FALSE(v->has_voxels());
   EXPECT_EQ(cpu::sample_field(b.grid(Filter::Trilinear), {3.5f, 7.25f, 9}), before);
 }
 
