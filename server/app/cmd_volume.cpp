@@ -1,5 +1,6 @@
 // `make-volume` and `info`.
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cctype>
@@ -10,6 +11,7 @@
 
 #include "app/commands.h"
 #include "chunked/chunked_volume.h"
+#include "chunked/zarr_convert.h"
 #include "chunked/zarr_writer.h"
 #include "core/generators.h"
 #include "core/macrocells.h"
@@ -63,8 +65,38 @@ struct ConvertArgs {
   std::string in, out, compressor = "blosc";
   bool gzip = false, pyramid = false;
   int64_t chunk = 128;
+  int64_t memory_budget_mib = 0;  // 0: half of this machine's memory
   ChunkSelectArgs select;
 };
+
+// Half of this machine's physical memory: what convert may hold before it reads by slabs.
+int64_t half_of_memory() {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && page > 0 ? int64_t(pages) * page / 2 : int64_t(1) << 30;
+}
+
+chunked::ZarrWriteOptions zarr_options(const ConvertArgs& a) {
+  chunked::ZarrWriteOptions zo;
+  zo.chunk = a.chunk;
+  zo.pyramid = a.pyramid;
+  zo.compressor = chunked::compressor_by_name(a.compressor);
+  return zo;
+}
+
+int convert_by_slabs(const ConvertArgs& a, int64_t budget) {
+  const auto r = chunked::convert_to_ome_zarr_by_slabs(a.in, a.out, a.select.options(), zarr_options(a), budget);
+  const Dims& d = r.header.dims;
+  std::printf("wrote %s: OME-Zarr, %d level%s, %lld chunks, %.1f MiB (%lldx%lldx%lld %s, read by slabs of %lld "
+              "planes within %.0f MiB: largest slab %.1f MiB, %d pass%s over the input), peak RSS %.1f MiB\n",
+              a.out.c_str(), r.zarr.levels, r.zarr.levels == 1 ? "" : "s", (long long)r.zarr.chunks,
+              double(r.zarr.bytes) / 1048576.0, (long long)d[0], (long long)d[1], (long long)d[2],
+              to_string(r.header.source), (long long)r.slab_planes, double(budget) / 1048576.0,
+              double(r.slab_bytes) / 1048576.0, r.passes, r.passes == 1 ? "" : "es", peak_rss_mib());
+  if (2 * r.slab_bytes > budget)
+    std::fprintf(stderr, "note: two slabs of one chunk edge (%.1f MiB each) exceed the budget; a smaller --chunk makes "
+                 "them thinner\n", double(r.slab_bytes) / 1048576.0);
+  return 0;
+}
 
 struct InfoArgs {
   ChunkSelectArgs select;
@@ -129,6 +161,10 @@ void add_volume_commands(CLI::App& app, Runner& run) {
   conv->add_option("--chunk", ca->chunk, "OME-Zarr: chunk edge in voxels (default 128)")->check(CLI::Range(1, 512));
   conv->add_option("--compressor", ca->compressor, "OME-Zarr: blosc (zstd, byte shuffle; default) | zstd | zlib | gzip | none")
       ->check(CLI::IsMember({"blosc", "zstd", "zlib", "gzip", "none"}));
+  conv->add_option("--memory-budget-mib", ca->memory_budget_mib,
+                   "OME-Zarr: an input whose voxels exceed this is read by slabs of z-planes and never held whole "
+                   "(default: half of this machine's memory)")
+      ->check(CLI::PositiveNumber);
   add_chunk_select(conv, ca->select);
   conv->callback([ca, &run] {
     run = [ca] {
@@ -136,17 +172,21 @@ void add_volume_commands(CLI::App& app, Runner& run) {
       if (!zarr && (ca->pyramid || ca->compressor != "blosc" || ca->chunk != 128))
         throw std::invalid_argument("--pyramid, --chunk and --compressor are for an OME-Zarr output (OUT.zarr)");
       if (zarr && ca->gzip) throw std::invalid_argument("--gzip is for .raw, .nrrd and .nhdr; OME-Zarr takes --compressor");
+      if (!zarr && ca->memory_budget_mib > 0) throw std::invalid_argument("--memory-budget-mib is for an OME-Zarr output");
+      if (zarr) {
+        const int64_t budget = ca->memory_budget_mib > 0 ? ca->memory_budget_mib << 20 : half_of_memory();
+        try {
+          if (chunked::source_voxel_bytes(ca->in, ca->select.options()) > budget) return convert_by_slabs(*ca, budget);
+        } catch (const RegionNotReadable&) {  // a TIFF stack: read whole below, whatever its size
+        }
+      }
       const Volume v = load_volume(ca->in, ca->select.options());
       if (!zarr) {
         write_volume(ca->out, v, {ca->gzip});
         std::printf("wrote %s: %s\n", ca->out.c_str(), v.to_string().c_str());
         return 0;
       }
-      chunked::ZarrWriteOptions zo;
-      zo.chunk = ca->chunk;
-      zo.pyramid = ca->pyramid;
-      zo.compressor = chunked::compressor_by_name(ca->compressor);
-      const auto r = chunked::write_ome_zarr(v, ca->out, zo);
+      const auto r = chunked::write_ome_zarr(v, ca->out, zarr_options(*ca));
       std::printf("wrote %s: OME-Zarr, %d level%s, %lld chunks, %.1f MiB (%s)\n", ca->out.c_str(), r.levels,
                   r.levels == 1 ? "" : "s", (long long)r.chunks, double(r.bytes) / 1048576.0, v.to_string().c_str());
       return 0;

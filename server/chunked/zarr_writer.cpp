@@ -25,12 +25,12 @@ struct Level {
 };
 
 template <typename T>
-void halve(const Level& in, Level& out) {
-  for (int a = 0; a < 3; ++a) out.dims[a] = (in.dims[a] + 1) / 2;
+void halve(const Dims& in_dims, const uint8_t* in, Level& out) {
+  for (int a = 0; a < 3; ++a) out.dims[a] = (in_dims[a] + 1) / 2;
   out.bytes.assign(size_t(out.dims[0] * out.dims[1] * out.dims[2]) * sizeof(T), 0);
-  const T* src = reinterpret_cast<const T*>(in.bytes.data());
+  const T* src = reinterpret_cast<const T*>(in);
   T* dst = reinterpret_cast<T*>(out.bytes.data());
-  const Dims d = in.dims, o = out.dims;
+  const Dims d = in_dims, o = out.dims;
   parallel_chunks(size_t(o[2]), [&](size_t z0, size_t z1, int) {
     for (int64_t z = int64_t(z0); z < int64_t(z1); ++z)
       for (int64_t y = 0; y < o[1]; ++y)
@@ -67,14 +67,6 @@ void write_file(const fs::path& file, const void* data, size_t n) {
 void write_json(const fs::path& file, const json& j) {
   const std::string s = j.dump(2) + "\n";
   write_file(file, s.data(), s.size());
-}
-
-// Un-shifts a run of a Volume's stored voxels back to the source type (int8 - 128, int16 - 32768).
-void unshift(uint8_t* p, size_t n, SourceType source) {
-  if (source == SourceType::I8)
-    for (size_t i = 0; i < n; ++i) p[i] ^= 0x80;
-  if (source == SourceType::I16)
-    for (size_t i = 0; i < n; ++i) reinterpret_cast<uint16_t*>(p)[i] ^= 0x8000;
 }
 
 ZarrWriteReport write_levels(const fs::path& out, const fs::path& tmp, const VolumeHeader& h, int levels,
@@ -150,6 +142,26 @@ ZarrWriteReport write_levels(const fs::path& out, const fs::path& tmp, const Vol
 
 }  // namespace
 
+void unshift_voxels(uint8_t* p, size_t n, SourceType source) {
+  if (source == SourceType::I8)
+    for (size_t i = 0; i < n; ++i) p[i] ^= 0x80;
+  if (source == SourceType::I16)
+    for (size_t i = 0; i < n; ++i) reinterpret_cast<uint16_t*>(p)[i] ^= 0x8000;
+}
+
+std::vector<uint8_t> halve_voxels(VoxelType type, const Dims& in_dims, const uint8_t* in, Dims& out_dims) {
+  Level next;
+  switch (type) {
+    case VoxelType::U8: halve<uint8_t>(in_dims, in, next); break;
+    case VoxelType::U16: halve<uint16_t>(in_dims, in, next); break;
+    case VoxelType::F32: halve<float>(in_dims, in, next); break;
+  }
+  out_dims = next.dims;
+  return std::move(next.bytes);
+}
+
+fs::path partial_path(const fs::path& out) { return out.string() + ".partial-" + std::to_string(::getpid()); }
+
 int pyramid_levels(const Dims& dims, int64_t chunk) {
   int n = 1;
   for (Dims d = dims; std::max({d[0], d[1], d[2]}) > chunk; ++n)
@@ -164,7 +176,7 @@ ZarrWriteReport write_ome_zarr_levels(const fs::path& out, const VolumeHeader& h
   std::error_code ec;
   if (fs::exists(out, ec)) throw VolumeError(out, "already exists (remove it first)");
   // Written beside OUT under a name of this process's, renamed when whole.
-  const fs::path tmp = out.string() + ".partial-" + std::to_string(::getpid());
+  const fs::path tmp = partial_path(out);
   fs::remove_all(tmp, ec);
   if (!fs::create_directories(tmp, ec)) throw VolumeError(tmp, "cannot be created: " + ec.message());
   try {
@@ -189,11 +201,7 @@ ZarrWriteReport write_ome_zarr(const Volume& volume, const fs::path& out, const 
   const int n = options.pyramid ? pyramid_levels(volume.dims(), options.chunk) : 1;
   while (int(levels.size()) < n) {
     Level next;
-    switch (volume.type()) {
-      case VoxelType::U8: halve<uint8_t>(levels.back(), next); break;
-      case VoxelType::U16: halve<uint16_t>(levels.back(), next); break;
-      case VoxelType::F32: halve<float>(levels.back(), next); break;
-    }
+    next.bytes = halve_voxels(volume.type(), levels.back().dims, levels.back().bytes.data(), next.dims);
     levels.push_back(std::move(next));
   }
   VolumeHeader h;
@@ -209,7 +217,7 @@ ZarrWriteReport write_ome_zarr(const Volume& volume, const fs::path& out, const 
         uint8_t* row = dst + size_t((z * box[1] + y) * box[0]) * bpv;
         std::memcpy(row, L.bytes.data() + size_t(((lo[2] + z) * L.dims[1] + lo[1] + y) * L.dims[0] + lo[0]) * bpv,
                     size_t(box[0]) * bpv);
-        unshift(row, size_t(box[0]), h.source);
+        unshift_voxels(row, size_t(box[0]), h.source);
       }
   });
 }

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "chunked/chunk_codec.h"
 #include "core/volume.h"
@@ -35,6 +36,17 @@ ZarrWriteReport write_ome_zarr_levels(const std::filesystem::path& out, const Vo
 
 // Levels a pyramid of `dims` gets: halved until the largest axis fits `chunk`.
 int pyramid_levels(const Dims& dims, int64_t chunk);
+
+// Where write_ome_zarr_levels writes `out` until it is whole: level k lies in partial_path(out)/k,
+// complete (its .zarray and chunks) before level k + 1's first fill.
+std::filesystem::path partial_path(const std::filesystem::path& out);
+
+// The next level's voxels: the 2x2x2 means of `in` (dims `in_dims`, a volume's storage type),
+// sizes rounded up (a mean over the voxels there are at an odd edge), integers rounded.
+std::vector<uint8_t> halve_voxels(VoxelType type, const Dims& in_dims, const uint8_t* in, Dims& out_dims);
+
+// Un-shifts n of a Volume's stored voxels back to the source type (int8 - 128, int16 - 32768).
+void unshift_voxels(uint8_t* p, size_t n, SourceType source);
 
 // Writes `volume` (with voxels) in its source type to the folder `out`, which must not exist: it
 // is written as `out`.partial-PID and renamed when whole, so no half-written pyramid is ever read.

@@ -322,7 +322,7 @@ Volume load_volume(const fs::path& path, const LoadOptions& options) {
     v.pyramid_levels = int(cv->levels().size());
     v.full_dims = cv->levels()[0].dims;
   } else if (fs::is_directory(path, ec) || ext == ".tif" || ext == ".tiff") {
-    if (options.region) throw VolumeError(path, "a region of a TIFF stack cannot be read (use NRRD, MetaImage or raw)");
+    if (options.region) throw RegionNotReadable(path, "a region of a TIFF stack cannot be read (use NRRD, MetaImage or raw)");
     v = read_tiff(path, options);
   } else if (ext == ".nrrd" || ext == ".nhdr") {
     v = read_nrrd(path, options);

@@ -23,6 +23,12 @@ class VolumeError : public std::runtime_error {
       : std::runtime_error(file.string() + ": " + reason) {}
 };
 
+// A region asked of a format read only whole (a TIFF stack).
+class RegionNotReadable : public VolumeError {
+ public:
+  using VolumeError::VolumeError;
+};
+
 // What to do with NaN/Inf voxels in float volumes. Default: replace (NaN -> the finite minimum,
 // +Inf -> finite maximum, -Inf -> finite minimum) and report the count, as ParaView users expect
 // a volume with a few masked voxels to open; `refuse` for pipelines that want to stop instead.

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """OME-Zarr and Neuroglancer precomputed against an independent implementation: Debian's
-python3-zarr reads what `peakcast convert --pyramid` writes (every level, every compressor), and
+python3-zarr reads what `peakcast convert --pyramid` writes (every level, every compressor; read
+whole and by slabs), and
 peakcast reads what python3-zarr writes (each compressor and blosc inner codec, both key
 separators, big-endian, missing chunks, t and c axes) and precomputed folders written here.
 
@@ -84,6 +85,37 @@ def peakcast_writes(tmp):
                       f"{dtype} {comp}: level {i} {got.shape} read by python3-zarr equals the "
                       f"{'source' if i == 0 else 'mean of the level above'}")
             check(len(paths) == 3, f"{dtype} {comp}: 45x30x21 in 16-voxel chunks makes 3 levels ({len(paths)})")
+
+
+def peakcast_writes_by_slabs(tmp):
+    """An input larger than convert's memory budget is read by slabs: python3-zarr reads the same
+    pyramid as from a whole read."""
+    for dtype in ("uint16", "float32"):
+        src = os.path.join(tmp, f"slabs-{dtype}.raw")
+        run("make-volume", "blobs", "--dims", 150, 140, 70, "--type", dtype, "-o", src)  # 2.8 / 5.6 MiB
+        want = read_raw(src)
+        out = os.path.join(tmp, f"slabs-{dtype}.zarr")
+        said = run("convert", src, out, "--pyramid", "--chunk", 32, "--memory-budget-mib", 1)
+        check("read by slabs of 32 planes" in said, f"{dtype}: convert says it read by slabs ({said.strip()})")
+        group = zarr.open_group(out, mode="r")
+        paths = [d["path"] for d in group.attrs["multiscales"][0]["datasets"]]
+        level = want
+        for i, p in enumerate(paths):
+            level = level if i == 0 else halve(level)
+            got = group[p][...]
+            check(got.dtype == level.dtype and np.array_equal(got, level),
+                  f"{dtype} by slabs: level {i} {got.shape} read by python3-zarr equals the "
+                  f"{'source' if i == 0 else 'mean of the level above'}")
+        check(len(paths) == 4, f"{dtype} by slabs: 150x140x70 in 32-voxel chunks makes 4 levels ({len(paths)})")
+    # A TIFF stack has no region reads: convert reads it whole, whatever the budget.
+    from PIL import Image
+    pages = [np.full((30, 40), 10 * k + 1, dtype=np.uint8) for k in range(3)]
+    tif = os.path.join(tmp, "pages.tif")
+    Image.fromarray(pages[0]).save(tif, save_all=True, append_images=[Image.fromarray(p) for p in pages[1:]])
+    out = os.path.join(tmp, "pages.zarr")
+    run("convert", tif, out, "--memory-budget-mib", 1)
+    got = zarr.open_group(out, mode="r")["0"][...]
+    check(np.array_equal(got, np.stack(pages)), f"a TIFF stack is converted whole {got.shape}")
 
 
 def halve_signed(a):
@@ -171,6 +203,7 @@ def precomputed(tmp):
 
 with tempfile.TemporaryDirectory() as tmp:
     peakcast_writes(tmp)
+    peakcast_writes_by_slabs(tmp)
     python_writes(tmp)
     precomputed(tmp)
 print(f"{len(failures)} failed" if failures else "all passed")
