@@ -2,10 +2,12 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <string>
 
@@ -69,10 +71,17 @@ struct ConvertArgs {
   ChunkSelectArgs select;
 };
 
-// Half of this machine's physical memory: what convert may hold before it reads by slabs.
+// Half of the memory this process may use (the machine's, or its cgroup's limit when lower): what
+// convert may hold before it reads by slabs.
 int64_t half_of_memory() {
   const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
-  return pages > 0 && page > 0 ? int64_t(pages) * page / 2 : int64_t(1) << 30;
+  int64_t total = pages > 0 && page > 0 ? int64_t(pages) * page : int64_t(2) << 30;
+  for (const char* limit : {"/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"}) {
+    std::ifstream in(limit);
+    long long bytes = 0;
+    if (in >> bytes && bytes > 0) total = std::min<int64_t>(total, bytes);  // "max" reads as no number
+  }
+  return total / 2;
 }
 
 chunked::ZarrWriteOptions zarr_options(const ConvertArgs& a) {
@@ -176,7 +185,10 @@ void add_volume_commands(CLI::App& app, Runner& run) {
       if (zarr) {
         const int64_t budget = ca->memory_budget_mib > 0 ? ca->memory_budget_mib << 20 : half_of_memory();
         try {
-          if (chunked::source_voxel_bytes(ca->in, ca->select.options()) > budget) return convert_by_slabs(*ca, budget);
+          VolumeHeader h;
+          const int64_t bytes = chunked::source_voxel_bytes(ca->in, ca->select.options(), &h);
+          if (chunked::whole_convert_bytes(bytes) > budget || h.voxel_count() > ca->select.options().max_voxels)
+            return convert_by_slabs(*ca, budget);
         } catch (const RegionNotReadable&) {  // a TIFF stack: read whole below, whatever its size
         }
       }

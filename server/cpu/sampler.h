@@ -17,8 +17,8 @@
 
 namespace peakcast::cpu {
 
-// The voxels as the sampler reads them: integer types as stored, float volumes already in TF
-// coordinates (CpuVolume). At least Volume::kTailPadding readable bytes follow the last voxel.
+// The voxels as the sampler reads them: as stored (mapped by scale and bias per sample), or a
+// float volume's copy in TF coordinates (CpuVolume::floats_in_place). At least Volume::kTailPadding readable bytes follow the last voxel.
 struct VoxelGrid {
   const uint8_t* data = nullptr;
   VoxelType type = VoxelType::U8;

@@ -231,8 +231,9 @@ void RenderService::render_brick(Scheduler::Work& w) {
     // The first turn opens the sequence (and starts reading its first brick): a still waiting in
     // the queue holds no voxels.
     if (!sw.bricks)
-      sw.bricks = std::make_shared<distributed::SequenceRun>(full.path.string(), full.options, sw.job.full_statistics,
-                                                             sw.job.scene, full.budget_bytes);
+      sw.bricks = std::make_shared<distributed::SequenceRun>(
+          full.path.string(), full.options, sw.job.full_statistics, sw.job.scene,
+          full.brick_budget(int64_t(sw.job.volume->volume->byte_size())));
     const auto t0 = Clock::now();
     sw.bricks->step(*impl_->backend.renderer);
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();

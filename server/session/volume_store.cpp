@@ -151,7 +151,7 @@ std::shared_ptr<const distributed::SequenceStatistics> VolumeStore::full_statist
   FullResolution& f = *entry.full;
   std::lock_guard lock(f.reduce);
   if (auto known = f.statistics()) return known;
-  distributed::StatisticsRun run(f.path.string(), f.options, f.budget_bytes);
+  distributed::StatisticsRun run(f.path.string(), f.options, f.brick_budget(int64_t(entry.volume->byte_size())));
   while (!run.done()) {
     if (stop.load()) throw VolumeError(f.path, "the server is shutting down");
     run.step();

@@ -3,6 +3,7 @@
 // GpuResidency: the store asks it before keeping a volume.
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <filesystem>
 #include <functional>
@@ -30,7 +31,10 @@ struct SequenceStatistics;
 struct FullResolution {
   std::filesystem::path path;
   LoadOptions options;  // level 0, the time point and channel shown
-  int64_t budget_bytes = 0;
+  int64_t budget_bytes = 0;  // --memory-budget-mib: the level held and level 0's bricks together
+  // What level 0's bricks (a still's, the statistics') may read beside the level held: what it
+  // leaves of the budget, at least a quarter of the budget.
+  int64_t brick_budget(int64_t held_bytes) const { return std::max(budget_bytes - held_bytes, budget_bytes / 4); }
   std::mutex reduce;  // one reduction at a time; a second asker waits for the first's
   // Null until reduced (VolumeStore::full_statistics); never waits for a reduction.
   std::shared_ptr<const distributed::SequenceStatistics> statistics() const;

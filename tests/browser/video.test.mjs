@@ -18,8 +18,9 @@ function instrument(page) {
     const WS = window.WebSocket;
     window.WebSocket = class extends WS {
       constructor(...a) { super(...a); window.__sockets.push(this); }
+      send(m) { if (typeof m === 'string' && JSON.parse(m).type === 'keyframe') window.__video.asked++; return super.send(m); }
     };
-    window.__video = { decoded: 0, closed: 0, shown: [], chunks: [] };
+    window.__video = { decoded: 0, closed: 0, shown: [], chunks: [], asked: 0 };
     const close = VideoFrame.prototype.close;
     VideoFrame.prototype.close = function () { if (!this.__closed) { this.__closed = true; window.__video.closed++; } return close.call(this); };
     const Decoder = window.VideoDecoder;
@@ -174,15 +175,19 @@ test('a reconnect and a resize start again at a key frame', async () => {
   // draw (when the codec is asked for before the server renders the new session's first frame,
   // that frame is the key frame, and the JPEG final after it may be drawn first).
   const videoAfter = async (action) => {
-    const [n, m] = await page.evaluate(() => [window.__video.shown.length, window.__video.chunks.length]);
+    const [n, m, a] = await page.evaluate(() => [window.__video.shown.length, window.__video.chunks.length, window.__video.asked]);
     await settled(page, action);
     await orbit(page, 10, -10);
     await orbitSettled(page);
-    return page.evaluate(([k, c]) => ({ chunks: window.__video.chunks.slice(c), shown: window.__video.shown.slice(k).filter((f) => f.video) }), [n, m]);
+    return page.evaluate(([k, c, q]) => ({ chunks: window.__video.chunks.slice(c), shown: window.__video.shown.slice(k).filter((f) => f.video),
+      asked: window.__video.asked - q }), [n, m, a]);
   };
+  // A stream that opened with a delta frame would be skipped by the client until it asked for a
+  // key frame: so no key frame may have been asked for.
   const opensWithKey = (after, what) => {
-    const { chunks, shown } = after;
+    const { chunks, shown, asked } = after;
     const seen = JSON.stringify(after);
+    assert.equal(asked, 0, `a key frame was asked for after the ${what}: ${seen}`);
     assert.ok(chunks.length > 1 && chunks[0].type === 'key', `no key frame after the ${what}: ${seen}`);
     assert.ok(chunks.slice(1).every((c) => c.type === 'delta'), `a second key frame after the ${what}: ${seen}`);
     assert.ok(shown.length > 1 && shown.every((f) => f.id >= chunks[0].id), `video not shown after the ${what}: ${seen}`);

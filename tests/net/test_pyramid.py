@@ -50,6 +50,14 @@ def test_pyramid_opens_at_the_level_the_memory_budget_holds():
             worst, spread = max_abs(a, cli_render(scene, "still")), max(ImageStat.Stat(a).stddev)
             print(f"  {render}: {headers['X-Bricks']} bricks, max abs {worst}/255 against the in-core file")
             assert worst <= 1 and spread > 1, (render, worst, spread)
+            if render == {"step": 1}:  # the level held (80x75x70 uint16, 0.8 MiB) leaves the bricks less room
+                pathlib.Path(TMP.name, "budget.json").write_text(json.dumps(dict(scene, volume=f"{TMP.name}/blobs.zarr")))
+                subprocess.run([PEAKCAST, "render", f"{TMP.name}/budget.json", "-o", f"{TMP.name}/budget.png",
+                                "--memory-budget-mib", "1", "--stats", f"{TMP.name}/budget_stats.json"],
+                               check=True, capture_output=True)
+                alone = json.loads(pathlib.Path(TMP.name, "budget_stats.json").read_text())["bricks"]
+                print(f"  bricks beside the level held: {headers['X-Bricks']}; with the whole budget (render): {alone}")
+                assert int(headers["X-Bricks"]) > alone, (headers["X-Bricks"], alone)
         health = json.loads(http(s, "/api/health")[2])
         assert health["still_progress"] == 1.0, health
         status, headers, held = http(s, "/api/render?resolution=held", "POST", json.dumps(scene).encode())
