@@ -67,7 +67,7 @@ struct ConvertArgs {
   std::string in, out, compressor = "blosc";
   bool gzip = false, pyramid = false;
   int64_t chunk = 128;
-  int64_t memory_budget_mib = 0;  // 0: half of this machine's memory
+  int64_t memory_budget_mib = 0;  // 0: half of the memory this process may use (half_of_memory)
   ChunkSelectArgs select;
 };
 
@@ -171,9 +171,9 @@ void add_volume_commands(CLI::App& app, Runner& run) {
   conv->add_option("--compressor", ca->compressor, "OME-Zarr: blosc (zstd, byte shuffle; default) | zstd | zlib | gzip | none")
       ->check(CLI::IsMember({"blosc", "zstd", "zlib", "gzip", "none"}));
   conv->add_option("--memory-budget-mib", ca->memory_budget_mib,
-                   "OME-Zarr: an input whose voxels exceed this is read by slabs of z-planes and never held whole "
-                   "(default: half of this machine's memory)")
-      ->check(CLI::PositiveNumber);
+                   "OME-Zarr: an input whose whole read would take more than this (about 2.25x its voxel bytes) "
+                   "is read by slabs of z-planes and never held whole (default: half of this machine's memory)")
+      ->check(CLI::Range(int64_t(1), int64_t(1) << 30));
   add_chunk_select(conv, ca->select);
   conv->callback([ca, &run] {
     run = [ca] {

@@ -116,6 +116,12 @@ def peakcast_writes_by_slabs(tmp):
     run("convert", tif, out, "--memory-budget-mib", 1)
     got = zarr.open_group(out, mode="r")["0"][...]
     check(np.array_equal(got, np.stack(pages)), f"a TIFF stack is converted whole {got.shape}")
+    # The budget is for an OME-Zarr output, and positive: refused by name, nothing written.
+    for args, words in (([tif, os.path.join(tmp, "pages.nrrd"), "--memory-budget-mib", 1], "is for an OME-Zarr output"),
+                        ([tif, os.path.join(tmp, "zero.zarr"), "--memory-budget-mib", 0], "memory-budget-mib")):
+        r = subprocess.run([PEAKCAST, "convert", *map(str, args)], capture_output=True, text=True)
+        check(r.returncode != 0 and words in r.stderr and not os.path.exists(str(args[1])),
+              f"convert {' '.join(map(str, args[2:]))} to {os.path.basename(str(args[1]))} is refused: {r.stderr.strip()}")
 
 
 def halve_signed(a):
