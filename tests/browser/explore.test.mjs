@@ -165,7 +165,7 @@ test('the data browser lists the data directories by relative names, looks into 
 });
 
 test('clipping: a crop box and a plane from the panel and Ctrl+drag, honoured by the server and the still', async () => {
-  const page = await openClient(browser, server.url, { width: 1280, height: 800 });
+  const page = await openClient(browser, server.url, { width: 1280, height: 800, versions: true });
   await waitFinal(page);
   const { canvasSummary, difference } = await import('./harness.mjs');
   const before = await canvasSummary(page);
@@ -175,7 +175,7 @@ test('clipping: a crop box and a plane from the panel and Ctrl+drag, honoured by
   await page.check('#clip-box');
   await page.$eval('.clip-sliders input', (s) => { s.value = String((+s.min + +s.max) / 2); s.dispatchEvent(new Event('input')); });
   await page.waitForFunction(() => window.peakcast.app.render.clip?.box?.[0]?.[0] > 70);
-  await waitFinal(page, { afterFrames: n });
+  await waitFinal(page, { afterFrames: n, current: true });
   const cropped = await canvasSummary(page);
   assert.ok(difference(before, cropped) > 2, `the crop changed the picture: ${difference(before, cropped)}`);
   await screenshot(page, 'clip_box');
@@ -194,7 +194,7 @@ test('clipping: a crop box and a plane from the panel and Ctrl+drag, honoured by
   await page.keyboard.up('Control');
   assert.ok((await offset()) > 20, `Ctrl+drag up moved the plane further in: ${await offset()}`);
   n = await frames();
-  await waitFinal(page, { afterFrames: n });
+  await waitFinal(page, { afterFrames: n, current: true });
   await screenshot(page, 'clip_plane');
   // The server renders what the page asks: a still of the page's scene equals the view's frame
   // (both from the same render.clip), and a probe through the cut finds what lies behind it.
@@ -216,7 +216,7 @@ test('clipping: a crop box and a plane from the panel and Ctrl+drag, honoured by
   n = await frames();
   await page.uncheck('#clip-plane');
   await page.waitForFunction(() => !window.peakcast.app.render.clip);
-  await waitFinal(page, { afterFrames: n });
+  await waitFinal(page, { afterFrames: n, current: true });
   const again = await canvasSummary(page);
   assert.ok(difference(before, again) < 1, `without a clip the picture is the first one: ${difference(before, again)}`);
   assert.deepEqual(page.errors, []);

@@ -48,23 +48,51 @@ export async function launch() {
   });
 }
 
-export async function openClient(browser, url, { width = 1200, height = 700 } = {}) {
+// With `versions`, the page counts the render and stroke messages it sends after each welcome,
+// so that waitFinal({ current: true }) can tell a frame of everything sent from an older one.
+export async function openClient(browser, url, { width = 1200, height = 700, versions = false } = {}) {
   const page = await browser.newPage({ viewport: { width, height } });
   page.errors = [];
   page.on('pageerror', (e) => page.errors.push(e.message));
+  if (versions) await page.addInitScript(countRenderMessages);
   await page.goto(url);
   return page;
 }
 
+// The render version the server is at once it has read everything sent: the last welcome's,
+// +1 per render and stroke message sent after it (the server bumps it once per accepted one).
+function countRenderMessages() {
+  let base = 0, sent = 0;
+  window.__renderVersion = () => base + sent;
+  const WS = window.WebSocket;
+  window.WebSocket = class extends WS {
+    constructor(...a) {
+      super(...a);
+      this.addEventListener('message', (e) => {
+        if (typeof e.data !== 'string') return;
+        const m = JSON.parse(e.data);
+        if (m.type === 'welcome') { base = m.state?.versions?.render ?? 0; sent = 0; }
+      });
+    }
+    send(data) {
+      if (typeof data === 'string' && ['render', 'stroke'].includes(JSON.parse(data).type)) sent++;
+      super.send(data);
+    }
+  };
+}
+
 // Waits for a final frame showing at least `cameraVersion`, after `afterFrames` frames. With
 // `currentTf`, the frame must also show the TF editor's newest version: several edits in a row
-// may be slower than the still delay, and a final frame come between them.
-export async function waitFinal(page, { afterFrames = 0, cameraVersion = 0, currentTf = false, timeout = 30000 } = {}) {
-  await page.waitForFunction(([n, v, tf]) => {
+// may be slower than the still delay, and a final frame come between them. With `current` (a
+// page opened with `versions`), the frame must show every render message sent so far: the final
+// of an earlier setting can arrive after a later one is sent.
+export async function waitFinal(page, { afterFrames = 0, cameraVersion = 0, currentTf = false, current = false, timeout = 30000 } = {}) {
+  await page.waitForFunction(([n, v, tf, cur]) => {
     const c = document.querySelector('#frame');
     const tfShown = !tf || +(c.dataset.tfVersion || 0) >= window.peakcast.tfEditor.version;
-    return c.dataset.final === 'true' && +(c.dataset.frames || 0) > n && +(c.dataset.cameraVersion || 0) >= v && tfShown;
-  }, [afterFrames, cameraVersion, currentTf], { timeout });
+    const renderShown = !cur || +(c.dataset.renderVersion || 0) >= window.__renderVersion();
+    return c.dataset.final === 'true' && +(c.dataset.frames || 0) > n && +(c.dataset.cameraVersion || 0) >= v && tfShown && renderShown;
+  }, [afterFrames, cameraVersion, currentTf, current], { timeout });
 }
 
 // Records every text `selector` shows from now on (a load's progress line comes and goes faster
