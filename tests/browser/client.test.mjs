@@ -53,7 +53,7 @@ test('dragging a TF point changes the image', async () => {
   await page.mouse.down();
   await page.mouse.move(tf.x + tf.width - 1, tf.y + tf.height * 0.8, { steps: 5 });
   await page.mouse.up();
-  await waitFinal(page, { afterFrames: n + 1 });
+  await waitFinal(page, { afterFrames: n + 1, currentTf: true });
   const after_ = await canvasSummary(page);
   // Less opacity: rays reach further into the plume. The image must change, whichever way.
   assert.ok(difference(before_, after_) > 0.5, `difference ${difference(before_, after_)}`);
@@ -64,7 +64,7 @@ test('dragging a TF point changes the image', async () => {
 });
 
 test('the first picture has a derived TF, and peak finding without a peak warns', async () => {
-  const page = await openClient(browser, server.url);
+  const page = await openClient(browser, server.url, { versions: true });
   await waitFinal(page);
   assert.equal(await page.evaluate(() => window.peakcast.stats.last.stats.tf_source), 'auto');
   assert.ok(await page.isHidden('#warning'));
@@ -72,20 +72,20 @@ test('the first picture has a derived TF, and peak finding without a peak warns'
   let n = await frameCount(page);
   await page.evaluate(() => window.peakcast.tfEditor.set([[0, 0, 0, 0, 0], [255, 1, 1, 1, 0.3]], { silent: false }));
   await page.selectOption('select[name=classification]', 'peaks');
-  await waitFinal(page, { afterFrames: n + 1 });
+  await waitFinal(page, { afterFrames: n + 1, current: true });
   await page.waitForSelector('#warning:not([hidden])', { timeout: 20000 });
   assert.match(await page.textContent('#warning'), /no opacity peak/);
   await screenshot(page, 'peaks_without_a_peak');
   // Back to postclassification: the warning goes.
   n = await frameCount(page);
   await page.selectOption('select[name=classification]', 'post');
-  await waitFinal(page, { afterFrames: n + 1 });
+  await waitFinal(page, { afterFrames: n + 1, current: true });
   await page.waitForSelector('#warning', { state: 'hidden', timeout: 20000 });
   await page.close();
 });
 
 test('an isosurface preset with peak finding shows a surface', async () => {
-  const page = await openClient(browser, server.url);
+  const page = await openClient(browser, server.url, { versions: true });
   await waitFinal(page);
   await greyRamp(page);
   const postclass = await canvasSummary(page);
@@ -95,7 +95,7 @@ test('an isosurface preset with peak finding shows a surface', async () => {
   await page.fill('#tf-iso', '200');
   await page.selectOption('#tf-preset', 'iso');
   // The final frame of the preset's TF (the one before it may show the grey ramp with peaks on).
-  await waitFinal(page, { afterFrames: n + 1, currentTf: true });
+  await waitFinal(page, { afterFrames: n + 1, currentTf: true, current: true });
   await page.waitForFunction(() => /peaks/.test(document.querySelector('#variant').textContent), null, { timeout: 20000 });
   const peaks = await canvasSummary(page);
   const peakCount = await page.evaluate(() => window.peakcast.tfEditor.points.length);
@@ -103,12 +103,12 @@ test('an isosurface preset with peak finding shows a surface', async () => {
   // An opaque shaded surface covers much of the plume; the same TF without peak finding barely shows.
   n = await frameCount(page);
   await page.selectOption('select[name=classification]', 'post');
-  await waitFinal(page, { afterFrames: n + 1 });
+  await waitFinal(page, { afterFrames: n + 1, current: true });
   const post = await canvasSummary(page);
   assert.ok(peaks.lit > 0.02 && peaks.lit > post.lit * 3, `lit ${peaks.lit} (peaks) vs ${post.lit} (post)`);
   assert.ok(difference(peaks, postclass) > 5);
   await page.selectOption('select[name=classification]', 'peaks');
-  await waitFinal(page, { afterFrames: n + 2 });
+  await waitFinal(page, { afterFrames: n + 2, current: true });
   await screenshot(page, 'isosurface_peaks');
   await page.close();
 });
