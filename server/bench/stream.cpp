@@ -27,6 +27,7 @@ struct StreamArgs {
   std::string size = "1024x1024";
   double fps = 30, seconds = 4, orbit_deg_per_s = 30;
   int kbps = 8000, quality = 70;
+  std::string encoder_options;
   bool json = false;
 };
 
@@ -79,6 +80,7 @@ int run_stream(const StreamArgs& a) {
     vs.kbps = a.kbps;
     vs.quality = a.quality;
     vs.fps = int(std::lround(a.fps));
+    vs.encoder_options = a.encoder_options;
     enc = std::make_unique<encode::VideoEncoder>(vs);
     dec = std::make_unique<encode::VideoDecoder>(*video);
     encoder = enc->encoder_name();
@@ -108,7 +110,7 @@ int run_stream(const StreamArgs& a) {
                         {"encode_ms_max", *std::max_element(encode_ms.begin(), encode_ms.end())},
                         {"fps", a.fps},           {"frames", frames},            {"width", w},
                         {"height", h},            {"kbps", video ? a.kbps : 0},  {"quality", a.quality},
-                        {"delay_frames", 0}};
+                        {"delay_frames", 0},      {"encoder_options", a.encoder_options}};
     std::printf("%s\n", j.dump().c_str());
   } else {
     std::printf("%s (%s) %dx%d, %d frames at %.0f frames/s over a %.0f-degree orbit (rendered in %.1f s)\n",
@@ -133,6 +135,8 @@ void add_stream_command(CLI::App& bench, Runner& run) {
   c->add_option("--kbps", args->kbps, "video bit-rate ceiling (kbit/s)")->check(CLI::Range(100, 200000));
   c->add_option("--quality", args->quality, "JPEG quality, or the video CRF it maps onto (10..100)")
       ->check(CLI::Range(10, 100));
+  c->add_option("--encoder-options", args->encoder_options,
+                 "the video encoder's own options over peakcast's: \"key=value;key=value\" (preset, crf, x264-params, ...)");
   c->add_option("--orbit", args->orbit_deg_per_s, "degrees per second the camera turns");
   c->add_flag("--json", args->json, "one JSON object: codec, mbps, psnr_db, encode_ms, fps, ...");
   c->callback([args, &run] { run = [args] { return run_stream(*args); }; });

@@ -101,6 +101,30 @@ void configure(AVCodecContext* ctx, const char* name, const VideoSettings& s) {
   }
 }
 
+// `options` ("key=value;key=value") set on the encoder after configure(); false (and why) when
+// one is malformed or the encoder has no such option or refuses its value.
+bool apply_options(AVCodecContext* ctx, const char* name, const std::string& options, std::string& why) {
+  size_t p = 0;
+  while (p < options.size()) {
+    const size_t end = std::min(options.find(';', p), options.size());
+    const std::string kv = options.substr(p, end - p);
+    p = end + 1;
+    if (kv.empty()) continue;
+    const size_t eq = kv.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      why += std::string(name) + ": encoder option '" + kv + "' is not key=value; ";
+      return false;
+    }
+    const std::string key = kv.substr(0, eq), value = kv.substr(eq + 1);
+    const int err = av_opt_set(ctx, key.c_str(), value.c_str(), AV_OPT_SEARCH_CHILDREN);
+    if (err < 0) {
+      why += std::string(name) + ": encoder option " + key + "=" + value + ": " + av_error(err) + "; ";
+      return false;
+    }
+  }
+  return true;
+}
+
 ContextPtr open_encoder(const char* name, const VideoSettings& s, std::string& why) {
   const AVCodec* codec = avcodec_find_encoder_by_name(name);
   if (!codec) {
@@ -119,9 +143,11 @@ ContextPtr open_encoder(const char* name, const VideoSettings& s, std::string& w
   ctx->color_primaries = AVCOL_PRI_BT709;
   ctx->color_trc = AVCOL_TRC_BT709;
   configure(ctx.get(), name, s);
+  if (!apply_options(ctx.get(), name, s.encoder_options, why)) return nullptr;
   const int err = avcodec_open2(ctx.get(), codec, nullptr);
-  if (err < 0) {
-    why += std::string(name) + ": " + av_error(err) + "; ";
+  if (err < 0) {  // a value the encoder reads only when it opens (x264's preset) fails here
+    why += std::string(name) + ": " + av_error(err) +
+           (s.encoder_options.empty() ? "" : " with encoder options '" + s.encoder_options + "'") + "; ";
     return nullptr;
   }
   return ctx;

@@ -30,6 +30,9 @@ struct VideoSettings {
   int quality = 70;           // today's JPEG scale (10..100), mapped onto the codec's CRF
   int fps = 30;               // the rate the budget is planned for
   int threads = 2;
+  // The encoder's own options over peakcast's, as "key=value;key=value" (libavcodec's names:
+  // preset, crf, x264-params, cpu-used, ...); one the encoder does not have refuses it.
+  std::string encoder_options;
 };
 
 struct VideoPacket {

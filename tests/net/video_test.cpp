@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <mutex>
+#include <string>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -131,6 +132,32 @@ TEST(Video, BadSettingsAreRefusedByName) {
   s.width = 64;
   s.kbps = 0;
   EXPECT_THROW({ VideoEncoder e(s); }, std::runtime_error);
+}
+
+// The encoder's own options (bench stream --encoder-options) reach it: a finer CRF takes more
+// bytes for the same key frame; an option it lacks, a value it refuses, or a pair without '='
+// refuses the encoder with the option's name.
+TEST(Video, EncoderOptionsReachTheEncoderAndBadOnesAreRefusedByName) {
+  VideoSettings s;
+  s.width = 256;
+  s.height = 192;
+  s.kbps = 20000;
+  const auto rgb = picture(s.width, s.height, 0);
+  VideoEncoder plain(s);
+  const size_t plain_bytes = plain.encode(rgb.data(), s.width, s.height, true).bytes.size();
+  s.encoder_options = "crf=4;x264-params=trellis=1";
+  VideoEncoder fine(s);
+  EXPECT_GT(fine.encode(rgb.data(), s.width, s.height, true).bytes.size(), plain_bytes * 2);
+  for (const char* bad : {"no-such-option=1", "preset=no-such-preset", "crf"}) {
+    s.encoder_options = bad;
+    try {
+      VideoEncoder e(s);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const std::runtime_error& e) {
+      const std::string key = std::string(bad).substr(0, std::string(bad).find('='));
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace
