@@ -30,7 +30,10 @@ void Scheduler::add_session(const std::shared_ptr<Session>& s) {
 
 void Scheduler::remove_session(const std::string& id) {
   std::lock_guard lock(m_);
-  sessions_.erase(id);
+  if (const auto it = sessions_.find(id); it != sessions_.end()) {
+    if (const auto s = it->second.lock()) s->leave();
+    sessions_.erase(it);
+  }
 }
 
 size_t Scheduler::session_count() const {
@@ -49,7 +52,15 @@ void Scheduler::notify() {
 bool Scheduler::submit_still(StillJob job) {
   {
     std::lock_guard lock(m_);
-    if (stopping_ || stills_.size() >= options_.max_queued_stills) return false;
+    if (stopping_) return false;
+    // Refinements: one live per viewer (a stale one waits, cancelled, for the render thread to
+    // answer it). Scripts' stills: max_queued_stills, whatever refinements wait beside them.
+    const bool refinement = job.refinement;
+    const auto counted = std::count_if(stills_.begin(), stills_.end(), [&](const auto& w) {
+      return w->job.refinement == refinement && !(refinement && w->job.cancelled->load());
+    });
+    if (size_t(counted) >= (refinement ? std::max<size_t>(sessions_.size(), 1) : options_.max_queued_stills))
+      return false;
     auto w = std::make_shared<StillWork>();
     w->job = std::move(job);
     w->id = next_still_++;

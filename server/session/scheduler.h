@@ -51,6 +51,10 @@ struct StillJob {
   std::function<void(double share, int bricks)> progress;
   // Set by the connection when its client goes away: the still stops at the next band.
   std::shared_ptr<std::atomic<bool>> cancelled = std::make_shared<std::atomic<bool>>(false);
+  // A viewer's view at rest drawn at the finest level (RenderService::queue_refinement). Not
+  // counted against max_queued_stills, so scripts' stills cannot keep a view coarse nor a
+  // viewer's refinement refuse a script; at most one live per viewer (input cancels it).
+  bool refinement = false;
 };
 
 // Estimated filter evaluations per ray: the box diagonal over the step, at least one. An upper
@@ -79,7 +83,7 @@ struct StillWork {
 };
 
 struct SchedulerOptions {
-  size_t max_queued_stills = 4;          // waiting + in progress; beyond: refused (503)
+  size_t max_queued_stills = 4;          // scripts' stills waiting + in progress; beyond: refused (503)
   double band_samples = 1.5e7;           // estimated samples per band (~50-100 ms on llvmpipe)
   std::chrono::milliseconds still_delay{150};
   double max_fps = 60.0;  // per session; 0: no limit (tests)
@@ -95,6 +99,7 @@ class Scheduler {
   size_t session_count() const;
   void notify();  // some session's state or acks changed
   // Queues a still; returns false (and keeps nothing) when the queue is full or shutting down.
+  // Scripts' stills count against max_queued_stills; live refinements against the viewers.
   bool submit_still(StillJob job);
   size_t stills_pending() const;  // queued + in progress
 

@@ -34,6 +34,11 @@ void Session::touch() {
   cancel_refinement();
 }
 
+void Session::leave() {
+  std::lock_guard lock(m_);
+  cancel_refinement();
+}
+
 void Session::cancel_refinement() {
   refinement_cancelled_->store(true);
   refinement_cancelled_ = std::make_shared<std::atomic<bool>>(false);

@@ -119,6 +119,8 @@ class Session {
                            std::shared_ptr<const distributed::SequenceStatistics> statistics);
   // A frame id for a final frame of the finest level, counted in flight like any frame.
   uint32_t refined_frame_id();
+  // The viewer left: a refinement of its view still queued is stale (answered, never drawn).
+  void leave();
 
   // Render-thread side. When there is nothing to do now, `wake` says when to ask again
   // (Clock::time_point::max() when only new input can create work).

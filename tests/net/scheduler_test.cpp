@@ -72,6 +72,32 @@ TEST(Scheduler, TheStillQueueIsBounded) {
   EXPECT_EQ(s.stills_pending(), 3u);
 }
 
+// A viewer's refinement (its view at rest at the finest level) and scripts' stills are counted
+// apart: scripts filling max_queued_stills leave room for the refinement, and the refinement
+// takes none of the scripts' places. Refinements: one live per viewer; a cancelled one (the view
+// moved, or the viewer left) frees its place at once.
+TEST(Scheduler, ViewersRefinementsAndScriptsStillsAreCountedApart) {
+  auto e = entry();
+  Scheduler s(options(2, 1e9));
+  BusyViewer v(e);
+  s.add_session(v.session);
+  auto refinement = [&] {
+    StillJob j = still(e, 8, 8);
+    j.refinement = true;
+    return j;
+  };
+  StillJob first = refinement();
+  auto first_cancelled = first.cancelled;
+  EXPECT_TRUE(s.submit_still(std::move(first)));
+  EXPECT_TRUE(s.submit_still(still(e, 8, 8)));
+  EXPECT_TRUE(s.submit_still(still(e, 8, 8))) << "the refinement takes no script's place";
+  EXPECT_FALSE(s.submit_still(still(e, 8, 8))) << "a third script still beyond max_queued_stills = 2";
+  EXPECT_FALSE(s.submit_still(refinement())) << "a second live refinement for one viewer";
+  first_cancelled->store(true);  // the view moved
+  EXPECT_TRUE(s.submit_still(refinement())) << "scripts' stills do not keep a view coarse";
+  EXPECT_EQ(s.stills_pending(), 4u);
+}
+
 TEST(Scheduler, StillsComeInBandsThatAlternateWithViewersFrames) {
   auto e = entry();
   // 100 x 40 pixels x 26 samples per ray; 26,000 samples per band -> 10 rows per band, 4 bands.
