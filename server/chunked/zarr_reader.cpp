@@ -242,11 +242,12 @@ class ZarrVolume : public ChunkedVolume {
     const fs::path file = a.dir / key;
     const auto raw = read_file_if_there(file, a.chunk_bytes + (int64_t(1) << 20) + a.chunk_bytes / 8);
     if (!raw) return std::nullopt;
-    const std::vector<uint8_t> chunk = decode_chunk(a.compressor, *raw, size_t(a.chunk_bytes), file);
+    std::vector<uint8_t> chunk = decode_chunk(a.compressor, *raw, size_t(a.chunk_bytes), file);
     const size_t bpv = source_bytes(source_);
     const ChunkLevel& L = levels_[size_t(level)];
     Dims box{};
     for (int ax = 0; ax < 3; ++ax) box[ax] = std::min(L.chunk[ax], L.dims[ax] - c[ax] * L.chunk[ax]);
+    if (lead_offset == 0 && box == L.chunk && chunk.size() == size_t(block) * bpv) return chunk;  // no copy
     return crop_block(chunk.data() + size_t(lead_offset * block) * bpv, L.chunk, box, bpv);
   }
 
