@@ -101,22 +101,29 @@ void configure(AVCodecContext* ctx, const char* name, const VideoSettings& s) {
   }
 }
 
-// `options` ("key=value;key=value") set on the encoder after configure(); false (and why) when
-// one is malformed or the encoder has no such option or refuses its value.
+// `options` ("key=value;key=value") set on the encoder after configure(): its private options
+// only (x264's preset, crf, x264-params; libvpx's cpu-used, ...), never the generic ones
+// (pixel_format, bf, video_size) that the frames handed to it depend on. False (and why) when a
+// pair is malformed or the encoder has no such option or refuses its value.
 bool apply_options(AVCodecContext* ctx, const char* name, const std::string& options, std::string& why) {
+  const auto trim = [](std::string t) {
+    const size_t a = t.find_first_not_of(" \t"), b = t.find_last_not_of(" \t");
+    return a == std::string::npos ? std::string() : t.substr(a, b - a + 1);
+  };
   size_t p = 0;
   while (p < options.size()) {
     const size_t end = std::min(options.find(';', p), options.size());
-    const std::string kv = options.substr(p, end - p);
+    const std::string kv = trim(options.substr(p, end - p));
     p = end + 1;
     if (kv.empty()) continue;
     const size_t eq = kv.find('=');
-    if (eq == std::string::npos || eq == 0) {
+    const std::string key = eq == std::string::npos ? std::string() : trim(kv.substr(0, eq));
+    if (key.empty()) {
       why += std::string(name) + ": encoder option '" + kv + "' is not key=value; ";
       return false;
     }
-    const std::string key = kv.substr(0, eq), value = kv.substr(eq + 1);
-    const int err = av_opt_set(ctx, key.c_str(), value.c_str(), AV_OPT_SEARCH_CHILDREN);
+    const std::string value = trim(kv.substr(eq + 1));
+    const int err = av_opt_set(ctx->priv_data, key.c_str(), value.c_str(), 0);
     if (err < 0) {
       why += std::string(name) + ": encoder option " + key + "=" + value + ": " + av_error(err) + "; ";
       return false;

@@ -30,8 +30,10 @@ struct VideoSettings {
   int quality = 70;           // today's JPEG scale (10..100), mapped onto the codec's CRF
   int fps = 30;               // the rate the budget is planned for
   int threads = 2;
-  // The encoder's own options over peakcast's, as "key=value;key=value" (libavcodec's names:
-  // preset, crf, x264-params, cpu-used, ...); one the encoder does not have refuses it.
+  // The encoder's own (private) options over peakcast's, as "key=value;key=value" (libavcodec's
+  // names: preset, crf, x264-params, cpu-used, ...). An encoder that lacks one, or refuses its
+  // value, is not opened: the next for the codec is tried (h264_nvenc, then libx264), and the
+  // error names the option when none opens. encoder_name() says which one did.
   std::string encoder_options;
 };
 
