@@ -24,7 +24,7 @@ warm-up renders. It adds the blobs scene to the protocol's Marschner-Lobb and em
 
 Usage: scripts/bench_peers.py [--peakcast build/server/peakcast] [--sizes 512,1024]
        [--scenes blobs,ml-peak,ml-dense,em] [--frames 5] [--no-preint] [--steps LIST] [--data-dir bench-data/peers]
-       [--backends auto]
+       [--backends auto] [--ring-px 4]
 Runs itself under xvfb-run when there is no DISPLAY. Needs python3-vtk9 and python3-pil.
 """
 import argparse, json, math, os, pathlib, re, shutil, statistics, subprocess, sys, tempfile, time
@@ -96,6 +96,22 @@ def psnr(a_path, b_path):
     se = sum(count * ((i % 256) ** 2) for i, count in enumerate(hist))
     n = a.width * a.height * 3
     return 200.0 if se == 0 else 20 * math.log10(255.0 / math.sqrt(se / n))
+
+
+def psnr_split(a_path, ref_path, ring_px):
+    """PSNR inside the volume's outline, `ring_px` pixels in from it, and in that ring alone. The
+    outline is where the converged image leaves the (black) background."""
+    import numpy as np
+    from PIL import Image
+    a = np.asarray(Image.open(a_path).convert("RGB"), dtype=np.float64)
+    ref = np.asarray(Image.open(ref_path).convert("RGB"), dtype=np.float64)
+    inside = ref.sum(axis=2) > 0
+    core = inside.copy()
+    for _ in range(ring_px):  # erode by one pixel (4-neighbourhood) per round
+        core &= np.roll(core, 1, 0) & np.roll(core, -1, 0) & np.roll(core, 1, 1) & np.roll(core, -1, 1)
+    se = ((a - ref) ** 2).sum(axis=2) / 3.0
+    db = lambda m: 200.0 if not m.any() or se[m].mean() == 0 else 10 * math.log10(255.0 ** 2 / se[m].mean())
+    return db(core), db(inside & ~core)
 
 
 def vtk_render(scene, mapper_kind, step, frames, orbit, out_png):
@@ -205,6 +221,8 @@ def main():
     ap.add_argument("--preint", action="store_true", help="(the default now; accepted so recorded commands still run)")
     ap.add_argument("--steps", help="candidate steps in voxels, e.g. 1,2,4 (default: " + ",".join(map(str, STEPS)) + ")")
     ap.add_argument("--backends", default="auto", help="peakcast backends to compare, e.g. cpu,gl")
+    ap.add_argument("--ring-px", type=int, default=0, help="also print each image's PSNR inside the volume's "
+                    "outline less this many pixels, and in that ring alone (where the error sits)")
     ap.add_argument("--vtk-scene")
     ap.add_argument("--vtk-mapper")
     ap.add_argument("--vtk-step", type=float)
@@ -242,6 +260,9 @@ def main():
                 load_first[mapper] = vtk[1]
                 load_first[mapper + "_ms"] = vtk[0]
                 load_first[mapper + "_psnr"] = psnr(png, ref_png)
+                if args.ring_px:
+                    print(f"    VTK {mapper} step 1: interior %.2f dB, {args.ring_px}-pixel ring %.2f dB"
+                          % psnr_split(png, ref_png, args.ring_px), flush=True)
             for backend in backends:
                 btag = f"{tag}_{backend}"
                 # peakcast at each candidate step. Postclassified at each step, and preintegrated
@@ -296,8 +317,12 @@ def main():
                                  load_first_ms={"fixed-point": load_first["fixed-point"], "gpu": load_first["gpu"],
                                                 "peakcast": pc1["load_first_ms"]}))
                 for p in pc:
-                    print(f"    peakcast {backend} {p['method']} step {p['step']}: {p['ms']:.1f} ms, {p['psnr']:.1f} dB, "
-                          f"{p['spr']:.1f} samples/ray, {p['variant']}", flush=True)
+                    split = ""
+                    if args.ring_px:
+                        png = work / f"{btag}_{p['method']}_{p['step']}.png"
+                        split = (", interior %.2f dB, ring %.2f dB" % psnr_split(png, ref_png, args.ring_px))
+                    print(f"    peakcast {backend} {p['method']} step {p['step']}: {p['ms']:.1f} ms, {p['psnr']:.1f} dB"
+                          f"{split}, {p['spr']:.1f} samples/ray, {p['variant']}", flush=True)
     (work / "peers.json").write_text(json.dumps(rows, indent=1))
     print("ratio: peakcast frame ms / VTK frame ms at equal error (the fastest peakcast candidate, post@step or "
           "prei(ntegrated)@step, whose PSNR against the converged image is >= VTK's); peaks: peakcast with peak "
