@@ -176,7 +176,7 @@ void RenderService::queue_refinement(const std::shared_ptr<Session>& session, co
   still.png = job.quality.final_png;
   still.quality = job.quality.final_quality;
   still.cancelled = job.refine->cancelled;
-  still.refinement = true;
+  still.refinement_of = session->id();
   const std::weak_ptr<FrameSink> weak_sink = sink;
   const std::weak_ptr<Session> weak_session = session;
   still.progress = [weak_sink, cancelled = still.cancelled](double share, int bricks) {
@@ -193,7 +193,7 @@ void RenderService::queue_refinement(const std::shared_ptr<Session>& session, co
     }
     deliver_refined_frame(*s, session->refined_frame_id(), job, std::move(r));
   };
-  // Refused only when shutting down, or past one live refinement per viewer.
+  // Refused only when shutting down, or while this viewer's last refinement is still live.
   if (scheduler_.submit_still(std::move(still))) metrics_.set("peakcast_stills_queued", "", double(scheduler_.stills_pending()));
 }
 

@@ -55,12 +55,13 @@ bool Scheduler::submit_still(StillJob job) {
     if (stopping_) return false;
     // Refinements: one live per viewer (a stale one waits, cancelled, for the render thread to
     // answer it). Scripts' stills: max_queued_stills, whatever refinements wait beside them.
-    const bool refinement = job.refinement;
-    const auto counted = std::count_if(stills_.begin(), stills_.end(), [&](const auto& w) {
-      return w->job.refinement == refinement && !(refinement && w->job.cancelled->load());
-    });
-    if (size_t(counted) >= (refinement ? std::max<size_t>(sessions_.size(), 1) : options_.max_queued_stills))
+    const auto is_script = [](const auto& w) { return !w->job.refinement(); };
+    if (job.refinement()) {
+      for (const auto& w : stills_)
+        if (w->job.refinement_of == job.refinement_of && !w->job.cancelled->load()) return false;
+    } else if (size_t(std::count_if(stills_.begin(), stills_.end(), is_script)) >= options_.max_queued_stills) {
       return false;
+    }
     auto w = std::make_shared<StillWork>();
     w->job = std::move(job);
     w->id = next_still_++;

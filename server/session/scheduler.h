@@ -51,10 +51,12 @@ struct StillJob {
   std::function<void(double share, int bricks)> progress;
   // Set by the connection when its client goes away: the still stops at the next band.
   std::shared_ptr<std::atomic<bool>> cancelled = std::make_shared<std::atomic<bool>>(false);
-  // A viewer's view at rest drawn at the finest level (RenderService::queue_refinement). Not
-  // counted against max_queued_stills, so scripts' stills cannot keep a view coarse nor a
-  // viewer's refinement refuse a script; at most one live per viewer (input cancels it).
-  bool refinement = false;
+  // A viewer's view at rest drawn at the finest level (RenderService::queue_refinement): the
+  // viewer's session id, empty for a script's still. Not counted against max_queued_stills, so
+  // scripts' stills cannot keep a view coarse nor a viewer's refinement refuse a script; at most
+  // one live (not cancelled: input or leaving cancels it) per viewer.
+  std::string refinement_of;
+  bool refinement() const { return !refinement_of.empty(); }
 };
 
 // Estimated filter evaluations per ray: the box diagonal over the step, at least one. An upper
@@ -99,7 +101,7 @@ class Scheduler {
   size_t session_count() const;
   void notify();  // some session's state or acks changed
   // Queues a still; returns false (and keeps nothing) when the queue is full or shutting down.
-  // Scripts' stills count against max_queued_stills; live refinements against the viewers.
+  // Scripts' stills count against max_queued_stills; a viewer may have one live refinement.
   bool submit_still(StillJob job);
   size_t stills_pending() const;  // queued + in progress
 

@@ -79,23 +79,22 @@ TEST(Scheduler, TheStillQueueIsBounded) {
 TEST(Scheduler, ViewersRefinementsAndScriptsStillsAreCountedApart) {
   auto e = entry();
   Scheduler s(options(2, 1e9));
-  BusyViewer v(e);
-  s.add_session(v.session);
-  auto refinement = [&] {
+  auto refinement = [&](const std::string& viewer) {
     StillJob j = still(e, 8, 8);
-    j.refinement = true;
+    j.refinement_of = viewer;
     return j;
   };
-  StillJob first = refinement();
+  StillJob first = refinement("a");
   auto first_cancelled = first.cancelled;
   EXPECT_TRUE(s.submit_still(std::move(first)));
   EXPECT_TRUE(s.submit_still(still(e, 8, 8)));
   EXPECT_TRUE(s.submit_still(still(e, 8, 8))) << "the refinement takes no script's place";
   EXPECT_FALSE(s.submit_still(still(e, 8, 8))) << "a third script still beyond max_queued_stills = 2";
-  EXPECT_FALSE(s.submit_still(refinement())) << "a second live refinement for one viewer";
+  EXPECT_FALSE(s.submit_still(refinement("a"))) << "a second live refinement for one viewer";
+  EXPECT_TRUE(s.submit_still(refinement("b"))) << "another viewer's refinement is not held back by the first's";
   first_cancelled->store(true);  // the view moved
-  EXPECT_TRUE(s.submit_still(refinement())) << "scripts' stills do not keep a view coarse";
-  EXPECT_EQ(s.stills_pending(), 4u);
+  EXPECT_TRUE(s.submit_still(refinement("a"))) << "scripts' stills do not keep a view coarse";
+  EXPECT_EQ(s.stills_pending(), 5u);
 }
 
 TEST(Scheduler, StillsComeInBandsThatAlternateWithViewersFrames) {
