@@ -71,6 +71,25 @@ bool g_have_prev, g_gap;
 int g_expect;
 // The lattice points the ray composites (BRICK: those it owns; else all of them).
 int g_own_first, g_own_last;
+// The whole ray's last lattice index (a brick's `last` is its own), and what the first and last
+// samples' chords differ from a whole step by (chord()).
+int g_ray_last;
+float g_head, g_tail, g_t_entry;
+
+// The chord lattice index i visited with stride m stands for (midpoint rule): the lattice's
+// [i - 1/2, i + m - 1/2] cut at the ray's entry and exit (cpu/ray_caster-inl.h chord).
+float chord(Lattice L, int i, int m) {
+  float w = lattice_step(L, float(i), float(m));
+  if (i == 0) w += g_head;
+  if (i + m > g_ray_last) w += g_tail;
+  return w;
+}
+void chord_ends(Lattice L, float t_exit, int last) {
+  g_ray_last = last;
+  g_t_entry = L.t0;
+  g_head = -lattice_step(L, 0.0, 0.5);
+  g_tail = min(t_exit - lattice_t(L, float(last)), lattice_step(L, float(last), 1.0)) - lattice_step(L, float(last), 0.5);
+}
 
 #ifdef BRICK
 // Lattice point i lies in this brick's own box (whole-volume voxel coordinates, computed alike
@@ -208,13 +227,13 @@ bool consume(Ray r, float t, float f, vec3 x, vec3 g, float dt, inout RayResult 
   if (!peak_hit)
 #endif
   {
-    vec4 c = tf_lookup(f);
-    if (c.a > 0.0) {
+    vec4 c = tf_lookup(f);  // .a: the step's transparency
+    if (c.a < 1.0) {
       vec3 rgb = c.rgb;
 #ifdef SHADING
       rgb = shade(rgb, SAMPLE_GRADIENT(x, g), r.d);
 #endif
-      composite(res.acc, rgb, correct_opacity(c.a, dt) * DVR_WEIGHT);
+      composite(res.acc, rgb, step_opacity(c.a, dt) * DVR_WEIGHT);
     }
   }
 #endif
@@ -261,14 +280,25 @@ bool vs_segment(Ray r, float t1, float t2, float dt1, vec4 f, vec3 g0, vec3 g1, 
 #endif
   const float k = float(VIRTUAL_SAMPLES);
   float sub = dt1 / (k + 1.0);
-  if (consume(r, t1, f.y, vec3(0.0), g1, sub, res)) return true;
   float span = t2 - t1;
-  for (int q = 1; q <= VIRTUAL_SAMPLES; ++q) {
+  // The sub-samples' chords as the true samples' (chord()), on the sub-lattice: the ray's first
+  // sample stands for half a sub-step, and the last before the exit (t_limit: the ray's last
+  // segment) for half a sub-step before it and the rest up to the exit.
+  bool ends = t_limit < 3.0e38;
+  for (int q = 0; q <= VIRTUAL_SAMPLES; ++q) {
     float s = float(q) / (k + 1.0);
-    if (t1 + s * span > t_limit) break;
+    float t = t1 + s * span;
+    if (q > 0 && t > t_limit) break;
+    float weight = sub;
+    if (q == 0 && t1 == g_t_entry) weight -= 0.5 * sub;
+    if (ends && (q == VIRTUAL_SAMPLES || t1 + float(q + 1) / (k + 1.0) * span > t_limit)) weight += (t_limit - t) - 0.5 * sub;
+    if (q == 0) {
+      if (consume(r, t1, f.y, vec3(0.0), g1, weight, res)) return true;
+      continue;
+    }
     float v = catmull_rom(f.x, f.y, f.z, f.w, s);
     vec3 g = catmull_rom3(g0, g1, g2, g3, s);
-    if (consume(r, t1 + s * span, v, vec3(0.0), g, sub, res)) return true;
+    if (consume(r, t, v, vec3(0.0), g, weight, res)) return true;
   }
   return false;
 }
@@ -343,7 +373,11 @@ void vs_finish(Ray r, Lattice L, int last, float t_exit, inout RayResult res) {
 // Visits lattice index i, standing for the step to index i + m. Returns true when the ray is
 // opaque enough to stop.
 bool sample_visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
-  float dt = lattice_step(L, float(i), float(m));
+#ifdef VIRTUAL_SAMPLES
+  float dt = lattice_step(L, float(i), float(m));  // the true step: vs_segment cuts the sub-samples' chords
+#else
+  float dt = chord(L, i, m);
+#endif
   float t = lattice_t(L, float(i));
   vec3 x = voxel_coords(r.o + t * r.d);
   float f = sample_field(x);
@@ -392,6 +426,26 @@ bool visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
   return sample_visit(r, L, i, m, res);
 }
 
+#if defined(PREINTEGRATION) && !defined(VIRTUAL_SAMPLES)
+// The segment from the last lattice point visited to the exit: the table's segments cover the
+// chord between samples, this the rest of the ray. Drawn by the rank owning that point, when the
+// ray goes on there (cpu/ray_kernel.cpp close_segment).
+void close_segment(Ray r, float t_exit, inout RayResult res) {
+  if (!(g_have_prev && !g_gap && DRAWN && g_expect == g_ray_last + 1 && res.acc.a < STOP)) return;
+  vec3 x = voxel_coords(r.o + t_exit * r.d);
+  float f = sample_field(x);
+  res.samples += 1.0;
+  vec4 c = preint_lookup(g_prev_f, f);
+  if (!(c.a > 0.0)) return;
+  float a = correct_opacity_for(c.a, t_exit - g_prev_t, u_box_half.w);
+#ifdef SHADING
+  composite(res.acc, shade(c.rgb / c.a, field_gradient(x), r.d), a * DVR_WEIGHT);
+#else
+  res.acc += (1.0 - res.acc.a) * DVR_WEIGHT * (c * (a / c.a));
+#endif
+}
+#endif
+
 RayResult cast_ray(vec2 pixel) {
   RayResult res;
   res.acc = vec4(0.0);
@@ -430,6 +484,7 @@ RayResult cast_ray(vec2 pixel) {
   L.B *= step_mult;
 #endif
   int last = int(min(floor(lattice_index(L, span.y)), u_value_map.w - 1.0));
+  chord_ends(L, span.y, last);
 #ifdef BRICK
   if (!clip_to_brick(r, L, span, last)) {  // none of its points in this brick: nothing to draw here
     res.samples = -1.0;
@@ -616,6 +671,8 @@ RayResult cast_ray(vec2 pixel) {
 #endif
 #ifdef VIRTUAL_SAMPLES
   vs_finish(r, L, last, span.y, res);
+#elif defined(PREINTEGRATION)
+  close_segment(r, span.y, res);
 #endif
   return res;
 }

@@ -69,14 +69,15 @@ class RayCaster {
   float field_at(int i, int m);
   float new_run(int i, int m);  // field_at's slow path: samples a new run from i
 
-  // The TF table at s; false, leaving `out` alone, where its opacity is exactly zero.
+  // The TF table at s (colour, and the step's transparency in .a); false, leaving `out` alone,
+  // where its opacity is exactly zero.
   bool tf_lookup(float s, vec4& out) const;
   vec4 tf_exact(float v) const;
   // The table at (s_front, s_back); false, leaving `out` alone, where it is exactly zero.
   bool preint_lookup(float s_front, float s_back, vec4& out) const;
-  float correct_opacity(float a, float dt) const {
-    return dt == f_.step ? a : 1.f - std::pow(std::max(1.f - a, 0.f), dt / f_.step);
-  }
+  // The opacity of a sample standing for dt, from the TF table's transparency T of the uniform
+  // step (render::step_tf_table; twin of tf.glsl step_opacity).
+  float step_opacity(float T, float dt) const { return dt == f_.step ? 1.f - T : 1.f - std::pow(std::max(T, 0.f), dt / f_.step); }
   vec3 shade(vec3 rgb, vec3 gradient) const {
     const float len = glm::length(gradient);
     if (len * min_spacing_ < 1e-5f) return rgb;
@@ -107,6 +108,23 @@ class RayCaster {
   }
   bool visit_behind(int i, int m);
   bool sample_visit(int i, int m);
+  // The chord lattice index i visited with stride m stands for (midpoint rule): the lattice's
+  // [i - 1/2, i + m - 1/2] cut at the ray's entry and exit (see chord_ends).
+  float chord(int i, int m) const {
+    float w = lattice_step(L_, float(i), float(m));
+    if (i == 0) w += head_;
+    if (i + m > ray_last_) w += tail_;
+    return w;
+  }
+  // After setup's last_: the whole ray's last index and the chord corrections at its ends.
+  void chord_ends() {
+    ray_last_ = last_;
+    head_ = -lattice_step(L_, 0.f, 0.5f);
+    const float last = float(last_);
+    tail_ = std::min(span_y_ - lattice_t(L_, last), lattice_step(L_, last, 1.f)) - lattice_step(L_, last, 0.5f);
+  }
+  // Preintegration's last segment, from the last lattice point visited to the exit.
+  void close_segment();
   // Virtual samples (Lee et al. 2010): the window of four true samples, newest last.
   bool vs_segment(float t1, float t2, float dt1, vec4 fw, vec3 g0, vec3 g1, vec3 g2, vec3 g3, float t_limit, bool own);
   bool vs_last_segment(float t_limit);
@@ -134,6 +152,10 @@ class RayCaster {
   Lattice L_;
   RayResult res_;
   int last_ = 0;
+  // The whole ray's last lattice index (a brick's last_ is its own), and what the first and last
+  // samples' chords differ from a whole step by (chord()).
+  int ray_last_ = 0;
+  float head_ = 0, tail_ = 0;
   // The lattice points the ray composites (bricks: those it owns; else all of them).
   int own_first_ = 0, own_last_ = std::numeric_limits<int>::max();
   bool owned(int i) const { return i >= own_first_ && i <= own_last_; }

@@ -97,10 +97,10 @@ bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
   } else if (draw_ && !(key.peaks && key.peak_mode == PeakMode::PeaksOnly)) {
     if (!(key.peaks && key.peak_mode == PeakMode::Xor && peak_hit)) {
       vec4 c;
-      if (tf_lookup(fv, c) && c.a > 0.f) {
+      if (tf_lookup(fv, c) && c.a < 1.f) {
         vec3 rgb(c);
         if (key.shading) rgb = shade(rgb, sample_gradient(t, g));
-        composite(rgb, correct_opacity(c.a, dt) * dvr_weight_);
+        composite(rgb, step_opacity(c.a, dt) * dvr_weight_);
       }
     }
   }
@@ -114,7 +114,8 @@ bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
 
 // Visits lattice index i, standing for the step to index i + m.
 HWY_INLINE bool RayCaster::sample_visit(int i, int m) {
-  const float dt = lattice_step(L_, float(i), float(m));
+  // Virtual samples: the true step (vs_segment cuts the sub-samples' chords).
+  const float dt = f_.key.virtual_samples ? lattice_step(L_, float(i), float(m)) : chord(i, m);
   const float t = lattice_t(L_, float(i));
   const float fv = field_at(i, m);
   res_.samples += 1.f;
@@ -133,6 +134,24 @@ HWY_INLINE bool RayCaster::sample_visit(int i, int m) {
     return vs_push(t, fv, g, dt, own);  // (vs_flush may have drawn another's)
   }
   return consume(t, fv, vec3(0.f), dt);
+}
+
+// The segment from the last lattice point visited to the exit (preintegration, no virtual
+// samples): the table's segments cover the chord between samples, this the rest of the ray.
+// Drawn by the rank owning that point, when the ray goes on there.
+void RayCaster::close_segment() {
+  if (!(have_prev_ && !gap_ && draw_ && expect_ == ray_last_ + 1 && res_.acc.a < stop_)) return;
+  const vec3 x = voxel_coords(r_.o + span_y_ * r_.d);
+  const float fv = sample_field(x);
+  res_.samples += 1.f;
+  vec4 c;
+  if (!preint_lookup(prev_f_, fv, c) || !(c.a > 0.f)) return;
+  const float a = 1.f - std::pow(std::max(1.f - c.a, 0.f), (span_y_ - prev_t_) / f_.step);
+  if (f_.key.shading) {
+    composite(shade(vec3(c) / c.a, field_gradient(x)), a * dvr_weight_);
+  } else {
+    blend_premultiplied(res_.acc, c * (a / c.a), dvr_weight_);
+  }
 }
 
 bool RayCaster::setup(float px, float py) {
@@ -161,6 +180,7 @@ bool RayCaster::setup(float px, float py) {
     L_.B *= float(c[0]);
   }
   last_ = int(std::min(std::floor(lattice_index(L_, span_y_)), float(f_.sample_cap - 1)));
+  chord_ends();
   if (f_.brick && !clip_to_brick()) {  // none of its points in this brick: nothing to draw here
     res_.samples = -1.f;
     return false;
@@ -197,6 +217,7 @@ RayResult RayCaster::walk(int first) {
     stopped = walk_cells(span_x_, span_y_);
   }
   if (!stopped && key.virtual_samples) vs_finish(last_, span_y_);
+  if (!stopped && key.preintegration && !key.virtual_samples) close_segment();
   return res_;
 }
 

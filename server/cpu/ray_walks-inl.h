@@ -77,7 +77,7 @@ bool RayCaster::dense_run(int& i, int& visited, vec3 xo, vec3 dv, ivec3 grid) {
   float samples = res_.samples, prev_f = prev_f_;
   const int first = i;
   bool stopped = false;
-  while (i <= last_) {
+  while (i < last_) {  // the last point's chord is not a whole step: visit() draws it
     if constexpr (kCells) {  // walk_leaps's cell test, as it would make it
       const vec3 x = xo + lattice_t(L_, float(i)) * dv;
       ivec3 c;
@@ -89,8 +89,8 @@ bool RayCaster::dense_run(int& i, int& visited, vec3 xo, vec3 dv, ivec3 grid) {
     vec4 s;
     if (preint) {  // the segment from the previous point (visited without a gap)
       if (preint_lookup(prev_f, fv, s)) blend_premultiplied(acc, s, dvr_weight_);
-    } else if (tf_lookup(fv, s) && s.a > 0.f) {
-      blend(acc, vec3(s), correct_opacity(s.a, lattice_step(L_, float(i), 1.f)) * dvr_weight_);
+    } else if (tf_lookup(fv, s) && s.a < 1.f) {
+      blend(acc, vec3(s), step_opacity(s.a, lattice_step(L_, float(i), 1.f)) * dvr_weight_);
     }
     prev_f = fv;
     visited = i++;

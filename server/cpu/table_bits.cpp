@@ -39,7 +39,7 @@ std::vector<uint64_t> tf_cell_bits(const std::vector<float>& rgba, int n) {
   if (n < 2 || rgba.size() < size_t(n) * 4) throw std::invalid_argument("tf_cell_bits: table smaller than n RGBA");
   std::vector<uint64_t> bits((size_t(n - 1) + 63) / 64, 0);
   for (int i = 0; i + 1 < n; ++i)
-    if (rgba[size_t(i) * 4 + 3] != 0.f || rgba[size_t(i + 1) * 4 + 3] != 0.f) set_bit(bits, size_t(i));
+    if (rgba[size_t(i) * 4 + 3] != 1.f || rgba[size_t(i + 1) * 4 + 3] != 1.f) set_bit(bits, size_t(i));
   return bits;
 }
 

@@ -20,8 +20,9 @@ std::vector<uint64_t> peak_texel_bits(const std::vector<float>& texels, int bins
 // A clear bit: the lookup interpolates zeros, and is exactly zero.
 std::vector<uint64_t> preint_cell_bits(const std::vector<float>& rgba, int n);
 
-// Bit i, for the cells i < n - 1 of an n-entry RGBA TF table: texel i or i + 1, which a linear
-// lookup in that cell reads, has a non-zero opacity. A clear bit: the lookup's opacity is zero.
+// Bit i, for the cells i < n - 1 of an n-entry TF table (colour and transparency, as
+// render::step_tf_table makes it): texel i or i + 1, which a linear lookup in that cell reads,
+// has a non-zero opacity (transparency below 1). A clear bit: the lookup's opacity is zero.
 std::vector<uint64_t> tf_cell_bits(const std::vector<float>& rgba, int n);
 
 inline bool test_bit(const uint64_t* bits, size_t k) { return (bits[k >> 6] >> (k & 63)) & 1u; }

@@ -98,6 +98,20 @@ auto run_reference(const Frame& fr, const ReferenceOptions& opt, Body body) {
     lattice.A *= step_mult;
     lattice.B *= step_mult;
     const int64_t last = std::min<int64_t>(int64_t(std::floor(lattice.index_at(t1))), kMaxSamplesPerRay - 1);
+    // The chord each sample stands for (midpoint rule): the lattice's [i - 1/2, i + m - 1/2], cut
+    // at the ray's entry and exit, so the first sample stands for half a step and the last one
+    // for half a step before it and the rest up to the exit (twin of ray_chord in
+    // shaders/raycast_body.glsl). Virtual samples: the same on the sub-lattice (emit).
+    const double head = -(lattice.t(0.5) - lattice.t(0.0));
+    const double tail = std::min(t1 - lattice.t(double(last)), lattice.step(double(last), 1)) -
+                        (lattice.t(double(last) + 0.5) - lattice.t(double(last)));
+    auto chord = [&](int64_t i, int m) {
+      double w = lattice.step(double(i), m);
+      if (i == 0) w += head;
+      if (i + m > last) w += tail;
+      return w;
+    };
+    int64_t visited_last = -1;  // the last index visited (preintegration closes the ray from it)
     double t_prev = 0, f_prev = 0;
     bool first = true;
     // One sample (true or virtual) at t with value f, standing for `step`; g: its gradient (raw
@@ -142,17 +156,28 @@ auto run_reference(const Frame& fr, const ReferenceOptions& opt, Body body) {
       glm::dvec3 g;
     };
     std::vector<True> w;  // waiting true samples, at most 4
+    // The sub-samples' chords as the true samples' (chord()), on the sub-lattice: the ray's first
+    // sample stands for half a sub-step, and the last before the exit (t_limit, the ray's last
+    // segment) for half a sub-step before it and the rest up to the exit.
     auto emit = [&](size_t a, bool has_prev, bool has_next2, double t_limit) {
       const double sub = w[a].step / (k_virtual + 1);
-      if (consume(w[a].t, w[a].f, &w[a].g, sub)) return true;
       const size_t p0 = has_prev ? a - 1 : a, p3 = has_next2 ? a + 2 : a + 1;
       const double span = w[a + 1].t - w[a].t;
-      for (int q = 1; q <= k_virtual; ++q) {
+      for (int q = 0; q <= k_virtual; ++q) {
         const double u = double(q) / (k_virtual + 1);
-        if (w[a].t + u * span > t_limit) break;
+        const double t = w[a].t + u * span;
+        if (q > 0 && t > t_limit) break;
+        double weight = sub;
+        if (q == 0 && w[a].t == lattice.t(0.0)) weight -= 0.5 * sub;
+        if (std::isfinite(t_limit) && (q == k_virtual || w[a].t + double(q + 1) / (k_virtual + 1) * span > t_limit))
+          weight += (t_limit - t) - 0.5 * sub;
+        if (q == 0) {
+          if (consume(w[a].t, w[a].f, &w[a].g, weight)) return true;
+          continue;
+        }
         const double f = catmull_rom(w[p0].f, w[a].f, w[a + 1].f, w[p3].f, u);
         const glm::dvec3 g = catmull_rom(w[p0].g, w[a].g, w[a + 1].g, w[p3].g, u);
-        if (consume(w[a].t + u * span, f, &g, sub)) return true;
+        if (consume(t, f, &g, weight)) return true;
       }
       return false;
     };
@@ -170,7 +195,8 @@ auto run_reference(const Frame& fr, const ReferenceOptions& opt, Body body) {
       const double step = lattice.step(double(i), m);
       const double f = fr.field(r, t);
       samples += 1;
-      if (!k_virtual) return consume(t, f, nullptr, step);
+      visited_last = i;
+      if (!k_virtual) return consume(t, f, nullptr, chord(i, m));
       if (w.size() == 4) w.erase(w.begin());
       w.push_back({t, f, step, fr.shading ? fr.grad(r, t) : glm::dvec3(0.0)});
       if (w.size() == 3) return emit(0, false, true, HUGE_VAL);
@@ -196,10 +222,23 @@ auto run_reference(const Frame& fr, const ReferenceOptions& opt, Body body) {
       emit(w.size() - 2, w.size() >= 3, false, t1);
       w.clear();
     };
+    // Preintegration's last segment, from the last lattice point to the exit (the table's
+    // segments cover the chord between samples; the rest of the ray is this one).
+    auto close = [&]() {
+      if (!preint || k_virtual || first || visited_last != last || acc.alpha >= stop) return;
+      const double f = fr.field(r, t1);
+      samples += 1;
+      glm::dvec4 c = lookup_preintegration(pre, f_prev, f);
+      if (!(c.a > 0)) return;
+      const double a = correct_opacity(c.a, t1 - t_prev, dt);
+      acc.at_t = t1, acc.at_value = f;
+      acc.add(fr.lit(glm::dvec3(c) / c.a, r, t1), a * dvr_weight);
+    };
     if (!rs.adaptive) {
       for (int64_t i = 0; i <= last; ++i)
         if (visit(i, 1)) return;
       finish();
+      close();
       return;
     }
     // Adaptive: the cells in ray order (the GPU's traversal), every m-th index from each cell's
@@ -217,6 +256,7 @@ auto run_reference(const Frame& fr, const ReferenceOptions& opt, Body body) {
       next = std::max(next, end + 1);
     }
     finish();
+    close();
   });
 }
 

@@ -5,6 +5,7 @@
 
 #include "render/small_cache.h"
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "core/sampling.h"
@@ -93,9 +94,12 @@ std::string step_tf_key(const ResolvedScene& s, const std::string& tf_sig) {
 std::vector<float> step_tf_table(const ResolvedScene& s, double lo, double hi) {
   const double exponent = double(float(plan_sampling(s).step)) / double(float(s.tf.opacity_unit));
   std::vector<float> table = s.tf.bake(TransferFunction::kTableSize, lo, hi);
-  if (exponent != 1.0)
-    for (size_t k = 3; k < table.size(); k += 4)
-      table[k] = float(1.0 - std::pow(std::max(0.0, 1.0 - double(table[k])), exponent));
+  // Kept a normal float (GPUs flush denormals to zero, which would make the step's every chord
+  // opaque), except where the TF is opaque itself.
+  for (size_t k = 3; k < table.size(); k += 4) {
+    const double T = std::pow(std::max(0.0, 1.0 - double(table[k])), exponent);
+    table[k] = T > 0.0 ? float(std::max(T, double(std::numeric_limits<float>::min()))) : 0.f;
+  }
   return table;
 }
 

@@ -59,10 +59,13 @@ FrameSetup setup_frame(const ResidentVolume& volume, const ResolvedScene& s, Gpu
 // (RendererSeam::set_empty_space_leaps), at most 1 so that every empty cell is stepped through.
 std::vector<uint8_t> traversal_distances(const Occupancy& occupancy, bool leaps);
 
-// The TF as TransferFunction::kTableSize RGBA entries over [lo, hi] whose opacities are already
-// corrected for the scene's uniform step, 1 - (1 - a)^(step / unit), as VTK's mappers bake
-// theirs: a sample that stands for that step composites the looked-up alpha as is, others
-// correct from it (tf.glsl). The key names the table (the TF signature and the exponent).
+// The TF as TransferFunction::kTableSize entries over [lo, hi]: colour, and in the fourth channel
+// the transparency of the scene's uniform step, T = (1 - a)^(step / unit) (VTK's mappers bake the
+// opacity 1 - T likewise): a sample that stands for that step composites 1 - T, others correct
+// from it, 1 - T^(dt / step) (tf.glsl step_opacity). Kept as a transparency, so that a step
+// opaque to float precision (1 - T rounds to 1) still corrects to a short chord's opacity (a
+// ray's first and last samples, virtual samples). The key names the table (the TF signature and
+// the exponent).
 std::string step_tf_key(const ResolvedScene& s, const std::string& tf_sig);
 std::vector<float> step_tf_table(const ResolvedScene& s, double lo, double hi);
 

@@ -79,12 +79,13 @@ TEST(TableBits, PeakTexelClearOnlyWhereNoLayerHoldsAPeak) {
 
 TEST(TableBits, TfCellClearOnlyWhereBothTexelsAreTransparent) {
   for (const auto& tf : test_tfs()) {
-    const std::vector<float> rgba = tf.bake(TransferFunction::kTableSize, 0.0, 1.0);
+    std::vector<float> rgba = tf.bake(TransferFunction::kTableSize, 0.0, 1.0);
+    for (size_t k = 3; k < rgba.size(); k += 4) rgba[k] = 1.f - rgba[k];  // transparency, as the renderer's table
     const int n = TransferFunction::kTableSize;
     const auto bits = cpu::tf_cell_bits(rgba, n);
     int clear = 0;
     for (int i = 0; i + 1 < n; ++i) {
-      const bool any = rgba[4 * size_t(i) + 3] != 0.f || rgba[4 * size_t(i + 1) + 3] != 0.f;
+      const bool any = rgba[4 * size_t(i) + 3] != 1.f || rgba[4 * size_t(i + 1) + 3] != 1.f;
       EXPECT_EQ(cpu::test_bit(bits.data(), size_t(i)), any) << i;
       clear += !any;
     }

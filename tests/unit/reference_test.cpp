@@ -1,5 +1,7 @@
 // The CPU reference against closed forms: a constant TF through a box seen orthographically
-// along an axis has alpha = 1 - (1 - a)^(samples * step / unit) exactly.
+// along an axis has alpha = 1 - (1 - a)^(length / unit) exactly, whatever the step: each sample
+// stands for its chord (the first half a step, the last up to the exit), and the chords add up
+// to the ray's length in the box.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -36,7 +38,7 @@ TEST(Reference, LatticeSamplesIncludeEntryAndExit) {
   for (double step : {1.0, 0.5, 4.0}) {
     Image img = reference::render_reference(v, constant_tf_scene(v, step));
     const double n = 32.0 / step + 1.0;  // t = 0, step, ..., 32
-    const double alpha = 1.0 - std::pow(0.95, n * step);
+    const double alpha = 1.0 - std::pow(0.95, 32.0);
     EXPECT_NEAR(img.pixel(4, 4)[3], alpha, 1e-6) << step;
     EXPECT_NEAR(img.pixel(4, 4)[0], alpha * 1.0, 1e-6);
     EXPECT_NEAR(img.pixel(4, 4)[1], alpha * 0.5, 1e-6);
@@ -51,8 +53,9 @@ TEST(Reference, ClipKeepsTheSpanItLeavesAndStartsTheLatticeThere) {
   ResolvedScene s = constant_tf_scene(v, 1.0);  // eye on +x looking to -x: rays run x = 32 -> 0
   s.scene.render.clip = parse_clip(nlohmann::json::parse(R"({"plane": {"point": [10.5, 0, 0], "normal": [-1, 0, 0]}})"));
   Image img = reference::render_reference(v, s);
-  // Kept: x <= 10.5, entered at x = 10.5: samples at 10.5, 9.5, ..., 0.5 (11 of them).
-  EXPECT_NEAR(img.pixel(4, 4)[3], 1.0 - std::pow(0.95, 11.0), 1e-6);
+  // Kept: x <= 10.5, entered at x = 10.5: samples at 10.5, 9.5, ..., 0.5 (11 of them), standing
+  // for the 10.5 units kept (the last for 0.5 before it and 0.5 after it).
+  EXPECT_NEAR(img.pixel(4, 4)[3], 1.0 - std::pow(0.95, 10.5), 1e-6);
   EXPECT_EQ(img.samples[4 * 8 + 4], 11.f);
   // A crop box on y keeps the upper half of the 8-pixel window (y in [8, 12] world: rows 0-3).
   s.scene.render.clip = parse_clip(nlohmann::json::parse(R"({"box": [[-5, 8, -5], [40, 30, 40]]})"));
