@@ -284,18 +284,19 @@ bool vs_segment(Ray r, float t1, float t2, float dt1, vec4 f, vec3 g0, vec3 g1, 
   // The sub-samples' chords as the true samples' (chord()), on the sub-lattice: the ray's first
   // sample stands for half a sub-step, and the last before the exit (t_limit: the ray's last
   // segment) for half a sub-step before it and the rest up to the exit.
+  // (The true sample outside the loop: llvmpipe's budget of loop iterations, sample_cap, counts
+  // k per true sample.)
   bool ends = t_limit < 3.0e38;
-  for (int q = 0; q <= VIRTUAL_SAMPLES; ++q) {
+  float weight = sub;
+  if (t1 == g_t_entry) weight -= 0.5 * sub;
+  if (ends && t1 + span / (k + 1.0) > t_limit) weight += (t_limit - t1) - 0.5 * sub;
+  if (consume(r, t1, f.y, vec3(0.0), g1, weight, res)) return true;
+  for (int q = 1; q <= VIRTUAL_SAMPLES; ++q) {
     float s = float(q) / (k + 1.0);
     float t = t1 + s * span;
-    if (q > 0 && t > t_limit) break;
-    float weight = sub;
-    if (q == 0 && t1 == g_t_entry) weight -= 0.5 * sub;
+    if (t > t_limit) break;
+    weight = sub;
     if (ends && (q == VIRTUAL_SAMPLES || t1 + float(q + 1) / (k + 1.0) * span > t_limit)) weight += (t_limit - t) - 0.5 * sub;
-    if (q == 0) {
-      if (consume(r, t1, f.y, vec3(0.0), g1, weight, res)) return true;
-      continue;
-    }
     float v = catmull_rom(f.x, f.y, f.z, f.w, s);
     vec3 g = catmull_rom3(g0, g1, g2, g3, s);
     if (consume(r, t, v, vec3(0.0), g, weight, res)) return true;

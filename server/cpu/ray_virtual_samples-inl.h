@@ -28,17 +28,16 @@ bool RayCaster::vs_segment(float t1, float t2, float dt1, vec4 fw, vec3 g0, vec3
   // sample stands for half a sub-step, and the last before the exit (t_limit: the ray's last
   // segment) for half a sub-step before it and the rest up to the exit.
   const bool ends = t_limit < kHuge;
-  for (int q = 0; q <= vs; ++q) {
+  float weight = sub;
+  if (t1 == L_.t0) weight -= 0.5f * sub;
+  if (ends && t1 + span / (k + 1.f) > t_limit) weight += (t_limit - t1) - 0.5f * sub;
+  if (consume(t1, fw.y, g1, weight)) return true;
+  for (int q = 1; q <= vs; ++q) {
     const float s = float(q) / (k + 1.f);
     const float t = t1 + s * span;
-    if (q > 0 && t > t_limit) break;
-    float weight = sub;
-    if (q == 0 && t1 == L_.t0) weight -= 0.5f * sub;
+    if (t > t_limit) break;
+    weight = sub;
     if (ends && (q == vs || t1 + float(q + 1) / (k + 1.f) * span > t_limit)) weight += (t_limit - t) - 0.5f * sub;
-    if (q == 0) {
-      if (consume(t1, fw.y, g1, weight)) return true;
-      continue;
-    }
     const float v = catmull_rom(fw.x, fw.y, fw.z, fw.w, s);
     const vec3 g = catmull_rom3(g0, g1, g2, g3, s);
     if (consume(t, v, g, weight)) return true;
