@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Independent check of the scene conventions (docs/scenes.md): the same scenes rendered by VTK's
 vtkFixedPointVolumeRayCastMapper (Debian's python3-vtk9, offscreen under xvfb-run) and by
-`peakcast render`. Measured on llvmpipe: 41.7-42.2 dB; the bound 38 dB. A mirrored image (a
+`peakcast render`. Measured on llvmpipe: 41.0-42.2 dB; the bound 38 dB. A mirrored image (a
 broken row order or camera handedness) scores under 25 dB, checked too, so the test can fail."""
 import json, math, pathlib, subprocess, sys, tempfile
 
