@@ -109,12 +109,13 @@ class RayCaster {
   bool visit_behind(int i, int m);
   bool sample_visit(int i, int m);
   // The chord lattice index i visited with stride m stands for (midpoint rule): the lattice's
-  // [i - 1/2, i + m - 1/2] cut at the ray's entry and exit (see chord_ends).
-  float chord(int i, int m) const {
-    float w = lattice_step(L_, float(i), float(m));
-    if (i == 0) w += head_;
-    if (i + m > ray_last_) w += tail_;
-    return w;
+  // [i - 1/2, i + m - 1/2] cut at the ray's entry and exit (see chord_ends): its whole step but
+  // at the ray's ends.
+  // chord_end: the first or last sample's, from its whole step (out of line, off the walk's path).
+  HWY_NOINLINE float chord_end(int i, int m, float step) const {
+    if (i == 0) step += head_;
+    if (i + m > ray_last_) step += tail_;
+    return step;
   }
   // After setup's last_: the whole ray's last index and the chord corrections at its ends.
   void chord_ends() {
@@ -122,6 +123,11 @@ class RayCaster {
     head_ = -lattice_step(L_, 0.f, 0.5f);
     const float last = float(last_);
     tail_ = std::min(span_y_ - lattice_t(L_, last), lattice_step(L_, last, 1.f)) - lattice_step(L_, last, 0.5f);
+  }
+  // dense_run's opacity for a step other than the table's (a ray texture's multiplier) or the
+  // last point's chord.
+  HWY_NOINLINE float dense_opacity_slow(float T, int i, float dt) const {
+    return step_opacity(T, i == ray_last_ ? chord_end(i, 1, dt) : dt);
   }
   // Preintegration's last segment, from the last lattice point visited to the exit.
   void close_segment();
@@ -153,7 +159,7 @@ class RayCaster {
   RayResult res_;
   int last_ = 0;
   // The whole ray's last lattice index (a brick's last_ is its own), and what the first and last
-  // samples' chords differ from a whole step by (chord()).
+  // samples' chords differ from a whole step by (chord_end()).
   int ray_last_ = 0;
   float head_ = 0, tail_ = 0;
   // The lattice points the ray composites (bricks: those it owns; else all of them).

@@ -115,7 +115,8 @@ bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
 // Visits lattice index i, standing for the step to index i + m.
 HWY_INLINE bool RayCaster::sample_visit(int i, int m) {
   // Virtual samples: the true step (vs_segment cuts the sub-samples' chords).
-  const float dt = f_.key.virtual_samples ? lattice_step(L_, float(i), float(m)) : chord(i, m);
+  float dt = lattice_step(L_, float(i), float(m));
+  if (HWY_UNLIKELY((i == 0 || i + m > ray_last_)) && !f_.key.virtual_samples) dt = chord_end(i, m, dt);
   const float t = lattice_t(L_, float(i));
   const float fv = field_at(i, m);
   res_.samples += 1.f;

@@ -24,7 +24,7 @@ bool RayCaster::vs_segment(float t1, float t2, float dt1, vec4 fw, vec3 g0, vec3
   const float k = float(vs);
   const float sub = dt1 / (k + 1.f);
   const float span = t2 - t1;
-  // The sub-samples' chords as the true samples' (chord()), on the sub-lattice: the ray's first
+  // The sub-samples' chords as the true samples' (chord_end()), on the sub-lattice: the ray's first
   // sample stands for half a sub-step, and the last before the exit (t_limit: the ray's last
   // segment) for half a sub-step before it and the rest up to the exit.
   const bool ends = t_limit < kHuge;

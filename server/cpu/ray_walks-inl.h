@@ -77,7 +77,9 @@ bool RayCaster::dense_run(int& i, int& visited, vec3 xo, vec3 dv, ivec3 grid) {
   float samples = res_.samples, prev_f = prev_f_;
   const int first = i;
   bool stopped = false;
-  while (i < last_) {  // the last point's chord is not a whole step: visit() draws it
+  const float dt = lattice_step(L_, 0.f, 1.f);  // uniform steps (the ray texture's multiplier in it)
+  const bool whole = dt == f_.step;             // the table's own step: no correction
+  while (i <= last_) {
     if constexpr (kCells) {  // walk_leaps's cell test, as it would make it
       const vec3 x = xo + lattice_t(L_, float(i)) * dv;
       ivec3 c;
@@ -90,7 +92,10 @@ bool RayCaster::dense_run(int& i, int& visited, vec3 xo, vec3 dv, ivec3 grid) {
     if (preint) {  // the segment from the previous point (visited without a gap)
       if (preint_lookup(prev_f, fv, s)) blend_premultiplied(acc, s, dvr_weight_);
     } else if (tf_lookup(fv, s) && s.a < 1.f) {
-      blend(acc, vec3(s), step_opacity(s.a, lattice_step(L_, float(i), 1.f)) * dvr_weight_);
+      // (The first point is never in a run; the last one's chord is cut at the exit.) One cold
+      // call: more of them made the compiler keep the ray's opacity in memory.
+      const float a = HWY_LIKELY(whole && i != last_) ? 1.f - s.a : dense_opacity_slow(s.a, i, dt);
+      blend(acc, vec3(s), a * dvr_weight_);
     }
     prev_f = fv;
     visited = i++;
