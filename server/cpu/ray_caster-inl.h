@@ -77,7 +77,9 @@ class RayCaster {
   bool preint_lookup(float s_front, float s_back, vec4& out) const;
   // The opacity of a sample standing for dt, from the TF table's transparency T of the uniform
   // step (render::step_tf_table; twin of tf.glsl step_opacity).
-  float step_opacity(float T, float dt) const { return dt == f_.step ? 1.f - T : 1.f - std::pow(std::max(T, 0.f), dt / f_.step); }
+  float step_opacity(float T, float dt) const {
+    return dt == f_.step ? 1.f - T : 1.f - std::pow(std::max(T, 0.f), dt / f_.step);
+  }
   vec3 shade(vec3 rgb, vec3 gradient) const {
     const float len = glm::length(gradient);
     if (len * min_spacing_ < 1e-5f) return rgb;

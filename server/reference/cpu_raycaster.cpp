@@ -100,7 +100,7 @@ auto run_reference(const Frame& fr, const ReferenceOptions& opt, Body body) {
     const int64_t last = std::min<int64_t>(int64_t(std::floor(lattice.index_at(t1))), kMaxSamplesPerRay - 1);
     // The chord each sample stands for (midpoint rule): the lattice's [i - 1/2, i + m - 1/2], cut
     // at the ray's entry and exit, so the first sample stands for half a step and the last one
-    // for half a step before it and the rest up to the exit (twin of ray_chord in
+    // for half a step before it and the rest up to the exit (twin of chord in
     // shaders/raycast_body.glsl). Virtual samples: the same on the sub-lattice (emit).
     const double head = -(lattice.t(0.5) - lattice.t(0.0));
     const double tail = std::min(t1 - lattice.t(double(last)), lattice.step(double(last), 1)) -
@@ -111,7 +111,7 @@ auto run_reference(const Frame& fr, const ReferenceOptions& opt, Body body) {
       if (i + m > last) w += tail;
       return w;
     };
-    int64_t visited_last = -1;  // the last index visited (preintegration closes the ray from it)
+    int64_t visited_end = -1;  // the last visit's i + m (preintegration closes the ray from it)
     double t_prev = 0, f_prev = 0;
     bool first = true;
     // One sample (true or virtual) at t with value f, standing for `step`; g: its gradient (raw
@@ -195,7 +195,7 @@ auto run_reference(const Frame& fr, const ReferenceOptions& opt, Body body) {
       const double step = lattice.step(double(i), m);
       const double f = fr.field(r, t);
       samples += 1;
-      visited_last = i;
+      visited_end = i + m;
       if (!k_virtual) return consume(t, f, nullptr, chord(i, m));
       if (w.size() == 4) w.erase(w.begin());
       w.push_back({t, f, step, fr.shading ? fr.grad(r, t) : glm::dvec3(0.0)});
@@ -225,7 +225,7 @@ auto run_reference(const Frame& fr, const ReferenceOptions& opt, Body body) {
     // Preintegration's last segment, from the last lattice point to the exit (the table's
     // segments cover the chord between samples; the rest of the ray is this one).
     auto close = [&]() {
-      if (!preint || k_virtual || first || visited_last != last || acc.alpha >= stop) return;
+      if (!preint || k_virtual || first || visited_end != last + 1 || acc.alpha >= stop) return;
       const double f = fr.field(r, t1);
       samples += 1;
       glm::dvec4 c = lookup_preintegration(pre, f_prev, f);
