@@ -126,6 +126,12 @@ class RayCaster {
     const float last = float(last_);
     tail_ = std::min(span_y_ - lattice_t(L_, last), lattice_step(L_, last, 1.f)) - lattice_step(L_, last, 0.5f);
   }
+  // A preintegrated segment of the table's step (premultiplied, opacity > 0) for a segment of
+  // length len: its opacity corrected, its colour scaled with it.
+  vec4 preint_for_length(vec4 c, float len) const {
+    const float a = 1.f - std::pow(std::max(1.f - c.a, 0.f), len / f_.step);
+    return vec4(vec3(c) * (a / c.a), a);
+  }
   // dense_run's opacity for a step other than the table's (a ray texture's multiplier) or the
   // last point's chord.
   HWY_NOINLINE float dense_opacity_slow(float T, int i, float dt) const {

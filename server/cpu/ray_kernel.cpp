@@ -85,8 +85,7 @@ bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
     vec4 c;
     if (segment && draw_ && preint_lookup(prev_f_, fv, c)) {  // else the segment adds exactly nothing
       if (varying_steps_ && c.a > 0.f) {  // the table holds segments of the uniform step
-        const float a = 1.f - std::pow(std::max(1.f - c.a, 0.f), (t - prev_t_) / f_.step);
-        c = vec4(vec3(c) * (a / c.a), a);
+        c = preint_for_length(c, t - prev_t_);
       }
       if (key.shading) {
         if (c.a > 0.f) composite(shade(vec3(c) / c.a, sample_gradient(t, g)), c.a * dvr_weight_);
@@ -147,11 +146,11 @@ void RayCaster::close_segment() {
   res_.samples += 1.f;
   vec4 c;
   if (!preint_lookup(prev_f_, fv, c) || !(c.a > 0.f)) return;
-  const float a = 1.f - std::pow(std::max(1.f - c.a, 0.f), (span_y_ - prev_t_) / f_.step);
+  c = preint_for_length(c, span_y_ - prev_t_);
   if (f_.key.shading) {
-    composite(shade(vec3(c) / c.a, field_gradient(x)), a * dvr_weight_);
+    composite(shade(vec3(c) / c.a, field_gradient(x)), c.a * dvr_weight_);
   } else {
-    blend_premultiplied(res_.acc, c * (a / c.a), dvr_weight_);
+    blend_premultiplied(res_.acc, c, dvr_weight_);
   }
 }
 
