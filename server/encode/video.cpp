@@ -2,10 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <mutex>
 #include <stdexcept>
 
-#include "core/parallel.h"
+#include "encode/yuv420.h"
 
 extern "C" {
 #include <libavcodec/avcodec.h>
@@ -52,12 +53,19 @@ std::vector<const char*> encoder_names(VideoCodec c) {
   return {};
 }
 
-// Today's JPEG quality (10..100) onto a CRF: q70 -> the codec's usual default, q95 -> near
-// transparent, q10 -> the coarsest useful.
+// Today's JPEG quality (10..100) onto a CRF: q70 -> about JPEG q70's PSNR on the reference
+// volume (H.264: CRF 25.5 with the chroma offset below; VP9 and AV1: 25), q95 -> near
+// transparent, q10 -> the coarsest useful. docs/streaming.md has the measurements.
 double crf_for(VideoCodec c, int quality) {
   const double q = std::clamp(quality, 10, 100);
-  return c == VideoCodec::H264 ? std::clamp(51.0 - 0.4 * q, 0.0, 51.0) : std::clamp(60.0 - 0.5 * q, 0.0, 63.0);
+  return c == VideoCodec::H264 ? std::clamp(53.5 - 0.4 * q, 0.0, 51.0) : std::clamp(60.0 - 0.5 * q, 0.0, 63.0);
 }
+
+// x264's chroma QP below luma's. The picture is seen, and measured, in RGB: with 4:2:0 one chroma
+// sample's error reaches four pixels, with about the weight (R, G and B together) that one luma
+// sample's error has in one pixel. Equal weight per unit of error asks for half the quantizer
+// step on chroma, which is 6 QP (x264's default, with psy off, is 0).
+constexpr const char* kX264ChromaOffset = "-6";
 
 void set(AVCodecContext* ctx, const char* key, const std::string& value) {
   av_opt_set(ctx->priv_data, key, value.c_str(), 0);  // an option this build lacks is left out
@@ -73,9 +81,12 @@ void configure(AVCodecContext* ctx, const char* name, const VideoSettings& s) {
   ctx->rc_buffer_size = int(std::min<int64_t>(INT32_MAX, ctx->rc_max_rate * 2 / s.fps));
   const std::string crf = std::to_string(int(std::lround(crf_for(s.codec, s.quality))));
   if (n == "libx264") {
+    char x264_crf[16];  // x264 takes a fractional CRF
+    std::snprintf(x264_crf, sizeof x264_crf, "%.1f", crf_for(s.codec, s.quality));
     set(ctx, "preset", "superfast");
     set(ctx, "tune", "zerolatency,psnr");
-    set(ctx, "crf", crf);
+    set(ctx, "crf", x264_crf);
+    set(ctx, "chromaoffset", kX264ChromaOffset);
     set(ctx, "forced-idr", "1");
   } else if (n == "libvpx-vp9") {
     ctx->bit_rate = ctx->rc_max_rate;  // constrained quality: the CRF under this ceiling
@@ -158,33 +169,6 @@ ContextPtr open_encoder(const char* name, const VideoSettings& s, std::string& w
     return nullptr;
   }
   return ctx;
-}
-
-// RGB (full range, row 0 at the top) to BT.709 limited-range 4:2:0 of the same size, in 16-bit
-// fixed point (coefficients x 65536, rounded), chroma from each 2x2 block's mean. swscale's
-// RGB24 input path took about 4 ms of a 1024^2 frame on one core; this splits the rows over the
-// cores (bench stream: see docs/performance.md). Width and height are even.
-void rgb_to_yuv420_bt709(const uint8_t* rgb, int w, int h, AVFrame* f) {
-  parallel_chunks(size_t(h / 2), [&](size_t r0, size_t r1, int) {
-    for (size_t r = r0; r < r1; ++r) {
-      const int y0 = int(2 * r);
-      uint8_t* cb = f->data[1] + r * f->linesize[1];
-      uint8_t* cr = f->data[2] + r * f->linesize[2];
-      const uint8_t* row[2] = {rgb + size_t(y0) * w * 3, rgb + size_t(y0 + 1) * w * 3};
-      uint8_t* yrow[2] = {f->data[0] + size_t(y0) * f->linesize[0], f->data[0] + size_t(y0 + 1) * f->linesize[0]};
-      for (int k = 0; k < 2; ++k)
-        for (int x = 0; x < w; ++x) {
-          const uint8_t* p = row[k] + 3 * x;
-          yrow[k][x] = uint8_t((11966 * p[0] + 40254 * p[1] + 4064 * p[2] + (16 << 16) + 32768) >> 16);
-        }
-      for (int x = 0; x < w / 2; ++x) {
-        const uint8_t *a = row[0] + 6 * x, *b = row[1] + 6 * x;
-        const int R = a[0] + a[3] + b[0] + b[3], G = a[1] + a[4] + b[1] + b[4], B = a[2] + a[5] + b[2] + b[5];
-        cb[x] = uint8_t((-6597 * R - 22187 * G + 28784 * B + (512 << 16) + 131072) >> 18);
-        cr[x] = uint8_t((28784 * R - 26148 * G - 2637 * B + (512 << 16) + 131072) >> 18);
-      }
-    }
-  });
 }
 
 void quiet_logs() {
@@ -300,7 +284,8 @@ VideoPacket VideoEncoder::encode(const uint8_t* rgb, int width, int height, bool
   Impl& m = *impl_;
   if (av_frame_make_writable(m.frame.get()) < 0) throw std::runtime_error("video: frame not writable");
   if (width == m.settings.width && height == m.settings.height) {
-    rgb_to_yuv420_bt709(rgb, width, height, m.frame.get());
+    AVFrame* f = m.frame.get();
+    rgb_to_yuv420_bt709(rgb, width, height, {f->data[0], f->data[1], f->data[2], f->linesize[0], f->linesize[1], f->linesize[2]});
   } else {
     Impl::scale_into_frame_impl(m, rgb, width, height);
   }

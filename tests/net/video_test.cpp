@@ -163,6 +163,36 @@ TEST(Video, EncoderOptionsReachTheEncoderAndBadOnesAreRefusedByName) {
   }
 }
 
+// x264 writes its settings into its first key frame (an SEI: "x264 - core ... options: ...").
+std::string x264_settings(const VideoPacket& key) {
+  const std::string bytes(key.bytes.begin(), key.bytes.end());
+  const size_t at = bytes.find("options: ");
+  return at == std::string::npos ? std::string() : bytes.substr(at, bytes.find('\0', at) - at);
+}
+
+TEST(Video, X264SpendsOnChromaWhatRgbErrorAsksAndMapsQualityOntoCrf) {
+  // docs/streaming.md: chroma 6 QP below luma (with 4:2:0 a chroma sample's error reaches four
+  // RGB pixels); q70 is CRF 25.5, q95 CRF 15.5. An option given by hand still wins.
+  VideoSettings s;
+  s.width = 128;
+  s.height = 96;
+  const auto rgb = picture(s.width, s.height, 0);
+  const auto settings_at = [&](int quality, const std::string& options) {
+    s.quality = quality;
+    s.encoder_options = options;
+    VideoEncoder e(s);
+    if (std::string(e.encoder_name()) != "libx264") return std::string("not libx264");
+    return x264_settings(e.encode(rgb.data(), s.width, s.height, true));
+  };
+  const std::string q70 = settings_at(70, "");
+  EXPECT_NE(q70.find(" chroma_qp_offset=-6 "), std::string::npos) << q70;
+  EXPECT_NE(q70.find(" crf=25.5 "), std::string::npos) << q70;
+  EXPECT_NE(q70.find(" psy=0 "), std::string::npos) << q70;  // tune psnr: no psy offset on chroma
+  const std::string q95 = settings_at(95, "");
+  EXPECT_NE(q95.find(" crf=15.5 "), std::string::npos) << q95;
+  EXPECT_NE(settings_at(70, "chromaoffset=0").find(" chroma_qp_offset=0 "), std::string::npos);
+}
+
 }  // namespace
 }  // namespace peakcast::encode
 
