@@ -66,9 +66,9 @@ int run_stream(const StreamArgs& a) {
   }
   const double render_s = std::chrono::duration<double>(Clock::now() - t_render).count();
 
-  // Each pass encodes the whole orbit with a fresh encoder; the bits and the PSNR are the first
-  // pass's, the encode ms the median over every pass (one run's median varies by 20-40% on a
-  // shared 2-core machine).
+  // Each pass encodes (and decodes) the whole orbit with a fresh encoder and decoder, as the
+  // first; the bits and the PSNR are the first pass's, the encode ms the median (and the max) over
+  // every pass (one pass's median varied by 20-40% between runs on a shared 2-core machine).
   std::vector<double> encode_ms, db;
   size_t bytes = 0;
   std::string encoder = "turbojpeg";
@@ -86,7 +86,7 @@ int run_stream(const StreamArgs& a) {
       vs.fps = int(std::lround(a.fps));
       vs.encoder_options = a.encoder_options;
       enc = std::make_unique<encode::VideoEncoder>(vs);
-      if (pass == 0) dec = std::make_unique<encode::VideoDecoder>(*video);
+      dec = std::make_unique<encode::VideoDecoder>(*video);
       encoder = enc->encoder_name();
     }
     for (const auto& rgb : renders) {
@@ -94,8 +94,6 @@ int run_stream(const StreamArgs& a) {
       std::vector<uint8_t> packet = enc ? enc->encode(rgb.data(), w, h, false).bytes
                                         : jpeg.encode(rgb.data(), w, h, a.quality, encode::Subsampling::S420);
       encode_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
-      if (pass > 0) continue;
-      bytes += packet.size();
       std::vector<uint8_t> out;
       int dw = 0, dh = 0;
       if (dec) {
@@ -103,6 +101,8 @@ int run_stream(const StreamArgs& a) {
       } else {
         out = encode::decode_jpeg(packet.data(), packet.size(), dw, dh);
       }
+      if (pass > 0) continue;
+      bytes += packet.size();
       db.push_back(psnr(rgb, out));
     }
   }
@@ -122,9 +122,9 @@ int run_stream(const StreamArgs& a) {
   } else {
     std::printf("%s (%s) %dx%d, %d frames at %.0f frames/s over a %.0f-degree orbit (rendered in %.1f s)\n",
                 a.codec.c_str(), encoder.c_str(), w, h, frames, a.fps, a.orbit_deg_per_s * frames / a.fps, render_s);
-    std::printf("  %.2f Mbit/s, PSNR %.2f dB (min %.2f), encode %.2f ms per frame (median; max %.2f), delay 0 frames\n",
+    std::printf("  %.2f Mbit/s, PSNR %.2f dB (min %.2f), encode %.2f ms per frame (median; max %.2f; %d pass%s), delay 0 frames\n",
                 mbps, mean_db, *std::min_element(db.begin(), db.end()), median(encode_ms),
-                *std::max_element(encode_ms.begin(), encode_ms.end()));
+                *std::max_element(encode_ms.begin(), encode_ms.end()), a.passes, a.passes == 1 ? "" : "es");
   }
   return 0;
 }

@@ -54,11 +54,15 @@ std::vector<const char*> encoder_names(VideoCodec c) {
 }
 
 // Today's JPEG quality (10..100) onto a CRF: q70 -> about JPEG q70's PSNR on the reference
-// volume (H.264: CRF 25.5 with the chroma offset below; VP9 and AV1: 25), q95 -> near
-// transparent, q10 -> the coarsest useful. docs/streaming.md has the measurements.
-double crf_for(VideoCodec c, int quality) {
+// volume, q95 -> near transparent, q10 -> the coarsest useful. libx264: CRF 25.5 at q70, with the
+// chroma offset below (measured, docs/streaming.md); NVENC's CQ keeps x264's usual 23 at q70 (no
+// chroma offset there, and not measured: no NVENC block on the GPU hosts lent so far); VP9 and
+// AV1: 25.
+double crf_for(const std::string& encoder, VideoCodec c, int quality) {
   const double q = std::clamp(quality, 10, 100);
-  return c == VideoCodec::H264 ? std::clamp(53.5 - 0.4 * q, 0.0, 51.0) : std::clamp(60.0 - 0.5 * q, 0.0, 63.0);
+  if (encoder == "libx264") return std::clamp(53.5 - 0.4 * q, 0.0, 51.0);
+  if (c == VideoCodec::H264) return std::clamp(51.0 - 0.4 * q, 0.0, 51.0);
+  return std::clamp(60.0 - 0.5 * q, 0.0, 63.0);
 }
 
 // x264's chroma QP below luma's. The picture is seen, and measured, in RGB: with 4:2:0 one chroma
@@ -79,10 +83,10 @@ void configure(AVCodecContext* ctx, const char* name, const VideoSettings& s) {
   ctx->gop_size = s.fps * 10;  // a key frame every 10 s at least; more on request
   ctx->rc_max_rate = int64_t(s.kbps) * 1000;
   ctx->rc_buffer_size = int(std::min<int64_t>(INT32_MAX, ctx->rc_max_rate * 2 / s.fps));
-  const std::string crf = std::to_string(int(std::lround(crf_for(s.codec, s.quality))));
+  const std::string crf = std::to_string(int(std::lround(crf_for(n, s.codec, s.quality))));
   if (n == "libx264") {
     char x264_crf[16];  // x264 takes a fractional CRF
-    std::snprintf(x264_crf, sizeof x264_crf, "%.1f", crf_for(s.codec, s.quality));
+    std::snprintf(x264_crf, sizeof x264_crf, "%.1f", crf_for(n, s.codec, s.quality));
     set(ctx, "preset", "superfast");
     set(ctx, "tune", "zerolatency,psnr");
     set(ctx, "crf", x264_crf);

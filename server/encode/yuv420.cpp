@@ -75,19 +75,19 @@ void ConvertRows(const uint8_t* rgb, int w, int h, const Yuv420Planes& o) {
   struct Rgb {
     V r, g, b;
   };
-  const auto load = [&](const uint8_t* p) {
+  const auto load = [&](const uint8_t* p) HWY_ATTR {
     hn::Vec<decltype(d8)> r, g, b;
     hn::LoadInterleaved3(d8, p, r, g, b);
     return Rgb{hn::PromoteTo(d32, r), hn::PromoteTo(d32, g), hn::PromoteTo(d32, b)};
   };
-  const auto store_luma = [&](const Rgb& c, uint8_t* out) {
+  const auto store_luma = [&](const Rgb& c, uint8_t* out) HWY_ATTR {
     const V y = hn::Add(hn::Add(hn::Mul(c.r, hn::Set(d32, kYr)), hn::Mul(c.g, hn::Set(d32, kYg))),
                         hn::Add(hn::Mul(c.b, hn::Set(d32, kYb)), hn::Set(d32, kYoff)));
     hn::StoreU(hn::DemoteTo(d8, hn::ShiftRight<16>(y)), d8, out);
   };
   // The sums of each horizontal pair of pixels: lanes 0..n-1 from the 2n pixels in lo, hi.
-  const auto pairs = [&](V lo, V hi) { return hn::Add(hn::ConcatEven(d32, hi, lo), hn::ConcatOdd(d32, hi, lo)); };
-  const auto chroma = [&](V R, V G, V B, int cr, int cg, int cb) {
+  const auto pairs = [&](V lo, V hi) HWY_ATTR { return hn::Add(hn::ConcatEven(d32, hi, lo), hn::ConcatOdd(d32, hi, lo)); };
+  const auto chroma = [&](V R, V G, V B, int cr, int cg, int cb) HWY_ATTR {
     const V s = hn::Add(hn::Add(hn::Mul(R, hn::Set(d32, cr)), hn::Mul(G, hn::Set(d32, cg))),
                         hn::Add(hn::Mul(B, hn::Set(d32, cb)), hn::Set(d32, kCoff)));
     return hn::DemoteTo(d8, hn::ShiftRight<18>(s));

@@ -185,6 +185,7 @@ TEST(Video, X264SpendsOnChromaWhatRgbErrorAsksAndMapsQualityOntoCrf) {
     return x264_settings(e.encode(rgb.data(), s.width, s.height, true));
   };
   const std::string q70 = settings_at(70, "");
+  if (q70 == "not libx264") GTEST_SKIP() << "H.264 opened on another encoder (NVENC) here";
   EXPECT_NE(q70.find(" chroma_qp_offset=-6 "), std::string::npos) << q70;
   EXPECT_NE(q70.find(" crf=25.5 "), std::string::npos) << q70;
   EXPECT_NE(q70.find(" psy=0 "), std::string::npos) << q70;  // tune psnr: no psy offset on chroma
