@@ -52,6 +52,13 @@ inline RowPair row_pair(const uint8_t* rgb, int w, const Yuv420Planes& o, int r)
           o.v + size_t(r) * size_t(o.v_stride)};
 }
 
+inline void convert_scalar(const uint8_t* rgb, int w, int h, const Yuv420Planes& o) {
+  for (int r = 0; r < h / 2; ++r) {
+    const RowPair p = row_pair(rgb, w, o, r);
+    row_pair_scalar(p.row0, p.row1, 0, w, p.y0, p.y1, p.cb, p.cr);
+  }
+}
+
 }  // namespace peakcast::encode::detail
 #endif
 
@@ -63,10 +70,7 @@ namespace hn = hwy::HWY_NAMESPACE;
 void ConvertRows(const uint8_t* rgb, int w, int h, const Yuv420Planes& o) {
   using namespace detail;
 #if HWY_TARGET == HWY_SCALAR  // one lane: nothing to gain, and no ConcatEven
-  for (int r = 0; r < h / 2; ++r) {
-    const RowPair p = row_pair(rgb, w, o, r);
-    row_pair_scalar(p.row0, p.row1, 0, w, p.y0, p.y1, p.cb, p.cr);
-  }
+  convert_scalar(rgb, w, h, o);
 #else
   const hn::ScalableTag<int32_t> d32;
   const hn::Rebind<uint8_t, decltype(d32)> d8;  // as many u8 lanes as int32 lanes
@@ -126,10 +130,7 @@ void rgb_to_yuv420_bt709(const uint8_t* rgb, int width, int height, const Yuv420
 }
 
 void rgb_to_yuv420_bt709_scalar(const uint8_t* rgb, int width, int height, const Yuv420Planes& out) {
-  for (int r = 0; r < height / 2; ++r) {
-    const detail::RowPair p = detail::row_pair(rgb, width, out, r);
-    detail::row_pair_scalar(p.row0, p.row1, 0, width, p.y0, p.y1, p.cb, p.cr);
-  }
+  detail::convert_scalar(rgb, width, height, out);
 }
 
 }  // namespace peakcast::encode
