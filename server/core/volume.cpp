@@ -1,7 +1,5 @@
 #include "core/volume.h"
 
-#include <sys/mman.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -70,22 +68,6 @@ SourceType parse_source_type(const std::string& raw) {
                               "' (supported: uint8, int8, uint16, int16, float32)");
 }
 
-namespace {
-
-// Large voxel arrays in 2 MiB pages where the kernel offers them on request (Debian's default
-// THP mode is "madvise"): a brick read by an out-of-core still fills tens of MiB of fresh memory,
-// and in 4 KiB pages most of that time went to page faults (perf: a third of the CPU in the
-// kernel). Only whole huge pages inside the array are advised.
-void advise_huge_pages(uint8_t* p, size_t bytes) {
-  constexpr uintptr_t kHuge = uintptr_t(2) << 20;
-  if (bytes < 4 * kHuge) return;
-  const uintptr_t lo = (reinterpret_cast<uintptr_t>(p) + kHuge - 1) & ~(kHuge - 1);
-  const uintptr_t hi = (reinterpret_cast<uintptr_t>(p) + bytes) & ~(kHuge - 1);
-  if (hi > lo) madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_HUGEPAGE);  // advice: a refusal is harmless
-}
-
-}  // namespace
-
 Volume::Volume(const VolumeHeader& h)
     : spacing(h.spacing),
       origin(h.origin),
@@ -93,9 +75,8 @@ Volume::Volume(const VolumeHeader& h)
       dims_(h.dims),
       type_(storage_type(h.source)),
       source_(h.source),
-      data_(new uint8_t[size_t(h.voxel_count()) * voxel_bytes(storage_type(h.source)) + kTailPadding]) {
+      data_(allocate_voxels<uint8_t>(size_t(h.voxel_count()) * voxel_bytes(storage_type(h.source)) + kTailPadding)) {
   std::fill_n(data_.get() + byte_size(), kTailPadding, uint8_t(0));
-  advise_huge_pages(data_.get(), byte_size());
 }
 
 Volume Volume::header_only(const VolumeHeader& h) {

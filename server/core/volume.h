@@ -9,6 +9,8 @@
 
 #include <glm/vec3.hpp>
 
+#include "core/voxel_memory.h"
+
 namespace peakcast {
 
 // How voxels are kept in memory and on the GPU (R8 / R16 / R32F).
@@ -123,7 +125,7 @@ class Volume {
   Dims dims_{0, 0, 0};
   VoxelType type_ = VoxelType::U8;
   SourceType source_ = SourceType::U8;
-  mutable std::unique_ptr<uint8_t[]> data_;
+  mutable VoxelArray<uint8_t> data_;
 };
 
 }  // namespace peakcast

@@ -54,7 +54,8 @@ CpuVolume::CpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cell
   if (v.type() == VoxelType::F32 && !floats_in_place(v, scale, bias)) {
     const size_t n = size_t(v.voxel_count());
     constexpr size_t kPad = Volume::kTailPadding / sizeof(float);
-    unit_.reset(new float[n + kPad]());
+    unit_ = allocate_voxels<float>(n + kPad);
+    std::fill_n(unit_.get() + n, kPad, 0.f);
     const float* f = reinterpret_cast<const float*>(v.data());
     parallel_chunks(n, [&](size_t b, size_t e, int) {
       for (size_t i = b; i < e; ++i) unit_[i] = float(range.to_unit(double(f[i]) + v.value_offset));

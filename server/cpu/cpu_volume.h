@@ -27,7 +27,7 @@ class CpuVolume : public render::ResidentVolume {
   VoxelGrid grid(Filter filter) const;
 
  private:
-  std::unique_ptr<float[]> unit_;  // float volumes in TF coordinates, plus padding
+  VoxelArray<float> unit_;  // float volumes in TF coordinates, plus padding
   size_t copy_bytes_ = 0;
   float scale_ = 1.f, bias_ = 0.f;
 };

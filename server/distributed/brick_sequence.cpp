@@ -1,5 +1,7 @@
 #include "distributed/brick_sequence.h"
 
+#include <malloc.h>
+
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -10,6 +12,7 @@
 #include <utility>
 
 #include "core/macrocell_share.h"
+#include "core/parallel.h"
 #include "distributed/brick_frame.h"
 
 namespace peakcast::distributed {
@@ -45,6 +48,31 @@ void replace_with(Volume& v, const SequenceStatistics& s) {
 // the grids (bench outofcore: 1 GiB of voxels in 9 bricks under 256 MiB peaked 1 MiB past the
 // budget plus 10% with the whole budget given to bricks).
 int64_t voxel_share(int64_t budget_bytes) { return budget_bytes / 10 * 9; }
+
+// What the budget holds beside the bricks that does not shrink with them, taken from their share
+// first: a budget too small for it (a few KiB in tests) still gives the bricks half their share.
+int64_t bricks_share(int64_t budget_bytes, int64_t beside) {
+  const int64_t share = voxel_share(budget_bytes);
+  return std::max(share - beside, share / 2);
+}
+
+// The whole volume's macrocells: up to 64 per axis (default_cell_size), whatever the bricks.
+int64_t macrocell_count(const Index3& dims) {
+  const Dims d{dims[0], dims[1], dims[2]};
+  const int cell = default_cell_size(d);
+  return cells_along(d[0], cell) * cells_along(d[1], cell) * cells_along(d[2], cell);
+}
+// A share per cell: min, max (float), own count, sum, sum of squares (double); a grid: min, max, stddev.
+constexpr int64_t kShareCellBytes = 2 * sizeof(float) + 3 * sizeof(double);
+constexpr int64_t kGridCellBytes = 3 * sizeof(float);
+
+// Statistics hold beside each brick: the two grids' shares added so far and the brick's own
+// being made (bench outofcore's 4096^3 pyramid: 64^3 cells, 24 MiB), and for integers the count
+// of each stored value, per thread and summed (65536 counts for 16-bit voxels).
+int64_t statistics_beside(const Index3& dims, VoxelType type) {
+  const int64_t values = type == VoxelType::U8 ? 256 : type == VoxelType::U16 ? 65536 : Volume::kHistogramBins;
+  return 3 * macrocell_count(dims) * kShareCellBytes + (hardware_threads() + 2) * values * int64_t(sizeof(uint64_t));
+}
 
 }  // namespace
 
@@ -87,7 +115,8 @@ StatisticsRun::StatisticsRun(std::string path, LoadOptions base, int64_t budget_
   s_.source = head.source_type();
   floats_ = head.type() == VoxelType::F32;
   offset_ = storage_offset(head.source_type());
-  s_.bricks = bricks_for_budget(dims_, 0, voxel_bytes(head.type()), voxel_share(budget_bytes), 1);
+  s_.bricks = bricks_for_budget(dims_, 0, voxel_bytes(head.type()),
+                                bricks_share(budget_bytes, statistics_beside(dims_, head.type())), 1);
   split_ = kd_split(dims_, s_.bricks, 0);
   if (floats_) histogram_.assign(Volume::kHistogramBins, 0);
 }
@@ -163,6 +192,12 @@ void StatisticsRun::finish() {
   }
   s_.cells.trilinear = std::make_shared<const MacrocellGrid>(grid_from_share(shares_[0]));
   s_.cells.tricubic = std::make_shared<const MacrocellGrid>(grid_from_share(shares_[1]));
+  // The shares and counts (a few MiB: statistics_beside) go back to the system, not to a heap
+  // arena that the bricks drawn next, read on other threads, would not take them from.
+  shares_[0] = shares_[1] = MacrocellShare{};
+  std::vector<uint64_t>().swap(counts_);
+  std::vector<uint64_t>().swap(histogram_);
+  malloc_trim(0);
   s_.ms = ms_since(t0_);
 }
 
@@ -190,11 +225,10 @@ SequenceRun::SequenceRun(std::string path, LoadOptions base, std::shared_ptr<con
   // The image's buffers come out of the budget first: the layers composited so far, the brick's
   // layer, the composite being made, the renderer's own buffers and what the allocator keeps of
   // them. Measured (bench outofcore --size 1024 --budget-mib 256 --image 1024): 130 MiB beyond
-  // the two bricks at 1024², eight RGBA float images.
+  // the two bricks at 1024², eight RGBA float images. The whole volume's two grids stay beside.
   const int64_t image_bytes = 8 * int64_t(scene_.scene.width) * scene_.scene.height * 4 * int64_t(sizeof(float));
-  // A budget too small for them (a few KiB in tests) still gives the bricks half its share.
-  const int64_t share = voxel_share(budget_bytes);
-  r_.bricks = bricks_for_budget(dims, r_.ghost, bpv, std::max(share - image_bytes, share / 2), 2);
+  const int64_t grid_bytes = 2 * macrocell_count(dims) * kGridCellBytes;
+  r_.bricks = bricks_for_budget(dims, r_.ghost, bpv, bricks_share(budget_bytes, image_bytes + grid_bytes), 2);
   split_ = kd_split(dims, r_.bricks, r_.ghost);
   r_.largest_brick_bytes = largest_read(split_) * int64_t(bpv);
   const glm::dvec3 eye = (scene_.camera.eye - stats_->box.origin) / stats_->box.spacing;
