@@ -35,12 +35,13 @@ void add_box(const T* data, const Dims& n, const int64_t lo[3], const int64_t hi
       }
       own += double(own_hi[0] - own_lo[0] + 1);
     }
-  s.min[idx] = float(double(mn) + offset);
-  s.max[idx] = float(double(mx) + offset);
+  // Added to what the share holds (a fresh share: +inf, -inf, zeros), as add_share adds.
+  s.min[idx] = std::min(s.min[idx], float(double(mn) + offset));
+  s.max[idx] = std::max(s.max[idx], float(double(mx) + offset));
   // The sums are of stored values, as the standard deviation needs no offset.
-  s.sum[idx] = sum;
-  s.sum2[idx] = sum2;
-  s.own[idx] = own;
+  s.sum[idx] += sum;
+  s.sum2[idx] += sum2;
+  s.own[idx] += own;
 }
 
 }  // namespace
@@ -52,21 +53,34 @@ MacrocellShare macrocell_share(const Volume& v, const Dims& whole, const Dims& c
 
 MacrocellShare macrocell_share_at(const Volume& v, const Dims& region_lo, const Dims& whole, const Dims& count_lo,
                                   const Dims& count_hi, FilterSupport support, int cell) {
+  MacrocellShare s;
+  add_macrocell_share_at(s, v, region_lo, whole, count_lo, count_hi, support, cell);
+  return s;
+}
+
+void add_macrocell_share_at(MacrocellShare& s, const Volume& v, const Dims& region_lo, const Dims& whole,
+                            const Dims& count_lo, const Dims& count_hi, FilterSupport support, int cell) {
   const Dims n = v.dims();
   for (int a = 0; a < 3; ++a)
     if (!(0 <= count_lo[a] && count_lo[a] < count_hi[a] && count_hi[a] <= n[a] && region_lo[a] >= 0 &&
           region_lo[a] + n[a] <= whole[a]))
       throw std::invalid_argument("macrocell_share: the counted box is not inside the brick and the volume");
-  MacrocellShare s;
-  s.cell = cell > 0 ? cell : default_cell_size(whole);
-  s.support = support;
-  for (int a = 0; a < 3; ++a) s.grid[a] = cells_along(whole[a], s.cell);
-  const size_t count = size_t(s.grid[0] * s.grid[1] * s.grid[2]);
-  s.min.assign(count, std::numeric_limits<float>::infinity());
-  s.max.assign(count, -std::numeric_limits<float>::infinity());
-  s.own.assign(count, 0.0);
-  s.sum.assign(count, 0.0);
-  s.sum2.assign(count, 0.0);
+  Dims grid{};
+  const int edge = cell > 0 ? cell : default_cell_size(whole);
+  for (int a = 0; a < 3; ++a) grid[a] = cells_along(whole[a], edge);
+  const size_t count = size_t(grid[0] * grid[1] * grid[2]);
+  if (s.min.empty()) {  // a fresh share
+    s.cell = edge;
+    s.support = support;
+    s.grid = grid;
+    s.min.assign(count, std::numeric_limits<float>::infinity());
+    s.max.assign(count, -std::numeric_limits<float>::infinity());
+    s.own.assign(count, 0.0);
+    s.sum.assign(count, 0.0);
+    s.sum2.assign(count, 0.0);
+  } else if (s.cell != edge || s.grid != grid || s.support != support || s.min.size() != count) {
+    throw std::invalid_argument("add_macrocell_share_at: the share is of another grid");
+  }
   const int before = support == FilterSupport::Tricubic ? 1 : 0;
   const int after = support == FilterSupport::Tricubic ? 2 : 1;
   parallel_for(size_t(s.grid[1] * s.grid[2]), [&](size_t row) {
@@ -97,7 +111,6 @@ MacrocellShare macrocell_share_at(const Volume& v, const Dims& region_lo, const 
       }
     }
   });
-  return s;
 }
 
 void add_share(MacrocellShare& into, const MacrocellShare& o) {

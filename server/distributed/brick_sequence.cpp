@@ -66,12 +66,12 @@ int64_t macrocell_count(const Index3& dims) {
 constexpr int64_t kShareCellBytes = 2 * sizeof(float) + 3 * sizeof(double);
 constexpr int64_t kGridCellBytes = 3 * sizeof(float);
 
-// Statistics hold beside each brick: the two grids' shares added so far and the brick's own
-// being made (bench outofcore's 4096^3 pyramid: 64^3 cells, 24 MiB), and for integers the count
+// Statistics hold beside each brick: the two grids' shares, to which each brick adds its voxels
+// (bench outofcore's 4096^3 pyramid: 64^3 cells, 16 MiB), and for integers the count
 // of each stored value, per thread and summed (65536 counts for 16-bit voxels).
 int64_t statistics_beside(const Index3& dims, VoxelType type) {
   const int64_t values = type == VoxelType::U8 ? 256 : type == VoxelType::U16 ? 65536 : Volume::kHistogramBins;
-  return 3 * macrocell_count(dims) * kShareCellBytes + (hardware_threads() + 2) * values * int64_t(sizeof(uint64_t));
+  return 2 * macrocell_count(dims) * kShareCellBytes + (hardware_threads() + 2) * values * int64_t(sizeof(uint64_t));
 }
 
 }  // namespace
@@ -132,9 +132,9 @@ bool StatisticsRun::done() const { return steps_ >= total_steps(); }
 void StatisticsRun::add_shares(const Volume& v, size_t k) {
   const FilterSupport supports[2] = {FilterSupport::Trilinear, FilterSupport::Tricubic};
   for (int g = 0; g < 2; ++g) {
-    MacrocellShare share = brick_macrocell_share(v, split_.bricks[k], dims_, supports[g]);
-    if (k == 0) shares_[g] = std::move(share);
-    else add_share(shares_[g], share);
+    const auto [lo, hi] = counted_box(split_.bricks[k], dims_);
+    add_macrocell_share_at(shares_[g], v, v.region_lo, Dims{dims_[0], dims_[1], dims_[2]}, Dims{lo[0], lo[1], lo[2]},
+                           Dims{hi[0], hi[1], hi[2]}, supports[g]);
   }
 }
 

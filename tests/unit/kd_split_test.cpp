@@ -143,14 +143,20 @@ TEST(KdSplit, BrickMacrocellSharesAddUpToTheWholeVolumesGrid) {
       const peakcast::MacrocellGrid want = peakcast::build_macrocells(v, 0, support);
       for (int ranks = 1; ranks <= 5; ++ranks) {
         const KdSplit s = kd_split(dims, ranks, 3);
-        peakcast::MacrocellShare sum;
+        peakcast::MacrocellShare sum, direct;  // direct: each brick added in place (an out-of-core still's)
         for (const Brick& b : s.bricks) {
           const peakcast::Volume brick = crop(v, b, t);
           const auto [lo, hi] = counted_box(b, dims);
           const peakcast::MacrocellShare part = peakcast::macrocell_share(brick, dims, lo, hi, support);
           if (b.rank == 0) sum = part;
           else peakcast::add_share(sum, part);
+          peakcast::add_macrocell_share_at(direct, brick, brick.region_lo, dims, lo, hi, support);
         }
+        EXPECT_EQ(direct.min, sum.min);
+        EXPECT_EQ(direct.max, sum.max);
+        EXPECT_EQ(direct.own, sum.own);
+        EXPECT_EQ(direct.sum, sum.sum) << "bit for bit, as add_share adds";
+        EXPECT_EQ(direct.sum2, sum.sum2);
         const peakcast::MacrocellGrid got = peakcast::grid_from_share(sum);
         ASSERT_EQ(got.cell, want.cell);
         ASSERT_EQ(got.grid, want.grid);
@@ -170,6 +176,8 @@ TEST(KdSplit, BrickMacrocellSharesAddUpToTheWholeVolumesGrid) {
     const peakcast::MacrocellShare a = peakcast::macrocell_share(brick, dims, lo, hi, peakcast::FilterSupport::Trilinear);
     peakcast::MacrocellShare b = peakcast::macrocell_share(brick, dims, lo, hi, peakcast::FilterSupport::Tricubic);
     EXPECT_THROW(peakcast::add_share(b, a), std::invalid_argument);
+    EXPECT_THROW(peakcast::add_macrocell_share_at(b, brick, brick.region_lo, dims, lo, hi, peakcast::FilterSupport::Trilinear),
+                 std::invalid_argument);
     EXPECT_THROW(peakcast::grid_from_share(a), std::invalid_argument);  // the other brick's cells are missing
   }
 }
