@@ -39,6 +39,10 @@ MacrocellShare macrocell_share_at(const Volume& brick, const Dims& region_lo, co
 // whole grid: what add_share of macrocell_share_at's result gives, bit for bit.
 void add_macrocell_share_at(MacrocellShare& into, const Volume& brick, const Dims& region_lo, const Dims& whole,
                             const Dims& count_lo, const Dims& count_hi, FilterSupport support, int cell = 0);
+// Both supports' shares at once, in one pass over the voxels (an out-of-core still's statistics).
+void add_macrocell_shares_at(MacrocellShare& trilinear, MacrocellShare& tricubic, const Volume& brick,
+                             const Dims& region_lo, const Dims& whole, const Dims& count_lo, const Dims& count_hi,
+                             int cell = 0);
 // Adds `other` (of the same grid) into `into`: min of the minima, max of the maxima, sums.
 void add_share(MacrocellShare& into, const MacrocellShare& other);
 // The grid once every brick's share has been added. std::invalid_argument when a cell got no voxels.

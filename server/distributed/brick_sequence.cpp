@@ -130,12 +130,9 @@ double StatisticsRun::progress() const { return double(steps_) / double(total_st
 bool StatisticsRun::done() const { return steps_ >= total_steps(); }
 
 void StatisticsRun::add_shares(const Volume& v, size_t k) {
-  const FilterSupport supports[2] = {FilterSupport::Trilinear, FilterSupport::Tricubic};
-  for (int g = 0; g < 2; ++g) {
-    const auto [lo, hi] = counted_box(split_.bricks[k], dims_);
-    add_macrocell_share_at(shares_[g], v, v.region_lo, Dims{dims_[0], dims_[1], dims_[2]}, Dims{lo[0], lo[1], lo[2]},
-                           Dims{hi[0], hi[1], hi[2]}, supports[g]);
-  }
+  const auto [lo, hi] = counted_box(split_.bricks[k], dims_);
+  add_macrocell_shares_at(shares_[0], shares_[1], v, v.region_lo, Dims{dims_[0], dims_[1], dims_[2]},
+                          Dims{lo[0], lo[1], lo[2]}, Dims{hi[0], hi[1], hi[2]});
 }
 
 void StatisticsRun::step() {

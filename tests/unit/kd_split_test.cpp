@@ -143,7 +143,8 @@ TEST(KdSplit, BrickMacrocellSharesAddUpToTheWholeVolumesGrid) {
       const peakcast::MacrocellGrid want = peakcast::build_macrocells(v, 0, support);
       for (int ranks = 1; ranks <= 5; ++ranks) {
         const KdSplit s = kd_split(dims, ranks, 3);
-        peakcast::MacrocellShare sum, direct;  // direct: each brick added in place (an out-of-core still's)
+        // direct: each brick added in place; both: both supports in one pass (an out-of-core still's)
+        peakcast::MacrocellShare sum, direct, both[2];
         for (const Brick& b : s.bricks) {
           const peakcast::Volume brick = crop(v, b, t);
           const auto [lo, hi] = counted_box(b, dims);
@@ -151,7 +152,15 @@ TEST(KdSplit, BrickMacrocellSharesAddUpToTheWholeVolumesGrid) {
           if (b.rank == 0) sum = part;
           else peakcast::add_share(sum, part);
           peakcast::add_macrocell_share_at(direct, brick, brick.region_lo, dims, lo, hi, support);
+          peakcast::add_macrocell_shares_at(both[0], both[1], brick, brick.region_lo, dims, lo, hi);
         }
+        const peakcast::MacrocellShare& one_pass = both[support == peakcast::FilterSupport::Tricubic ? 1 : 0];
+        EXPECT_EQ(one_pass.support, support);
+        EXPECT_EQ(one_pass.min, sum.min);
+        EXPECT_EQ(one_pass.max, sum.max);
+        EXPECT_EQ(one_pass.own, sum.own);
+        EXPECT_EQ(one_pass.sum, sum.sum);
+        EXPECT_EQ(one_pass.sum2, sum.sum2);
         EXPECT_EQ(direct.min, sum.min);
         EXPECT_EQ(direct.max, sum.max);
         EXPECT_EQ(direct.own, sum.own);
