@@ -225,7 +225,9 @@ SequenceRun::SequenceRun(std::string path, LoadOptions base, std::shared_ptr<con
   // the two bricks at 1024², eight RGBA float images. The whole volume's two grids stay beside.
   const int64_t image_bytes = 8 * int64_t(scene_.scene.width) * scene_.scene.height * 4 * int64_t(sizeof(float));
   const int64_t grid_bytes = 2 * macrocell_count(dims) * kGridCellBytes;
-  r_.bricks = bricks_for_budget(dims, r_.ghost, bpv, bricks_share(budget_bytes, image_bytes + grid_bytes), 2);
+  r_.beside_bytes = image_bytes + grid_bytes;
+  r_.budget_too_small = voxel_share(budget_bytes) - r_.beside_bytes < voxel_share(budget_bytes) / 2;
+  r_.bricks = bricks_for_budget(dims, r_.ghost, bpv, bricks_share(budget_bytes, r_.beside_bytes), 2);
   split_ = kd_split(dims, r_.bricks, r_.ghost);
   r_.largest_brick_bytes = largest_read(split_) * int64_t(bpv);
   const glm::dvec3 eye = (scene_.camera.eye - stats_->box.origin) / stats_->box.spacing;

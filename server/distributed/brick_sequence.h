@@ -82,6 +82,10 @@ struct SequenceResult {
   int64_t bytes_read = 0;
   int64_t largest_brick_bytes = 0;
   double read_ms = 0.0, render_ms = 0.0;  // reading overlaps rendering: the two add up to more than the wall time
+  // The image's buffers and the grids (beside_bytes) leave the bricks less than half their share
+  // of the budget: the bricks get that half, and the still holds more than the budget.
+  int64_t beside_bytes = 0;
+  bool budget_too_small = false;
 };
 
 // `scene` (resolved against stats.box) drawn by bricks with `renderer`, holding at most two
