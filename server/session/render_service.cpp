@@ -6,6 +6,7 @@
 #include <optional>
 #include <tuple>
 
+#include "core/log.h"
 #include "distributed/brick_sequence.h"
 #include "encode/png.h"
 #include "render/backend.h"
@@ -245,6 +246,10 @@ void RenderService::render_brick(Scheduler::Work& w) {
     metrics_.observe("peakcast_render_ms", "kind=\"still_brick\"", ms);
     if (sw.bricks->done()) {
       distributed::SequenceResult r = sw.bricks->take();
+      if (r.budget_too_small)  // the bricks got half their share: the still held more than the budget
+        log::warn("memory budget too small for a full-resolution still's image buffers beside its bricks",
+                  {{"width", r.image.width}, {"height", r.image.height}, {"bricks", r.bricks},
+                   {"beside_mib", double(r.beside_bytes) / 1048576.0}});
       sw.image = std::move(r.image);
       sw.variant = "bricks";
       sw.bricks.reset();  // no voxels held while the still is encoded
