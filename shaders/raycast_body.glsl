@@ -583,8 +583,8 @@ RayResult cast_ray(vec2 pixel) {
 #else
   // 3D-DDA over the macrocell grid (Amanatides & Woo) in voxel coordinates. Each occupied cell
   // visits the lattice indices inside it (the multiples of its multiplier M with ADAPTIVE);
-  // segment methods also visit EXTENSION more on each side, so the segments that leave or enter the
-  // cell are not lost.
+  // segment methods also visit EXTENSION more on each side of a run of occupied cells, so the
+  // segments that enter or leave the run are not lost.
   float edge = u_cells.w;
   vec3 x0 = cell_coords(r.o + span.x * r.d);
   vec3 dv = r.d / u_spacing.xyz;
@@ -600,10 +600,24 @@ RayResult cast_ray(vec2 pixel) {
   vec3 t_max = mix(vec3(3.0e38), span.x + ((vec3(cell) + ahead) * edge - x0) * inv_dv, moves);
   float t_in = span.x;
   int next = 0;  // first lattice index not yet visited
+#ifdef SEGMENTS
+  // The EXTENSION points after a run of occupied cells are visited once the run ends: before an
+  // empty cell, a leap or the ray's end. An occupied cell next continues the run from its own
+  // first point with its own multiplier, as the reference walks it.
+  int run_end = -1;  // the last index of the run whose points after it are owed
+#endif
   for (int guard = 0; guard < 4 * (grid.x + grid.y + grid.z) + 4; ++guard) {
     ivec3 c = clamp(cell, ivec3(0), grid - 1);
 #ifdef SPACE_SKIPPING
     uint empty_distance = cell_byte(u_cell_distance, c);
+#ifdef SEGMENTS
+    if (run_end >= 0 && (empty_distance > 1u && cell == c || empty_distance != 0u)) {  // the run ends here
+      for (int j = max(next, run_end + 1); j <= min(last, run_end + EXTENSION); ++j)
+        if (visit(r, L, j, 1, res)) return res;
+      next = max(next, min(last, run_end + EXTENSION) + 1);
+      run_end = -1;
+    }
+#endif
     if (empty_distance > 1u && cell == c) {
       // Every cell within empty_distance - 1 of this one is empty: leap to where the ray leaves
       // that cube (no lattice point inside it is visited) and go on from the cell beyond.
@@ -640,7 +654,7 @@ RayResult cast_ray(vec2 pixel) {
       // Every m-th lattice index from the first one not yet visited; each sample stands for the
       // steps up to the next one, the cell's last for those up to the cell's end, so the cells'
       // samples cover the ray without gaps or overlaps. Segment methods add the single indices
-      // just before and after the cell (one step each).
+      // just before the run and, once it ends, just after it (one step each).
       int i = max(next, first);
 #ifdef SEGMENTS
       for (int e = EXTENSION; e >= 1; --e)
@@ -651,13 +665,10 @@ RayResult cast_ray(vec2 pixel) {
         for (; i <= chunk_end; i += m)
           if (visit(r, L, i, min(m, end + 1 - i), res)) return res;
       }
-#ifdef SEGMENTS
-      // Never a point visited already (a thin cell's points may all be the last one's extension).
-      for (int j = max(next, end + 1); j <= min(last, end + EXTENSION); ++j)
-        if (visit(r, L, j, 1, res)) return res;
-      end = min(last, end + EXTENSION);
-#endif
       next = max(next, end + 1);
+#ifdef SEGMENTS
+      run_end = end;
+#endif
     }
     if (final_cell || next > last) break;
     // Step to the neighbour across the nearest face; ties step every tied axis at once.
@@ -669,6 +680,13 @@ RayResult cast_ray(vec2 pixel) {
       }
     t_in = t_out;
   }
+#ifdef SEGMENTS
+  // A run that reaches the last cell visited (or the guard): its points after it, never one
+  // visited already.
+  if (run_end >= 0)
+    for (int j = max(next, run_end + 1); j <= min(last, run_end + EXTENSION); ++j)
+      if (visit(r, L, j, 1, res)) return res;
+#endif
 #endif
 #ifdef VIRTUAL_SAMPLES
   vs_finish(r, L, last, span.y, res);

@@ -138,12 +138,27 @@ bool RayCaster::walk_cells(float span_x, float span_y) {
   float t_in = span_x;
   int next = 0;  // first lattice index not yet visited
   const int last = last_;
+  // Segment methods visit EXTENSION points after a run of occupied cells, so that the segment
+  // leaving it is not lost: once the run ends, before an empty cell, a leap or the ray's end. An
+  // occupied cell next continues the run from its own first point with its own multiplier, as the
+  // reference walks it (visited right away, the point would shift the next cell's samples).
+  int run_end = -1;  // the last index of the run whose points after it are owed
+  auto end_run = [&]() {
+    if (!segments_ || run_end < 0) return false;
+    const int end = std::min(last, run_end + kExtension);
+    for (int j = std::max(next, run_end + 1); j <= end; ++j)
+      if (visit(j, 1)) return true;
+    next = std::max(next, end + 1);
+    run_end = -1;
+    return false;
+  };
   for (int guard = 0; guard < 4 * (grid.x + grid.y + grid.z) + 4; ++guard) {
     const ivec3 c = glm::clamp(cell, ivec3(0), grid - 1);
     bool occupied = true;
     if (f_.key.space_skipping) {
       const uint8_t empty_distance = cell_byte(f_.cell_distance, f_, c);
       if (empty_distance > 1 && cell == c) {
+        if (end_run()) return true;
         // Every cell within empty_distance - 1 of this one is empty: leap out of that cube.
         const int reach = int(empty_distance) - 1;
         vec3 t_face;
@@ -178,12 +193,10 @@ bool RayCaster::walk_cells(float span_x, float span_y) {
           if (first - e >= next && visit(first - e, 1)) return true;
       for (; i <= end; i += m)
         if (visit(i, std::min(m, end + 1 - i))) return true;
-      if (segments_) {
-        for (int j = std::max(next, end + 1); j <= std::min(last, end + kExtension); ++j)
-          if (visit(j, 1)) return true;
-        end = std::min(last, end + kExtension);
-      }
       next = std::max(next, end + 1);
+      run_end = end;
+    } else if (end_run()) {
+      return true;
     }
     if (final_cell || next > last) break;
     // Step to the neighbour across the nearest face; ties step every tied axis at once.
@@ -194,7 +207,7 @@ bool RayCaster::walk_cells(float span_x, float span_y) {
       }
     t_in = t_out;
   }
-  return false;
+  return end_run();
 }
 
 }  // namespace

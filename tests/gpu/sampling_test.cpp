@@ -296,7 +296,12 @@ TEST(Adaptive, GpuMatchesTheCpuTwinAndTheReference) {
   test::TestVolume gv(v);
   for (const json& render : {json{{"adaptive", true}, {"step", 0.25}, {"space_skipping", false}},
                              json{{"adaptive", true}, {"step", 0.25}},
-                             json{{"adaptive", true}, {"sampling", "differential"}, {"s_k", 1}}}) {
+                             json{{"adaptive", true}, {"sampling", "differential"}, {"s_k", 1}},
+                             // Segment methods: a run of occupied cells is walked as the reference
+                             // walks the ray, each cell from its first point with its multiplier.
+                             json{{"adaptive", true}, {"step", 0.5}, {"classification", "preint"}, {"space_skipping", false}},
+                             json{{"adaptive", true}, {"step", 1}, {"classification", "preint"}},
+                             json{{"adaptive", true}, {"step", 0.5}, {"classification", "peaks"}}}) {
     const ResolvedScene s = test::make_scene(*v, scene_json(far_camera(), render));
     render::RenderStats st;
     const Image g = test::render_gpu(gv, s, render::GpuPath::Fragment, &st);
