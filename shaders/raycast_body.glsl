@@ -611,7 +611,7 @@ RayResult cast_ray(vec2 pixel) {
 #ifdef SPACE_SKIPPING
     uint empty_distance = cell_byte(u_cell_distance, c);
 #ifdef SEGMENTS
-    if (run_end >= 0 && (empty_distance > 1u && cell == c || empty_distance != 0u)) {  // the run ends here
+    if (run_end >= 0 && empty_distance != 0u) {  // an empty cell or a leap: the run ends here
       for (int j = max(next, run_end + 1); j <= min(last, run_end + EXTENSION); ++j)
         if (visit(r, L, j, 1, res)) return res;
       next = max(next, min(last, run_end + EXTENSION) + 1);

@@ -52,6 +52,11 @@ int render_within_budget(const RenderArgs& a) {
   render::RenderBackend b = render::open_backend(render::requested_backend(a.backend), "", {}, a.program_cache);
   const auto r = distributed::render_sequence(*b.renderer, parsed.volume.string(), {}, stats, scene, budget);
   encode::write_png(r.image, a.out);
+  if (stats.budget_too_small)
+    std::fprintf(stderr,
+                 "warning: a memory budget of %lld MiB is too small for the statistics' grids and value counts "
+                 "beside a brick: they held more than the budget; raise --memory-budget-mib\n",
+                 (long long)a.memory_budget_mib);
   if (r.budget_too_small)
     std::fprintf(stderr,
                  "warning: a memory budget of %lld MiB is too small for the %dx%d image's buffers and the grids "
@@ -67,7 +72,7 @@ int render_within_budget(const RenderArgs& a) {
     const nlohmann::json j = {{"bricks", r.bricks}, {"ghost", r.ghost}, {"largest_brick_bytes", r.largest_brick_bytes},
                               {"statistics_bricks", stats.bricks}, {"bytes_read", stats.bytes_read + r.bytes_read},
                               {"statistics_ms", stats.ms}, {"read_ms", r.read_ms}, {"render_ms", r.render_ms},
-                              {"wall_ms", wall}, {"budget_too_small", r.budget_too_small},
+                              {"wall_ms", wall}, {"budget_too_small", stats.budget_too_small || r.budget_too_small},
                               {"backend", render::to_string(b.backend)},
                               {"renderer", b.renderer->description()}};
     std::ofstream(a.stats) << j.dump(2) << "\n";

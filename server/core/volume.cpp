@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "core/parallel.h"
+#include "core/value_counts.h"
 
 namespace peakcast {
 
@@ -187,9 +188,12 @@ std::vector<uint64_t> Volume::box_value_counts(const Dims& lo, const Dims& hi) c
   if (!has_voxels()) throw std::logic_error("box_value_counts: the voxels were dropped");
   if (type_ == VoxelType::F32) throw std::logic_error("box_value_counts: float voxels have no finite set of values");
   const size_t values = type_ == VoxelType::U8 ? 256 : 65536;
-  std::vector<std::vector<uint64_t>> parts(static_cast<size_t>(hardware_threads()));
-  parallel_chunks(size_t(hi[2] - lo[2]), [&](size_t begin, size_t end, int worker) {
-    auto& c = parts[size_t(worker)];
+  const size_t tables = size_t(value_count_tables(type_)), planes = size_t(hi[2] - lo[2]);
+  const size_t per = (planes + tables - 1) / tables;
+  std::vector<std::vector<uint64_t>> parts(tables);
+  parallel_for(tables, [&](size_t worker) {  // contiguous planes per table
+    const size_t begin = std::min(planes, worker * per), end = std::min(planes, begin + per);
+    auto& c = parts[worker];
     c.assign(values, 0);
     for (int64_t k = lo[2] + int64_t(begin); k < lo[2] + int64_t(end); ++k)
       for (int64_t j = lo[1]; j < hi[1]; ++j) {
@@ -199,7 +203,7 @@ std::vector<uint64_t> Volume::box_value_counts(const Dims& lo, const Dims& hi) c
         else
           for (int64_t i = lo[0]; i < hi[0]; ++i) ++c[reinterpret_cast<const uint16_t*>(data_.get())[row + size_t(i)]];
       }
-  });
+  }, int(tables));
   std::vector<uint64_t> all(values, 0);
   for (const auto& c : parts)
     for (size_t v = 0; v < c.size(); ++v) all[v] += c[v];

@@ -13,6 +13,7 @@
 
 #include "core/macrocell_share.h"
 #include "core/parallel.h"
+#include "core/value_counts.h"
 #include "distributed/brick_frame.h"
 
 namespace peakcast::distributed {
@@ -68,10 +69,11 @@ constexpr int64_t kGridCellBytes = 3 * sizeof(float);
 
 // Statistics hold beside each brick: the two grids' shares, to which each brick adds its voxels
 // (bench outofcore's 4096^3 pyramid: 64^3 cells, 16 MiB), and for integers the count
-// of each stored value, per thread and summed (65536 counts for 16-bit voxels).
+// of each stored value, per table and summed (65536 counts for 16-bit voxels, at most 4 tables).
 int64_t statistics_beside(const Index3& dims, VoxelType type) {
   const int64_t values = type == VoxelType::U8 ? 256 : type == VoxelType::U16 ? 65536 : Volume::kHistogramBins;
-  return 2 * macrocell_count(dims) * kShareCellBytes + (hardware_threads() + 2) * values * int64_t(sizeof(uint64_t));
+  return 2 * macrocell_count(dims) * kShareCellBytes +
+         (value_count_tables(type) + 2) * values * int64_t(sizeof(uint64_t));
 }
 
 }  // namespace
@@ -115,8 +117,9 @@ StatisticsRun::StatisticsRun(std::string path, LoadOptions base, int64_t budget_
   s_.source = head.source_type();
   floats_ = head.type() == VoxelType::F32;
   offset_ = storage_offset(head.source_type());
-  s_.bricks = bricks_for_budget(dims_, 0, voxel_bytes(head.type()),
-                                bricks_share(budget_bytes, statistics_beside(dims_, head.type())), 1);
+  const int64_t beside = statistics_beside(dims_, head.type());
+  s_.budget_too_small = voxel_share(budget_bytes) - beside < voxel_share(budget_bytes) / 2;
+  s_.bricks = bricks_for_budget(dims_, 0, voxel_bytes(head.type()), bricks_share(budget_bytes, beside), 1);
   split_ = kd_split(dims_, s_.bricks, 0);
   if (floats_) histogram_.assign(Volume::kHistogramBins, 0);
 }

@@ -38,6 +38,9 @@ struct SequenceStatistics {
   int bricks = 0;
   int64_t bytes_read = 0;  // voxel bytes of both passes
   double ms = 0.0;
+  // What the statistics hold beside each brick (the grids' shares, the value counts) left the
+  // bricks less than half their share of the budget: they got that half, over the budget.
+  bool budget_too_small = false;
 };
 
 // The bricks of a sequence take 90% of budget_bytes; the rest is for decoding chunks, the image

@@ -156,7 +156,10 @@ std::shared_ptr<const distributed::SequenceStatistics> VolumeStore::full_statist
     if (stop.load()) throw VolumeError(f.path, "the server is shutting down");
     run.step();
   }
-  f.set_statistics(std::make_shared<const distributed::SequenceStatistics>(run.take()));
+  auto statistics = std::make_shared<const distributed::SequenceStatistics>(run.take());
+  if (statistics->budget_too_small)  // the bricks got half their share: the reduction held more than the budget
+    log::warn("memory budget too small for level 0's statistics beside their bricks", {{"path", f.path.string()}});
+  f.set_statistics(std::move(statistics));
   return f.statistics();
 }
 
