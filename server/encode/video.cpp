@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <mutex>
 #include <stdexcept>
+#include <vector>
 
 #include "encode/yuv420.h"
 
@@ -234,6 +236,7 @@ struct VideoEncoder::Impl {
   PacketPtr packet;
   SwsPtr sws;
   int sws_w = 0, sws_h = 0;
+  std::vector<uint8_t> padded;  // a frame of another size, with swscale's read padding
   int64_t pts = 0;
   static void scale_into_frame_impl(Impl& m, const uint8_t* rgb, int width, int height);
 };
@@ -279,7 +282,13 @@ void VideoEncoder::Impl::scale_into_frame_impl(Impl& m, const uint8_t* rgb, int 
     m.sws_w = width;
     m.sws_h = height;
   }
-  const uint8_t* src[1] = {rgb};
+  // swscale's readers load past the last pixel (a SEGV under TSan, whose heap ends the caller's
+  // tight buffer at a page): the frame is handed over from a copy with FFmpeg's input padding.
+  const size_t bytes = size_t(width) * 3 * size_t(height);
+  m.padded.resize(bytes + AV_INPUT_BUFFER_PADDING_SIZE);
+  std::memcpy(m.padded.data(), rgb, bytes);
+  std::memset(m.padded.data() + bytes, 0, AV_INPUT_BUFFER_PADDING_SIZE);
+  const uint8_t* src[1] = {m.padded.data()};
   const int stride[1] = {width * 3};
   sws_scale(m.sws.get(), src, stride, 0, height, m.frame->data, m.frame->linesize);
 }
