@@ -52,8 +52,10 @@ int64_t voxel_share(int64_t budget_bytes) { return budget_bytes / 10 * 9; }
 
 // What the budget holds beside the bricks that does not shrink with them, taken from their share
 // first: a budget too small for it (a few KiB in tests) still gives the bricks half their share.
-int64_t bricks_share(int64_t budget_bytes, int64_t beside) {
+// too_small: the budget held more than it says (budget_too_small).
+int64_t bricks_share(int64_t budget_bytes, int64_t beside, bool& too_small) {
   const int64_t share = voxel_share(budget_bytes);
+  too_small = share - beside < share / 2;
   return std::max(share - beside, share / 2);
 }
 
@@ -117,9 +119,8 @@ StatisticsRun::StatisticsRun(std::string path, LoadOptions base, int64_t budget_
   s_.source = head.source_type();
   floats_ = head.type() == VoxelType::F32;
   offset_ = storage_offset(head.source_type());
-  const int64_t beside = statistics_beside(dims_, head.type());
-  s_.budget_too_small = voxel_share(budget_bytes) - beside < voxel_share(budget_bytes) / 2;
-  s_.bricks = bricks_for_budget(dims_, 0, voxel_bytes(head.type()), bricks_share(budget_bytes, beside), 1);
+  const int64_t share = bricks_share(budget_bytes, statistics_beside(dims_, head.type()), s_.budget_too_small);
+  s_.bricks = bricks_for_budget(dims_, 0, voxel_bytes(head.type()), share, 1);
   split_ = kd_split(dims_, s_.bricks, 0);
   if (floats_) histogram_.assign(Volume::kHistogramBins, 0);
 }
@@ -229,8 +230,7 @@ SequenceRun::SequenceRun(std::string path, LoadOptions base, std::shared_ptr<con
   const int64_t image_bytes = 8 * int64_t(scene_.scene.width) * scene_.scene.height * 4 * int64_t(sizeof(float));
   const int64_t grid_bytes = 2 * macrocell_count(dims) * kGridCellBytes;
   r_.beside_bytes = image_bytes + grid_bytes;
-  r_.budget_too_small = voxel_share(budget_bytes) - r_.beside_bytes < voxel_share(budget_bytes) / 2;
-  r_.bricks = bricks_for_budget(dims, r_.ghost, bpv, bricks_share(budget_bytes, r_.beside_bytes), 2);
+  r_.bricks = bricks_for_budget(dims, r_.ghost, bpv, bricks_share(budget_bytes, r_.beside_bytes, r_.budget_too_small), 2);
   split_ = kd_split(dims, r_.bricks, r_.ghost);
   r_.largest_brick_bytes = largest_read(split_) * int64_t(bpv);
   const glm::dvec3 eye = (scene_.camera.eye - stats_->box.origin) / stats_->box.spacing;
