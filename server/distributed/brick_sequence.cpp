@@ -119,7 +119,8 @@ StatisticsRun::StatisticsRun(std::string path, LoadOptions base, int64_t budget_
   s_.source = head.source_type();
   floats_ = head.type() == VoxelType::F32;
   offset_ = storage_offset(head.source_type());
-  const int64_t share = bricks_share(budget_bytes, statistics_beside(dims_, head.type()), s_.budget_too_small);
+  const int64_t beside = statistics_beside(dims_, head.type());
+  const int64_t share = bricks_share(budget_bytes, beside, s_.budget_too_small);
   s_.bricks = bricks_for_budget(dims_, 0, voxel_bytes(head.type()), share, 1);
   split_ = kd_split(dims_, s_.bricks, 0);
   if (floats_) histogram_.assign(Volume::kHistogramBins, 0);
@@ -230,7 +231,8 @@ SequenceRun::SequenceRun(std::string path, LoadOptions base, std::shared_ptr<con
   const int64_t image_bytes = 8 * int64_t(scene_.scene.width) * scene_.scene.height * 4 * int64_t(sizeof(float));
   const int64_t grid_bytes = 2 * macrocell_count(dims) * kGridCellBytes;
   r_.beside_bytes = image_bytes + grid_bytes;
-  r_.bricks = bricks_for_budget(dims, r_.ghost, bpv, bricks_share(budget_bytes, r_.beside_bytes, r_.budget_too_small), 2);
+  const int64_t share = bricks_share(budget_bytes, r_.beside_bytes, r_.budget_too_small);
+  r_.bricks = bricks_for_budget(dims, r_.ghost, bpv, share, 2);
   split_ = kd_split(dims, r_.bricks, r_.ghost);
   r_.largest_brick_bytes = largest_read(split_) * int64_t(bpv);
   const glm::dvec3 eye = (scene_.camera.eye - stats_->box.origin) / stats_->box.spacing;
