@@ -20,7 +20,7 @@ function instrument(page) {
       constructor(...a) { super(...a); window.__sockets.push(this); }
       send(m) { if (typeof m === 'string' && JSON.parse(m).type === 'keyframe') window.__video.asked++; return super.send(m); }
     };
-    window.__video = { decoded: 0, closed: 0, shown: [], chunks: [], asked: 0 };
+    window.__video = { decoded: 0, closed: 0, shown: [], chunks: [], asked: 0, stats: [] };
     const close = VideoFrame.prototype.close;
     VideoFrame.prototype.close = function () { if (!this.__closed) { this.__closed = true; window.__video.closed++; } return close.call(this); };
     const Decoder = window.VideoDecoder;
@@ -42,9 +42,14 @@ async function open(view = { width: 1100, height: 640 }) {
   await page.goto(server.url);
   await waitFinal(page);
   // After the client's own listener has drawn a frame: note it, and keep the newest video frame's pixels.
+  // Each frame's stats (codec, warnings): why a frame was not video, when one is not.
+  await page.evaluate(() => window.peakcast.stream.addEventListener('stats', (e) => {
+    const s = e.detail;
+    window.__video.stats.push({ id: s.frame, final: s.final, codec: s.codec, warnings: s.warnings });
+  }));
   await page.evaluate(() => window.peakcast.stream.addEventListener('frame', (e) => {
     const f = e.detail.frame;
-    window.__video.shown.push({ id: f.id, video: f.video, key: f.key, final: f.final });
+    window.__video.shown.push({ id: f.id, video: f.video, key: f.key, final: f.final, camera: f.cameraVersion });
     if (f.video) {
       const c = document.querySelector('#frame');
       window.__video.last = c.getContext('2d').getImageData(0, 0, c.width, c.height);
@@ -65,10 +70,13 @@ async function useCodec(page, codec) {
   await settled(page, () => page.selectOption('#codec', codec));
 }
 
-// A mouse orbit of `steps` moves; resolves with the frames shown meanwhile and the seconds it took.
+// A mouse orbit of `steps` moves; resolves with the frames shown meanwhile, the seconds it took,
+// and the orbit's interactive frames: those of its cameras. A frame shown meanwhile may be one
+// rendered before the orbit, for a setting sent earlier (on a busy machine, the interactive frame
+// of a render change sent before the codec was), and says nothing of the orbit's frames.
 async function orbit(page, steps = 30, dx = 10) {
   const box = await page.locator('#frame').boundingBox();
-  const n0 = await page.evaluate(() => window.__video.shown.length);
+  const [n0, camera0] = await page.evaluate(() => [window.__video.shown.length, window.peakcast.app.cameraVersion]);
   const t0 = Date.now();
   await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
   await page.mouse.down();
@@ -79,7 +87,7 @@ async function orbit(page, steps = 30, dx = 10) {
   await page.mouse.up();
   const seconds = (Date.now() - t0) / 1000;
   const shown = await page.evaluate((n) => window.__video.shown.slice(n), n0);
-  return { shown, seconds, interactive: shown.filter((f) => !f.final) };
+  return { shown, seconds, interactive: shown.filter((f) => !f.final && f.camera > camera0) };
 }
 
 // Resolves once the final frame of the orbit's last camera is shown. A final frame alone is not
@@ -122,7 +130,8 @@ for (const codec of ['h264', 'vp9']) {
     await useCodec(page, codec);
     const run = await orbit(page, 20);
     assert.ok(run.interactive.length >= 3, `only ${run.interactive.length} interactive frames`);
-    assert.ok(run.interactive.every((f) => f.video), JSON.stringify(run.interactive));
+    const statsOf = () => page.evaluate(() => window.__video.stats);
+    assert.ok(run.interactive.every((f) => f.video), JSON.stringify({ shown: run.interactive, stats: await statsOf() }));
     const version = await page.evaluate(() => window.peakcast.app.cameraVersion);
     await waitFinal(page, { cameraVersion: version });
     const stats = await page.textContent('#stats');
