@@ -158,10 +158,14 @@ void RenderService::collect_frame() {
     if (f.job.video) f.video_ticket = f.job.video->take_ticket();  // encoded in the order rendered
     std::optional<FrameJob> refined;  // only when a finest-level frame follows: what it echoes
     if (f.job.refine) refined = f.job;
-    pool_->submit([this, f = std::move(f), sink = s.sink](encode::JpegEncoder& enc) {
+    // The finest level's frame is queued once the held level's frame is handed to the sink: it
+    // then reaches the wire after it, with its stats after the held frame's. Queued here, a quick
+    // refinement could overtake the encode, and its frame (a newer id) be replaced in the send
+    // queue by the held one, or its stats come between the held frame and the held frame's stats.
+    pool_->submit([this, f = std::move(f), sink = s.sink, session = s.session, refined](encode::JpegEncoder& enc) {
       encode_viewer_frame(enc, f, *sink, metrics_);
+      if (refined) queue_refinement(session, sink, *refined);
     });
-    if (refined) queue_refinement(s.session, s.sink, std::move(*refined));
   } catch (const std::exception& e) {
     s.session->frame_dropped(s.job.frame_id);
     s.sink->deliver_text(protocol::error_message("render_failed", e.what()));

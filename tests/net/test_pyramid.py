@@ -95,7 +95,8 @@ async def test_a_viewer_sees_the_finest_level_after_the_level_held():
         held, held_stats = await final_of_level(1, refining=True)
         fine, fine_stats = await final_of_level(0)
         # This refinement's messages: the last run of rising fractions (one that new input cut
-        # short may come before it; the first may come before the held frame, encoded meanwhile).
+        # short may come before it). The refinement is queued once the held frame is handed on,
+        # so its messages and its frame come after the held frame and the held frame's stats.
         refining = [t["fraction"] for t in c.texts if t["type"] == "refining"]
         run = [refining[-1]]
         for f in reversed(refining[:-1]):
