@@ -5,6 +5,7 @@
 #include "core/ray_texture_png.h"
 #include "encode/video.h"
 #include "net/connection_slot.h"
+#include "net/frame_queue.h"
 #include "render/variant.h"
 #include "session/protocol.h"
 
@@ -262,16 +263,16 @@ void WsSession::enqueue(Outgoing out) {
     return;
   }
   if (out.binary) {
-    // The newest frame replaces a frame still waiting (not the one being written), unless that
-    // one is a video frame: the frames after it are coded against it. The flow control before
-    // rendering (at most kMaxFramesInFlight un-acknowledged) bounds what waits.
-    for (size_t k = writing_ ? 1 : 0; k < queue_.size(); ++k)
-      if (queue_[k].binary && !queue_[k].video) {
-        if (session_) session_->frame_dropped(queue_[k].frame_id);
-        app_.metrics.add("peakcast_frames_dropped_total", "", 1);
-        queue_.erase(queue_.begin() + long(k));
-        break;
-      }
+    // The newest frame replaces a frame still waiting (not the one being written); an older one
+    // is dropped instead (net/frame_queue.h). The flow control before rendering (at most
+    // kMaxFramesInFlight un-acknowledged) bounds what waits.
+    const FramePlacement p = place_frame(queue_, writing_ ? 1 : 0, out.frame_id, out.video);
+    if (p.replace || p.drop) {
+      if (session_) session_->frame_dropped(p.drop ? out.frame_id : queue_[*p.replace].frame_id);
+      app_.metrics.add("peakcast_frames_dropped_total", "", 1);
+      if (p.drop) return;
+      queue_.erase(queue_.begin() + long(*p.replace));
+    }
   } else if (queue_.size() >= limits::kMaxQueuedTextMessages) {
     return close(websocket::close_code::policy_error, "client too slow");
   }

@@ -183,6 +183,20 @@ class Client:
                 return m
         raise TimeoutError(f"no {type_} message")
 
+    async def stats_of(self, frame, timeout=30):
+        """The stats message of frame `frame["id"]`, received already or still to come. A frame's
+        stats need not follow it: the encode threads hand frames on in the order they finish."""
+        deadline = time.time() + timeout
+        seen = 0
+        while True:
+            for m in self.texts[seen:]:
+                if m.get("type") == "stats" and m.get("frame") == frame["id"]:
+                    return m
+            seen = len(self.texts)
+            if time.time() >= deadline:
+                raise TimeoutError(f"no stats for frame {frame['id']}")
+            await self.recv(deadline - time.time())
+
     async def next_frame(self, final=None, timeout=60):
         deadline = time.time() + timeout
         while time.time() < deadline:
