@@ -82,6 +82,8 @@ export class Stream extends EventTarget {
     const frame = parseFrame(buffer);
     frame.receivedAt = performance.now();
     if (frame.video) return this.#video.push(frame, this.codec);
+    // Newest id wins: a frame the server encoded late can arrive after a newer one.
+    if (this.#pending && frame.id < this.#pending.id) return this.send({ type: 'ack', frame: frame.id });
     if (this.#pending) this.send({ type: 'ack', frame: this.#pending.id });  // superseded, never shown
     this.#pending = frame;
     if (!this.#decoding) this.#decodeNewest();

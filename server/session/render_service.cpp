@@ -163,7 +163,12 @@ void RenderService::collect_frame() {
     // refinement could overtake the encode, and its frame (a newer id) be replaced in the send
     // queue by the held one, or its stats come between the held frame and the held frame's stats.
     pool_->submit([this, f = std::move(f), sink = s.sink, session = s.session, refined](encode::JpegEncoder& enc) {
-      encode_viewer_frame(enc, f, *sink, metrics_);
+      try {
+        encode_viewer_frame(enc, f, *sink, metrics_);
+      } catch (...) {  // the held frame failed: its finest level is still owed
+        if (refined) queue_refinement(session, sink, *refined);
+        throw;
+      }
       if (refined) queue_refinement(session, sink, *refined);
     });
   } catch (const std::exception& e) {
@@ -196,7 +201,7 @@ void RenderService::queue_refinement(const std::shared_ptr<Session>& session, co
         s->deliver_text(protocol::error_message("render_failed", "the finest level: " + r.error));
       return;
     }
-    deliver_refined_frame(*s, session->refined_frame_id(), job, std::move(r));
+    if (const auto id = session->refined_frame_id(*cancelled)) deliver_refined_frame(*s, *id, job, std::move(r));
   };
   // Refused only when shutting down, or while this viewer's last refinement is still live.
   if (scheduler_.submit_still(std::move(still))) metrics_.set("peakcast_stills_queued", "", double(scheduler_.stills_pending()));

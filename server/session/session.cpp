@@ -52,8 +52,9 @@ void Session::set_full_statistics(const std::shared_ptr<VolumeEntry>& volume,
   if (!dirty_) final_pending_ = true;  // the view at rest now gets its finest frame too
 }
 
-uint32_t Session::refined_frame_id() {
+std::optional<uint32_t> Session::refined_frame_id(const std::atomic<bool>& cancelled) {
   std::lock_guard lock(m_);
+  if (cancelled.load()) return std::nullopt;
   const uint32_t id = next_frame_id_++;
   outstanding_.insert(id);
   return id;

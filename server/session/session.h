@@ -117,8 +117,10 @@ class Session {
   // has moved to another volume meanwhile.
   void set_full_statistics(const std::shared_ptr<VolumeEntry>& volume,
                            std::shared_ptr<const distributed::SequenceStatistics> statistics);
-  // A frame id for a final frame of the finest level, counted in flight like any frame.
-  uint32_t refined_frame_id();
+  // A frame id for a final frame of the finest level, counted in flight like any frame; nullopt
+  // when `cancelled` (new input since). Checked under the session's lock, which input takes to
+  // cancel: a frame of the newer view cannot take an id before a stale refinement's.
+  std::optional<uint32_t> refined_frame_id(const std::atomic<bool>& cancelled);
   // The viewer left: a refinement of its view still queued is stale (answered, never drawn).
   void leave();
 

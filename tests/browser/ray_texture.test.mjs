@@ -244,12 +244,14 @@ test('a reconnect replays the strokes: the first in hello, the rest as stroke me
   const welcome = await page.evaluate(() => window.__got.find((g) => g.m.type === 'welcome').m.state.render.ray_texture);
   assert.equal(welcome.strokes.length, 1, 'the welcome shows the texture the hello carried');
   await page.evaluate(() => window.peakcast.stream.send({ type: 'quality', final_format: 'png' }));
-  const replayed = await finalPng(page, { exact: true }).catch(() => frameState(page));
-  const since = await page.evaluate(() => {  // the welcome's render version, and what was sent after it
+  const since = () => page.evaluate(() => {  // the welcome's render version, what was sent after it, the canvas
     const w = window.__got.filter((g) => g.m.type === 'welcome').at(-1);
-    return { welcome: w.m.state.versions.render, sent: window.__sent.filter((s) => s.k > w.k && s.m.type !== 'ack').map((s) => s.m.type) };
+    const { final, png, renderVersion } = document.querySelector('#frame').dataset;
+    return { welcome: w.m.state.versions.render, sent: window.__sent.filter((s) => s.k > w.k && s.m.type !== 'ack').map((s) => s.m.type),
+      shown: { final, png, renderVersion } };
   });
-  assert.equal(replayed.render, n, `the new session: version 1 with the hello's texture, +1 per stroke: ${JSON.stringify(since)}`);
+  const replayed = await finalPng(page, { exact: true }).catch(async () => assert.fail(`no final PNG of the new session's version: ${JSON.stringify(await since())}`));
+  assert.equal(replayed.render, n, `the new session: version 1 with the hello's texture, +1 per stroke: ${JSON.stringify(await since())}`);
   await snap(page, 'Q');
   const c = await compare(page, 'P', 'Q');
   console.log(`reconnect: ${n} strokes replayed (1 in hello, ${n - 1} as stroke messages), ${c.changed} pixels differ`);

@@ -150,6 +150,7 @@ class Client:
 
     def __init__(self, ws, ack=True):
         self.ws, self.ack, self.texts, self.frames = ws, ack, [], []
+        self.unread_frames = []  # frames stats_of received while it looked: next_frame's first
 
     @classmethod
     async def connect(cls, server, ack=True, **kw):
@@ -195,9 +196,15 @@ class Client:
             seen = len(self.texts)
             if time.time() >= deadline:
                 raise TimeoutError(f"no stats for frame {frame['id']}")
-            await self.recv(deadline - time.time())
+            m = await self.recv(deadline - time.time())
+            if "image" in m:
+                self.unread_frames.append(m)
 
     async def next_frame(self, final=None, timeout=60):
+        while self.unread_frames:
+            m = self.unread_frames.pop(0)
+            if final is None or m["final"] == final:
+                return m
         deadline = time.time() + timeout
         while time.time() < deadline:
             m = await self.recv(deadline - time.time())
