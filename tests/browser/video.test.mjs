@@ -152,21 +152,27 @@ for (const codec of ['h264', 'vp9']) {
 test('a video orbit keeps up with a JPEG one', async () => {
   const page = await open();
   const fps = (r) => r.interactive.length / r.seconds;
-  // JPEG and H.264 orbits alternate; each codec's best round counts. Under CTest the machine is
-  // shared with other tests, and a round that met a busy moment says nothing about the codec. A
-  // second pair of rounds only when the first falls short.
-  const best = { jpeg: 0, h264: 0 };
-  for (let round = 0; round < 2 && !(best.h264 >= 0.7 * best.jpeg && round > 0); round++) {
+  // A round is a JPEG orbit and an H.264 orbit back to back; a round's ratio compares the two
+  // under the same load. Under CTest the machine is shared with other tests, whose load comes
+  // and goes: the best of up to three rounds counts (each codec's best over different rounds
+  // compared a quiet JPEG round with a busy H.264 one: 13.1 against 7.0 frames/s, while the
+  // busy round's own pair was 8.0 against 7.0). A further round only when the last falls short.
+  const rounds = [];
+  let best = 0;
+  for (let round = 0; round < 3 && best < 0.7; round++) {
+    const r = {};
     for (const codec of ['jpeg', 'h264']) {
       if (round > 0 || codec !== 'jpeg') await useCodec(page, codec);
       const run = await orbit(page, 40, codec === 'jpeg' ? 10 : -10);
       if (codec === 'h264') assert.ok(run.interactive.every((f) => f.video), JSON.stringify(run.interactive));
-      best[codec] = Math.max(best[codec], fps(run));
-      console.log(`orbit round ${round + 1}: ${codec} ${fps(run).toFixed(1)} frames/s`);
+      r[codec] = fps(run);
+      console.log(`orbit round ${round + 1}: ${codec} ${r[codec].toFixed(1)} frames/s`);
       await orbitSettled(page);
     }
+    rounds.push(r);
+    best = Math.max(best, r.h264 / r.jpeg);
   }
-  assert.ok(best.h264 >= 0.7 * best.jpeg, `h264 ${best.h264.toFixed(1)} vs jpeg ${best.jpeg.toFixed(1)} frames/s`);
+  assert.ok(best >= 0.7, `h264 against jpeg frames/s, by round: ${rounds.map((r) => `${r.h264.toFixed(1)}/${r.jpeg.toFixed(1)}`).join(', ')}`);
   const pending = await page.evaluate(() => window.__video.decoded - window.__video.closed);
   assert.equal(pending, 0);
   await page.close();
