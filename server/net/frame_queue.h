@@ -1,8 +1,8 @@
-// Where a frame goes in a viewer's send queue (docs/streaming.md, "Frames in flight"): the newest
-// frame replaces one still waiting, so a slow link shows the newest picture rather than a backlog.
-// Frames reach the queue in the order their encodes finish, which is not always the order they
-// were rendered in (encode threads, a refinement's still thread): an older frame arriving after a
-// newer one must not replace it.
+// Where a frame goes in a viewer's send queue (docs/streaming.md, "Key frames, acks and dropped
+// frames"): the newest frame replaces one still waiting, so a slow link shows the newest picture
+// rather than a backlog. Frames reach the queue in the order their encodes finish, which is not
+// always the order they were rendered in (encode threads, a refinement's still thread): an older
+// frame arriving after a newer one must not replace it.
 #pragma once
 
 #include <cstddef>
