@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <deque>
+#include <exception>
 #include <future>
 #include <optional>
 #include <tuple>
@@ -163,13 +164,14 @@ void RenderService::collect_frame() {
     // refinement could overtake the encode, and its frame (a newer id) be replaced in the send
     // queue by the held one, or its stats come between the held frame and the held frame's stats.
     pool_->submit([this, f = std::move(f), sink = s.sink, session = s.session, refined](encode::JpegEncoder& enc) {
+      std::exception_ptr failed;  // the held frame failed: its finest level is still owed
       try {
         encode_viewer_frame(enc, f, *sink, metrics_);
-      } catch (...) {  // the held frame failed: its finest level is still owed
-        if (refined) queue_refinement(session, sink, *refined);
-        throw;
+      } catch (...) {
+        failed = std::current_exception();
       }
       if (refined) queue_refinement(session, sink, *refined);
+      if (failed) std::rethrow_exception(failed);
     });
   } catch (const std::exception& e) {
     s.session->frame_dropped(s.job.frame_id);
