@@ -28,6 +28,9 @@ for t in "${targets[@]}"; do
         -artifact_prefix="$FUZZ_DIR/findings/$t-" "$corpus")
   [[ -d $PEAKCAST_ROOT/tests/fuzz/seeds/$t ]] && args+=("$PEAKCAST_ROOT/tests/fuzz/seeds/$t")
   [[ -f $PEAKCAST_ROOT/tests/fuzz/$t.dict ]] && args=(-dict="$PEAKCAST_ROOT/tests/fuzz/$t.dict" "${args[@]}")
+  # tests/fuzz/<target>.options: that target's own libFuzzer flags (e.g. a tighter malloc limit).
+  [[ -f $PEAKCAST_ROOT/tests/fuzz/$t.options ]] && read -r -a extra <"$PEAKCAST_ROOT/tests/fuzz/$t.options" &&
+    args=("${extra[@]}" "${args[@]}")
   log=$FUZZ_DIR/$t.log
   start=$SECONDS
   if (cd "$FUZZ_DIR" && "$FUZZ_DIR/tests/fuzz/$t" "${args[@]}") >"$log" 2>&1; then result=ok; else

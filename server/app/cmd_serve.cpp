@@ -22,7 +22,7 @@ int serve(const net::ServerConfig& c, const ServeOptions& o) {
   std::printf("peakcast: serving on http://%s:%u (renderer %s)\n", c.bind.c_str(), unsigned(server.port()),
               server.app().render.gl_renderer().c_str());
   log::info("serving", {{"bind", c.bind}, {"port", server.port()}, {"renderer", server.app().render.gl_renderer()},
-                        {"data", o.data}, {"volumes", o.volumes}, {"auth", !c.token.empty()}, {"ranks", c.ranks}});
+                        {"data", o.data}, {"volumes", o.volumes}, {"auth", !c.token.empty() || !c.user_tokens.empty()}, {"ranks", c.ranks}});
   std::fflush(stdout);
   server.run_until_signal();
   std::printf("peakcast: stopped\n");
@@ -44,6 +44,7 @@ void add_serve_command(CLI::App& app, Runner& run) {
       }
       log::configure(log::parse_level(o->log_level), log::parse_format(o->log_format));
       net::ServerConfig config = o->resolved();
+      unsetenv("PEAKCAST_TOKEN");  // read: not passed on to any process this one starts
       if (mpi_world_size_hint() > 1) {  // mpirun -np N peakcast serve: rank 0 serves, every rank renders
 #ifdef PEAKCAST_HAVE_MPI
         return mpi_serve(config.backend, config.egl_device, [&](MpiServeHooks hooks) {

@@ -16,7 +16,7 @@ namespace {
 // Options that are not settings: not layered, not printed.
 const std::set<std::string> kNotSettings = {"help", "config", "print-config"};
 // Repeatable options: a list in every form.
-const std::set<std::string> kLists = {"data", "volume", "allow-origin"};
+const std::set<std::string> kLists = {"data", "volume", "allow-origin", "allowed-host"};
 
 std::string key_of(const CLI::Option& opt) { return opt.get_single_name(); }
 
@@ -77,6 +77,17 @@ net::ServerConfig ServeOptions::resolved() const {
   c.upload_limits.max_concurrent = max_uploads;
   c.upload_limits.per_minute = uploads_per_minute;
   c.upload_limits.idle_timeout = std::chrono::seconds(upload_timeout);
+  c.upload_limits.min_bytes_per_second = upload_min_rate_kib * 1024;
+  c.upload_limits.deadline = std::chrono::seconds(upload_deadline);
+  if (!token_file.empty()) {
+    if (!c.token.empty()) throw std::invalid_argument("give --token or --token-file, not both");
+    c.token = net::read_token_file(token_file);
+  }
+  if (!user_token_file.empty()) c.user_tokens = net::read_user_tokens(user_token_file);
+  for (const std::string& h : c.allowed_hosts)
+    if (h != "*" && net::host_name(h).empty())
+      throw std::invalid_argument("--allowed-host '" + h + "' is not a host name (a name or an address; '*' for any; "
+                                  "no wildcards in names)");
   return c;
 }
 
@@ -96,8 +107,15 @@ void add_serve_options(CLI::App& s, ServeOptions& o) {
   s.add_option("--port", c.port, "TCP port (0: any free port)");
   s.add_option("--data", o.data, "directory volumes may be opened from (repeatable)");
   s.add_option("--volume", o.volumes, "volume to preload (repeatable; the first is the default view)");
-  s.add_option("--token", c.token, "require this bearer token (HTTP header, ?token= or hello.token)");
+  s.add_option("--token", c.token,
+               "require this bearer token (HTTP header, ?token= or hello.token); it shows in the process list: "
+               "prefer --token-file");
+  s.add_option("--token-file", o.token_file, "read the admin token from the first line of this file");
+  s.add_option("--user-token-file", o.user_token_file,
+               "user tokens, a line \"NAME TOKEN\" each: they view, render and upload, and delete only their own uploads");
   s.add_option("--allow-origin", c.allow_origins, "WebSocket Origin to accept besides the server's own (repeatable)");
+  s.add_option("--allowed-host", c.allowed_hosts,
+               "a Host name to answer besides the bind address and localhost (repeatable; * for any): DNS rebinding");
   s.add_option("--max-sessions", c.max_sessions, "concurrent WebSocket sessions")->check(CLI::Range(1, 4096));
   s.add_option("--idle-timeout", o.idle_seconds, "seconds without a client message before closing")
       ->check(CLI::Range(1, 86400));
@@ -140,6 +158,11 @@ void add_serve_options(CLI::App& s, ServeOptions& o) {
       ->check(CLI::Range(1.0, 1e6));
   s.add_option("--upload-timeout", o.upload_timeout, "seconds an upload may send nothing before it is ended")
       ->check(CLI::Range(1, 3600));
+  s.add_option("--upload-min-rate-kib", o.upload_min_rate_kib,
+               "KiB/s an upload must average after its first --upload-timeout seconds; slower, it is ended (408)")
+      ->check(CLI::Range(0.0, 1e6));
+  s.add_option("--upload-deadline", o.upload_deadline, "seconds within which an upload's whole body must arrive")
+      ->check(CLI::Range(1, 86400));
   s.add_option("--web-dir", o.web_dir, "the browser client's files");
   s.add_option("--shader-dir", o.shader_dir, "the GLSL shaders");
   s.add_option("--egl-device", c.egl_device,

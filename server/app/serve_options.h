@@ -28,12 +28,17 @@ struct ServeOptions {
   int max_uploads = limits::kDefaultMaxConcurrentUploads;
   double uploads_per_minute = limits::kUploadsPerMinutePerClient;
   int upload_timeout = int(limits::kDefaultUploadIdleTimeout.count());
+  double upload_min_rate_kib = limits::kDefaultUploadMinBytesPerSecond / 1024;
+  int upload_deadline = int(limits::kDefaultUploadDeadline.count());
+  std::string token_file, user_token_file;  // read by resolved()
   std::string log_level = "info", log_format = "text";
   std::string config_file;
   bool print_config = false;
   std::map<std::string, std::string> source;  // option key -> "flag" | "env NAME" | "file PATH" | "default"
 
-  net::ServerConfig resolved() const;  // server plus the fields kept here in other units
+  // server plus the fields kept here in other units, and the tokens read from their files.
+  // Throws std::invalid_argument naming the option when a file cannot be read or is wrong.
+  net::ServerConfig resolved() const;
 };
 
 // Adds every serve option to `cmd`, bound to `o`.

@@ -5,12 +5,14 @@
 #include <fstream>
 
 #include "chunked/formats.h"
+#include "core/file_roots.h"
 
 namespace fs = std::filesystem;
 
 namespace peakcast::chunked {
 
 std::optional<std::vector<uint8_t>> read_file_if_there(const fs::path& file, int64_t limit) {
+  file_roots::check(file);  // a chunk or level linked out of the data directories is refused
   std::error_code ec;
   const bool there = fs::exists(file, ec);
   if (ec) throw VolumeError(file, "cannot be read: " + ec.message());  // not "missing": no fill value for it

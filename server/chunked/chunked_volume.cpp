@@ -61,6 +61,22 @@ void place_chunk(const std::vector<uint8_t>* bytes, const std::vector<uint8_t>& 
     }
 }
 
+// How many chunks may be decoded at once within options.decode_budget_bytes beside the voxels
+// (all cores when there is no budget). Refused before any chunk is read when not even one fits.
+int decoders_within(const ChunkedVolume& cv, int level, const VolumeHeader& h, double chunks, const LoadOptions& options) {
+  const int most = int(std::min<double>(hardware_threads(), std::max(chunks, 1.0)));
+  if (options.decode_budget_bytes <= 0) return most;
+  const int64_t one = cv.decoded_chunk_bytes(level);
+  const int64_t voxels = h.voxel_count() * int64_t(voxel_bytes(storage_type(h.source)));
+  const int64_t left = options.decode_budget_bytes - voxels;
+  if (one <= 0 || left < one)
+    throw VolumeError(cv.root(), "level " + cv.levels()[size_t(level)].name + ": one chunk decodes to " +
+                                     std::to_string(one >> 20) + " MiB, more than the memory budget of " +
+                                     std::to_string(options.decode_budget_bytes >> 20) + " MiB leaves beside the " +
+                                     std::to_string(voxels >> 20) + " MiB of voxels");
+  return int(std::clamp<int64_t>(left / one, 1, most));
+}
+
 }  // namespace
 
 int finest_level_within(const ChunkedVolume& cv, int from, int64_t budget_bytes) {
@@ -123,6 +139,7 @@ Volume read_level(const ChunkedVolume& cv, int level, const LoadOptions& options
     throw VolumeError(cv.root(), "level " + L.name + ": " + std::to_string(int64_t(count)) + " chunks of " +
                                      std::to_string(L.chunk[0]) + "x" + std::to_string(L.chunk[1]) + "x" +
                                      std::to_string(L.chunk[2]) + " voxels for one read; chunks this small are refused");
+  const int threads = decoders_within(cv, level, h, count, options);
   detail::LoadProgress progress(options, size_t(h.voxel_count()) * bpv);
   parallel_for(size_t(count), [&](size_t i) {  // rethrows the first refusal
     const int64_t k = int64_t(i);
@@ -138,7 +155,7 @@ Volume read_level(const ChunkedVolume& cv, int level, const LoadOptions& options
     const auto bytes = cv.read_chunk(level, c);
     place_chunk(bytes ? &*bytes : nullptr, cv.fill(level), clo, chi, rlo, rhi, bpv, v.data());
     progress.add(placed);
-  });
+  }, threads);
   detail::finish_volume(cv.root(), v, h.big_endian, local);
   if (options.region) {
     v.source_dims = L.dims;

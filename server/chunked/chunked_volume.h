@@ -50,6 +50,9 @@ class ChunkedVolume {
   // fastest, in the file's byte order. Nothing when the chunk is not stored (it reads as fill).
   // Throws VolumeError naming the chunk's file when it is there but wrong. Thread-safe.
   virtual std::optional<std::vector<uint8_t>> read_chunk(int level, const Dims& c) const = 0;
+  // The bytes one chunk of `level` decodes to before it is cut to its box (a zarr chunk holds its
+  // whole chunk shape, time and channel axes included): what a read charges per chunk in flight.
+  virtual int64_t decoded_chunk_bytes(int level) const = 0;
 
  protected:
   std::filesystem::path root_;
@@ -82,7 +85,7 @@ int finest_level_of_voxels(const ChunkedVolume& volume, int from, int64_t voxels
 // The largest size of one decoded chunk a reader accepts, and the most chunks one read visits
 // (a level cut into chunks of a few voxels is refused rather than stat'ed chunk by chunk).
 constexpr int64_t kMaxChunkBytes = int64_t(512) << 20;
-constexpr int64_t kMaxChunksPerRead = int64_t(1) << 24;
+constexpr int64_t kMaxChunksPerRead = int64_t(1) << 20;
 // The largest edge of a level, in voxels (sizes and offsets then never overflow 64 bits).
 constexpr int64_t kMaxLevelEdge = int64_t(1) << 40;
 

@@ -36,7 +36,7 @@ class PrecomputedVolume : public ChunkedVolume {
     const fs::path file = dir / "info";
     const json info = read_json_file(file);
     if (info.contains("type") && info["type"] != "image")
-      throw VolumeError(file, "type " + info["type"].dump() + " is not an image (segmentations are not volumes to render)");
+      throw VolumeError(file, "type " + info["type"].dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + " is not an image (segmentations are not volumes to render)");
     const std::string dt = info.contains("data_type") && info["data_type"].is_string() ? info["data_type"].get<std::string>() : "";
     static const std::pair<const char*, SourceType> kinds[] = {{"uint8", SourceType::U8},   {"int8", SourceType::I8},
                                                               {"uint16", SourceType::U16}, {"int16", SourceType::I16},
@@ -87,6 +87,11 @@ class PrecomputedVolume : public ChunkedVolume {
       offsets_.push_back(offset);
       fills_.push_back(std::vector<uint8_t>(source_bytes(source_), 0));  // Neuroglancer shows a missing chunk as 0
     }
+  }
+
+  int64_t decoded_chunk_bytes(int level) const override {
+    const ChunkLevel& L = levels_[size_t(level)];
+    return L.chunk[0] * L.chunk[1] * L.chunk[2] * int64_t(source_bytes(source_)) * channels_;
   }
 
   std::optional<std::vector<uint8_t>> read_chunk(int level, const Dims& c) const override {

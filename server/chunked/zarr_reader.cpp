@@ -56,7 +56,7 @@ std::vector<uint8_t> parse_fill(const json& j, SourceType t, bool big, const fs:
   else throw VolumeError(file, "fill_value must be a number or null (NaN, Infinity, -Infinity for floats)");
   auto integer = [&](double lo, double hi) {
     if (!(v >= lo && v <= hi) || v != std::floor(v))
-      throw VolumeError(file, "fill_value " + j.dump() + " is not a " + to_string(t) + " value");
+      throw VolumeError(file, "fill_value " + j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + " is not a " + to_string(t) + " value");
     return v;
   };
   switch (t) {
@@ -220,6 +220,8 @@ class ZarrVolume : public ChunkedVolume {
       arrays_.push_back(std::move(a));
     }
   }
+
+  int64_t decoded_chunk_bytes(int level) const override { return arrays_[size_t(level)].chunk_bytes; }
 
   std::optional<std::vector<uint8_t>> read_chunk(int level, const Dims& c) const override {
     const ZarrArray& a = arrays_[size_t(level)];

@@ -205,7 +205,7 @@ json scene_to_json(const Scene& s) {
   return j;
 }
 
-std::string Scene::to_string() const { return "Scene" + scene_to_json(*this).dump(); }
+std::string Scene::to_string() const { return "Scene" + scene_to_json(*this).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace); }
 
 namespace {
 

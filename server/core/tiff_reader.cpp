@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <regex>
 
+#include "core/file_roots.h"
 #include "core/volume_io_detail.h"
 
 namespace fs = std::filesystem;
@@ -47,6 +48,7 @@ bool natural_less(const std::string& a, const std::string& b) {
 }
 
 std::unique_ptr<ImageInput> open_image(const fs::path& file) {
+  file_roots::check(file);  // a slice linked out of the data directories
   auto in = ImageInput::open(file.string());
   if (!in) throw VolumeError(file, "cannot read TIFF: " + OIIO::geterror());
   return in;

@@ -1,4 +1,5 @@
 #include "core/volume_io.h"
+#include "core/file_roots.h"
 
 #include <unistd.h>
 
@@ -115,6 +116,7 @@ void check_header(const fs::path& file, const VolumeHeader& h, const LoadOptions
     throw VolumeError(file, std::to_string(voxel_mem >> 20) + " MiB of voxels exceeds the memory budget of " +
                                 std::to_string(options.memory_budget_bytes >> 20) +
                                 " MiB; a pyramid opens at a level that fits (peakcast convert IN OUT.zarr --pyramid)");
+  if (options.on_header) options.on_header(h);
 }
 
 namespace {
@@ -232,10 +234,28 @@ void finish_volume(const fs::path& file, Volume& v, bool big_endian, const LoadO
   if (options.statistics) v.finalize_statistics();
 }
 
+// The data files a header names, checked before any of them is looked at: one file only where
+// options.single_file says so (an upload: never a word on whether another path exists), and
+// every file inside the server's roots (core/file_roots.h; a link out is refused).
+void check_payload_files(const fs::path& header_file, const PayloadSpec& payload, const LoadOptions& options) {
+  if (payload.files.empty()) throw VolumeError(header_file, "no data file");
+  if (options.single_file) {
+    const fs::path self = header_file.lexically_normal();
+    for (const fs::path& f : payload.files) {
+      const fs::path n = f.lexically_normal();
+      const bool beside = n.parent_path() == self.parent_path() && n.stem() == self.stem();  // id.json -> id.raw
+      if (n != self && !beside)
+        throw VolumeError(header_file, "its header names another data file: an upload is one file "
+                                       "(send the voxels attached: .nrrd, .mha with ElementDataFile = LOCAL)");
+    }
+  }
+  for (const fs::path& f : payload.files) file_roots::check(f);
+}
+
 Volume read_payload(const fs::path& header_file, const VolumeHeader& h, const PayloadSpec& payload,
                     const LoadOptions& options) {
+  check_payload_files(header_file, payload, options);
   check_header(header_file, h, options);
-  if (payload.files.empty()) throw VolumeError(header_file, "no data file");
   const size_t total = size_t(h.voxel_count()) * source_bytes(h.source);
   // Raw data: refuse a short file before allocating anything.
   if (payload.encoding == Encoding::Raw) {
@@ -289,6 +309,7 @@ Volume load_volume(const fs::path& path, const LoadOptions& options) {
   using namespace detail;
   const auto t0 = std::chrono::steady_clock::now();
   std::error_code ec;
+  file_roots::check(path);
   if (!fs::exists(path, ec)) throw VolumeError(path, "no such file");
   const std::string ext = lower(path.extension().string());
   Volume v;

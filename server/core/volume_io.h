@@ -64,6 +64,18 @@ struct LoadOptions {
   int64_t memory_budget_bytes = 0;
   // false: no range and histogram (a brick whose caller reduces the whole volume's; saves a pass).
   bool statistics = true;
+  // Host memory for what a read decodes besides the volume's voxels (0: no limit): compressed
+  // chunks being decoded at once (a chunk may be far larger than the box it fills). Charged
+  // before decoding: fewer chunks at once, or refused when not even one fits beside the voxels.
+  // The server sets it to --memory-budget-mib for every read, whichever level is read.
+  int64_t decode_budget_bytes = 0;
+  // true: the voxels must be in the file named (or, for raw voxels, the file its sidecar names
+  // beside it): a header naming any other data file is refused before that file is looked at.
+  // An upload is one file (session/upload_store.cpp).
+  bool single_file = false;
+  // Told each header once it is checked, before anything is allocated or decoded: a caller that
+  // charges the decoded bytes elsewhere (an upload's budget) throws from here to refuse.
+  std::function<void(const VolumeHeader&)> on_header;
 };
 
 // Format by name: .nrrd/.nhdr, .mhd/.mha, .json (sidecar) or .raw with a sidecar,

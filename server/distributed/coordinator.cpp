@@ -67,7 +67,7 @@ void Coordinator::prune_locked() {
 }
 
 BrickRead Coordinator::read_bricks(const std::unique_lock<std::mutex>& held, int64_t id, const BrickLoadRequest& req) {
-  send(held, kLoad, id, req.to_json().dump());
+  send(held, kLoad, id, req.to_json().dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
   BrickRead b;
   try {
     b = read_brick(req);

@@ -1,10 +1,10 @@
 #include "net/app_context.h"
 
-#include <cctype>
 #include <string>
 
 #include <boost/asio/post.hpp>
 
+#include "core/file_roots.h"
 #include "core/volume_io.h"
 #include "encode/video.h"
 
@@ -15,13 +15,26 @@ namespace {
 LoadOptions load_options(const ServerConfig& c) {
   LoadOptions o;
   o.memory_budget_bytes = c.memory_budget_bytes;
+  o.decode_budget_bytes = c.memory_budget_bytes;
   return o;
 }
+
+// Every file the server reads lies in a data directory or the upload folder (core/file_roots.h);
+// the operator's preloaded volumes add their own folders (cmd_serve.cpp). Set before anything
+// is read.
+const ServerConfig& confine_reads(const ServerConfig& c) {
+  std::vector<std::filesystem::path> roots = c.data_dirs;
+  if (!c.upload_dir.empty()) roots.push_back(c.upload_dir);
+  file_roots::confine(roots);
+  return c;
+}
+
+bool is_doc(const std::string& rel) { return rel.ends_with(".md") || rel.ends_with(".png"); }
 
 }  // namespace
 
 AppContext::AppContext(ServerConfig c)
-    : config(std::move(c)),
+    : config(confine_reads(c)),
       residency(config.gpu_budget_bytes),
       volumes(config.data_dirs, residency, load_options(config), config.volume_loader),
       uploads(config.upload_dir, config.upload_limits, volumes),
@@ -31,7 +44,13 @@ AppContext::AppContext(ServerConfig c)
                                                    limits::kStillDelay, config.max_fps},
                                   config.egl_device, config.backend, config.program_cache, config.wrap_renderer,
                                   config.ranks}),
-      ws_sessions(config.max_sessions) {
+      ws_sessions(config.max_sessions),
+      access(config.token, config.user_tokens),
+      hosts(config.bind, config.allowed_hosts) {
+  // The client's files and the docs its help links open (docs/ beside client-web/, in the
+  // container too): listed once, here; nothing else is ever served from disk.
+  files.add_root(config.web_dir, "/");
+  files.add_root((config.web_dir / "..").lexically_normal() / "docs", "/docs/", is_doc);
   // Which video encoders open is tried once, here, before serving: not on an io thread at the
   // first welcome (opening libaom and libx264 takes tens of ms).
   encode::available_codecs();
@@ -54,45 +73,6 @@ PngLocator AppContext::png_locator() const {
       throw SceneError(std::string("render.ray_texture.png: ") + e.what());
     }
   };
-}
-
-std::string path_of(const std::string& target) { return target.substr(0, target.find('?')); }
-
-std::string query_param(const std::string& target, const std::string& key) {
-  const auto q = target.find('?');
-  if (q == std::string::npos) return "";
-  size_t i = q + 1;
-  while (i < target.size()) {
-    size_t amp = target.find('&', i);
-    if (amp == std::string::npos) amp = target.size();
-    const std::string pair = target.substr(i, amp - i);
-    const auto eq = pair.find('=');
-    if (pair.substr(0, eq) == key) return eq == std::string::npos ? "" : pair.substr(eq + 1);
-    i = amp + 1;
-  }
-  return "";
-}
-
-std::string url_decode(const std::string& s) {
-  std::string out;
-  for (size_t i = 0; i < s.size(); ++i) {
-    if (s[i] == '+') {
-      out += ' ';
-    } else if (s[i] == '%' && i + 2 < s.size() && std::isxdigit(static_cast<unsigned char>(s[i + 1])) &&
-               std::isxdigit(static_cast<unsigned char>(s[i + 2]))) {
-      out += char(std::stoi(s.substr(i + 1, 2), nullptr, 16));
-      i += 2;
-    } else {
-      out += s[i];
-    }
-  }
-  return out;
-}
-
-std::string token_from(const std::string& authorization, const std::string& target) {
-  const std::string prefix = "Bearer ";
-  if (authorization.rfind(prefix, 0) == 0) return authorization.substr(prefix.size());
-  return query_param(target, "token");
 }
 
 }  // namespace peakcast::net

@@ -13,7 +13,10 @@
 
 #include "core/metrics.h"
 #include "core/ray_texture_png.h"
+#include "net/access.h"
 #include "net/connection_slot.h"
+#include "net/http_text.h"
+#include "net/static_files.h"
 #include "net/session_registry.h"
 #include "session/gpu_residency.h"
 #include "session/limits.h"
@@ -28,8 +31,10 @@ struct ServerConfig {
   uint16_t port = 8080;
   std::vector<std::filesystem::path> data_dirs;
   std::vector<std::filesystem::path> volumes;  // preloaded; the first is the default
-  std::string token;                           // empty: no authentication
+  std::string token;                           // the admin token; empty (and no user_tokens): no authentication
+  std::vector<UserToken> user_tokens;          // --user-token-file: view, render, upload, delete their own uploads
   std::vector<std::string> allow_origins;      // besides the server's own origin
+  std::vector<std::string> allowed_hosts;      // Host names besides the bind address and loopback ("*": any)
   int max_sessions = limits::kDefaultMaxSessions;
   std::chrono::seconds idle_timeout = limits::kDefaultIdleTimeout;
   double max_fps = limits::kDefaultMaxFps;
@@ -67,6 +72,13 @@ struct AppContext {
   ConnectionCounter connections{limits::kMaxConnections, limits::kMaxConnectionsPerAddress};
   std::atomic<bool> stopping{false};  // graceful shutdown under way: refuse new work
   std::atomic<uint64_t> next_session{1};
+  Access access;      // who a token is (net/access.h)
+  HostCheck hosts;    // which Host headers are answered (DNS rebinding)
+  StaticFiles files;  // the client's files and docs: a fixed list made at start-up
+  // The data-directory browser's listings: apart from the loader, so that no volume load (a
+  // pyramid's metadata, a slow disk) holds up a listing.
+  boost::asio::thread_pool listing{1};
+
   // Volume loads run here, never on an io thread (an 800 MB stack takes seconds). Declared last:
   // joined first on destruction, while the volumes it fills still exist.
   boost::asio::thread_pool loader{1};
@@ -78,11 +90,5 @@ struct AppContext {
   // Ray-texture PNGs, like volumes given by path, are read only from inside the data directories.
   PngLocator png_locator() const;
 };
-
-// Bearer token from "Authorization: Bearer X" or the query "?token=X"; empty when absent.
-std::string token_from(const std::string& authorization, const std::string& target);
-std::string path_of(const std::string& target);  // target without the query
-std::string query_param(const std::string& target, const std::string& key);
-std::string url_decode(const std::string& s);  // %XX and '+' (a query's space)
 
 }  // namespace peakcast::net

@@ -11,7 +11,7 @@
 namespace peakcast::net {
 
 HttpSession::HttpSession(tcp::socket&& socket, AppContext& app, std::shared_ptr<ConnectionSlot> slot)
-    : stream_(std::move(socket)), app_(app), slot_(std::move(slot)) {}
+    : stream_(std::move(socket)), app_(app), slot_(std::move(slot)), upload_deadline_(stream_.get_executor()) {}
 
 void HttpSession::run() {
   asio::dispatch(stream_.get_executor(), [self = shared_from_this()] { self->read(); });
@@ -34,6 +34,7 @@ void HttpSession::read() {
 void HttpSession::on_header(beast::error_code ec) {
   if (ec) return on_read(ec);
   const auto& req = parser_->get();
+  if (!host_allowed(req)) return;
   if (req.method() == http::verb::post && path_of(std::string(req.target())) == "/api/volumes") return start_upload();
   if (auto n = parser_->content_length(); n && *n > limits::kMaxHttpBodyBytes) return on_read(http::error::body_limit);
   parser_->body_limit(limits::kMaxHttpBodyBytes);  // a chunked body is counted as it arrives
@@ -91,6 +92,21 @@ void HttpSession::watch_for_close(std::shared_ptr<std::atomic<bool>> cancelled) 
   });
 }
 
+// DNS rebinding: a page served from another name that resolves here must not reach the server.
+// Every route is refused for a Host outside the allow-list (net/http_text.h), before any body is
+// read; the connection then closes.
+bool HttpSession::host_allowed(const Request& req) {
+  if (app_.hosts.allowed(req[http::field::host])) return true;
+  app_.metrics.add("peakcast_http_requests_total", "route=\"host\",code=\"403\"", 1);
+  Request head;
+  head.version(req.version());
+  head.keep_alive(false);
+  write(error_response(head, http::status::forbidden, "forbidden_host",
+                       "Host '" + std::string(req[http::field::host]).substr(0, 200) +
+                           "' is not a name this server answers to (--allowed-host)"));
+  return false;
+}
+
 bool HttpSession::origin_allowed(const Request& req) const {
   const std::string origin(req[http::field::origin]);
   if (origin.empty()) return true;  // not a browser: scripts and tools
@@ -110,13 +126,16 @@ void HttpSession::upgrade(Request req) {
                                 "Origin " + std::string(req[http::field::origin]) + " is not allowed"));
   }
   const std::string token = token_from(std::string(req[http::field::authorization]), std::string(req.target()));
-  if (!app_.config.token.empty() && !token.empty() && token != app_.config.token) {
+  const Principal who = app_.access.who(token);
+  if (app_.access.required() && !token.empty() && !who.authorized) {
     app_.metrics.add("peakcast_http_requests_total", "route=\"ws\",code=\"401\"", 1);
     return write(error_response(req, http::status::unauthorized, "unauthorized", "wrong bearer token"));
   }
-  // The slot is reserved now, atomically: simultaneous upgrades cannot exceed the cap. The
+  // The slot is reserved now, atomically, for a client whose token is checked (or an open
+  // server): simultaneous upgrades cannot exceed the cap. One that brings its token in hello
+  // takes its slot then (WsSession), never before: an unauthenticated socket costs no slot. The
   // WebSocket session owns the reservation from here on and gives it back when it ends.
-  if (app_.stopping.load() || !app_.ws_sessions.try_reserve()) {
+  if (app_.stopping.load() || (who.authorized && !app_.ws_sessions.try_reserve())) {
     app_.metrics.add("peakcast_http_requests_total", "route=\"ws\",code=\"503\"", 1);
     auto res = app_.stopping.load()
                    ? error_response(req, http::status::service_unavailable, "shutting_down", "the server is shutting down")
@@ -126,9 +145,8 @@ void HttpSession::upgrade(Request req) {
     res.set(http::field::retry_after, "5");
     return write(std::move(res));
   }
-  const bool authorized = app_.config.token.empty() || token == app_.config.token;
   stream_.expires_never();
-  std::make_shared<WsSession>(stream_.release_socket(), app_, authorized, std::move(slot_))->run(std::move(req));
+  std::make_shared<WsSession>(stream_.release_socket(), app_, who, std::move(slot_))->run(std::move(req));
 }
 
 void HttpSession::write(Response res) {

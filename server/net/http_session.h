@@ -3,6 +3,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <memory>
 #include <optional>
 
@@ -24,11 +25,12 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   // POST /api/volumes (http_upload.cpp): the body streamed into the upload store's file.
   void start_upload();
   void read_upload();
-  void on_upload_read(beast::error_code ec);
+  void on_upload_read(beast::error_code ec, std::size_t bytes);
   void refuse_upload(int status, const std::string& code, const std::string& message);
   void upgrade(Request req);
   void write(Response res);
   bool origin_allowed(const Request& req) const;
+  bool host_allowed(const Request& req);  // false: refused (403 forbidden_host), answered here
   void watch_for_close(std::shared_ptr<std::atomic<bool>> cancelled);
 
   beast::tcp_stream stream_;
@@ -38,6 +40,12 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   std::optional<http::request_parser<http::file_body>> upload_parser_;
   std::unique_ptr<UploadStore::Ticket> upload_;
   UploadParams upload_params_;
+  std::chrono::steady_clock::time_point upload_start_;  // the body's first read: rate and deadline
+  uint64_t upload_received_ = 0;
+  // The whole body's deadline (--upload-deadline): cancels the read, so the 408 can still be sent
+  // (a stream timeout would close the socket first).
+  asio::steady_timer upload_deadline_;
+  bool deadline_passed_ = false;
   std::shared_ptr<ConnectionSlot> slot_;
   bool pending_ = false;  // a request is being answered (on the strand)
 };

@@ -6,6 +6,7 @@
 // that goes away ends it, and its file is removed. Checked and registered on the loader pool.
 #include <boost/asio/post.hpp>
 
+#include "core/utf8.h"
 #include "net/http_session.h"
 
 namespace peakcast::net {
@@ -18,6 +19,7 @@ void HttpSession::refuse_upload(int status, const std::string& code, const std::
   req.keep_alive(false);  // the body (or the rest of it) is not read: the connection ends
   upload_.reset();        // its file goes now
   upload_parser_.reset();
+  upload_deadline_.cancel();
   auto res = error_response(req, http::status(status), code, message);
   if (status == 503 || status == 429) res.set(http::field::retry_after, "5");
   write(std::move(res));
@@ -26,9 +28,8 @@ void HttpSession::refuse_upload(int status, const std::string& code, const std::
 void HttpSession::start_upload() {
   const auto& req = parser_->get();
   const std::string target(req.target());
-  if (!app_.config.token.empty() &&
-      token_from(std::string(req[http::field::authorization]), target) != app_.config.token)
-    return refuse_upload(401, "unauthorized", "missing or wrong bearer token");
+  const Principal who = app_.access.who(token_from(std::string(req[http::field::authorization]), target));
+  if (!who.authorized) return refuse_upload(401, "unauthorized", "missing or wrong bearer token");
   if (!origin_allowed(req))
     return refuse_upload(403, "forbidden_origin", "Origin " + std::string(req[http::field::origin]) + " is not allowed");
   std::optional<int64_t> length;
@@ -42,39 +43,13 @@ void HttpSession::start_upload() {
     return refuse_upload(r.status, r.code, r.what());
   }
   upload_params_ = UploadParams{};
+  upload_start_ = {};
+  upload_received_ = 0;
   upload_params_.name = url_decode(query_param(target, "name"));
+  upload_params_.owner = who.name;
   upload_params_.content_type = std::string(req[http::field::content_type]);
   // Raw voxels: their header as query parameters (dims=X,Y,Z&dtype=uint16&spacing=..&origin=..).
-  if (const std::string dims = query_param(target, "dims"); !dims.empty()) {
-    nlohmann::json h = nlohmann::json::object();
-    auto numbers = [&](const std::string& key) -> nlohmann::json {
-      const std::string text = url_decode(query_param(target, key));
-      nlohmann::json out = nlohmann::json::array();
-      size_t i = 0;
-      while (i <= text.size()) {
-        size_t e = text.find(',', i);
-        if (e == std::string::npos) e = text.size();
-        const std::string part = text.substr(i, e - i);
-        try {
-          size_t used = 0;
-          const double v = std::stod(part, &used);
-          if (used != part.size()) throw std::invalid_argument(part);
-          if (v == double(int64_t(v)) && part.find_first_of(".eE") == std::string::npos) out.push_back(int64_t(v));
-          else out.push_back(v);
-        } catch (const std::exception&) {
-          out.push_back(part);  // refused by name below, as any wrong header value
-        }
-        i = e + 1;
-      }
-      return out;
-    };
-    h["dims"] = numbers("dims");
-    for (const char* key : {"spacing", "origin"})
-      if (!query_param(target, key).empty()) h[key] = numbers(key);
-    for (const char* key : {"dtype", "endian"})
-      if (const std::string v = url_decode(query_param(target, key)); !v.empty()) h[key] = v;
-    upload_params_.raw = h;
-  }
+  upload_params_.raw = raw_header_from_query(target);
   const bool expects_continue = beast::iequals(req[http::field::expect], "100-continue");
   upload_parser_.emplace(std::move(*parser_));
   parser_.reset();
@@ -90,13 +65,43 @@ void HttpSession::start_upload() {
   });
 }
 
+// Each read waits at most the idle timeout, and never past the whole body's deadline. After the
+// first idle timeout the average rate must stay above the minimum: a trickle (a byte every few
+// seconds) is ended instead of holding an upload slot for as long as it lasts.
 void HttpSession::read_upload() {
-  stream_.expires_after(app_.uploads.limits().idle_timeout);
-  http::async_read_some(stream_, buffer_, *upload_parser_,
-                        [self = shared_from_this()](beast::error_code ec, std::size_t) { self->on_upload_read(ec); });
+  const auto& l = app_.uploads.limits();
+  if (upload_start_ == std::chrono::steady_clock::time_point{}) {
+    upload_start_ = std::chrono::steady_clock::now();
+    deadline_passed_ = false;
+    upload_deadline_.expires_after(l.deadline);
+    upload_deadline_.async_wait([weak = weak_from_this()](beast::error_code ec) {
+      auto self = weak.lock();
+      if (ec || !self || !self->upload_parser_) return;  // cancelled: the body is whole, or refused
+      self->deadline_passed_ = true;
+      beast::error_code ignored;
+      self->stream_.socket().cancel(ignored);  // the read ends with operation_aborted
+    });
+  }
+  stream_.expires_after(l.idle_timeout);
+  http::async_read_some(stream_, buffer_, *upload_parser_, [self = shared_from_this()](beast::error_code ec, std::size_t n) {
+    self->on_upload_read(ec, n);
+  });
 }
 
-void HttpSession::on_upload_read(beast::error_code ec) {
+void HttpSession::on_upload_read(beast::error_code ec, std::size_t bytes) {
+  upload_received_ += bytes;
+  const auto& l = app_.uploads.limits();
+  if (deadline_passed_)
+    return refuse_upload(408, "upload_too_slow", "an upload must arrive whole within " +
+                                                     std::to_string(l.deadline.count()) + " s (--upload-deadline)");
+  if (!ec && !upload_parser_->is_done()) {
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - upload_start_).count();
+    if (seconds > double(l.idle_timeout.count()) && double(upload_received_) < l.min_bytes_per_second * seconds)
+      return refuse_upload(408, "upload_too_slow",
+                           "the upload arrives at " + std::to_string(int64_t(double(upload_received_) / seconds)) +
+                               " bytes/s, below the minimum of " + std::to_string(int64_t(l.min_bytes_per_second)) +
+                               " (--upload-min-rate-kib)");
+  }
   if (ec == http::error::body_limit)
     return refuse_upload(413, "too_large", "an upload may hold " +
                                                std::to_string(app_.uploads.limits().max_bytes >> 20) +
@@ -106,9 +111,11 @@ void HttpSession::on_upload_read(beast::error_code ec) {
                      ec == beast::error::timeout ? "outcome=\"timeout\"" : "outcome=\"disconnected\"", 1);
     upload_.reset();
     upload_parser_.reset();
+    upload_deadline_.cancel();
     return fail(ec, "upload read");
   }
   if (!upload_parser_->is_done()) return read_upload();
+  upload_deadline_.cancel();
   upload_parser_->get().body().close();
   const unsigned version = upload_parser_->get().version();
   const bool keep_alive = upload_parser_->get().keep_alive();
@@ -125,7 +132,7 @@ void HttpSession::on_upload_read(beast::error_code ec) {
     std::string outcome = "ok";
     try {
       auto entry = self->app_.uploads.commit(std::move(ticket), params);
-      res = json_response(req, http::status::created, entry->info(false).dump());
+      res = json_response(req, http::status::created, json_text(entry->info(false)));
       res.set(http::field::location, "/api/volumes/" + entry->id);
     } catch (const UploadRefusal& r) {
       outcome = r.code;

@@ -3,8 +3,6 @@
 
 #include <cstdio>
 #include <cstring>
-#include <fstream>
-#include <sstream>
 
 #include <boost/asio/post.hpp>
 
@@ -13,6 +11,9 @@
 #include "session/data_listing.h"
 #include "session/protocol.h"
 #include "session/limits.h"
+#include "core/public_text.h"
+#include "core/utf8.h"
+#include "net/ws_session.h"
 
 namespace fs = std::filesystem;
 namespace asio = boost::asio;
@@ -26,32 +27,16 @@ void count(AppContext& app, const char* route, http::status status) {
 
 namespace {
 
-const char* mime_type(const std::string& path) {
-  auto ends = [&](const char* ext) { return path.size() >= std::strlen(ext) && path.ends_with(ext); };
-  if (ends(".html")) return "text/html; charset=utf-8";
-  if (ends(".js") || ends(".mjs")) return "text/javascript; charset=utf-8";
-  if (ends(".css")) return "text/css; charset=utf-8";
-  if (ends(".json")) return "application/json";
-  if (ends(".svg")) return "image/svg+xml";
-  if (ends(".png")) return "image/png";
-  if (ends(".ico")) return "image/x-icon";
-  if (ends(".md")) return "text/plain; charset=utf-8";  // the docs, read as text
-  return "application/octet-stream";
-}
-
-Response static_file(const Request& req, const fs::path& root, std::string path) {
-  if (path == "/" || path.empty()) path = "/index.html";
-  if (path.find("..") != std::string::npos || path.find('\0') != std::string::npos)
-    return error_response(req, http::status::bad_request, "bad_path", "illegal path");
-  const fs::path file = root / path.substr(1);
-  std::ifstream in(file, std::ios::binary);
-  if (!in || fs::is_directory(file)) return error_response(req, http::status::not_found, "not_found", path + " not found");
-  std::stringstream body;
-  body << in.rdbuf();
+// A file of the fixed list (net/static_files.h), or 404: a URL path is never joined to a root.
+Response static_file(AppContext& app, const Request& req, const std::string& path) {
+  const auto file = app.files.find(path);
+  auto body = file ? StaticFiles::read(*file) : std::nullopt;
+  if (!body) return error_response(req, http::status::not_found, "not_found", path + " not found");
   Response res{http::status::ok, req.version()};
-  res.set(http::field::content_type, mime_type(path));
+  res.set(http::field::content_type, mime_type(path == "/" ? "/index.html" : path));
   res.set(http::field::cache_control, "no-cache");
-  res.body() = body.str();
+  res.set("X-Content-Type-Options", "nosniff");
+  res.body() = std::move(*body);
   res.keep_alive(req.keep_alive());
   res.prepare_payload();
   return res;
@@ -96,7 +81,7 @@ void probe(AppContext& app, const Request& req, std::function<void(Response)> se
                       "probing needs the volume's voxels; under mpirun they live in the ranks' bricks");
       const auto p = reference::probe_reference(*vol->volume, resolved, x, y);
       count(app, "probe", http::status::ok);
-      send(json_response(req, http::status::ok, protocol::probe_json(p.hit, p.position, p.value, p.distance, p.opacity).dump()));
+      send(json_response(req, http::status::ok, json_text(protocol::probe_json(p.hit, p.position, p.value, p.distance, p.opacity))));
     } catch (const SceneError& e) {
       refuse(http::status::bad_request, "bad_scene", e.what());
     } catch (const std::invalid_argument& e) {  // the pixel is outside the image
@@ -119,16 +104,18 @@ Response json_response(const Request& req, http::status status, const std::strin
   return res;
 }
 
+// Whatever the message holds (a client's bytes, a library's path), the answer is UTF-8 JSON with
+// no server path (core/public_text.h), and building it cannot throw for bad bytes.
 Response error_response(const Request& req, http::status status, const std::string& code, const std::string& message) {
-  return json_response(req, status, nlohmann::json{{"error", code}, {"message", message}}.dump());
+  return json_response(req, status, json_text(nlohmann::json{{"error", code}, {"message", public_text(message)}}));
 }
 
 void handle_request(AppContext& app, Request req, std::function<void(Response)> send,
                     std::shared_ptr<std::atomic<bool>> cancelled) {
   const std::string path = path_of(std::string(req.target()));
   const bool api = path.rfind("/api/", 0) == 0 || path == "/metrics";
-  if (api && path != "/api/health" && !app.config.token.empty() &&
-      token_from(std::string(req[http::field::authorization]), std::string(req.target())) != app.config.token) {
+  const Principal who = app.access.who(token_from(std::string(req[http::field::authorization]), std::string(req.target())));
+  if (api && path != "/api/health" && !who.authorized) {
     count(app, "auth", http::status::unauthorized);
     auto res = error_response(req, http::status::unauthorized, "unauthorized", "missing or wrong bearer token");
     res.set(http::field::www_authenticate, "Bearer");
@@ -152,11 +139,13 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
   if (req.method() == http::verb::delete_ && path.rfind("/api/volumes/", 0) == 0) {
     const std::string id = url_decode(path.substr(std::strlen("/api/volumes/")));
     // Off the io thread: removing a large file takes a while on some file systems.
-    return asio::post(app.loader, [&app, req, id, send = std::move(send)] {
+    return asio::post(app.loader, [&app, req, id, who, send = std::move(send)] {
       try {
-        app.uploads.remove(id);
+        app.uploads.remove(id, app.access.required() && !who.admin ? std::optional<std::string>(who.name) : std::nullopt);
+        // Viewers of it move to the default volume: its memory goes with the last of them.
+        for (const auto& ws : app.ws_sessions.live()) ws->volume_removed(id);
         count(app, "delete", http::status::ok);
-        send(json_response(req, http::status::ok, nlohmann::json{{"deleted", id}}.dump()));
+        send(json_response(req, http::status::ok, json_text(nlohmann::json{{"deleted", id}})));
       } catch (const UploadRefusal& r) {
         count(app, "delete", http::status(r.status));
         send(error_response(req, http::status(r.status), r.code, r.what()));
@@ -175,13 +164,14 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
     const auto status = stopping ? http::status::service_unavailable : http::status::ok;
     count(app, "health", status);
     return send(json_response(req, status,
-                              nlohmann::json{{"status", stopping ? "stopping" : "ok"},
+                              json_text(nlohmann::json{{"status", stopping ? "stopping" : "ok"},
                                              {"gl_renderer", app.render.gl_renderer()},
                                              {"backend", app.render.backend()},
                                              {"ranks", app.render.ranks()},
                                              {"sessions", app.ws_sessions.count()},
                                              {"max_sessions", app.config.max_sessions},
                                              {"volumes", app.volumes.list().size()},
+                                             {"volume_bytes", app.residency.counted_bytes()},
                                              {"stills_queued", app.render.stills_pending()},
                                              {"still_progress", app.render.still_progress()},
                                              {"max_queued_stills", app.config.max_queued_stills},
@@ -189,16 +179,15 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
                                               {{"enabled", app.uploads.enabled()},
                                                {"max_bytes", app.uploads.limits().max_bytes},
                                                {"budget_bytes", app.uploads.limits().budget_bytes},
-                                               {"used_bytes", app.uploads.used_bytes()}}}}
-                                  .dump()));
+                                               {"used_bytes", app.uploads.used_bytes()}}}})));
   }
   if (path == "/api/files") {  // the data-directory browser: one folder, relative names only
     const std::string dir = url_decode(query_param(std::string(req.target()), "dir"));
-    return asio::post(app.loader, [&app, req, dir, send = std::move(send)] {
+    return asio::post(app.listing, [&app, req, dir, send = std::move(send)] {
       try {
         auto list = list_data_dir(app.volumes.data_dirs(), dir);
         count(app, "files", http::status::ok);
-        send(json_response(req, http::status::ok, list.dump()));
+        send(json_response(req, http::status::ok, json_text(list)));
       } catch (const VolumeError& e) {
         count(app, "files", http::status::not_found);
         send(error_response(req, http::status::not_found, "not_found", e.what()));
@@ -212,7 +201,7 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
     const nlohmann::json list = app.volumes.listing();
     count(app, "volumes", http::status::ok);
     return send(json_response(req, http::status::ok,
-                              nlohmann::json{{"volumes", list}, {"default", app.volumes.default_id()}}.dump()));
+                              json_text(nlohmann::json{{"volumes", list}, {"default", app.volumes.default_id()}})));
   }
   if (path.rfind("/api/volumes/", 0) == 0) {
     const std::string id = url_decode(path.substr(std::strlen("/api/volumes/")));
@@ -222,7 +211,7 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
         try {
           auto e = app.volumes.get(id);
           count(app, "volume", http::status::ok);
-          send(json_response(req, http::status::ok, e->info(true).dump()));
+          send(json_response(req, http::status::ok, json_text(e->info(true))));
         } catch (const std::exception& e) {
           count(app, "volume", http::status::internal_server_error);
           send(error_response(req, http::status::internal_server_error, "volume_error", e.what()));
@@ -230,7 +219,7 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
       });
     count(app, "volume", v ? http::status::ok : http::status::not_found);
     if (!v) return send(error_response(req, http::status::not_found, "not_found", "no loaded volume '" + id + "'"));
-    return send(json_response(req, http::status::ok, v->info(true).dump()));
+    return send(json_response(req, http::status::ok, json_text(v->info(true))));
   }
   if (path == "/metrics") {
     app.metrics.set("peakcast_sessions", "", app.ws_sessions.count());
@@ -244,9 +233,7 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
   }
   if (api) return send(error_response(req, http::status::not_found, "not_found", path + " is not an API route"));
   // The docs the client's help links to (docs/ beside client-web/, in the container too).
-  if (path.rfind("/docs/", 0) == 0 && (path.ends_with(".md") || path.ends_with(".png")))
-    return send(static_file(req, (app.config.web_dir / "..").lexically_normal() / "docs", path.substr(5)));
-  send(static_file(req, app.config.web_dir, path));
+  send(static_file(app, req, path));
 }
 
 }  // namespace peakcast::net

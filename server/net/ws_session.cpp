@@ -11,13 +11,15 @@
 
 namespace peakcast::net {
 
-WsSession::WsSession(tcp::socket&& socket, AppContext& app, bool authorized, std::shared_ptr<ConnectionSlot> slot)
+WsSession::WsSession(tcp::socket&& socket, AppContext& app, Principal who, std::shared_ptr<ConnectionSlot> slot)
     : ws_(std::move(socket)),
       app_(app),
-      authorized_(authorized),
+      authorized_(who.authorized),
+      who_(std::move(who)),
       idle_(ws_.get_executor()),
       pace_(ws_.get_executor()),
       write_timer_(ws_.get_executor()),
+      auth_(ws_.get_executor()),
       slot_(std::move(slot)),
       tokens_(limits::kMessageBurst),
       tokens_at_(Clock::now()) {}
@@ -39,7 +41,7 @@ void WsSession::shut_down() {
 }
 
 void WsSession::run(Request upgrade) {
-  counted_ = true;  // the slot was reserved by the upgrade (SessionRegistry::try_reserve)
+  counted_ = authorized_;  // then the slot was reserved by the upgrade (SessionRegistry::try_reserve)
   app_.ws_sessions.track(shared_from_this());
   ws_.set_option(websocket::stream_base::timeout::suggested(beast::role_type::server));
   ws_.read_message_max(limits::kMaxWsReadBytes);
@@ -49,7 +51,40 @@ void WsSession::run(Request upgrade) {
   ws_.async_accept(*req, [self = shared_from_this(), req](beast::error_code ec) {
     if (ec) return fail(ec, "ws accept");
     self->arm_idle_timer();
+    if (!self->authorized_) self->arm_auth_timer();
     self->read();
+  });
+}
+
+// An unauthenticated socket holds no session slot, and only this long: messages before a valid
+// hello (pings) do not extend it.
+void WsSession::arm_auth_timer() {
+  auth_.expires_after(limits::kHandshakeTimeout);
+  auth_.async_wait([weak = weak_from_this()](beast::error_code ec) {
+    if (ec) return;
+    auto self = weak.lock();
+    if (!self || self->authorized_) return;
+    self->send_error("unauthorized", "no hello with a valid token within " +
+                                         std::to_string(limits::kHandshakeTimeout.count()) + " s");
+    self->close(websocket::close_code::policy_error, "unauthorized");
+  });
+}
+
+void WsSession::volume_removed(const std::string& id) {
+  asio::post(ws_.get_executor(), [self = shared_from_this(), id] {
+    if (!self->session_ || self->closing_ || self->session_->volume_id() != id) return;
+    const std::string fallback = self->app_.volumes.default_id();
+    self->send_error("volume_deleted", "the volume '" + id + "' was deleted" +
+                                           (fallback.empty() ? std::string() : "; showing '" + fallback + "'"));
+    if (fallback.empty() || fallback == id) return self->close(websocket::close_code::going_away, "volume deleted");
+    self->guarded([&] {
+      self->with_volume(fallback, [self](std::shared_ptr<VolumeEntry> entry) {
+        self->session_->set_volume(entry);
+        self->prepare_finest(entry);
+        self->queue_text(protocol::volume_message(entry->info(true), self->session_->state_json()));
+        self->app_.render.notify();
+      });
+    });
   });
 }
 
@@ -66,12 +101,14 @@ void WsSession::read() {
     if (ec == websocket::error::message_too_big) {  // Beast has already closed with 1009
       self->idle_.cancel();
       self->pace_.cancel();
+      self->auth_.cancel();
       self->release();
       return;
     }
     if (ec) {
       self->idle_.cancel();
       self->pace_.cancel();
+      self->auth_.cancel();
       self->release();
       return fail(ec, "ws read");
     }
@@ -146,11 +183,21 @@ void WsSession::handle(const std::string& text) {
   if (auto* hello = std::get_if<Hello>(&msg)) {
     if (session_) throw ProtocolError("bad_message", "hello: the session has already started");
     if (!authorized_) {
-      if (hello->token != app_.config.token) {
+      Principal who = app_.access.who(hello->token);
+      if (!who.authorized) {
         send_error("unauthorized", "missing or wrong token");
         return close(websocket::close_code::policy_error, "unauthorized");
       }
+      // The slot is taken now that the token is checked (none before: see arm_auth_timer).
+      if (!app_.ws_sessions.try_reserve()) {
+        send_error("session_limit", "the server holds its maximum of " + std::to_string(app_.config.max_sessions) +
+                                        " sessions; try again later");
+        return close(websocket::close_code::try_again_later, "session limit");
+      }
+      counted_ = true;
       authorized_ = true;
+      who_ = std::move(who);
+      auth_.cancel();
     }
     const std::string vid = hello->volume.empty() ? app_.volumes.default_id() : hello->volume;
     if (vid.empty()) throw ProtocolError("volume_error", "no volume given and the server has none loaded");
@@ -327,6 +374,7 @@ void WsSession::close(websocket::close_code code, const std::string& reason) {
   close_reason_ = reason;
   idle_.cancel();
   pace_.cancel();
+  auth_.cancel();
   if (session_) app_.render.remove_session(session_->id());
   // Frames still queued are dropped; text (the error that explains the close) is sent first.
   for (auto it = queue_.begin() + (writing_ ? 1 : 0); it != queue_.end();) {

@@ -18,10 +18,15 @@ namespace peakcast::net {
 
 class WsSession : public FrameSink, public std::enable_shared_from_this<WsSession> {
  public:
-  WsSession(tcp::socket&& socket, AppContext& app, bool authorized, std::shared_ptr<class ConnectionSlot> slot);
+  // `who.authorized`: the upgrade checked the token (or the server is open) and reserved this
+  // session's slot in app.ws_sessions. Otherwise the client has kHandshakeTimeout to send a hello
+  // with a valid token, and the slot is taken then. The session gives its slot back.
+  WsSession(tcp::socket&& socket, AppContext& app, Principal who, std::shared_ptr<class ConnectionSlot> slot);
   ~WsSession() override;
-  // The upgrade has reserved this session's slot in app.ws_sessions; the session gives it back.
   void run(Request upgrade);
+  // Any thread: the upload `id` was deleted. A session viewing it is told (error volume_deleted)
+  // and moves to the server's default volume, or closes when there is none.
+  void volume_removed(const std::string& id);
   // Any thread: sends a close frame (going away) after what is queued; the server is stopping.
   void shut_down();
 
@@ -63,6 +68,7 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   void enqueue(Outgoing out);
   void write_next();
   void arm_idle_timer();
+  void arm_auth_timer();
   void read_when_allowed();  // the message rate: a fast sender is read later, never dropped
   void arm_write_timer();
   void close(websocket::close_code code, const std::string& reason);
@@ -72,6 +78,7 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   beast::flat_buffer buffer_;
   AppContext& app_;
   bool authorized_;
+  Principal who_;
   bool counted_ = false, closing_ = false, writing_ = false, close_sent_ = false;
   websocket::close_code close_code_ = websocket::close_code::normal;
   std::string close_reason_;
@@ -81,7 +88,7 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   bool probing_ = false;
   std::optional<protocol::ProbeMsg> next_probe_;
   std::deque<Outgoing> queue_;
-  asio::steady_timer idle_, pace_, write_timer_;
+  asio::steady_timer idle_, pace_, write_timer_, auth_;
   std::shared_ptr<ConnectionSlot> slot_;
   double tokens_;                     // message-rate bucket (limits::kMessageBurst at most)
   Clock::time_point tokens_at_;

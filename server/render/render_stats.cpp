@@ -45,7 +45,7 @@ std::string RenderStats::to_string() const {
                           "ray_texture_ms", "ray_texture_strokes", "ray_texture_texels", "tf_source", "warnings",
                           "compile_ms", "gpu_ms"}) {
     if (!j.contains(key)) continue;
-    s << (first ? "" : " ") << key << "=" << (j[key].is_string() ? j[key].get<std::string>() : j[key].dump());
+    s << (first ? "" : " ") << key << "=" << (j[key].is_string() ? j[key].get<std::string>() : j[key].dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
     first = false;
   }
   s << "}";

@@ -25,7 +25,7 @@ bool is_tiff(const std::string& ext) { return ext == ".tif" || ext == ".tiff"; }
 bool raw_with_sidecar(const fs::path& p) {
   std::error_code ec;
   for (const fs::path& s : {fs::path(p.string() + ".json"), fs::path(p).replace_extension(".json")}) {
-    if (!fs::is_regular_file(s, ec)) continue;
+    if (!fs::is_regular_file(s, ec) || fs::file_size(s, ec) > (1u << 20) || ec) continue;
     std::ifstream in(s);
     nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
     if (j.is_object() && j.contains("dims")) return true;
@@ -40,8 +40,10 @@ bool opens_as_stack(const fs::path& dir) {
   std::error_code ec;
   int headers = 0;
   bool tiffs = false;
-  for (const auto& e : fs::directory_iterator(dir, ec)) {
-    const std::string x = lower(e.path().extension().string());
+  size_t seen = 0;  // a folder of a million chunks is told by its first entries
+  for (auto it = fs::directory_iterator(dir, ec); !ec && it != fs::directory_iterator() && seen < 4096;
+       it.increment(ec), ++seen) {
+    const std::string x = lower(it->path().extension().string());
     tiffs |= is_tiff(x);
     headers += is_header(x);
   }

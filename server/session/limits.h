@@ -45,7 +45,9 @@ constexpr int kDefaultMaxConcurrentUploads = 2;             // (cfg) uploads bei
 constexpr double kUploadsPerMinutePerClient = 60;           // (cfg) per client address, sustained (a burst of 10); beyond: 429
 constexpr double kUploadBurst = 10;
 constexpr std::chrono::seconds kDefaultUploadIdleTimeout{30};  // (cfg) no upload bytes for this long: the upload ends
-constexpr size_t kMaxUploadNameLength = 200;                // characters of an upload's name
+constexpr size_t kMaxUploadNameLength = 200;                // bytes of an upload's name (UTF-8, cut at a character)
+constexpr double kDefaultUploadMinBytesPerSecond = 16 * 1024;  // (cfg) an upload's average rate after its first idle timeout
+constexpr std::chrono::seconds kDefaultUploadDeadline{3600};   // (cfg) the whole body of one upload
 // SIGTERM -> forced exit, if the graceful path has not finished. Sanitizer builds wait longer: a
 // report being written (stacks symbolized, seconds on a loaded machine) must not be cut off.
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)

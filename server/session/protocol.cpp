@@ -1,4 +1,6 @@
 #include "session/protocol.h"
+#include "core/public_text.h"
+#include "core/utf8.h"
 
 #include <algorithm>
 #include <cmath>
@@ -216,25 +218,25 @@ ClientMessage parse_client_message(const std::string& text) {
     std::tie(m.x, m.y) = parse_pixel(j["pixel"], "probe.pixel");
     return m;
   }
-  throw ProtocolError("unknown_type", "unknown message type '" + type.substr(0, 64) + "'");
+  throw ProtocolError("unknown_type", "unknown message type '" + clean_utf8(type, 64) + "'");
 }
 
 std::string error_message(const std::string& code, const std::string& message) {
-  return json{{"type", "error"}, {"code", code}, {"message", message}}.dump();
+  return json{{"type", "error"}, {"code", code}, {"message", public_text(message)}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
-std::string pong_message(const std::string& id) { return json{{"type", "pong"}, {"id", id}}.dump(); }
+std::string pong_message(const std::string& id) { return json{{"type", "pong"}, {"id", id}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace); }
 
 std::string stroke_ack_message(uint32_t seq, size_t strokes) {
-  return json{{"type", "stroke_ack"}, {"seq", seq}, {"strokes", strokes}}.dump();
+  return json{{"type", "stroke_ack"}, {"seq", seq}, {"strokes", strokes}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 std::string loading_message(const std::string& volume, double fraction) {
-  return json{{"type", "loading"}, {"volume", volume}, {"fraction", std::clamp(fraction, 0.0, 1.0)}}.dump();
+  return json{{"type", "loading"}, {"volume", volume}, {"fraction", std::clamp(fraction, 0.0, 1.0)}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 std::string refining_message(double fraction, int bricks) {
-  return json{{"type", "refining"}, {"fraction", std::clamp(fraction, 0.0, 1.0)}, {"bricks", bricks}}.dump();
+  return json{{"type", "refining"}, {"fraction", std::clamp(fraction, 0.0, 1.0)}, {"bricks", bricks}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 std::pair<int, int> parse_pixel(const json& p, const std::string& where) {
@@ -258,11 +260,11 @@ std::string probe_message(uint32_t id, const json& answer) {
   json j = answer;
   j["type"] = "probe";
   j["id"] = id;
-  return j.dump();
+  return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 std::string volume_message(const json& volume_info, const json& state) {
-  return json{{"type", "volume"}, {"volume", volume_info}, {"state", state}}.dump();
+  return json{{"type", "volume"}, {"volume", volume_info}, {"state", state}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 std::string welcome_message(const Welcome& w) {
@@ -271,7 +273,7 @@ std::string welcome_message(const Welcome& w) {
               {"state", w.state},          {"capabilities", w.capabilities},
               {"gl_renderer", w.gl_renderer}, {"backend", w.backend},
               {"limits", w.limits}}
-      .dump();
+      .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 std::string stats_message(uint32_t frame, bool final, int width, int height, const json& render_stats,
@@ -284,7 +286,7 @@ std::string stats_message(uint32_t frame, bool final, int width, int height, con
   m["height"] = height;
   m["encode_ms"] = encode_ms;
   m["bytes"] = bytes;
-  return m.dump();
+  return m.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 namespace {

@@ -256,6 +256,11 @@ uint32_t Session::in_flight() const {
   return uint32_t(outstanding_.size());
 }
 
+std::string Session::volume_id() const {
+  std::lock_guard lock(m_);
+  return volume_ ? volume_->id : "";
+}
+
 nlohmann::json Session::state_json() const {
   std::lock_guard lock(m_);
   Scene full = scene_;  // every render setting, defaults included: what the client shows and restores

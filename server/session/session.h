@@ -109,6 +109,7 @@ class Session {
   void interactive_rendered(int64_t pixels, double render_ms);
   void frame_dropped(uint32_t frame_id);  // the connection replaced it before sending
   nlohmann::json state_json() const;      // volume, camera, tf, render, viewport: what the client restores
+  std::string volume_id() const;          // the volume viewed now
   // The volume and the scene of the session's next final frame (the viewport's full size): what
   // a probe looks at. Throws SceneError when the state does not resolve.
   std::pair<std::shared_ptr<VolumeEntry>, ResolvedScene> view() const;

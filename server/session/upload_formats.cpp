@@ -6,6 +6,7 @@
 #include <fstream>
 #include <vector>
 
+#include "core/utf8.h"
 #include "session/upload_store.h"
 
 namespace fs = std::filesystem;
@@ -32,8 +33,10 @@ std::string lower(std::string s) {
   return s;
 }
 
-// The header lines of a text header (NRRD, MetaImage), up to its first blank line.
-std::vector<std::string> header_lines(const std::string& head) {
+// The header lines of a text header (NRRD, MetaImage): up to the first blank line when
+// `to_blank` (NRRD's header ends there), else every line of the head (a MetaImage reader reads
+// past blank lines and comments).
+std::vector<std::string> header_lines(const std::string& head, bool to_blank = true) {
   std::vector<std::string> out;
   size_t i = 0;
   while (i < head.size()) {
@@ -41,10 +44,18 @@ std::vector<std::string> header_lines(const std::string& head) {
     if (e == std::string::npos) e = head.size();
     std::string line = head.substr(i, e - i);
     if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty()) break;
+    if (line.empty() && to_blank) break;
     out.push_back(line);
     i = e + 1;
   }
+  return out;
+}
+
+// A key as the readers compare it: lower case, without any white space ("Data File " -> "datafile").
+std::string squeezed(const std::string& key) {
+  std::string out;
+  for (char c : key)
+    if (!std::isspace(static_cast<unsigned char>(c))) out += char(std::tolower(static_cast<unsigned char>(c)));
   return out;
 }
 
@@ -52,11 +63,9 @@ bool is_metaimage(const std::string& head) {
   static const char* keys[] = {"objecttype", "ndims", "comment", "transformtype", "dimsize", "elementtype"};
   const auto lines = header_lines(head);
   if (lines.empty()) return false;
-  const std::string first = lower(lines[0]);
-  const auto eq = first.find('=');
+  const auto eq = lines[0].find('=');
   if (eq == std::string::npos) return false;
-  std::string key = first.substr(0, eq);
-  key.erase(key.find_last_not_of(' ') + 1);
+  const std::string key = squeezed(lines[0].substr(0, eq));
   return std::find(std::begin(keys), std::end(keys), key) != std::end(keys);
 }
 
@@ -77,10 +86,11 @@ UploadFormat sniff_upload(const fs::path& file, bool raw_header_given) {
   const std::string head = head_of(file, kSniffBytes);
   if (head.rfind("NRRD000", 0) == 0) {
     for (const std::string& line : header_lines(head)) {
-      const std::string l = lower(line);
-      if (l.rfind("data file:", 0) == 0 || l.rfind("datafile:", 0) == 0)
-        throw unsupported("a detached NRRD header names another file ('" + line.substr(0, 80) +
-                          "'): an upload is one file, send the .nrrd with its data attached");
+      const auto colon = line.find(':');
+      if (colon == std::string::npos || line.compare(colon, 2, ":=") == 0) continue;  // key/value pairs
+      if (squeezed(line.substr(0, colon)) == "datafile")
+        throw unsupported("a detached NRRD header names another file (its 'data file' field): an upload is one "
+                          "file, send the .nrrd with its data attached");
     }
     return UploadFormat::Nrrd;
   }
@@ -89,15 +99,16 @@ UploadFormat sniff_upload(const fs::path& file, bool raw_header_given) {
                            head.compare(0, 4, std::string("II+\0", 4)) == 0))
     return UploadFormat::Tiff;
   if (is_metaimage(head)) {
-    for (const std::string& line : header_lines(head)) {
+    for (const std::string& line : header_lines(head, false)) {
       const auto eq = line.find('=');
-      if (eq == std::string::npos) continue;
-      std::string key = lower(line.substr(0, eq)), value = line.substr(eq + 1);
-      key.erase(key.find_last_not_of(' ') + 1);
-      value.erase(0, value.find_first_not_of(' '));
-      if (key == "elementdatafile" && lower(value) != "local")
-        throw unsupported("a MetaImage header whose data is in another file (ElementDataFile = " + value.substr(0, 80) +
-                          ") is not one file: send an .mha (ElementDataFile = LOCAL)");
+      if (eq == std::string::npos || squeezed(line.substr(0, eq)) != "elementdatafile") continue;
+      std::string value = line.substr(eq + 1);
+      value.erase(0, value.find_first_not_of(" \t"));
+      value.erase(value.find_last_not_of(" \t") + 1);
+      if (lower(value) != "local")
+        throw unsupported("a MetaImage header whose data is in another file (ElementDataFile other than LOCAL) is "
+                          "not one file: send an .mha (ElementDataFile = LOCAL)");
+      break;  // the last field: the voxels follow
     }
     return UploadFormat::MetaImage;
   }
@@ -140,6 +151,32 @@ nlohmann::json raw_sidecar(const nlohmann::json& h, const std::string& data_file
     out["endian"] = h["endian"];
   }
   return out;
+}
+
+void check_raw_body(const nlohmann::json& sidecar, int64_t body_bytes) {
+  static const std::pair<const char*, int64_t> sizes[] = {{"uint8", 1}, {"int8", 1}, {"uint16", 2}, {"int16", 2}, {"float32", 4}};
+  int64_t per = 0;
+  for (const auto& [name, n] : sizes)
+    if (sidecar.at("dtype") == name) per = n;
+  int64_t need = per;
+  std::string dims;
+  for (const auto& d : sidecar.at("dims")) {
+    const int64_t n = d.get<int64_t>();
+    if (n < 2) throw bad("raw header: every axis of a volume needs at least 2 voxels (dims " + json_text(sidecar.at("dims")) + ")");
+    if (__builtin_mul_overflow(need, n, &need)) throw bad("raw header: dims overflow a 64-bit size");
+    dims += (dims.empty() ? "" : "x") + std::to_string(n);
+  }
+  if (need != body_bytes)
+    throw bad("raw voxels: dims " + dims + " of " + sidecar.at("dtype").get<std::string>() + " need " + std::to_string(need) +
+              " bytes; the body holds " + std::to_string(body_bytes));
+}
+
+std::string clean_upload_name(const std::string& name) {
+  std::string printable;
+  for (char c : name)
+    if (static_cast<unsigned char>(c) >= 0x20 && c != 0x7f) printable += c;
+  std::string out = clean_utf8(printable, limits::kMaxUploadNameLength);
+  return out.empty() ? "upload" : out;
 }
 
 MultipartUpload split_multipart(const fs::path& file, const std::string& content_type, const fs::path& data_out) {

@@ -34,5 +34,13 @@ MultipartUpload split_multipart(const std::filesystem::path& file, const std::st
 // (uint8, int8, uint16, int16, float32), optional spacing and origin (3 numbers), endian. The
 // sidecar the raw reader takes, pointing at `data_file`. Throws UploadRefusal (400).
 nlohmann::json raw_sidecar(const nlohmann::json& header, const std::string& data_file);
+// Raw voxels: the body holds exactly what the sidecar's dims and dtype need, and every axis has at
+// least 2 voxels (a volume that can never render is not kept). Throws UploadRefusal (400) naming
+// both sizes.
+void check_raw_body(const nlohmann::json& sidecar, int64_t body_bytes);
+
+// An upload's name as kept and shown: UTF-8 (bad bytes replaced), no control characters, at most
+// limits::kMaxUploadNameLength bytes cut at a character boundary; "upload" when nothing is left.
+std::string clean_upload_name(const std::string& name);
 
 }  // namespace peakcast

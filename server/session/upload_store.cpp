@@ -1,10 +1,12 @@
 #include "session/upload_store.h"
 
 #include <fstream>
+#include <set>
 #include <random>
 #include <system_error>
 
 #include "core/log.h"
+#include "core/utf8.h"
 #include "session/upload_formats.h"
 
 namespace fs = std::filesystem;
@@ -21,15 +23,6 @@ std::string new_id() {
   char id[32];
   std::snprintf(id, sizeof id, "upload-%012llx", static_cast<unsigned long long>(rng() & 0xffffffffffffull));
   return id;
-}
-
-// A name as the client gave it, made safe to show: printable, bounded; "upload" when empty.
-std::string clean_name(const std::string& name) {
-  std::string out;
-  for (char c : name)
-    if (static_cast<unsigned char>(c) >= 0x20 && c != 0x7f) out += c;
-  if (out.size() > limits::kMaxUploadNameLength) out.resize(limits::kMaxUploadNameLength);
-  return out.empty() ? "upload" : out;
 }
 
 // Every file of an upload: `<id>.<ext>`, its sidecar, its meta file, and their temporaries.
@@ -67,22 +60,51 @@ UploadStore::UploadStore(fs::path dir, UploadLimits limits, VolumeStore& volumes
   const fs::path probe = incoming_ / ".probe";
   if (ec || !std::ofstream(probe)) throw std::invalid_argument("--upload-dir " + dir_.string() + " cannot be written");
   fs::remove(probe, ec);
-  // Uploads cut short by a crash: gone. Finished ones: listed again.
+  // Uploads cut short by a crash: gone. Finished ones: listed again. Files of an upload whose
+  // meta file is missing or damaged: gone too (they would be counted by nothing, listed by
+  // nothing and deletable by nobody).
   for (const auto& e : fs::directory_iterator(incoming_, ec)) fs::remove_all(e.path(), ec);
+  std::set<std::string> listed;
   for (const auto& e : fs::directory_iterator(dir_, ec)) {
     const std::string f = e.path().filename().string();
     if (!f.ends_with(kMetaSuffix)) continue;
     try {
       const nlohmann::json meta = nlohmann::json::parse(std::ifstream(e.path()));
       const std::string id = meta.at("id");
-      const fs::path file = dir_ / meta.at("file").get<std::string>();
+      if (id.rfind("upload-", 0) != 0 || f != id + kMetaSuffix) throw std::runtime_error("its id does not match");
+      const std::string file_name = meta.at("file");
+      if (file_name.find('/') != std::string::npos || file_name.rfind(id + ".", 0) != 0)
+        throw std::runtime_error("its file is not its own");
+      const fs::path file = dir_ / file_name;
       if (!fs::exists(file)) throw std::runtime_error("its data is gone");
-      volumes_.register_upload(id, file, meta.at("name"), meta.value("info", nlohmann::json::object()));
-      kept_[id] = meta.at("bytes").get<int64_t>();
+      const std::string name = clean_upload_name(meta.at("name").get<std::string>());
+      const std::string owner = meta.value("owner", std::string());
+      nlohmann::json info = meta.value("info", nlohmann::json::object());
+      if (info.is_object()) {
+        info["name"] = name;
+        if (!owner.empty()) info["owner"] = owner;
+      }
+      volumes_.register_upload(id, file, name, owner, info);
+      kept_[id] = Kept{meta.at("bytes").get<int64_t>(), owner};
+      listed.insert(id);
     } catch (const std::exception& x) {
       log::warn("upload " + f + " not listed: " + x.what());
     }
   }
+  for (const auto& e : fs::directory_iterator(dir_, ec)) {
+    const std::string f = e.path().filename().string();
+    if (f.rfind("upload-", 0) != 0) continue;
+    const std::string id = f.substr(0, f.find('.'));
+    if (listed.count(id)) continue;
+    log::warn("upload files without their meta file removed: " + f);
+    fs::remove(e.path(), ec);
+  }
+}
+
+int64_t UploadStore::used_locked() const {
+  int64_t used = 0;
+  for (const auto& [_, k] : kept_) used += k.bytes;
+  return used;
 }
 
 UploadStore::Ticket::~Ticket() {
@@ -106,13 +128,13 @@ std::unique_ptr<UploadStore::Ticket> UploadStore::begin(const std::string& clien
   b.tokens = std::min(limits_.burst, b.tokens + std::chrono::duration<double>(now - b.last).count() * limits_.per_minute / 60);
   b.last = now;
   if (b.tokens < 1)
-    throw UploadRefusal(429, "rate_limited", "too many uploads from this client: at most " +
+    throw UploadRefusal(429, "rate_limited", "too many uploads from this client: a burst of at most " +
+                                                 std::to_string(int(limits_.burst)) + ", then " +
                                                  std::to_string(int(limits_.per_minute)) + " a minute");
   if (receiving_ >= limits_.max_concurrent)
     throw UploadRefusal(503, "uploads_busy", std::to_string(limits_.max_concurrent) +
                                                  " uploads are being received now; retry later");
-  int64_t used = 0;
-  for (const auto& [_, n] : kept_) used += n;
+  const int64_t used = used_locked();
   if (length && *length > limits_.max_bytes)
     throw UploadRefusal(413, "too_large", "an upload may hold " + std::to_string(limits_.max_bytes >> 20) +
                                               " MiB (--max-upload-mib); this one has " + std::to_string(*length) + " bytes");
@@ -128,7 +150,7 @@ std::unique_ptr<UploadStore::Ticket> UploadStore::begin(const std::string& clien
 
 std::shared_ptr<VolumeEntry> UploadStore::commit(std::unique_ptr<Ticket> t, const UploadParams& params) {
   std::error_code ec;
-  const std::string id = t->id(), name = clean_name(params.name);
+  const std::string id = t->id(), name = clean_upload_name(params.name);
   fs::path body = t->file();
   const int64_t received = int64_t(fs::file_size(body, ec));
   if (ec || received == 0) throw UploadRefusal(400, "bad_upload", "the upload has no body");
@@ -142,19 +164,19 @@ std::shared_ptr<VolumeEntry> UploadStore::commit(std::unique_ptr<Ticket> t, cons
     body = data;
   }
   const UploadFormat format = sniff_upload(body, raw.has_value());
+  const int64_t bytes = int64_t(fs::file_size(body));
   // Into place: the data file, and for raw voxels the sidecar the raw reader takes.
   const fs::path file = dir_ / (id + extension_of(format));
   fs::path open = file;
   if (format == UploadFormat::Raw) {
+    const nlohmann::json sidecar = raw_sidecar(*raw, file.filename().string());
+    check_raw_body(sidecar, bytes);
     open = dir_ / (id + ".json");
-    std::ofstream(incoming_ / (id + ".json")) << raw_sidecar(*raw, file.filename().string()).dump();
+    std::ofstream(incoming_ / (id + ".json")) << json_text(sidecar);
   }
-  const int64_t bytes = int64_t(fs::file_size(body));
   {
     std::lock_guard lock(m_);
-    int64_t used = 0;
-    for (const auto& [_, n] : kept_) used += n;
-    if (used + bytes > limits_.budget_bytes)
+    if (used_locked() + bytes > limits_.budget_bytes)
       throw UploadRefusal(507, "upload_budget", "the uploads kept would exceed " +
                                                     std::to_string(limits_.budget_bytes >> 20) + " MiB (--upload-budget-mib)");
   }
@@ -164,9 +186,31 @@ std::shared_ptr<VolumeEntry> UploadStore::commit(std::unique_ptr<Ticket> t, cons
     remove_files(dir_, id);
     throw UploadRefusal(507, "upload_failed", "the upload could not be stored on the server");
   }
+  // The budget counts what the upload costs the server: its file, or the voxels it decodes to
+  // when more (a small gzip file of zeros). Charged from the header, before anything is decoded.
+  int64_t charged = bytes;
+  LoadOptions options = volumes_.load_options();
+  options.single_file = true;  // its voxels are in it: a header naming any other file is refused
+  options.on_header = [&](const VolumeHeader& h) {
+    for (int a = 0; a < 3; ++a)
+      if (h.dims[a] < 2)
+        throw UploadRefusal(400, "bad_upload", "every axis of a volume needs at least 2 voxels (sizes " +
+                                                   std::to_string(h.dims[0]) + "x" + std::to_string(h.dims[1]) + "x" +
+                                                   std::to_string(h.dims[2]) + ")");
+    const int64_t decoded = h.voxel_count() * int64_t(voxel_bytes(storage_type(h.source)));
+    charged = std::max(bytes, decoded);
+    std::lock_guard lock(m_);
+    if (used_locked() + charged > limits_.budget_bytes)
+      throw UploadRefusal(507, "upload_budget", "this upload decodes to " + std::to_string(decoded >> 20) +
+                                                    " MiB; with the uploads kept that exceeds " +
+                                                    std::to_string(limits_.budget_bytes >> 20) + " MiB (--upload-budget-mib)");
+  };
   std::shared_ptr<VolumeEntry> entry;
   try {
-    entry = volumes_.add_upload(id, open, name);  // read and checked as any volume file
+    entry = volumes_.add_upload(id, open, name, params.owner, options);  // read and checked as any volume file
+  } catch (const UploadRefusal&) {
+    remove_files(dir_, id);
+    throw;
   } catch (const std::exception& e) {
     remove_files(dir_, id);
     // The reader names the file: the client sees the upload's name, never a server path.
@@ -177,25 +221,42 @@ std::shared_ptr<VolumeEntry> UploadStore::commit(std::unique_ptr<Ticket> t, cons
     if (dynamic_cast<const VolumeError*>(&e)) throw UploadRefusal(422, "bad_volume", why);
     throw UploadRefusal(500, "upload_failed", why);
   }
-  const nlohmann::json meta = {
-      {"id", id}, {"name", name}, {"file", open.filename().string()}, {"bytes", bytes}, {"info", entry->info(false)}};
-  std::ofstream(dir_ / (id + ".upload.tmp")) << meta.dump();
-  fs::rename(dir_ / (id + ".upload.tmp"), dir_ / (id + kMetaSuffix), ec);
-  std::lock_guard lock(m_);
-  kept_[id] = bytes;
-  t->committed_ = true;
+  // Registered: from here on a failure takes it out again, whole (no volume without its files,
+  // no files without their meta).
+  try {
+    if (entry->volume) charged = std::max(charged, int64_t(entry->volume->byte_size()));
+    const nlohmann::json meta = {{"id", id},         {"name", name},   {"file", open.filename().string()},
+                                 {"bytes", charged}, {"owner", params.owner}, {"info", entry->info(false)}};
+    {
+      std::ofstream out(dir_ / (id + ".upload.tmp"));
+      out << json_text(meta);
+      if (!out) throw std::runtime_error("its meta file could not be written");
+    }
+    fs::rename(dir_ / (id + ".upload.tmp"), dir_ / (id + kMetaSuffix));
+    std::lock_guard lock(m_);
+    kept_[id] = Kept{charged, params.owner};
+    t->committed_ = true;
+  } catch (const std::exception& e) {
+    volumes_.remove_upload(id);
+    remove_files(dir_, id);
+    log::warn("upload not kept", {{"id", id}, {"error", e.what()}});
+    throw UploadRefusal(507, "upload_failed", "the upload could not be stored on the server");
+  }
   return entry;
 }
 
-void UploadStore::remove(const std::string& id) {
+void UploadStore::remove(const std::string& id, const std::optional<std::string>& as_owner) {
   {
     std::lock_guard lock(m_);
-    if (!kept_.count(id)) {
+    auto it = kept_.find(id);
+    if (it == kept_.end()) {
       if (volumes_.find(id) || volumes_.known(id))
         throw UploadRefusal(403, "not_an_upload", "'" + id + "' is not an upload: only uploads can be deleted");
-      throw UploadRefusal(404, "not_found", "no volume '" + id.substr(0, 200) + "'");
+      throw UploadRefusal(404, "not_found", "no volume '" + clean_utf8(id, 200) + "'");
     }
-    kept_.erase(id);
+    if (as_owner && it->second.owner != *as_owner)
+      throw UploadRefusal(403, "not_owner", "'" + id + "' was uploaded with another token: only its owner or the admin token may delete it");
+    kept_.erase(it);
   }
   volumes_.remove_upload(id);
   remove_files(dir_, id);
@@ -203,9 +264,7 @@ void UploadStore::remove(const std::string& id) {
 
 int64_t UploadStore::used_bytes() const {
   std::lock_guard lock(m_);
-  int64_t used = 0;
-  for (const auto& [_, n] : kept_) used += n;
-  return used;
+  return used_locked();
 }
 
 }  // namespace peakcast

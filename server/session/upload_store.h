@@ -40,6 +40,10 @@ struct UploadLimits {
   double per_minute = limits::kUploadsPerMinutePerClient;
   double burst = limits::kUploadBurst;
   std::chrono::seconds idle_timeout = limits::kDefaultUploadIdleTimeout;
+  // After the first idle_timeout, an upload slower than this on average is ended (a trickle
+  // would hold a slot for as long as it lasts); the whole body must arrive within `deadline`.
+  double min_bytes_per_second = limits::kDefaultUploadMinBytesPerSecond;
+  std::chrono::seconds deadline = limits::kDefaultUploadDeadline;
 };
 
 // What the request says of its body besides the bytes: a name, and for raw voxels their
@@ -48,6 +52,7 @@ struct UploadParams {
   std::string name;
   std::string content_type;            // multipart/form-data carries a JSON part and a data part
   std::optional<nlohmann::json> raw;   // {dims, dtype, spacing?, origin?, endian?}
+  std::string owner;                   // who sent it (net/access.h: a token's name); empty on an open server
 };
 
 class UploadStore {
@@ -84,8 +89,10 @@ class UploadStore {
   // The body is in the ticket's file: find its format, check it as any volume file is, move it
   // into place and register it. Throws UploadRefusal (the files are gone then).
   std::shared_ptr<VolumeEntry> commit(std::unique_ptr<Ticket> ticket, const UploadParams& params);
-  // Removes an upload (UploadRefusal 404 for no such volume, 403 for a volume that is not an upload).
-  void remove(const std::string& id);
+  // Removes an upload (UploadRefusal 404 for no such volume, 403 for a volume that is not an
+  // upload). `as_owner`: only an upload that this owner made (403 not_owner otherwise); nullopt:
+  // any (the admin, or an open server).
+  void remove(const std::string& id, const std::optional<std::string>& as_owner = std::nullopt);
   int64_t used_bytes() const;
 
  private:
@@ -96,7 +103,12 @@ class UploadStore {
   LoadOptions load_;
   mutable std::mutex m_;
   int receiving_ = 0;
-  std::map<std::string, int64_t> kept_;  // id -> bytes on disk
+  struct Kept {
+    int64_t bytes;  // what the budget counts: the file, or the voxels it decodes to when more
+    std::string owner;
+  };
+  std::map<std::string, Kept> kept_;
+  int64_t used_locked() const;
   struct Bucket {
     double tokens;
     std::chrono::steady_clock::time_point last;

@@ -36,6 +36,7 @@ nlohmann::json VolumeEntry::info(bool with_histogram) const {
     j["levels"] = v.pyramid_levels;
     j["full_dims"] = {v.full_dims[0], v.full_dims[1], v.full_dims[2]};
   }
+  if (!owner.empty()) j["owner"] = owner;
   if (with_histogram) j["histogram"] = v.histogram;
   return j;
 }
@@ -51,7 +52,8 @@ VolumeStore::VolumeStore(std::vector<fs::path> dirs, GpuResidency& residency, Lo
 }
 
 std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::path& path, bool preloaded,
-                                             const std::string& upload_name, std::function<void(double)> progress) {
+                                             const std::string& upload_name, std::function<void(double)> progress,
+                                             const LoadOptions* given, const std::string& owner) {
   std::lock_guard load(load_m_);
   if (auto e = find(id)) return e;
   auto e = std::make_shared<VolumeEntry>();
@@ -59,7 +61,8 @@ std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::p
   e->path = path;
   e->uploaded = !upload_name.empty();
   e->name = upload_name;
-  LoadOptions options = options_;
+  e->owner = owner;
+  LoadOptions options = given ? *given : options_;
   options.progress = std::move(progress);
   int finer = -1;  // a preview: the level within the budget, read after
   if (in_process_ && preview_voxels_ > 0 && options.memory_budget_bytes > 0 && chunked::is_chunked_volume(path)) {
@@ -186,7 +189,7 @@ std::shared_ptr<VolumeEntry> VolumeStore::get(const std::string& id_or_path, std
     if (auto u = uploads_.find(id_or_path); u != uploads_.end()) {
       const Upload up = u->second;
       lock.unlock();
-      return add(id_or_path, up.path, false, up.name, std::move(progress));
+      return add(id_or_path, up.path, false, up.name, std::move(progress), nullptr, up.owner);
     }
   }
   const fs::path resolved = resolve_in_roots(id_or_path, dirs_);
@@ -195,8 +198,21 @@ std::shared_ptr<VolumeEntry> VolumeStore::get(const std::string& id_or_path, std
     for (auto& [_, e] : entries_)
       if (e->path == resolved) return e;
   }
+  // A volume's id is never a server path: one asked for by absolute path is known by its path
+  // inside the data directory that holds it.
+  std::string id = id_or_path;
+  if (fs::path(id_or_path).is_absolute())
+    for (const fs::path& d : dirs_) {
+      std::error_code ec;
+      const fs::path rel = resolved.lexically_relative(fs::weakly_canonical(d, ec));
+      if (!ec && !rel.empty() && *rel.begin() != "..") {
+        id = rel.generic_string();
+        break;
+      }
+    }
+  if (auto e = find(id)) return e;
   try {
-    return add(id_or_path, resolved, false, "", std::move(progress));
+    return add(id, resolved, false, "", std::move(progress));
   } catch (const VolumeError& e) {
     // Clients see what they asked for, never where it lies on the server.
     throw VolumeError(id_or_path, without_paths(e.what(), resolved, id_or_path));
@@ -243,17 +259,18 @@ nlohmann::json VolumeStore::listing() const {
 }
 
 std::shared_ptr<VolumeEntry> VolumeStore::add_upload(const std::string& id, const fs::path& path,
-                                                     const std::string& name) {
-  auto e = add(id, path, false, name);
+                                                     const std::string& name, const std::string& owner,
+                                                     const LoadOptions& options) {
+  auto e = add(id, path, false, name, {}, &options, owner);
   std::lock_guard lock(m_);
-  uploads_[id] = Upload{path, name, e->info(false)};
+  uploads_[id] = Upload{path, name, owner, e->info(false)};
   return e;
 }
 
 void VolumeStore::register_upload(const std::string& id, const fs::path& path, const std::string& name,
-                                  nlohmann::json info) {
+                                  const std::string& owner, nlohmann::json info) {
   std::lock_guard lock(m_);
-  uploads_[id] = Upload{path, name, std::move(info)};
+  uploads_[id] = Upload{path, name, owner, std::move(info)};
 }
 
 void VolumeStore::remove_upload(const std::string& id) {

@@ -59,6 +59,7 @@ struct VolumeEntry {
   bool preloaded = false;
   bool uploaded = false;  // sent by a client (POST /api/volumes); `name` is the one it gave
   std::string name;       // empty: the file's name
+  std::string owner;      // an upload's owner (net/access.h), shown in its info; empty: none
   std::shared_ptr<FullResolution> full;  // set when the level held is not the finest
   // A preview (VolumeStore::set_preview): the entry of the finer level read since, which
   // sessions viewing this one move to (the same world box: camera and TF stay).
@@ -91,14 +92,16 @@ class VolumeStore {
   nlohmann::json listing() const;
   std::string default_id() const;
   const std::vector<std::filesystem::path>& data_dirs() const { return dirs_; }
+  const LoadOptions& load_options() const { return options_; }
 
   // Uploads (session/upload_store.h): an uploaded file read now and kept under `id`; one listed
   // again at start-up, read when first asked for; one removed (sessions viewing it keep their
   // copy until they switch).
+  // `options`: the store's, as the upload store adjusted them (one file, its budget).
   std::shared_ptr<VolumeEntry> add_upload(const std::string& id, const std::filesystem::path& path,
-                                          const std::string& name);
+                                          const std::string& name, const std::string& owner, const LoadOptions& options);
   void register_upload(const std::string& id, const std::filesystem::path& path, const std::string& name,
-                       nlohmann::json info);
+                       const std::string& owner, nlohmann::json info);
   void remove_upload(const std::string& id);
   bool known(const std::string& id) const;  // loaded, or an upload that can be
   // The finest level's statistics for entry.full's stills: reduced by bricks on the caller's
@@ -113,11 +116,12 @@ class VolumeStore {
 
  private:
   std::shared_ptr<VolumeEntry> add(const std::string& id, const std::filesystem::path& path, bool preloaded,
-                                   const std::string& upload_name = "", std::function<void(double)> progress = {});
+                                   const std::string& upload_name = "", std::function<void(double)> progress = {},
+                                   const LoadOptions* options = nullptr, const std::string& owner = "");
   std::string without_paths(std::string message, const std::filesystem::path& resolved, const std::string& asked) const;
   struct Upload {
     std::filesystem::path path;
-    std::string name;
+    std::string name, owner;
     nlohmann::json info;
   };
   std::map<std::string, Upload> uploads_;
