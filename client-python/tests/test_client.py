@@ -120,7 +120,11 @@ def test_refusals_answer_by_name_and_leave_nothing(server):
     before, volumes = server.files(), c.volumes()
     cases = [
         # (what, query, body, status, code)
-        ("truncated", "dims=28,24,21&dtype=uint16", blobs().tobytes(), 422, "bad_volume"),
+        # A raw body must hold exactly what its dims and dtype need (both sizes named).
+        ("truncated", "dims=28,24,21&dtype=uint16", blobs().tobytes(), 400, "bad_upload"),
+        ("extra bytes", "dims=28,24,19&dtype=uint16", blobs().tobytes(), 400, "bad_upload"),
+        ("truncated nrrd", "", b"NRRD0004\ntype: uint16\ndimension: 3\nsizes: 28 24 21\nencoding: raw\n\n" + blobs().tobytes(),
+         422, "bad_volume"),
         ("wrong dims", "dims=28,24,0&dtype=uint16", blobs().tobytes(), 400, "bad_upload"),
         ("wrong dims count", "dims=28,24&dtype=uint16", blobs().tobytes(), 400, "bad_upload"),
         ("bad dtype", "dims=28,24,20&dtype=uint32", blobs().tobytes(), 400, "bad_upload"),
@@ -129,7 +133,8 @@ def test_refusals_answer_by_name_and_leave_nothing(server):
         ("detached nrrd", "", (DATA / "nucleon.nhdr").read_bytes(), 415, "unsupported_upload"),
         ("empty", "dims=2,2,2&dtype=uint8", b"", 400, "bad_upload"),
         # More voxels than the server's limit (2^32): refused from the header, before any allocation.
-        ("voxel limit", "dims=4096,4096,512&dtype=uint8", b"\0" * 4096, 422, "bad_volume"),
+        ("voxel limit", "", b"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4096 4096 512\nencoding: raw\n\n" + b"\0" * 4096,
+         422, "bad_volume"),
     ]
     for what, query, body, status, code in cases:
         print("case", what)
@@ -199,7 +204,7 @@ def test_a_client_past_its_rate_is_refused(guarded):
 def start_stalled_upload(server, size=1 << 20):
     """An upload that sends its header and a little of its body, then nothing."""
     s = socket.create_connection(("127.0.0.1", server.port))
-    s.sendall(f"POST /api/volumes?dims=64,64,256&dtype=uint8 HTTP/1.1\r\nHost: x\r\nContent-Length: {size}\r\n\r\n"
+    s.sendall(f"POST /api/volumes?dims=64,64,256&dtype=uint8 HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: {size}\r\n\r\n"
               .encode() + b"\0" * 1000)
     return s
 

@@ -22,7 +22,7 @@ def post_raw(server, scene):
     """A still over a raw socket, so the test can hang up on it."""
     body = json.dumps(scene).encode()
     s = socket.create_connection((server.host, server.port), timeout=60)
-    s.sendall(b"POST /api/render HTTP/1.1\r\nHost: t\r\nContent-Type: application/json\r\nContent-Length: "
+    s.sendall(b"POST /api/render HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\nContent-Length: "
               + str(len(body)).encode() + b"\r\n\r\n" + body)
     return s
 

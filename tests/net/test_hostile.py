@@ -18,7 +18,7 @@ def raw_ws(server, source=ATTACKER):
     s.settimeout(30)
     s.connect((server.host, server.port))
     key = base64.b64encode(os.urandom(16)).decode()
-    s.sendall((f"GET /ws HTTP/1.1\r\nHost: t\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+    s.sendall((f"GET /ws HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
                f"Sec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n\r\n").encode())
     head = b""
     while b"\r\n\r\n" not in head:
@@ -261,7 +261,7 @@ def test_slowloris_is_cut_by_the_request_timeout():
         s.bind((ATTACKER, 0))
         s.connect((SERVER.host, SERVER.port))
         t0 = time.time()
-        request = b"GET /api/health HTTP/1.1\r\nHost: t\r\nX-Slow: " + b"a" * 200
+        request = b"GET /api/health HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: " + b"a" * 200
         closed_after = None
         for b in request:
             try:

@@ -167,7 +167,7 @@ def test_body_and_image_caps():
         # A body announced over the 1 MiB cap is refused before it is read.
         import socket
         with socket.create_connection((s.host, s.port)) as raw:
-            raw.sendall(f"POST /api/render HTTP/1.1\r\nHost: x\r\nContent-Length: {2 << 20}\r\n\r\n".encode())
+            raw.sendall(f"POST /api/render HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: {2 << 20}\r\n\r\n".encode())
             reply = raw.recv(4096).decode()
             assert reply.startswith("HTTP/1.1 413") and '"error":"too_large"' in reply, reply
         status, _, body = http(s, "/api/render", "POST", json.dumps({"volume": "heptane_151", "image": {"width": 9000, "height": 10}}).encode())
