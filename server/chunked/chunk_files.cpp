@@ -29,6 +29,18 @@ std::optional<std::vector<uint8_t>> read_file_if_there(const fs::path& file, int
   return bytes;
 }
 
+FolderIndex::FolderIndex(const fs::path& dir) {
+  std::error_code ec;
+  // Links are followed (a chunk or folder linked out is then refused when read, not taken for
+  // missing); the depth and entry caps end a loop.
+  auto it = fs::recursive_directory_iterator(dir, fs::directory_options::follow_directory_symlink, ec);
+  for (; !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    if (names_.size() >= kMaxEntries || it.depth() > 6) return;  // not indexed
+    names_.insert(it->path().lexically_relative(dir).generic_string());
+  }
+  indexed_ = !ec;
+}
+
 nlohmann::json read_json_file(const fs::path& file) {
   const auto bytes = read_file_if_there(file, 1 << 20);
   if (!bytes) throw VolumeError(file, "missing");

@@ -79,6 +79,17 @@ int decoders_within(const ChunkedVolume& cv, int level, const VolumeHeader& h, d
 
 }  // namespace
 
+bool ChunkedVolume::may_hold(int level, const fs::path& folder, const std::string& rel) const {
+  std::shared_ptr<const FolderIndex> index;
+  {
+    std::lock_guard lock(index_m_);  // the first chunk of a level lists its folder; the others wait
+    auto& slot = index_[level];
+    if (!slot) slot = std::make_shared<const FolderIndex>(folder);
+    index = slot;
+  }
+  return index->may_hold(rel);
+}
+
 int finest_level_within(const ChunkedVolume& cv, int from, int64_t budget_bytes) {
   const int64_t bpv = int64_t(voxel_bytes(storage_type(cv.source())));
   for (int k = std::max(from, 0); k < int(cv.levels().size()); ++k) {

@@ -5,7 +5,9 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -61,6 +63,13 @@ class ChunkedVolume {
   SourceType source_ = SourceType::U8;
   bool big_endian_ = false;
   std::vector<std::vector<uint8_t>> fills_;  // per level
+  // The level's folder listed once, on its first chunk (chunked/formats.h, FolderIndex): whether
+  // a chunk may be stored there, without a stat per missing chunk. Thread-safe.
+  bool may_hold(int level, const std::filesystem::path& folder, const std::string& rel) const;
+
+ private:
+  mutable std::mutex index_m_;
+  mutable std::map<int, std::shared_ptr<const class FolderIndex>> index_;
 };
 
 // A directory that holds a chunked volume: .zattrs with "multiscales", a .zarray, or a

@@ -6,6 +6,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -19,6 +20,22 @@ std::unique_ptr<ChunkedVolume> open_precomputed(const std::filesystem::path& dir
 
 // A file's bytes, or nothing when it does not exist; refused past `limit` bytes.
 std::optional<std::vector<uint8_t>> read_file_if_there(const std::filesystem::path& file, int64_t limit);
+// The files stored under a level's folder (relative paths, "/" between parts), listed once: a
+// chunk that is not there is then known without a stat of its own, so a level of a million
+// missing chunks costs one listing, not a million system calls. A folder of more than kMaxEntries
+// entries (or deeper than 6) is not indexed: every chunk is then looked up on its own.
+class FolderIndex {
+ public:
+  explicit FolderIndex(const std::filesystem::path& dir);
+  // True when `rel` may be there (always, for a folder not indexed).
+  bool may_hold(const std::string& rel) const { return !indexed_ || names_.count(rel) > 0; }
+  static constexpr size_t kMaxEntries = size_t(1) << 22;
+
+ private:
+  bool indexed_ = false;
+  std::unordered_set<std::string> names_;
+};
+
 // A metadata file (.zarray, .zattrs, info) parsed as JSON; refused when missing, over 1 MiB or
 // not JSON.
 nlohmann::json read_json_file(const std::filesystem::path& file);

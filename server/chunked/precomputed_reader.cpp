@@ -108,6 +108,8 @@ class PrecomputedVolume : public ChunkedVolume {
     const size_t one = size_t(box[0] * box[1] * box[2]) * bpv;
     const size_t expected = one * size_t(channels_);
     const int64_t limit = int64_t(expected) + (int64_t(expected) >> 3) + (int64_t(1) << 20);
+    if (!may_hold(level, root_ / L.name, name) && !may_hold(level, root_ / L.name, name + ".gz"))
+      return std::nullopt;  // not stored: zeros
     fs::path file = root_ / L.name / name;
     auto raw = read_file_if_there(file, limit);
     if (!raw) {

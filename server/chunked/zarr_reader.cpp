@@ -241,6 +241,7 @@ class ZarrVolume : public ChunkedVolume {
       }
       key += (k ? std::string(1, a.separator) : std::string()) + std::to_string(index);
     }
+    if (!may_hold(level, a.dir, key)) return std::nullopt;  // not stored: the fill value
     const fs::path file = a.dir / key;
     const auto raw = read_file_if_there(file, a.chunk_bytes + (int64_t(1) << 20) + a.chunk_bytes / 8);
     if (!raw) return std::nullopt;

@@ -61,7 +61,9 @@ NON_DEFAULT = {"bind": "0.0.0.0", "port": "9123", "max-sessions": "5", "idle-tim
                "program-cache": "off", "upload-dir": "/tmp/peakcast-config-test-uploads", "max-upload-mib": "64",
                "upload-budget-mib": "128", "max-uploads": "3", "upload-timeout": "5",
                "uploads-per-minute": "10", "max-kbps": "2500",
-               "backend": "cpu"}
+               "backend": "cpu", "token-file": "/tmp/peakcast-config-test-token",
+               "user-token-file": "/tmp/peakcast-config-test-users", "upload-min-rate-kib": "32",
+               "upload-deadline": "60"}
 
 
 def test_every_option_by_flag_env_and_file():
@@ -149,6 +151,33 @@ def test_refusals_name_their_source():
             assert r.returncode == 2, (env, args, r.returncode, r.stdout, r.stderr)
             assert expect in r.stderr, (env, args, r.stderr)
             assert "# Precedence" not in r.stdout, "nothing printed for a refused configuration"
+
+
+def test_token_and_host_options_refused_by_name():
+    """Issue 44's options: a token file that cannot be read or holds no token, user tokens that are
+    not "NAME TOKEN", a token given twice, an allowed host that is not a host name: exit 2 naming
+    the option, never serving with less protection than asked for (and never printing a token)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        empty = pathlib.Path(tmp, "empty")
+        empty.write_text("\n")
+        users = pathlib.Path(tmp, "users")
+        users.write_text("alice tok-a\nbob\n")
+        twice = pathlib.Path(tmp, "twice")
+        twice.write_text("alice tok-a\nalice tok-b\n")
+        token = pathlib.Path(tmp, "token")
+        token.write_text("s3cret-from-file\n")
+        cases = [(["--token-file", "/nonexistent/token"], "--token-file"),
+                 (["--token-file", str(empty)], "holds no token"),
+                 (["--user-token-file", str(users)], "line 2"),
+                 (["--user-token-file", str(twice)], "used twice"),
+                 (["--token", "a", "--token-file", str(token)], "not both"),
+                 (["--allowed-host", "*.example.org"], "--allowed-host"),
+                 (["--allowed-host", "evil.example/x"], "--allowed-host")]
+        for args, expect in cases:
+            r = serve([*args, "--port", "0", "--io-threads", "1"], check=False)
+            assert r.returncode != 0, (args, r.stdout)
+            assert expect in r.stderr, (args, r.stderr)
+            assert "tok-a" not in r.stderr and "s3cret" not in r.stderr, (args, r.stderr)
 
 
 def test_layered_values_reach_the_server():
