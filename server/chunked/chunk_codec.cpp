@@ -59,6 +59,13 @@ Bytes inflate_bytes(const Bytes& in, size_t expected, const std::filesystem::pat
 Bytes unzstd(const Bytes& in, size_t expected, const std::filesystem::path& file) {
   std::unique_ptr<ZSTD_DStream, size_t (*)(ZSTD_DStream*)> d(ZSTD_createDStream(), ZSTD_freeDStream);
   if (!d) throw std::runtime_error("zstd: out of memory");
+  // The frame's window is what the decoder allocates, whatever the chunk decodes to: a 15-byte
+  // frame may claim 128 MiB (found by tests/fuzz/fuzz_chunk_codecs). A chunk's encoder never needs
+  // a window larger than the chunk (numcodecs compresses it in one call, its size known), so the
+  // window is capped at the power of two that holds `expected`: a larger claim is refused.
+  int window_log = 10;  // ZSTD_WINDOWLOG_ABSOLUTEMIN (zstd.h states it only for static linking)
+  while (window_log < 31 && (size_t(1) << window_log) < expected) ++window_log;
+  ZSTD_DCtx_setParameter(d.get(), ZSTD_d_windowLogMax, window_log);
   Bytes out(expected);
   uint8_t spill = 0;
   bool spilling = false;

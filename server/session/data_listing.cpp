@@ -54,6 +54,7 @@ bool opens_as_stack(const fs::path& dir) {
 
 nlohmann::json list_data_dir(const std::vector<fs::path>& roots, const std::string& dir, size_t max_entries) {
   if (fs::path(dir).is_absolute()) throw VolumeError(dir, "name a folder relative to the data directories");
+  if (dir.find('\0') != std::string::npos) throw VolumeError("dir", "a folder name holds no NUL byte");
   // resolve_in_roots refuses what leaves the data directories (.., symlinks) and what is missing.
   const fs::path wanted = dir.empty() ? fs::path(".") : fs::path(dir);
   std::map<std::string, nlohmann::json> entries;  // by name: a folder in two roots is listed once
