@@ -1,12 +1,14 @@
 // `serve`: the render server. Its options and their precedence: app/serve_options.h.
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <stdexcept>
 
 #include "app/cmd_render_mpi.h"
 #include "app/commands.h"
 #include "app/serve_options.h"
+#include "core/file_roots.h"
 #include "core/log.h"
 #include "net/server.h"
 
@@ -45,6 +47,13 @@ void add_serve_command(CLI::App& app, Runner& run) {
       log::configure(log::parse_level(o->log_level), log::parse_format(o->log_format));
       net::ServerConfig config = o->resolved();
       unsetenv("PEAKCAST_TOKEN");  // read: not passed on to any process this one starts
+      // Every rank reads only inside the data directories, the upload folder and the preloaded
+      // volumes' folders (core/file_roots.h): under mpirun the other ranks read the bricks, and
+      // open the chunks and data files themselves.
+      std::vector<std::filesystem::path> roots = config.data_dirs;
+      if (!config.upload_dir.empty()) roots.push_back(config.upload_dir);
+      for (const auto& v : config.volumes) roots.push_back(std::filesystem::absolute(v).parent_path());
+      file_roots::confine(roots);
       if (mpi_world_size_hint() > 1) {  // mpirun -np N peakcast serve: rank 0 serves, every rank renders
 #ifdef PEAKCAST_HAVE_MPI
         return mpi_serve(config.backend, config.egl_device, [&](MpiServeHooks hooks) {
