@@ -3,7 +3,7 @@
 #   bash scripts/test.sh            everything: all CTest labels in the Release build, then the
 #                                   unit and net labels under ASan+UBSan, the net label under TSan,
 #                                   the container label (builds the image with buildah, runs it),
-#                                   and every fuzz target for 15 s (PEAKCAST_FUZZ_SECONDS)
+#                                   and every fuzz target for 10 s (PEAKCAST_FUZZ_SECONDS)
 #   bash scripts/test.sh -L unit    only the Release build's CTest, with these ctest arguments
 # Each part is timed; the last line sums the tests of every part ("N passed, N failed").
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -98,7 +98,7 @@ else
     part "container: build the image, run it" ctest_counted "$BUILD_DIR" -L container
   fi
   if [[ -z ${PEAKCAST_SKIP_FUZZ:-} ]]; then
-    part "fuzz (${PEAKCAST_FUZZ_SECONDS:-15} s per target)" fuzz_counted "${PEAKCAST_FUZZ_SECONDS:-15}"
+    part "fuzz (${PEAKCAST_FUZZ_SECONDS:-10} s per target)" fuzz_counted "${PEAKCAST_FUZZ_SECONDS:-10}"
   fi
 fi
 
