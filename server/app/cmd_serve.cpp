@@ -1,7 +1,6 @@
 // `serve`: the render server. Its options and their precedence: app/serve_options.h.
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
 #include <memory>
 #include <stdexcept>
 
@@ -47,13 +46,9 @@ void add_serve_command(CLI::App& app, Runner& run) {
       log::configure(log::parse_level(o->log_level), log::parse_format(o->log_format));
       net::ServerConfig config = o->resolved();
       unsetenv("PEAKCAST_TOKEN");  // read: not passed on to any process this one starts
-      // Every rank reads only inside the data directories, the upload folder and the preloaded
-      // volumes' folders (core/file_roots.h): under mpirun the other ranks read the bricks, and
-      // open the chunks and data files themselves.
-      std::vector<std::filesystem::path> roots = config.data_dirs;
-      if (!config.upload_dir.empty()) roots.push_back(config.upload_dir);
-      for (const auto& v : config.volumes) roots.push_back(std::filesystem::absolute(v).parent_path());
-      file_roots::confine(roots);
+      // Every rank reads only where the server may (net::read_roots): under mpirun the other
+      // ranks open the bricks' files, chunks and data files themselves.
+      file_roots::confine(net::read_roots(config));
       if (mpi_world_size_hint() > 1) {  // mpirun -np N peakcast serve: rank 0 serves, every rank renders
 #ifdef PEAKCAST_HAVE_MPI
         return mpi_serve(config.backend, config.egl_device, [&](MpiServeHooks hooks) {

@@ -41,13 +41,6 @@ void confine(const std::vector<fs::path>& list) {
   ++generation;
 }
 
-void add(const fs::path& root) {
-  fs::path r = resolved(root);
-  std::unique_lock lock(m);
-  roots.push_back(std::move(r));
-  ++generation;
-}
-
 bool confined() {
   std::shared_lock lock(m);
   return !roots.empty();
@@ -106,3 +99,30 @@ Scope::~Scope() {
 }
 
 }  // namespace peakcast::file_roots
+
+namespace peakcast {
+
+fs::path resolve_in_roots(const fs::path& requested, const std::vector<fs::path>& roots) {
+  if (roots.empty()) throw VolumeError(requested, "no data directory is configured");
+  auto inside = [](const fs::path& p, const fs::path& root) {
+    auto rel = p.lexically_relative(root);
+    return !rel.empty() && *rel.begin() != "..";
+  };
+  for (const auto& root : roots) {
+    std::error_code ec;
+    fs::path r = fs::weakly_canonical(root, ec);
+    fs::path candidate = requested.is_absolute() ? requested : r / requested;
+    fs::path c = fs::weakly_canonical(candidate, ec);  // resolves .. and symlinks
+    if (ec || !inside(c, r)) continue;
+    if (fs::exists(c, ec)) return c;
+  }
+  for (const auto& root : roots) {
+    std::error_code ec;
+    fs::path r = fs::weakly_canonical(root, ec);
+    fs::path c = fs::weakly_canonical(requested.is_absolute() ? requested : r / requested, ec);
+    if (inside(c, r)) throw VolumeError(requested, "no such file in the data directories");
+  }
+  throw VolumeError(requested, "path is outside the configured data directories");
+}
+
+}  // namespace peakcast

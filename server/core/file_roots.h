@@ -2,7 +2,7 @@
 // a chunk, a pyramid level, a sidecar, a ray-texture PNG) is resolved, links followed, and must
 // lie inside one of these roots, at every open, not only in listings. A link out of a data
 // directory is refused wherever it stands. Like OpenBSD's unveil(): set once when the server
-// starts (data directories, the upload folder, the operator's preloaded volumes); command-line
+// starts (data directories, the upload folder, the operator's preloaded volumes' folders); command-line
 // tools that read what their user names set nothing and are not confined.
 #pragma once
 
@@ -13,8 +13,6 @@ namespace peakcast::file_roots {
 
 // Replaces the roots (each resolved now). An empty list: no confinement.
 void confine(const std::vector<std::filesystem::path>& roots);
-// Adds one root (a preloaded volume's folder); turns confinement on if it was off.
-void add(const std::filesystem::path& root);
 bool confined();
 
 // Throws VolumeError naming `path`'s file name when confinement is on and `path`, resolved

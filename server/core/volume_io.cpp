@@ -362,29 +362,6 @@ Volume load_volume(const fs::path& path, const LoadOptions& options) {
   return v;
 }
 
-fs::path resolve_in_roots(const fs::path& requested, const std::vector<fs::path>& roots) {
-  if (roots.empty()) throw VolumeError(requested, "no data directory is configured");
-  auto inside = [](const fs::path& p, const fs::path& root) {
-    auto rel = p.lexically_relative(root);
-    return !rel.empty() && *rel.begin() != "..";
-  };
-  for (const auto& root : roots) {
-    std::error_code ec;
-    fs::path r = fs::weakly_canonical(root, ec);
-    fs::path candidate = requested.is_absolute() ? requested : r / requested;
-    fs::path c = fs::weakly_canonical(candidate, ec);  // resolves .. and symlinks
-    if (ec || !inside(c, r)) continue;
-    if (fs::exists(c, ec)) return c;
-  }
-  for (const auto& root : roots) {
-    std::error_code ec;
-    fs::path r = fs::weakly_canonical(root, ec);
-    fs::path c = fs::weakly_canonical(requested.is_absolute() ? requested : r / requested, ec);
-    if (inside(c, r)) throw VolumeError(requested, "no such file in the data directories");
-  }
-  throw VolumeError(requested, "path is outside the configured data directories");
-}
-
 std::pair<float, float> finite_extremes(const Volume& v) {
   if (v.type() != VoxelType::F32) return {float(v.min_value), float(v.max_value)};
   const FiniteScan f = scan_finite(v);

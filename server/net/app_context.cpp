@@ -19,13 +19,8 @@ LoadOptions load_options(const ServerConfig& c) {
   return o;
 }
 
-// Every file the server reads lies in a data directory or the upload folder (core/file_roots.h);
-// the operator's preloaded volumes add their own folders (cmd_serve.cpp). Set before anything
-// is read.
 const ServerConfig& confine_reads(const ServerConfig& c) {
-  std::vector<std::filesystem::path> roots = c.data_dirs;
-  if (!c.upload_dir.empty()) roots.push_back(c.upload_dir);
-  file_roots::confine(roots);
+  file_roots::confine(read_roots(c));
   return c;
 }
 
@@ -62,6 +57,14 @@ AppContext::AppContext(ServerConfig c)
       }
     });
   });
+}
+
+std::vector<std::filesystem::path> read_roots(const ServerConfig& c) {
+  std::vector<std::filesystem::path> roots = c.data_dirs;
+  if (!c.upload_dir.empty()) roots.push_back(c.upload_dir);
+  // The operator named them: a preloaded volume's folder may be read (a header's data file beside it).
+  for (const auto& v : c.volumes) roots.push_back(std::filesystem::absolute(v).parent_path());
+  return roots;
 }
 
 PngLocator AppContext::png_locator() const {

@@ -61,6 +61,10 @@ struct ServerConfig {
   UploadLimits upload_limits;
 };
 
+// Where the server reads (core/file_roots.h): the data directories, the upload folder and the
+// preloaded volumes' folders. AppContext confines the process to them before anything is read.
+std::vector<std::filesystem::path> read_roots(const ServerConfig& c);
+
 struct AppContext {
   ServerConfig config;
   Metrics metrics;

@@ -92,6 +92,71 @@ void probe(AppContext& app, const Request& req, std::function<void(Response)> se
   });
 }
 
+// DELETE /api/volumes/{id}: an upload, by its owner or the admin (docs/rest.md, Upload ownership).
+// Off the io thread: removing a large file takes a while on some file systems.
+void delete_upload(AppContext& app, const Request& req, const std::string& id, const Principal& who,
+                   std::function<void(Response)> send) {
+  asio::post(app.loader, [&app, req, id, who, send = std::move(send)] {
+    try {
+      app.uploads.remove(id, app.access.required() && !who.admin ? std::optional<std::string>(who.name) : std::nullopt);
+      // Viewers of it move to the default volume: its memory goes with the last of them.
+      for (const auto& ws : app.ws_sessions.live()) ws->volume_removed(id);
+      count(app, "delete", http::status::ok);
+      send(json_response(req, http::status::ok, json_text(nlohmann::json{{"deleted", id}})));
+    } catch (const UploadRefusal& r) {
+      count(app, "delete", http::status(r.status));
+      send(error_response(req, http::status(r.status), r.code, r.what()));
+    } catch (const std::exception& e) {
+      count(app, "delete", http::status::internal_server_error);
+      send(error_response(req, http::status::internal_server_error, "internal", e.what()));
+    }
+  });
+}
+
+// GET /api/files?dir=: the data-directory browser, one folder, relative names only. On its own
+// thread: no volume load holds a listing up.
+void list_files(AppContext& app, const Request& req, std::function<void(Response)> send) {
+  const std::string dir = url_decode(query_param(std::string(req.target()), "dir"));
+  asio::post(app.listing, [&app, req, dir, send = std::move(send)] {
+    try {
+      auto list = list_data_dir(app.volumes.data_dirs(), dir);
+      count(app, "files", http::status::ok);
+      send(json_response(req, http::status::ok, json_text(list)));
+    } catch (const VolumeError& e) {
+      count(app, "files", http::status::not_found);
+      send(error_response(req, http::status::not_found, "not_found", e.what()));
+    } catch (const std::exception& e) {
+      count(app, "files", http::status::internal_server_error);
+      send(error_response(req, http::status::internal_server_error, "internal", e.what()));
+    }
+  });
+}
+
+// GET /api/health: open to all (docs/security.md, "Not covered").
+Response health(AppContext& app, const Request& req) {
+  const bool stopping = app.stopping.load();
+  const auto status = stopping ? http::status::service_unavailable : http::status::ok;
+  count(app, "health", status);
+  const auto& uploads = app.uploads.limits();
+  return json_response(req, status,
+                       json_text(nlohmann::json{{"status", stopping ? "stopping" : "ok"},
+                                                {"gl_renderer", app.render.gl_renderer()},
+                                                {"backend", app.render.backend()},
+                                                {"ranks", app.render.ranks()},
+                                                {"sessions", app.ws_sessions.count()},
+                                                {"max_sessions", app.config.max_sessions},
+                                                {"volumes", app.volumes.list().size()},
+                                                {"volume_bytes", app.residency.counted_bytes()},
+                                                {"stills_queued", app.render.stills_pending()},
+                                                {"still_progress", app.render.still_progress()},
+                                                {"max_queued_stills", app.config.max_queued_stills},
+                                                {"uploads",
+                                                 {{"enabled", app.uploads.enabled()},
+                                                  {"max_bytes", uploads.max_bytes},
+                                                  {"budget_bytes", uploads.budget_bytes},
+                                                  {"used_bytes", app.uploads.used_bytes()}}}}));
+}
+
 }  // namespace
 
 Response json_response(const Request& req, http::status status, const std::string& body) {
@@ -136,67 +201,14 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
       return send(error_response(req, http::status::method_not_allowed, "bad_request", "POST a scene with \"pixel\": [x, y]"));
     return probe(app, req, std::move(send));
   }
-  if (req.method() == http::verb::delete_ && path.rfind("/api/volumes/", 0) == 0) {
-    const std::string id = url_decode(path.substr(std::strlen("/api/volumes/")));
-    // Off the io thread: removing a large file takes a while on some file systems.
-    return asio::post(app.loader, [&app, req, id, who, send = std::move(send)] {
-      try {
-        app.uploads.remove(id, app.access.required() && !who.admin ? std::optional<std::string>(who.name) : std::nullopt);
-        // Viewers of it move to the default volume: its memory goes with the last of them.
-        for (const auto& ws : app.ws_sessions.live()) ws->volume_removed(id);
-        count(app, "delete", http::status::ok);
-        send(json_response(req, http::status::ok, json_text(nlohmann::json{{"deleted", id}})));
-      } catch (const UploadRefusal& r) {
-        count(app, "delete", http::status(r.status));
-        send(error_response(req, http::status(r.status), r.code, r.what()));
-      } catch (const std::exception& e) {
-        count(app, "delete", http::status::internal_server_error);
-        send(error_response(req, http::status::internal_server_error, "internal", e.what()));
-      }
-    });
-  }
+  if (req.method() == http::verb::delete_ && path.rfind("/api/volumes/", 0) == 0)
+    return delete_upload(app, req, url_decode(path.substr(std::strlen("/api/volumes/"))), who, std::move(send));
   if (req.method() != http::verb::get && req.method() != http::verb::head)
     return send(error_response(req, http::status::method_not_allowed, "bad_request",
                                path.rfind("/api/volumes", 0) == 0 ? "GET, POST an upload, or DELETE an upload"
                                                                    : "GET only"));
-  if (path == "/api/health") {
-    const bool stopping = app.stopping.load();
-    const auto status = stopping ? http::status::service_unavailable : http::status::ok;
-    count(app, "health", status);
-    return send(json_response(req, status,
-                              json_text(nlohmann::json{{"status", stopping ? "stopping" : "ok"},
-                                             {"gl_renderer", app.render.gl_renderer()},
-                                             {"backend", app.render.backend()},
-                                             {"ranks", app.render.ranks()},
-                                             {"sessions", app.ws_sessions.count()},
-                                             {"max_sessions", app.config.max_sessions},
-                                             {"volumes", app.volumes.list().size()},
-                                             {"volume_bytes", app.residency.counted_bytes()},
-                                             {"stills_queued", app.render.stills_pending()},
-                                             {"still_progress", app.render.still_progress()},
-                                             {"max_queued_stills", app.config.max_queued_stills},
-                                             {"uploads",
-                                              {{"enabled", app.uploads.enabled()},
-                                               {"max_bytes", app.uploads.limits().max_bytes},
-                                               {"budget_bytes", app.uploads.limits().budget_bytes},
-                                               {"used_bytes", app.uploads.used_bytes()}}}})));
-  }
-  if (path == "/api/files") {  // the data-directory browser: one folder, relative names only
-    const std::string dir = url_decode(query_param(std::string(req.target()), "dir"));
-    return asio::post(app.listing, [&app, req, dir, send = std::move(send)] {
-      try {
-        auto list = list_data_dir(app.volumes.data_dirs(), dir);
-        count(app, "files", http::status::ok);
-        send(json_response(req, http::status::ok, json_text(list)));
-      } catch (const VolumeError& e) {
-        count(app, "files", http::status::not_found);
-        send(error_response(req, http::status::not_found, "not_found", e.what()));
-      } catch (const std::exception& e) {
-        count(app, "files", http::status::internal_server_error);
-        send(error_response(req, http::status::internal_server_error, "internal", e.what()));
-      }
-    });
-  }
+  if (path == "/api/health") return send(health(app, req));
+  if (path == "/api/files") return list_files(app, req, std::move(send));
   if (path == "/api/volumes") {
     const nlohmann::json list = app.volumes.listing();
     count(app, "volumes", http::status::ok);

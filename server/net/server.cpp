@@ -6,7 +6,6 @@
 #include <cstdlib>
 #include <thread>
 
-#include "core/file_roots.h"
 #include "core/log.h"
 #include "net/listener.h"
 #include "net/ws_session.h"
@@ -15,9 +14,6 @@ namespace peakcast::net {
 
 Server::Server(ServerConfig config) : app_(std::make_unique<AppContext>(std::move(config))), ioc_(app_->config.io_threads) {
   for (const auto& v : app_->config.volumes) {
-    // The operator named it: its folder may be read (a header's data file beside it), and
-    // nothing else outside the data directories (core/file_roots.h).
-    file_roots::add(std::filesystem::absolute(v).parent_path());
     auto e = app_->volumes.preload(v);
     log::info("volume loaded", {{"path", v.string()}, {"id", e->id}, {"volume", e->volume->to_string()},
                                 {"load_ms", e->volume->load_ms}});

@@ -46,8 +46,8 @@ bool inside(const fs::path& child, const fs::path& parent) {
 
 }  // namespace
 
-UploadStore::UploadStore(fs::path dir, UploadLimits limits, VolumeStore& volumes, LoadOptions load)
-    : dir_(std::move(dir)), limits_(limits), volumes_(volumes), load_(load) {
+UploadStore::UploadStore(fs::path dir, UploadLimits limits, VolumeStore& volumes)
+    : dir_(std::move(dir)), limits_(limits), volumes_(volumes) {
   if (dir_.empty()) return;
   for (const fs::path& data : volumes_.data_dirs())
     if (inside(dir_, data) || inside(data, dir_))
@@ -186,25 +186,8 @@ std::shared_ptr<VolumeEntry> UploadStore::commit(std::unique_ptr<Ticket> t, cons
     remove_files(dir_, id);
     throw UploadRefusal(507, "upload_failed", "the upload could not be stored on the server");
   }
-  // The budget counts what the upload costs the server: its file, or the voxels it decodes to
-  // when more (a small gzip file of zeros). Charged from the header, before anything is decoded.
   int64_t charged = bytes;
-  LoadOptions options = volumes_.load_options();
-  options.single_file = true;  // its voxels are in it: a header naming any other file is refused
-  options.on_header = [&](const VolumeHeader& h) {
-    for (int a = 0; a < 3; ++a)
-      if (h.dims[a] < 2)
-        throw UploadRefusal(400, "bad_upload", "every axis of a volume needs at least 2 voxels (sizes " +
-                                                   std::to_string(h.dims[0]) + "x" + std::to_string(h.dims[1]) + "x" +
-                                                   std::to_string(h.dims[2]) + ")");
-    const int64_t decoded = h.voxel_count() * int64_t(voxel_bytes(storage_type(h.source)));
-    charged = std::max(bytes, decoded);
-    std::lock_guard lock(m_);
-    if (used_locked() + charged > limits_.budget_bytes)
-      throw UploadRefusal(507, "upload_budget", "this upload decodes to " + std::to_string(decoded >> 20) +
-                                                    " MiB; with the uploads kept that exceeds " +
-                                                    std::to_string(limits_.budget_bytes >> 20) + " MiB (--upload-budget-mib)");
-  };
+  const LoadOptions options = charged_load(bytes, charged);
   std::shared_ptr<VolumeEntry> entry;
   try {
     entry = volumes_.add_upload(id, open, name, params.owner, options);  // read and checked as any volume file
@@ -221,12 +204,42 @@ std::shared_ptr<VolumeEntry> UploadStore::commit(std::unique_ptr<Ticket> t, cons
     if (dynamic_cast<const VolumeError*>(&e)) throw UploadRefusal(422, "bad_volume", why);
     throw UploadRefusal(500, "upload_failed", why);
   }
-  // Registered: from here on a failure takes it out again, whole (no volume without its files,
-  // no files without their meta).
+  if (entry->volume) charged = std::max(charged, int64_t(entry->volume->byte_size()));
+  keep(*t, *entry, name, open, charged, params.owner);
+  return entry;
+}
+
+// The budget counts what the upload costs the server: its file, or the voxels it decodes to when
+// more (a small gzip file of zeros). Charged from the header, before anything is decoded; the
+// reader refuses a header naming any other file (an upload is one file).
+LoadOptions UploadStore::charged_load(int64_t file_bytes, int64_t& charged) {
+  LoadOptions options = volumes_.load_options();
+  options.single_file = true;
+  options.on_header = [this, file_bytes, &charged](const VolumeHeader& h) {
+    for (int a = 0; a < 3; ++a)
+      if (h.dims[a] < 2)
+        throw UploadRefusal(400, "bad_upload", "every axis of a volume needs at least 2 voxels (sizes " +
+                                                   std::to_string(h.dims[0]) + "x" + std::to_string(h.dims[1]) + "x" +
+                                                   std::to_string(h.dims[2]) + ")");
+    const int64_t decoded = h.voxel_count() * int64_t(voxel_bytes(storage_type(h.source)));
+    charged = std::max(file_bytes, decoded);
+    std::lock_guard lock(m_);
+    if (used_locked() + charged > limits_.budget_bytes)
+      throw UploadRefusal(507, "upload_budget", "this upload decodes to " + std::to_string(decoded >> 20) +
+                                                    " MiB; with the uploads kept that exceeds " +
+                                                    std::to_string(limits_.budget_bytes >> 20) + " MiB (--upload-budget-mib)");
+  };
+  return options;
+}
+
+// A registered upload's meta file, then its count: a failure takes it out again, whole (no
+// volume without its files, no files without their meta).
+void UploadStore::keep(Ticket& t, const VolumeEntry& entry, const std::string& name, const fs::path& open,
+                       int64_t charged, const std::string& owner) {
+  const std::string& id = t.id();
   try {
-    if (entry->volume) charged = std::max(charged, int64_t(entry->volume->byte_size()));
     const nlohmann::json meta = {{"id", id},         {"name", name},   {"file", open.filename().string()},
-                                 {"bytes", charged}, {"owner", params.owner}, {"info", entry->info(false)}};
+                                 {"bytes", charged}, {"owner", owner}, {"info", entry.info(false)}};
     {
       std::ofstream out(dir_ / (id + ".upload.tmp"));
       out << json_text(meta);
@@ -234,15 +247,14 @@ std::shared_ptr<VolumeEntry> UploadStore::commit(std::unique_ptr<Ticket> t, cons
     }
     fs::rename(dir_ / (id + ".upload.tmp"), dir_ / (id + kMetaSuffix));
     std::lock_guard lock(m_);
-    kept_[id] = Kept{charged, params.owner};
-    t->committed_ = true;
+    kept_[id] = Kept{charged, owner};
+    t.committed_ = true;
   } catch (const std::exception& e) {
     volumes_.remove_upload(id);
     remove_files(dir_, id);
     log::warn("upload not kept", {{"id", id}, {"error", e.what()}});
     throw UploadRefusal(507, "upload_failed", "the upload could not be stored on the server");
   }
-  return entry;
 }
 
 void UploadStore::remove(const std::string& id, const std::optional<std::string>& as_owner) {

@@ -60,7 +60,7 @@ class UploadStore {
   // `dir` empty: uploads are off (every begin() is refused saying how to turn them on).
   // Throws std::invalid_argument for a folder inside a data directory or one that cannot be
   // written. Leftovers of uploads cut short by a crash are removed; finished ones are listed.
-  UploadStore(std::filesystem::path dir, UploadLimits limits, VolumeStore& volumes, LoadOptions load = {});
+  UploadStore(std::filesystem::path dir, UploadLimits limits, VolumeStore& volumes);
   bool enabled() const { return !dir_.empty(); }
   const UploadLimits& limits() const { return limits_; }
 
@@ -97,10 +97,12 @@ class UploadStore {
 
  private:
   void release(Ticket& t);
+  LoadOptions charged_load(int64_t file_bytes, int64_t& charged);
+  void keep(Ticket& t, const VolumeEntry& entry, const std::string& name, const std::filesystem::path& open,
+            int64_t charged, const std::string& owner);
   std::filesystem::path dir_, incoming_;
   UploadLimits limits_;
   VolumeStore& volumes_;
-  LoadOptions load_;
   mutable std::mutex m_;
   int receiving_ = 0;
   struct Kept {

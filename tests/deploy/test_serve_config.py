@@ -154,7 +154,7 @@ def test_refusals_name_their_source():
 
 
 def test_token_and_host_options_refused_by_name():
-    """Issue 44's options: a token file that cannot be read or holds no token, user tokens that are
+    """The access options: a token file that cannot be read or holds no token, user tokens that are
     not "NAME TOKEN", a token given twice, an allowed host that is not a host name: exit 2 naming
     the option, never serving with less protection than asked for (and never printing a token)."""
     with tempfile.TemporaryDirectory() as tmp:

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The outside audit of issue 44, held by the real server: one test (or a few) per point of the
+"""An outside audit of the running server, held by the real server: one test (or a few) per point of the
 contract the fixes follow. Each reproduces what the audit did and checks what the server must do
 instead: static files and docs from a fixed list only, JSON errors that are valid UTF-8 whatever
 bytes came in, upload names and headers that cannot name another file, no session slot or upload

@@ -1,4 +1,4 @@
-// Issue 44's rules held function by function (the net tests hold them against the real server,
+// The security rules held function by function (the net tests hold them against the real server,
 // tests/net/test_audit.py): UTF-8 cleaning, errors without server paths, reads confined to the
 // data directories, uploads as one file, chunk decoding charged to the memory budget, the Host
 // allow-list, constant-time tokens, the static file list.
@@ -11,12 +11,14 @@
 
 #include <nlohmann/json.hpp>
 
+#include "chunked/chunk_codec.h"
 #include "core/file_roots.h"
 #include "core/public_text.h"
 #include "core/utf8.h"
 #include "net/access.h"
 #include "net/http_text.h"
 #include "net/static_files.h"
+#include "session/data_listing.h"
 #include "session/upload_formats.h"
 #include "session/upload_store.h"
 #include "unit/chunked_test_util.h"
@@ -207,6 +209,33 @@ TEST(ChunkBudget, MissingChunksCostOneListing) {
 #else
   EXPECT_LT(seconds, 1.0);  // measured: 0.12 s for the read here
 #endif
+}
+
+// Found by fuzz_chunk_codecs: a 15-byte zstd frame claiming a 64 MiB window made the decoder
+// allocate it. A window larger than the chunk is refused; a frame zstd writes for the chunk reads.
+TEST(ChunkBudget, ZstdWindowLargerThanTheChunkIsRefused) {
+  const std::vector<uint8_t> claim = {0x28, 0xb5, 0x2f, 0xfd, 0xb0, 0x00, 0x37, 0x20, 0x04, 0xfd, 0xb0, 0x14, 0x64};
+  chunked::CompressorSpec zstd;
+  zstd.id = chunked::Compressor::Zstd;
+  try {
+    chunked::decode_chunk(zstd, claim, 13030, "chunk");
+    ADD_FAILURE() << "decoded";
+  } catch (const VolumeError& e) {  // refused from the frame header, before the window is allocated
+    EXPECT_NE(std::string(e.what()).find("too much memory"), std::string::npos) << e.what();
+  }
+  std::vector<uint8_t> voxels(13030);
+  for (size_t i = 0; i < voxels.size(); ++i) voxels[i] = uint8_t(i * 7);
+  const auto packed = chunked::encode_chunk(zstd, voxels.data(), voxels.size(), 1);
+  EXPECT_EQ(chunked::decode_chunk(zstd, packed, voxels.size(), "chunk"), voxels);
+}
+
+// Found by fuzz_data_listing: a folder name with a NUL byte was cut there by the system calls
+// and listed the data directory's root.
+TEST(Listing, FolderNameWithNulIsRefused) {
+  test::TempDir tmp;
+  fs::create_directories(tmp / "data/sub");
+  EXPECT_NO_THROW(list_data_dir({tmp / "data"}, "sub"));
+  EXPECT_THROW(list_data_dir({tmp / "data"}, std::string("\0\x08secret", 8)), VolumeError);
 }
 
 TEST(HttpText, HostAllowList) {
