@@ -15,12 +15,12 @@ float g_stop, g_dvr_weight, g_peak_weight;
 vec2 ray_texture_uv(Ray r, vec2 pixel, float t_enter) {
 #ifdef RAY_TEXTURE_VOLUME
   const float pi = 3.14159265358979;
-  vec3 n = (r.o + t_enter * r.d) / u_box_half.xyz;
+  vec3 n = (r.o + t_enter * r.d) / P.box_half;
   float len = length(n);
   if (!(len > 0.0)) return vec2(0.5);
   return vec2(0.5 + atan(n.x, n.z) / (2.0 * pi), acos(clamp(n.y / len, -1.0, 1.0)) / pi);
 #else
-  return pixel / vec2(u_image.xy);
+  return pixel / vec2(P.image_width, P.image_height);
 #endif
 }
 
@@ -33,7 +33,7 @@ float read_ray_texture(Ray r, vec2 pixel, float t_enter) {
   return c.r;
 }
 #else
-#define STOP u_dims.w
+#define STOP P.stop
 #define DVR_WEIGHT 1.0
 #define PEAK_WEIGHT 1.0
 #endif

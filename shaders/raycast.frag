@@ -1,13 +1,6 @@
 // Fragment entry point of the ray caster: one fragment per pixel of an RGBA32F (or RGBA8UI,
 // RGB8_OUTPUT) target, plus the sample count in a second R32F target.
-#include "uniforms.glsl"
-#include "ray_setup.glsl"
-#include "common_sampling.glsl"
-#include "tf.glsl"
-#include "compositing.glsl"
-#include "shading.glsl"
-#include "raycast_body.glsl"
-#include "output.glsl"
+#include "caster.glsl"
 
 #ifdef RGB8_OUTPUT
 layout(location = 0) out uvec4 out_color;
@@ -17,9 +10,9 @@ layout(location = 0) out vec4 out_color;
 layout(location = 1) out float out_samples;
 
 void main() {
-  // Target row k holds image row u_image.w + k (row 0 at the top), so the read-back is already
-  // in image order; u_image.zw is the tile's first pixel (0, 0 for a full frame).
-  vec2 pixel = vec2(u_image.zw) + gl_FragCoord.xy;
+  // Target row k holds image row P.tile_y + k (row 0 at the top), so the read-back is already
+  // in image order; (P.tile_x, P.tile_y) is the tile's first pixel (0, 0 for a full frame).
+  vec2 pixel = vec2(P.tile_x, P.tile_y) + gl_FragCoord.xy;
   RayResult res = CAST_RAY(pixel, ivec2(gl_FragCoord.xy));
   out_color = output_color(res.acc);
   out_samples = res.samples;

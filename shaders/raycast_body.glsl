@@ -18,16 +18,6 @@ struct RayResult {
   float samples;  // filter evaluations (root-solving steps included); -1: missed the box
 };
 
-#ifdef BRICK
-// Distributed rendering: the texture holds one brick (and ghosts) of the volume whose box the
-// ray, its lattice and the macrocell walk live in; only where voxels are read moves.
-vec3 voxel_coords(vec3 p) { return (p + u_brick_half.xyz) * (1.0 / u_spacing.xyz); }
-#else
-vec3 voxel_coords(vec3 p) { return (p + u_box_half.xyz) * (1.0 / u_spacing.xyz); }
-#endif
-// Where the macrocells are looked up: the whole volume's voxel coordinates (a brick's grids are
-// the whole volume's, core/macrocell_share.h).
-vec3 cell_coords(vec3 p) { return (p + u_box_half.xyz) * (1.0 / u_spacing.xyz); }
 
 #if defined(PEAKS) || defined(PREINTEGRATION) || defined(VIRTUAL_SAMPLES)
 #define SEGMENTS  // methods that look at the segment between consecutive samples
@@ -92,85 +82,9 @@ void chord_ends(Lattice L, float t_exit, int last) {
 }
 
 #ifdef BRICK
-// Lattice point i lies in this brick's own box (whole-volume voxel coordinates, computed alike
-// on every rank, so exactly one rank owns each point). u_own_lo.w / u_own_hi.w: the axes whose
-// bound is the volume's own face (none there: rounding may put a point a hair outside).
-bool owns(Ray r, Lattice L, int i) {
-  // precise: no contraction, so every call site (and every rank) computes the same x; the two
-  // ranks at a face decide a shared point at different call sites of clip_to_brick.
-  float j = float(i);
-  precise float t = L.t0 + j * (L.B + L.A * j * 0.5);  // lattice_t
-  precise vec3 x = (r.o + t * r.d + u_box_half.xyz) * (1.0 / u_spacing.xyz);
-  int open_lo = int(u_own_lo.w), open_hi = int(u_own_hi.w);
-  for (int a = 0; a < 3; ++a) {
-    bool lo_ok = ((open_lo >> a) & 1) != 0 || x[a] >= u_own_lo[a];
-    bool hi_ok = ((open_hi >> a) & 1) != 0 || x[a] < u_own_hi[a];
-    if (!(lo_ok && hi_ok)) return false;
-  }
-  return true;
-}
-
-int index_near(Lattice L, float t, vec2 span, int last) {
-  float x = lattice_index(L, clamp(t, span.x, span.y));
-  float i = floor(x);
-  if (x - i >= 0.5) i += 1.0;  // std::round's halves, as the CPU's guess
-  return (i <= 0.0 || isnan(i)) ? 0 : (i >= float(last) ? last : int(i));
-}
-
-// Restricts the ray to the points it owns (cpu/ray_brick-inl.h clip_to_brick, the same steps):
-// a first guess from the ray's interval in the own box, then owns() decides at both ends.
-// False when it owns none; else g_own_first/g_own_last, and `last` becomes the point closing
-// the last owned segment (segment methods) or the last owned point.
-bool clip_to_brick(Ray r, Lattice L, vec2 span, inout int last) {
-  if (last < 0) return false;
-  vec3 lo = u_own_lo.xyz * u_spacing.xyz - u_box_half.xyz, hi = u_own_hi.xyz * u_spacing.xyz - u_box_half.xyz;
-  int open_lo = int(u_own_lo.w), open_hi = int(u_own_hi.w);
-  float t_in = -3.0e38, t_out = 3.0e38;
-  for (int a = 0; a < 3; ++a) {
-    if (abs(r.d[a]) < 1e-20) continue;
-    float t_lo = ((open_lo >> a) & 1) != 0 ? (r.d[a] > 0.0 ? -3.0e38 : 3.0e38) : (lo[a] - r.o[a]) / r.d[a];
-    float t_hi = ((open_hi >> a) & 1) != 0 ? (r.d[a] > 0.0 ? 3.0e38 : -3.0e38) : (hi[a] - r.o[a]) / r.d[a];
-    t_in = max(t_in, min(t_lo, t_hi));
-    t_out = min(t_out, max(t_lo, t_hi));
-  }
-  if (!(t_in <= t_out)) {
-    t_in = 0.5 * (max(t_in, span.x) + min(t_out, span.y));
-    t_out = t_in;
-  }
-  int first = index_near(L, t_in, span, last);
-  int own_last = max(first, index_near(L, t_out, span, last));
-  while (first <= own_last && !owns(r, L, first)) ++first;
-  while (own_last >= first && !owns(r, L, own_last)) --own_last;
-  if (first > own_last) return false;
-  while (first > 0 && owns(r, L, first - 1)) --first;
-  while (own_last < last && owns(r, L, own_last + 1)) ++own_last;
-  g_own_first = first;
-  g_own_last = own_last;
-  // Virtual samples: the two visits after the last owned point (the Catmull-Rom window of its
-  // segment), and one more, so that whether the second is visited is decided as in one process
-  // (a run of occupied cells starting there visits the point before it). Adaptive sampling: each
-  // visit is up to 8 points on, and the last owned visit's step (its multiplier, cut at its
-  // cell's last point) is decided as in one process only when the walk goes on past it. (The
-  // segment out of the last owned point is drawn by the rank owning its end, see g_draw.)
-#ifdef ADAPTIVE
-  const int m = 8;  // kMaxAdaptiveMultiplier
-#else
-  const int m = 1;
-#endif
-#if defined(VIRTUAL_SAMPLES)
-  int beyond = 2 * m + 1;
-#elif defined(ADAPTIVE)
-  int beyond = m;
-#else
-  int beyond = 0;
-#endif
-  last = min(own_last + beyond, last);
-  return true;
-}
-
 #ifdef RAY_TEXTURE
 // The opacity the bricks in front composited, per pixel of the drawn rect (rows of
-// u_brick_half.w pixels; 0: the front brick, none): a ray texture's termination is of the
+// P.front_opacity_width pixels; 0: the front brick, none): a ray texture's termination is of the
 // opacity over them (render/brick.h Brick::front_opacity).
 layout(std430, binding = SSBO_FRONT_OPACITY) readonly buffer FrontOpacity { float u_front_opacity[]; };
 #endif
@@ -204,8 +118,7 @@ bool consume(Ray r, float t, float f, vec3 x, vec3 g, float dt, inout RayResult 
     vec4 c = preint_lookup(g_prev_f, f);
 #ifdef VARYING_STEPS
     if (c.a > 0.0) {  // the table holds segments of the uniform step: correct for this one's length
-      float a = correct_opacity_for(c.a, t - g_prev_t, u_box_half.w);
-      c = vec4(c.rgb * (a / c.a), a);
+      c = segment_for_length(c, t - g_prev_t);
     }
 #endif
 #ifdef SHADING
@@ -214,9 +127,7 @@ bool consume(Ray r, float t, float f, vec3 x, vec3 g, float dt, inout RayResult 
       composite(res.acc, rgb, c.a * DVR_WEIGHT);
     }
 #else
-    // The table's colour is opacity-weighted already: composite it as it is (no divide).
-    float w = (1.0 - res.acc.a) * DVR_WEIGHT;
-    res.acc += w * c;
+    composite_premultiplied(res.acc, c, DVR_WEIGHT);  // opacity-weighted already: no divide
 #endif
   }
 #elif !defined(PEAKS_ONLY)
@@ -261,15 +172,6 @@ uint w_own;  // the window's samples owned: bit 0 the newest (.w) to bit 3 (.x)
 #else
 #define W_OWNS(bit) true
 #endif
-
-float catmull_rom(float p0, float p1, float p2, float p3, float s) {
-  return 0.5 * (2.0 * p1 + (p2 - p0) * s + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * s * s +
-                (3.0 * p1 - p0 - 3.0 * p2 + p3) * s * s * s);
-}
-vec3 catmull_rom3(vec3 p0, vec3 p1, vec3 p2, vec3 p3, float s) {
-  return 0.5 * (2.0 * p1 + (p2 - p0) * s + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * s * s +
-                (3.0 * p1 - p0 - 3.0 * p2 + p3) * s * s * s);
-}
 
 // Sends out the true sample at t1 (value f1, step dt1) and the virtual samples between it and
 // the next one (t2) that lie before t_limit, on the spline through f0..f3 (g0..g3).
@@ -438,11 +340,11 @@ void close_segment(Ray r, float t_exit, inout RayResult res) {
   res.samples += 1.0;
   vec4 c = preint_lookup(g_prev_f, f);
   if (!(c.a > 0.0)) return;
-  float a = correct_opacity_for(c.a, t_exit - g_prev_t, u_box_half.w);
+  c = segment_for_length(c, t_exit - g_prev_t);
 #ifdef SHADING
-  composite(res.acc, shade(c.rgb / c.a, field_gradient(x), r.d), a * DVR_WEIGHT);
+  composite(res.acc, shade(c.rgb / c.a, field_gradient(x), r.d), c.a * DVR_WEIGHT);
 #else
-  res.acc += (1.0 - res.acc.a) * DVR_WEIGHT * (c * (a / c.a));
+  composite_premultiplied(res.acc, c, DVR_WEIGHT);
 #endif
 }
 #endif
@@ -484,17 +386,17 @@ RayResult cast_ray(vec2 pixel) {
   L.A *= step_mult;
   L.B *= step_mult;
 #endif
-  int last = int(min(floor(lattice_index(L, span.y)), u_value_map.w - 1.0));
+  int last = int(min(floor(lattice_index(L, span.y)), float(P.sample_cap - 1)));
   chord_ends(L, span.y, last);
 #ifdef BRICK
-  if (!clip_to_brick(r, L, span, last)) {  // none of its points in this brick: nothing to draw here
+  if (!clip_to_brick(r, L, span, last, g_own_first, g_own_last)) {  // none of its points in this brick: nothing to draw here
     res.samples = -1.0;
     return res;
   }
 #ifdef RAY_TEXTURE
-  if (u_brick_half.w > 0.0) {
-    ivec2 p = ivec2(pixel) - u_image.zw;
-    float a = u_front_opacity[p.y * int(u_brick_half.w) + p.x];
+  if (P.front_opacity_width > 0) {
+    ivec2 p = ivec2(pixel) - ivec2(P.tile_x, P.tile_y);
+    float a = u_front_opacity[p.y * P.front_opacity_width + p.x];
     if (a >= 0.0 && a >= g_stop) {  // reached in front (after a consume there): one process stopped
       res.samples = -1.0;
       return res;
@@ -532,10 +434,10 @@ RayResult cast_ray(vec2 pixel) {
   // an iteration per sample or leap instead of one per cell crossed plus one per sample: on
   // llvmpipe the cell loop cost more than the samples. Segment methods add the point
   // before a run of occupied cells and the one after it (EXTENSION 1), as the cell loop does.
-  float edge = u_cells.w;
+  float edge = P.cell_edge;
   vec3 xo = cell_coords(r.o);  // the ray in the cells' voxel coordinates: xo + t * dv
-  vec3 dv = r.d / u_spacing.xyz;
-  ivec3 grid = ivec3(u_cells.xyz);
+  vec3 dv = r.d / P.spacing;
+  ivec3 grid = P.cell_grid;
   ivec3 stp = ivec3(sign(dv));
   bvec3 moves = greaterThanEqual(abs(dv), vec3(1e-20));
   vec3 inv_dv = mix(vec3(0.0), 1.0 / mix(vec3(1.0), dv, moves), moves);
@@ -576,7 +478,7 @@ RayResult cast_ray(vec2 pixel) {
         int reach = int(empty_distance) - 1;
         vec3 t_face = mix(vec3(3.0e38), ((vec3(c + stp * reach) + ahead) * edge - xo) * inv_dv, moves);
         float t_leave = min(min(t_face.x, t_face.y), t_face.z);
-        i = max(i + 1, int(ceil(lattice_index(L, min(t_leave, span.y + u_box_half.w)))));
+        i = max(i + 1, int(ceil(lattice_index(L, min(t_leave, span.y + P.step)))));
       }
     }
   if (stop) return res;
@@ -585,10 +487,10 @@ RayResult cast_ray(vec2 pixel) {
   // visits the lattice indices inside it (the multiples of its multiplier M with ADAPTIVE);
   // segment methods also visit EXTENSION more on each side of a run of occupied cells, so the
   // segments that enter or leave the run are not lost.
-  float edge = u_cells.w;
+  float edge = P.cell_edge;
   vec3 x0 = cell_coords(r.o + span.x * r.d);
-  vec3 dv = r.d / u_spacing.xyz;
-  ivec3 grid = ivec3(u_cells.xyz);
+  vec3 dv = r.d / P.spacing;
+  ivec3 grid = P.cell_grid;
   ivec3 cell = clamp(ivec3(floor(x0 / edge)), ivec3(0), grid - 1);
   ivec3 stp = ivec3(sign(dv));
   // Per axis: 1 / dv (0 where the ray is parallel to the axis: it never crosses a face there),

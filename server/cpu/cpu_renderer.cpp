@@ -59,7 +59,8 @@ std::unique_ptr<render::ResidentVolume> CpuRenderer::make_resident(std::shared_p
 
 int CpuRenderer::sample_cap(const render::VariantKey&) const { return kMaxSamplesPerRay; }
 
-CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, render::GpuPath path, RenderStats* stats) {
+CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, render::GpuPath path, const PixelRect& rect,
+                              const render::Brick* brick, RenderStats* stats) {
   const MacrocellGrid& cells = cv.macrocells(s.scene.render.filter);
   render::SetupOptions o;
   o.leaps = seam_.leaps;
@@ -75,32 +76,6 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
   f.voxels = cv.grid(s.scene.render.filter);
   f.run_lanes = sample_run_lanes();
 
-  // The uniforms (raycaster.cpp's make_uniforms), in float like the GL path.
-  const SamplingPlan plan = plan_sampling(s);
-  const Volume& v = cv.volume();
-  const ViewSetup view = setup_view(s.camera, (s.box_min + s.box_max) * 0.5, s.scene.width, s.scene.height);
-  f.p0 = glm::vec3(view.p0);
-  f.right = glm::vec3(view.right);
-  f.up = glm::vec3(view.up);
-  f.forward = glm::vec3(view.forward);
-  f.half_w = float(view.half_w);
-  f.half_h = float(view.half_h);
-  f.dist = float(view.dist);
-  f.box_half = glm::vec3((s.box_max - s.box_min) * 0.5);
-  f.clip = center_clip<glm::vec3, float>(s.scene.render.clip, (s.box_min + s.box_max) * 0.5);
-  f.sample_half = f.box_half;
-  f.step = float(plan.step);
-  f.spacing = glm::vec3(v.spacing);
-  f.inv_spacing = 1.f / f.spacing;
-  f.stop = float(s.scene.render.early_termination);
-  f.sample_cap = sample_cap(f.key);
-  f.image_w = s.scene.width;
-  f.image_h = s.scene.height;
-  for (int a = 0; a < 3; ++a) f.grid[a] = int(cells.grid[a]);
-  f.cell_edge = float(cells.cell);
-  f.diff_k = float(plan.k);
-  f.min_step = float(plan.min_step);
-
   // The TF for the scene's step.
   const std::string tf_key = render::step_tf_key(s, fs.tf_sig);
   TfTable* tf = cache_find(tf_tables_, tf_key);
@@ -111,7 +86,6 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
     ++seam_.table_builds;
   }
   f.tf = tf->rgba.data();
-  f.tf_size = TransferFunction::kTableSize;
   f.tf_alpha_any = tf->alpha_any.data();
 
   // Peak table + TF points, or the preintegration table.
@@ -140,14 +114,11 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
     ++seam_.table_builds;
   }
   f.peak_texels = t->peak_texels.data();
-  f.peak_bins = t->peak_bins;
-  f.peak_layers = t->peak_layers;
-  f.max_peaks = s.scene.render.max_peaks;
-  f.secant_iterations = s.scene.render.secant_iterations;
   f.tf_points = t->tf_points.data();
-  f.tf_point_count = int(t->tf_points.size() / 2);
   f.preint = t->preint.data();
-  f.preint_size = t->preint_size;
+  const render::TableShape shape{t->peak_bins, t->peak_layers, t->preint_size, int(t->tf_points.size() / 2)};
+  f.u = render::make_ray_uniforms(s, cv.volume(), render::ValueMap{}, cells, shape, rect, sample_cap(f.key), brick);
+  f.v = render::shared_variant(f.key);
   f.peak_any = t->peak_any.data();
   f.preint_any = t->preint_any.data();
 
@@ -166,7 +137,7 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
     const std::string mkey = std::to_string(cv.serial()) + " " + cells.to_string();
     CellBytes* m = cache_find(multipliers_, mkey);
     if (!m) {
-      m = &cache_insert(multipliers_, CellBytes{mkey, adaptive_multipliers(cells, volume_stddev(v))}, kCacheEntries);
+      m = &cache_insert(multipliers_, CellBytes{mkey, adaptive_multipliers(cells, volume_stddev(cv.volume()))}, kCacheEntries);
       ++seam_.table_builds;
     }
     f.cell_stride = m->bytes.data();
@@ -238,7 +209,7 @@ RenderResult CpuRenderer::render(const render::ResidentVolume& v, const Resolved
   const PixelRect rect = req.tile.value_or(PixelRect{0, 0, s.scene.width, s.scene.height});
   render::check_rect(rect, s.scene.width, s.scene.height);
   if (stats) *stats = RenderStats::for_scene(s);
-  CpuFrame f = prepare(cv, s, req.path, stats);
+  CpuFrame f = prepare(cv, s, req.path, rect, nullptr, stats);
   const bool rgb8 = req.output == render::RenderOutput::Rgb8;
   f.key.rgb8 = rgb8;
   const bool read_samples = !rgb8 || req.sample_stats;
@@ -266,14 +237,14 @@ RenderResult CpuRenderer::render(const render::ResidentVolume& v, const Resolved
     stats->render_ms = render_ms;
     stats->variant = f.key.name() + (empty_frame ? "+nothing-visible" : "");
     stats->has_samples = read_samples;
-    stats->sample_cap = f.sample_cap;
+    stats->sample_cap = f.u.sample_cap;
     if (read_samples) {
       for (float n : samples) {
         if (n < 0) continue;  // missed the box
         stats->samples_total += n;
         stats->samples_max = std::max<double>(stats->samples_max, n);
         stats->rays_hit++;
-        if (n >= float(f.sample_cap)) stats->rays_at_cap++;
+        if (n >= float(f.u.sample_cap)) stats->rays_at_cap++;
       }
       stats->samples_mean = stats->rays_hit ? stats->samples_total / double(stats->rays_hit) : 0.0;
     }
@@ -288,22 +259,9 @@ Image CpuRenderer::render_brick(const render::ResidentVolume& v, const ResolvedS
   const PixelRect rect = render::check_brick_frame(s, brick, spacing, tile);
   const int w = rect.w, h = rect.h;
   if (stats) *stats = RenderStats::for_scene(s);
-  CpuFrame f = prepare(cv, s, render::GpuPath::Fragment, stats);
+  CpuFrame f = prepare(cv, s, render::GpuPath::Fragment, rect, &brick, stats);  // stop 1: until opaque
   f.brick = true;
-  if (brick.front_opacity && f.ray_texture) {
-    f.front_opacity = brick.front_opacity->data();
-    f.rect_x = rect.x;
-    f.rect_y = rect.y;
-    f.rect_w = rect.w;
-  }
-  f.sample_half = f.box_half - glm::vec3(brick.read_lo * spacing);
-  f.own_lo = glm::vec3(brick.own_lo);
-  f.own_hi = glm::vec3(brick.own_hi);
-  for (int a = 0; a < 3; ++a) {
-    f.at_start[a] = brick.at_start[a];
-    f.at_end[a] = brick.at_end[a];
-  }
-  f.stop = 1.f;  // until opaque (a ray texture's termination is per ray: setup)
+  if (brick.front_opacity && f.ray_texture) f.front_opacity = brick.front_opacity->data();
   Image img(w, h);
   const auto t0 = Clock::now();
   for_each_row(rect, [&](int x0, int x1, int y) {
@@ -325,7 +283,7 @@ Image CpuRenderer::render_brick(const render::ResidentVolume& v, const ResolvedS
     stats->render_ms = ms_since(t0);
     stats->variant = f.key.name() + "+brick";
     stats->has_samples = true;
-    stats->sample_cap = f.sample_cap;
+    stats->sample_cap = f.u.sample_cap;
     for (float n : img.samples) {
       if (n < 0) continue;  // owns no point of this ray
       stats->samples_total += n;
@@ -343,11 +301,12 @@ Image CpuRenderer::render_bare(const render::ResidentVolume& v, const ResolvedSc
   const int w = s.scene.width, h = s.scene.height;
   if (full.width != w || full.height != h) throw std::invalid_argument("render_bare: image size differs");
   if (stats) *stats = RenderStats::for_scene(s);
-  CpuFrame f = prepare(cv, s, path, nullptr);
+  CpuFrame f = prepare(cv, s, path, PixelRect{0, 0, w, h}, nullptr, nullptr);
   f.key = render::choose_variant(s, 0, path);
   f.key.cpu = true;
   f.key.shading = false;
   f.key.bare_sampling = true;
+  f.v = render::shared_variant(f.key);
   Image img(w, h);
   const auto t0 = Clock::now();
   for_each_row(PixelRect{0, 0, w, h}, [&](int x0, int x1, int y) {

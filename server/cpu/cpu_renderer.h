@@ -48,7 +48,7 @@ class CpuRenderer : public render::Renderer {
  private:
   // The frame's inputs, from the caches (built on a miss).
   CpuFrame prepare(const CpuVolume& volume, const ResolvedScene& scene, render::GpuPath path,
-                   render::RenderStats* stats);
+                   const render::PixelRect& rect, const render::Brick* brick, render::RenderStats* stats);
   // Calls fn(x0, x1, y) for the rows of every tile of `rect` (rect-relative pixels), tiles
   // spread over the threads.
   // Casts the rect's rays into res (rgb8 or float) and, when asked, their sample counts.

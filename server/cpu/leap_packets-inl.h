@@ -27,8 +27,8 @@ void leaps_to_first_occupied(const CpuFrame& f, const LeapInputs* in, int n, int
   const DF df;
   const DI di;
   const int N = int(hn::Lanes(df));
-  const float edge = f.cell_edge, inv_edge = 1.f / f.cell_edge;
-  const int grid[3] = {f.grid[0], f.grid[1], f.grid[2]};
+  const float edge = f.u.cell_edge, inv_edge = 1.f / f.u.cell_edge;
+  const int grid[3] = {f.u.cell_grid[0], f.u.cell_grid[1], f.u.cell_grid[2]};
   const int32_t* table = reinterpret_cast<const int32_t*>(f.cell_distance);  // padded by 3 bytes
   for (int k0 = 0; k0 < n; k0 += N) {
     alignas(64) float xo[3][64], dv[3][64], inv_dv[3][64], ahead[3][64], t0[64], A[64], B[64], lim[64];
@@ -71,7 +71,7 @@ void leaps_to_first_occupied(const CpuFrame& f, const LeapInputs* in, int n, int
       const auto d = hn::And(hn::GatherOffset(di, table, index), hn::Set(di, 0xFF));
       const auto empty = hn::And(active, hn::RebindMask(di, hn::Ne(d, hn::Zero(di))));
       const auto reach = hn::Sub(d, hn::Set(di, 1));
-      auto t_leave = hn::Set(df, kHuge);
+      auto t_leave = hn::Set(df, kFar);
       for (int a = 0; a < 3; ++a) {
         const auto face = hn::Add(hn::ConvertTo(df, hn::Add(c[a], hn::Mul(hn::Load(di, stp[a]), reach))), hn::Load(df, ahead[a]));
         const auto ta = hn::Mul(hn::Sub(hn::Mul(face, hn::Set(df, edge)), hn::Load(df, xo[a])), hn::Load(df, inv_dv[a]));

@@ -24,11 +24,12 @@ namespace {
 class RayCaster {
  public:
   explicit RayCaster(const CpuFrame& f)
-      : f_(f),
+      : P(f.u),
+        V(f.v),
+        f_(f),
         segments_(f.key.peaks || f.key.preintegration || f.key.virtual_samples),
         varying_steps_(f.key.differential || f.key.adaptive || f.key.virtual_samples),
-        dense_(!f.key.peaks && !f.key.virtual_samples && !f.key.shading && !varying_steps_ && !f.brick),
-        min_spacing_(std::min(f.spacing.x, std::min(f.spacing.y, f.spacing.z))) {}
+        dense_(!f.key.peaks && !f.key.virtual_samples && !f.key.shading && !varying_steps_ && !f.brick) {}
 
   RayResult cast(float px, float py) { return setup(px, py) ? walk(0) : res_; }
   RayResult cast_bare(float px, float py, int budget);
@@ -38,32 +39,30 @@ class RayCaster {
   // cells, as leaps_to_first_occupied found), then the ray's end.
   RayResult walk(int first);
   RayResult result() const { return res_; }
-  LeapInputs leap_inputs() const {
-    return {cell_coords(r_.o), r_.d / f_.spacing, L_.t0, L_.A, L_.B, span_y_ + f_.step, last_};
+  LeapInputs leap_inputs() {
+    return {cell_coords(r_.o), r_.d / P.spacing, L_.t0, L_.A, L_.B, span_y_ + P.step, last_};
   }
 
  private:
-  vec3 voxel_coords(vec3 p) const { return (p + f_.sample_half) * f_.inv_spacing; }
-  // Where the macrocells are looked up: the whole volume's voxel coordinates (a brick's grids
-  // are the whole volume's, core/macrocell_share.h), which are voxel_coords in one process.
-  vec3 cell_coords(vec3 p) const { return (p + f_.box_half) * f_.inv_spacing; }
-  // Distributed rendering: lattice point i lies in this brick's own box (whole-volume voxel
-  // coordinates, computed alike on every rank, so exactly one rank owns each point).
-  bool owns(int i) const {
-    const vec3 x = (r_.o + lattice_t(L_, float(i)) * r_.d + f_.box_half) * f_.inv_spacing;
-    for (int a = 0; a < 3; ++a)
-      if (!((f_.at_start[a] || x[a] >= f_.own_lo[a]) && (f_.at_end[a] || x[a] < f_.own_hi[a]))) return false;
-    return true;
-  }
-  // Restricts the ray to the points it owns (setup, brick frames); false when it owns none.
-  bool clip_to_brick();
+  // The frame's uniforms and switches, as the shared code (shaders/ray/) reads them.
+  const ray::RayUniforms& P;
+  const ray::Variant V;
+  // The ray code shared with the GL shader, as members (shaders/ray/cxx_prelude.h).
+#include "ray/ray_setup.glsl"
+#include "ray/lattice.glsl"
+#include "ray/compositing.glsl"
+#include "ray/shading.glsl"
+#include "ray/catmull_rom.glsl"
+#include "ray/peaks.glsl"
+#include "ray/brick.glsl"
+
   float sample_field(vec3 x) const { return SamplePoint(f_.voxels, x); }
   vec3 field_gradient(vec3 x) const {
     vec3 g;
     g.x = sample_field(x + vec3(1, 0, 0)) - sample_field(x - vec3(1, 0, 0));
     g.y = sample_field(x + vec3(0, 1, 0)) - sample_field(x - vec3(0, 1, 0));
     g.z = sample_field(x + vec3(0, 0, 1)) - sample_field(x - vec3(0, 0, 1));
-    return g / (2.f * f_.spacing);
+    return g / (2.f * P.spacing);
   }
   // The value at lattice index i: from the current run, or a new run from i (stride m).
   float field_at(int i, int m);
@@ -72,35 +71,13 @@ class RayCaster {
   // The TF table at s (colour, and the step's transparency in .a); false, leaving `out` alone,
   // where its opacity is exactly zero.
   bool tf_lookup(float s, vec4& out) const;
-  vec4 tf_exact(float v) const;
+  vec4 tf_point(int k) const { return f_.tf_points[k]; }
   // The table at (s_front, s_back); false, leaving `out` alone, where it is exactly zero.
   bool preint_lookup(float s_front, float s_back, vec4& out) const;
-  // The opacity of a sample standing for dt, from the TF table's transparency T of the uniform
-  // step (render::step_tf_table; twin of tf.glsl step_opacity).
-  float step_opacity(float T, float dt) const {
-    return dt == f_.step ? 1.f - T : 1.f - std::pow(std::max(T, 0.f), dt / f_.step);
-  }
-  vec3 shade(vec3 rgb, vec3 gradient) const {
-    const float len = glm::length(gradient);
-    if (len * min_spacing_ < 1e-5f) return rgb;
-    const vec3 n = gradient / len;
-    const float ndotl = std::abs(glm::dot(n, -r_.d));  // head light: l = h = direction to the eye
-    return rgb * (kAmbient + kDiffuse * ndotl) + vec3(kSpecular * std::pow(ndotl, kShininess));
-  }
-  // Front-to-back compositing into acc: a colour with its opacity, or a premultiplied colour
-  // (a preintegrated segment) weighted by `weight`. consume and dense_run share them.
-  static void blend(vec4& acc, vec3 rgb, float alpha) {
-    const float w = (1.f - acc.a) * alpha;
-    acc += vec4(w * rgb, w);
-  }
-  static void blend_premultiplied(vec4& acc, vec4 c, float weight) { acc += (1.f - acc.a) * weight * c; }
-  void composite(vec3 rgb, float alpha) { blend(res_.acc, rgb, alpha); }
   vec3 sample_gradient(float t, vec3 g) {
     return f_.key.virtual_samples ? g : field_gradient(voxel_coords(r_.o + t * r_.d));
   }
 
-  float solve_root(float t0, float f0, float t1, float f1, float v);
-  float root_evaluations(float f0, float f1, float v) const;
   bool find_peaks(float t0, float f0, float t1, float f1);
   bool consume(float t, float fv, vec3 g, float dt);
   // Visits lattice index i (a brick's held-back visits first, see behind_).
@@ -126,15 +103,9 @@ class RayCaster {
     const float last = float(last_);
     tail_ = std::min(span_y_ - lattice_t(L_, last), lattice_step(L_, last, 1.f)) - lattice_step(L_, last, 0.5f);
   }
-  // A preintegrated segment of the table's step (premultiplied, opacity > 0) for a segment of
-  // length len: its opacity corrected, its colour scaled with it.
-  vec4 preint_for_length(vec4 c, float len) const {
-    const float a = 1.f - std::pow(std::max(1.f - c.a, 0.f), len / f_.step);
-    return vec4(vec3(c) * (a / c.a), a);
-  }
   // dense_run's opacity for a step other than the table's (a ray texture's multiplier) or the
   // last point's chord.
-  HWY_NOINLINE float dense_opacity_slow(float T, int i, float dt) const {
+  HWY_NOINLINE float dense_opacity_slow(float T, int i, float dt) {
     return step_opacity(T, i == ray_last_ ? chord_end(i, 1, dt) : dt);
   }
   // Preintegration's last segment, from the last lattice point visited to the exit.
@@ -161,7 +132,6 @@ class RayCaster {
   // occupied points go through dense_run, which holds the colour in registers.
   const bool dense_;
   float span_x_ = 0, span_y_ = 0;
-  const float min_spacing_;
   Ray r_;
   Lattice L_;
   RayResult res_;

@@ -58,8 +58,8 @@ HWY_NOINLINE float RayCaster::new_run(int i, int m) {
   SampleRun run;
   run.o = r_.o;
   run.d = r_.d;
-  run.half = f_.sample_half;
-  run.inv_spacing = f_.inv_spacing;
+  run.half = P.sample_half;
+  run.inv_spacing = P.inv_spacing;
   run.t0 = L_.t0;
   run.A = L_.A;
   run.B = L_.B;
@@ -85,12 +85,12 @@ bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
     vec4 c;
     if (segment && draw_ && preint_lookup(prev_f_, fv, c)) {  // else the segment adds exactly nothing
       if (varying_steps_ && c.a > 0.f) {  // the table holds segments of the uniform step
-        c = preint_for_length(c, t - prev_t_);
+        c = segment_for_length(c, t - prev_t_);
       }
       if (key.shading) {
-        if (c.a > 0.f) composite(shade(vec3(c) / c.a, sample_gradient(t, g)), c.a * dvr_weight_);
+        if (c.a > 0.f) composite(res_.acc, shade(vec3(c) / c.a, sample_gradient(t, g), r_.d), c.a * dvr_weight_);
       } else {
-        blend_premultiplied(res_.acc, c, dvr_weight_);  // opacity-weighted already
+        composite_premultiplied(res_.acc, c, dvr_weight_);  // opacity-weighted already
       }
     }
   } else if (draw_ && !(key.peaks && key.peak_mode == PeakMode::PeaksOnly)) {
@@ -98,8 +98,8 @@ bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
       vec4 c;
       if (tf_lookup(fv, c) && c.a < 1.f) {
         vec3 rgb(c);
-        if (key.shading) rgb = shade(rgb, sample_gradient(t, g));
-        composite(rgb, step_opacity(c.a, dt) * dvr_weight_);
+        if (key.shading) rgb = shade(rgb, sample_gradient(t, g), r_.d);
+        composite(res_.acc, rgb, step_opacity(c.a, dt) * dvr_weight_);
       }
     }
   }
@@ -146,32 +146,35 @@ void RayCaster::close_segment() {
   res_.samples += 1.f;
   vec4 c;
   if (!preint_lookup(prev_f_, fv, c) || !(c.a > 0.f)) return;
-  c = preint_for_length(c, span_y_ - prev_t_);
+  c = segment_for_length(c, span_y_ - prev_t_);
   if (f_.key.shading) {
-    composite(shade(vec3(c) / c.a, field_gradient(x)), c.a * dvr_weight_);
+    composite(res_.acc, shade(vec3(c) / c.a, field_gradient(x), r_.d), c.a * dvr_weight_);
   } else {
-    blend_premultiplied(res_.acc, c, dvr_weight_);
+    composite_premultiplied(res_.acc, c, dvr_weight_);
   }
 }
 
 bool RayCaster::setup(float px, float py) {
-  r_ = make_ray(f_, px, py);
-  intersect_box(f_, r_, span_x_, span_y_);
-  if (!(span_x_ <= span_y_)) {  // missed (also false for NaN)
+  r_ = make_ray(vec2(px, py));
+  vec2 span = intersect_box(r_);
+  if (!(span.x <= span.y)) {  // missed (also false for NaN)
     res_.samples = -1.f;
     return false;
   }
-  const float t_box = span_x_;  // the box entry: where a volume-mapped ray texture is read
-  if (!clip_span(f_.clip, r_.o, r_.d, span_x_, span_y_)) {  // the clip keeps none of the ray
+  const float t_box = span.x;  // the box entry: where a volume-mapped ray texture is read
+  span = clip_span(r_, span);
+  if (!(span.x <= span.y)) {  // the clip keeps none of the ray
     res_.samples = 0.f;
     return false;
   }
-  L_ = ray_lattice(f_, r_, span_x_);
-  stop_ = f_.stop;
+  span_x_ = span.x;
+  span_y_ = span.y;
+  L_ = ray_lattice(r_, span_x_);
+  stop_ = P.stop;
   if (f_.ray_texture) {
     const glm::dvec2 uv = f_.key.ray_texture_volume
-                              ? volume_uv(glm::dvec3(r_.o + t_box * r_.d), glm::dvec3(f_.box_half))
-                              : glm::dvec2(px / float(f_.image_w), py / float(f_.image_h));
+                              ? volume_uv(glm::dvec3(r_.o + t_box * r_.d), glm::dvec3(P.box_half))
+                              : glm::dvec2(px / float(P.image_width), py / float(P.image_height));
     const auto c = sample_ray_texture(*f_.ray_texture, uv);
     stop_ = float(c[1]);
     dvr_weight_ = 1.f - std::max(float(c[2]), 0.f);
@@ -179,14 +182,15 @@ bool RayCaster::setup(float px, float py) {
     L_.A *= float(c[0]);
     L_.B *= float(c[0]);
   }
-  last_ = int(std::min(std::floor(lattice_index(L_, span_y_)), float(f_.sample_cap - 1)));
+  last_ = int(std::min(std::floor(lattice_index(L_, span_y_)), float(P.sample_cap - 1)));
   chord_ends();
-  if (f_.brick && !clip_to_brick()) {  // none of its points in this brick: nothing to draw here
+  if (f_.brick && !clip_to_brick(r_, L_, vec2(span_x_, span_y_), last_, own_first_, own_last_)) {  // none of its points in this brick: nothing to draw here
     res_.samples = -1.f;
     return false;
   }
   if (f_.front_opacity) {  // a ray texture's termination, of the opacity over the bricks in front
-    const float a = f_.front_opacity[size_t(int(py) - f_.rect_y) * size_t(f_.rect_w) + size_t(int(px) - f_.rect_x)];
+    const float a = f_.front_opacity[size_t(int(py) - P.tile_y) * size_t(P.front_opacity_width) +
+                                     size_t(int(px) - P.tile_x)];
     if (a >= 0.f && a >= stop_) {  // reached in front (after a consume there): one process stopped
       res_.samples = -1.f;
       return false;
@@ -222,10 +226,8 @@ RayResult RayCaster::walk(int first) {
 }
 
 RayResult RayCaster::cast_bare(float px, float py, int budget) {
-  r_ = make_ray(f_, px, py);
-  float span_x, span_y;
-  intersect_box(f_, r_, span_x, span_y);
-  L_ = ray_lattice(f_, r_, span_x);
+  r_ = make_ray(vec2(px, py));
+  L_ = ray_lattice(r_, intersect_box(r_).x);
   last_ = budget;
   float sum = 0.f;
   for (int i = 0; i < budget; ++i) sum += field_at(i, 1);

@@ -19,44 +19,17 @@ namespace peakcast::cpu {
 namespace HWY_NAMESPACE {
 namespace {
 
-// Regula falsi (secant steps kept inside the bracket), guarded against g_a == g_b.
-float RayCaster::solve_root(float t0, float f0, float t1, float f1, float v) {
-  float ta = t0, tb = t1, ga = f0 - v, gb = f1 - v;
-  for (int k = 0; k < f_.secant_iterations; ++k) {
-    if (gb == ga) break;
-    const float t = std::clamp(ta - ga * (tb - ta) / (gb - ga), std::min(ta, tb), std::max(ta, tb));
-    const float g = sample_field(voxel_coords(r_.o + t * r_.d)) - v;
-    res_.samples += 1.f;
-    if ((g >= 0.f) == (ga >= 0.f)) {
-      ta = t;
-      ga = g;
-    } else {
-      tb = t;
-      gb = g;
-    }
-  }
-  return gb == ga ? 0.5f * (ta + tb) : std::clamp(ta - ga * (tb - ta) / (gb - ga), std::min(ta, tb), std::max(ta, tb));
-}
-
-// What solve_root would count, without sampling: only shading uses the root's position. The
-// bracket's ends keep opposite signs (each step replaces the end of its own sign), so g_a never
-// equals g_b after the start and regula falsi takes every step.
-float RayCaster::root_evaluations(float f0, float f1, float v) const {
-  return f0 - v == f1 - v ? 0.f : float(f_.secant_iterations);
-}
-
 // Knoll et al. 2009 Algorithm 1 with the errata (peak_find.glsl).
 bool RayCaster::find_peaks(float t0, float f0, float t1, float f1) {
-  const int bins = f_.peak_bins;
-  auto bin = [&](float v) { return std::clamp(int(std::floor(v * float(bins))), 0, bins - 1); };
-  const int i = bin(f0), j = bin(f1);
+  const int bins = P.peak_bins;
+  const int i = peak_bin(f0), j = peak_bin(f1);
   if (!test_bit(f_.peak_any, size_t(j) * size_t(bins) + size_t(i))) return false;  // an empty texel
   const bool reverse = (i == j) && f0 > f1;  // the diagonal is stored ascending
-  const int max_peaks = f_.max_peaks;
+  const int max_peaks = P.max_peaks;
   float found[4];
   int n = 0;
   bool done = false;
-  for (int layer = 0; layer < f_.peak_layers && !done; ++layer) {
+  for (int layer = 0; layer < P.peak_layers && !done; ++layer) {
     const float* slots = f_.peak_texels + ((size_t(layer) * bins + size_t(j)) * bins + size_t(i)) * 4;
     for (int s = 0; s < 4; ++s) {
       const float v = slots[s];
@@ -64,7 +37,7 @@ bool RayCaster::find_peaks(float t0, float f0, float t1, float f1) {
         done = true;
         break;
       }
-      if (!(std::min(f0, f1) < v && v <= std::max(f0, f1))) continue;
+      if (!crosses(f0, f1, v)) continue;
       if (reverse) {  // keep the last four in table order: the first four along the ray
         if (n == 4) {
           found[0] = found[1];
@@ -89,12 +62,12 @@ bool RayCaster::find_peaks(float t0, float f0, float t1, float f1) {
     const vec4 c = tf_exact(v);
     vec3 rgb(c);
     if (f_.key.shading) {
-      const float t = solve_root(t0, f0, t1, f1, v);
-      rgb = shade(rgb, field_gradient(voxel_coords(r_.o + t * r_.d)));
+      const float t = solve_root(r_, t0, f0, t1, f1, v, res_.samples);
+      rgb = shade(rgb, field_gradient(voxel_coords(r_.o + t * r_.d)), r_.d);
     } else {
       res_.samples += root_evaluations(f0, f1, v);
     }
-    composite(rgb, c.a * peak_weight_);  // unscaled opacity at the peak (Knoll §4.2)
+    composite(res_.acc, rgb, c.a * peak_weight_);  // unscaled opacity at the peak (Knoll §4.2)
     if (res_.acc.a >= stop_) break;
   }
   return count > 0;

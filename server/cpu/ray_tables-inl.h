@@ -24,32 +24,17 @@ namespace {
 
 HWY_INLINE bool RayCaster::tf_lookup(float s, vec4& out) const {
   // GL_LINEAR between texel centres of an n-entry table, clamped: texel space u = s (n - 1).
-  const float u = std::clamp(s, 0.f, 1.f) * float(f_.tf_size - 1);
-  const int i = std::min(int(u), f_.tf_size - 2);
+  const int size = int(P.tf_size);
+  const float u = std::clamp(s, 0.f, 1.f) * float(size - 1);
+  const int i = std::min(int(u), size - 2);
   if (!test_bit(f_.tf_alpha_any, size_t(i))) return false;  // both texels transparent
   const float* a = f_.tf + 4 * i;
   out = to_vec4(lerp4(load4(a), load4(a + 4), u - float(i)));
   return true;
 }
 
-vec4 RayCaster::tf_exact(float v) const {
-  const int n = f_.tf_point_count;
-  int lo = 0, hi = n;  // first point with value > v
-  while (lo < hi) {
-    const int mid = (lo + hi) / 2;
-    if (f_.tf_points[2 * mid].x > v)
-      hi = mid;
-    else
-      lo = mid + 1;
-  }
-  if (lo == 0) return f_.tf_points[1];
-  if (lo == n) return f_.tf_points[2 * n - 1];
-  const float va = f_.tf_points[2 * (lo - 1)].x, vb = f_.tf_points[2 * lo].x;
-  return glm::mix(f_.tf_points[2 * (lo - 1) + 1], f_.tf_points[2 * lo + 1], (v - va) / (vb - va));
-}
-
 HWY_INLINE bool RayCaster::preint_lookup(float s_front, float s_back, vec4& out) const {
-  const int n = f_.preint_size;
+  const int n = P.preint_size;
   const float u = std::clamp(s_front, 0.f, 1.f) * float(n - 1), v = std::clamp(s_back, 0.f, 1.f) * float(n - 1);
   const int i = std::min(int(u), n - 2), j = std::min(int(v), n - 2);
   if (!test_bit(f_.preint_any, size_t(j) * size_t(n - 1) + size_t(i))) return false;  // zeros only

@@ -22,16 +22,16 @@ namespace HWY_NAMESPACE {
 namespace {
 
 uint8_t cell_byte(const uint8_t* table, const CpuFrame& f, ivec3 c) {
-  return table[size_t(c.x) + size_t(f.grid[0]) * (size_t(c.y) + size_t(f.grid[1]) * size_t(c.z))];
+  return table[size_t(c.x) + size_t(f.u.cell_grid.x) * (size_t(c.y) + size_t(f.u.cell_grid.y) * size_t(c.z))];
 }
 
 // Space skipping without adaptive multipliers, driven by the lattice with empty-space leaps
 // (SAMPLE_LEAPS in raycast_body.glsl). True when the ray stopped early.
 bool RayCaster::walk_leaps(float span_y, int first) {
-  const float edge = f_.cell_edge;
+  const float edge = P.cell_edge;
   const vec3 xo = cell_coords(r_.o);
-  const vec3 dv = r_.d / f_.spacing;
-  const ivec3 grid(f_.grid[0], f_.grid[1], f_.grid[2]);
+  const vec3 dv = r_.d / P.spacing;
+  const ivec3 grid = P.cell_grid;
   ivec3 stp;
   vec3 inv_dv, ahead;
   bool moves[3];
@@ -63,7 +63,7 @@ bool RayCaster::walk_leaps(float span_y, int first) {
       float t_leave = kHuge;
       for (int a = 0; a < 3; ++a)
         if (moves[a]) t_leave = std::min(t_leave, (float(c[a] + stp[a] * reach + ahead[a]) * edge - xo[a]) * inv_dv[a]);
-      const float next = std::ceil(lattice_index(L_, std::min(t_leave, span_y + f_.step)));
+      const float next = std::ceil(lattice_index(L_, std::min(t_leave, span_y + P.step)));
       i = std::max(i + 1, index_floor_cap(next, last_ + 1));
     }
   }
@@ -78,24 +78,24 @@ bool RayCaster::dense_run(int& i, int& visited, vec3 xo, vec3 dv, ivec3 grid) {
   const int first = i;
   bool stopped = false;
   const float dt = lattice_step(L_, 0.f, 1.f);  // uniform steps (the ray texture's multiplier in it)
-  const bool whole = dt == f_.step;             // the table's own step: no correction
+  const bool whole = dt == P.step;             // the table's own step: no correction
   while (i <= last_) {
     if constexpr (kCells) {  // walk_leaps's cell test, as it would make it
       const vec3 x = xo + lattice_t(L_, float(i)) * dv;
       ivec3 c;
-      for (int a = 0; a < 3; ++a) c[a] = cell_of(x[a] * (1.f / f_.cell_edge), grid[a] - 1);
+      for (int a = 0; a < 3; ++a) c[a] = cell_of(x[a] * (1.f / P.cell_edge), grid[a] - 1);
       if (cell_byte(f_.cell_distance, f_, c) != 0) break;
     }
     const float fv = field_at(i, 1);
     samples += 1.f;
     vec4 s;
     if (preint) {  // the segment from the previous point (visited without a gap)
-      if (preint_lookup(prev_f, fv, s)) blend_premultiplied(acc, s, dvr_weight_);
+      if (preint_lookup(prev_f, fv, s)) composite_premultiplied(acc, s, dvr_weight_);
     } else if (tf_lookup(fv, s) && s.a < 1.f) {
       // (The first point is never in a run; the last one's chord is cut at the exit.) One cold
       // call: more of them made the compiler keep the ray's opacity in memory.
       const float a = HWY_LIKELY(whole && i != last_) ? 1.f - s.a : dense_opacity_slow(s.a, i, dt);
-      blend(acc, vec3(s), a * dvr_weight_);
+      composite(acc, vec3(s), a * dvr_weight_);
     }
     prev_f = fv;
     visited = i++;
@@ -116,10 +116,10 @@ bool RayCaster::dense_run(int& i, int& visited, vec3 xo, vec3 dv, ivec3 grid) {
 
 // The 3D-DDA over the macrocells (Amanatides & Woo): adaptive multipliers, or the tests' CELL_DDA.
 bool RayCaster::walk_cells(float span_x, float span_y) {
-  const float edge = f_.cell_edge;
+  const float edge = P.cell_edge;
   const vec3 x0 = cell_coords(r_.o + span_x * r_.d);
-  const vec3 dv = r_.d / f_.spacing;
-  const ivec3 grid(f_.grid[0], f_.grid[1], f_.grid[2]);
+  const vec3 dv = r_.d / P.spacing;
+  const ivec3 grid = P.cell_grid;
   ivec3 cell, stp;
   vec3 inv_dv, ahead, t_delta, t_max;
   bool moves[3];

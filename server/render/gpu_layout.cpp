@@ -2,19 +2,6 @@
 
 namespace peakcast::render {
 
-std::map<std::string, size_t> host_uniform_offsets() {
-  return {{"u_p0", offsetof(RayUniforms, p0)},           {"u_right", offsetof(RayUniforms, right)},
-          {"u_up", offsetof(RayUniforms, up)},           {"u_forward", offsetof(RayUniforms, forward)},
-          {"u_box_half", offsetof(RayUniforms, box_half)}, {"u_spacing", offsetof(RayUniforms, spacing)},
-          {"u_dims", offsetof(RayUniforms, dims)},       {"u_value_map", offsetof(RayUniforms, value_map)},
-          {"u_background", offsetof(RayUniforms, background)}, {"u_cells", offsetof(RayUniforms, cells)},
-          {"u_image", offsetof(RayUniforms, image)},
-          {"u_peaks", offsetof(RayUniforms, peaks)},           {"u_tables", offsetof(RayUniforms, tables)},
-          {"u_brick_half", offsetof(RayUniforms, brick_half)}, {"u_own_lo", offsetof(RayUniforms, own_lo)},
-          {"u_own_hi", offsetof(RayUniforms, own_hi)},         {"u_clip_lo", offsetof(RayUniforms, clip_lo)},
-          {"u_clip_hi", offsetof(RayUniforms, clip_hi)},       {"u_clip_plane", offsetof(RayUniforms, clip_plane)}};
-}
-
 std::map<std::string, size_t> gl_uniform_offsets(const gpu::Program& program) {
   std::map<std::string, size_t> out;
   const GLuint block = glGetProgramResourceIndex(program.id(), GL_UNIFORM_BLOCK, "RayUniforms");

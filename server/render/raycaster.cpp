@@ -7,54 +7,11 @@
 
 #include "core/occupancy.h"
 #include "core/preintegration.h"
-#include "render/gpu_layout.h"
+#include "render/ray_uniforms.h"
 #include "render/shader_interface.h"
 #include "render/table_cache.h"
 
 namespace peakcast::render {
-namespace {
-
-RayUniforms make_uniforms(const GpuVolume& gv, const ResolvedScene& s, const MacrocellGrid& cells,
-                          const RayTables& t, const PixelRect& rect, int sample_cap, const Brick* brick) {
-  const SamplingPlan plan = plan_sampling(s);
-  const Volume& v = gv.volume();
-  const glm::dvec3 center = (s.box_min + s.box_max) * 0.5;
-  const ViewSetup view = setup_view(s.camera, center, s.scene.width, s.scene.height);
-  RayUniforms u{};
-  u.p0 = glm::vec4(glm::vec3(view.p0), 0.f);
-  u.right = glm::vec4(glm::vec3(view.right), float(view.half_w));
-  u.up = glm::vec4(glm::vec3(view.up), float(view.half_h));
-  u.forward = glm::vec4(glm::vec3(view.forward), float(view.dist));
-  u.box_half = glm::vec4(glm::vec3((s.box_max - s.box_min) * 0.5), float(plan.step));
-  u.spacing = glm::vec4(glm::vec3(v.spacing), float(s.tf.opacity_unit));
-  u.dims = glm::vec4(float(v.dims()[0]), float(v.dims()[1]), float(v.dims()[2]), float(s.scene.render.early_termination));
-  u.value_map = glm::vec4(gv.value_scale(), gv.value_bias(), float(TransferFunction::kTableSize), float(sample_cap));
-  u.background = glm::vec4(glm::vec3(s.scene.background), 1.f);
-  u.cells = glm::vec4(float(cells.grid[0]), float(cells.grid[1]), float(cells.grid[2]), float(cells.cell));
-  u.image = glm::ivec4(s.scene.width, s.scene.height, rect.x, rect.y);
-  u.peaks = glm::vec4(float(t.peak_bins), float(t.peak_layers), float(t.max_peaks), float(t.secant_iterations));
-  u.tables = glm::vec4(float(t.preint_size), float(t.tf_points), float(plan.k), float(plan.min_step));
-  const auto clip = center_clip<glm::vec3, float>(s.scene.render.clip, center);
-  u.clip_lo = glm::vec4(clip.lo, clip.box ? 1.f : 0.f);
-  u.clip_hi = glm::vec4(clip.hi, clip.plane ? 1.f : 0.f);
-  u.clip_plane = glm::vec4(clip.normal, clip.offset);
-  if (brick) {  // as cpu_renderer.cpp's render_brick sets its frame
-    u.brick_half = glm::vec4(glm::vec3(u.box_half) - glm::vec3(brick->read_lo * v.spacing), 0.f);
-    float open_lo = 0.f, open_hi = 0.f;
-    for (int a = 0; a < 3; ++a) {
-      open_lo += brick->at_start[a] ? float(1 << a) : 0.f;
-      open_hi += brick->at_end[a] ? float(1 << a) : 0.f;
-    }
-    u.own_lo = glm::vec4(glm::vec3(brick->own_lo), open_lo);
-    u.own_hi = glm::vec4(glm::vec3(brick->own_hi), open_hi);
-    u.dims.w = 1.f;  // until opaque: no rank sees the opacity in front of its brick
-    // Ray textures: the width of the front opacity's rows (0: none, the front brick).
-    if (brick->front_opacity) u.brick_half.w = float(rect.w);
-  }
-  return u;
-}
-
-}  // namespace
 
 Raycaster::Raycaster(gpu::ShaderCache& shaders) : shaders_(shaders) {
   const char* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
@@ -62,7 +19,7 @@ Raycaster::Raycaster(gpu::ShaderCache& shaders) : shaders_(shaders) {
   ubo_ = gpu::make_buffer();
   front_opacity_ = gpu::make_buffer();
   timer_ = gpu::GpuTimer::make();
-  glNamedBufferStorage(ubo_.id(), sizeof(RayUniforms), nullptr, GL_DYNAMIC_STORAGE_BIT);
+  glNamedBufferStorage(ubo_.id(), sizeof(ray::RayUniforms), nullptr, GL_DYNAMIC_STORAGE_BIT);
   vao_ = gpu::make_vertex_array();
 }
 
@@ -247,7 +204,9 @@ Raycaster::Targets& Raycaster::setup_draw(const GpuVolume& gv, const ResolvedSce
   const gpu::Program& prog = program(key);
   if (stats && !was_ready) stats->compile_ms = ms_since(t_program);  // built, loaded or waited for
   last_key_ = key;
-  const RayUniforms u = make_uniforms(gv, s, cells, tables_, rect, sample_cap(key), brick);
+  const TableShape shape{tables_.peak_bins, tables_.peak_layers, tables_.preint_size, tables_.tf_points};
+  const ray::RayUniforms u = make_ray_uniforms(s, gv.volume(), ValueMap{gv.value_scale(), gv.value_bias()}, cells,
+                                               shape, rect, sample_cap(key), brick);
   glNamedBufferSubData(ubo_.id(), 0, sizeof u, &u);
   glBindBufferBase(GL_UNIFORM_BUFFER, kUboRay, ubo_.id());
   gv.bind(kUnitVolume);  // the TF table and the other per-TF tables were bound by prepare()

@@ -4,6 +4,7 @@
 
 #include "gpu/gpu_fixture.h"
 #include "render/gpu_layout.h"
+#include "render/ray_uniforms.h"
 #include "unit/test_util.h"
 
 using namespace peakcast;
@@ -57,7 +58,7 @@ TEST(ShaderCache, UniformBlockOffsetsMatchTheHostStruct) {
       ASSERT_TRUE(offsets.count(name)) << name;
       EXPECT_EQ(offsets.at(name), off) << name;
     }
-    EXPECT_EQ(render::gl_uniform_block_size(g.gl->program(k)), sizeof(render::RayUniforms));
+    EXPECT_EQ(render::gl_uniform_block_size(g.gl->program(k)), sizeof(ray::RayUniforms));
   }
 }
 

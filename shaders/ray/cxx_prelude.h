@@ -1,0 +1,66 @@
+// The C++ side of the language shaders/ray/*.glsl is written in: a subset of GLSL 4.50 that is
+// also C++17 with glm. The GLSL side is glsl_prelude.glsl. A file of shaders/ray/ is included
+// into a C++ struct's body (its functions become members, so they read the frame's uniforms `P`
+// and switches `V` as a shader reads its globals), after this header at namespace scope. The
+// subset, checked by both compilers on every build:
+// - float literals carry `f` (1.0f); a double would not mix with glm's float vectors;
+// - no swizzles but .x .y .z .w (vec3(v) takes a vec4's first three), no implicit int->float;
+// - `inout`/`out` parameters are INOUT(T)/OUT(T) (references here, copy-in/out in GLSL);
+// - constants at file scope are SHARED_CONST; `precise` is PRECISE (C++ builds with
+//   -ffp-contract=off, so every product is rounded by itself already);
+// - RAY_COLD marks a function the CPU keeps out of line (the GLSL compiler inlines everything);
+// - the uniform block is RAY_UNIFORMS_BEGIN ... RAY_UNIFORMS_END (ray/uniforms.glsl).
+#pragma once
+
+#include <cmath>
+
+#include <glm/common.hpp>
+#include <glm/exponential.hpp>
+#include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+#include <glm/vector_relational.hpp>
+
+#define INOUT(T) T&
+#define OUT(T) T&
+#define PRECISE
+#define SHARED_CONST static constexpr
+#ifndef RAY_COLD
+#define RAY_COLD __attribute__((noinline))
+#endif
+#define RAY_UNIFORMS_BEGIN struct RayUniforms {
+#define RAY_UNIFORMS_END };
+
+namespace peakcast::ray {
+
+using glm::bvec3;
+using glm::ivec2;
+using glm::ivec3;
+using glm::ivec4;
+using glm::uint;
+using glm::uvec4;
+using glm::vec2;
+using glm::vec3;
+using glm::vec4;
+
+using glm::abs;
+using glm::any;
+using glm::ceil;
+using glm::clamp;
+using glm::dot;
+using glm::floor;
+using glm::greaterThan;
+using glm::greaterThanEqual;
+using glm::length;
+using glm::lessThan;
+using glm::lessThanEqual;
+using glm::max;
+using glm::min;
+using glm::mix;
+using glm::sign;
+using std::pow;
+using std::sqrt;
+inline bool isnan(float x) { return std::isnan(x); }
+
+}  // namespace peakcast::ray

@@ -1,0 +1,40 @@
+// The GLSL side of the language shaders/ray/*.glsl is written in (the C++ side, with the rules
+// of the subset, is cxx_prelude.h): the qualifiers both compilers read, and the variant's
+// switches as the constant `V` that the shared code tests (`if (V.peaks)`), folded by the
+// compiler so a variant holds only what its scene uses.
+#define INOUT(T) inout T
+#define OUT(T) out T
+#define PRECISE precise
+#define SHARED_CONST const
+#define RAY_COLD
+#define RAY_UNIFORMS_BEGIN layout(std140, binding = UBO_RAY) uniform RayUniforms {
+#define RAY_UNIFORMS_END } P;
+
+#include "ray/variant.glsl"
+
+#ifdef ORTHOGRAPHIC
+#define V_ORTHOGRAPHIC true
+#else
+#define V_ORTHOGRAPHIC false
+#endif
+#ifdef DIFFERENTIAL
+#define V_DIFFERENTIAL true
+#else
+#define V_DIFFERENTIAL false
+#endif
+#ifdef SHADING
+#define V_SHADING true
+#else
+#define V_SHADING false
+#endif
+#ifdef ADAPTIVE
+#define V_ADAPTIVE true
+#else
+#define V_ADAPTIVE false
+#endif
+#ifdef VIRTUAL_SAMPLES
+#define V_VIRTUAL_SAMPLES VIRTUAL_SAMPLES
+#else
+#define V_VIRTUAL_SAMPLES 0
+#endif
+const Variant V = Variant(V_ORTHOGRAPHIC, V_DIFFERENTIAL, V_SHADING, V_ADAPTIVE, V_VIRTUAL_SAMPLES);

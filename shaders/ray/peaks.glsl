@@ -1,0 +1,57 @@
+// Peak finding's arithmetic (Knoll et al. 2009 §4.2, Algorithm 1, errata in
+// docs/architecture.md): the bin of a value in the peak table, the crossing test, the root of
+// f(t) = v between two samples, and the TF evaluated exactly at a peak. Reads the target's field
+// (sample_field) and TF points (tf_point).
+
+// The peak table's bin of a value in TF coordinates.
+int peak_bin(float f) { return clamp(int(floor(f * float(P.peak_bins))), 0, P.peak_bins - 1); }
+
+// The errata: the segment f0 -> f1 crosses v when min < v <= max (both equal: no crossing).
+bool crosses(float f0, float f1, float v) { return min(f0, f1) < v && v <= max(f0, f1); }
+
+// Regula falsi (secant steps kept inside the bracket), guarded against ga == gb; each field
+// evaluation is counted in `evaluations`.
+float solve_root(Ray r, float t0, float f0, float t1, float f1, float v, INOUT(float) evaluations) {
+  float ta = t0, tb = t1, ga = f0 - v, gb = f1 - v;
+  for (int k = 0; k < P.secant_iterations; ++k) {
+    if (gb == ga) break;
+    float t = clamp(ta - ga * (tb - ta) / (gb - ga), min(ta, tb), max(ta, tb));
+    float g = sample_field(voxel_coords(r.o + t * r.d)) - v;
+    evaluations += 1.0f;
+    if ((g >= 0.0f) == (ga >= 0.0f)) {
+      ta = t;
+      ga = g;
+    } else {
+      tb = t;
+      gb = g;
+    }
+  }
+  return gb == ga ? 0.5f * (ta + tb) : clamp(ta - ga * (tb - ta) / (gb - ga), min(ta, tb), max(ta, tb));
+}
+
+// What solve_root counts, without sampling (only shading uses the root's position): the
+// bracket's ends keep opposite signs (each step replaces the end of its own sign), so ga never
+// equals gb after the start and regula falsi takes every step unless they start equal.
+float root_evaluations(float f0, float f1, float v) {
+  PRECISE float ga = f0 - v;
+  PRECISE float gb = f1 - v;  // as solve_root's start, not rewritten as f0 == f1
+  return ga == gb ? 0.0f : float(P.secant_iterations);
+}
+
+// The TF evaluated exactly from its points (tf_point(2k): the value in TF coordinates in .x,
+// tf_point(2k + 1): its colour and opacity): a Dirac-like peak is narrower than a table entry.
+vec4 tf_exact(float v) {
+  int n = P.tf_point_count;
+  int lo = 0, hi = n;  // first point with value > v
+  while (lo < hi) {
+    int mid = (lo + hi) / 2;
+    if (tf_point(2 * mid).x > v)
+      hi = mid;
+    else
+      lo = mid + 1;
+  }
+  if (lo == 0) return tf_point(1);
+  if (lo == n) return tf_point(2 * n - 1);
+  float va = tf_point(2 * (lo - 1)).x, vb = tf_point(2 * lo).x;
+  return mix(tf_point(2 * (lo - 1) + 1), tf_point(2 * lo + 1), (v - va) / (vb - va));
+}

@@ -1,0 +1,10 @@
+// The variant's switches that the shared code tests (server/render/variant.h chooses them per
+// scene). GLSL: the constant `V` from the variant's #defines (glsl_prelude.glsl), so a branch
+// on it is folded away; C++: a member of the frame's code, set from the VariantKey.
+struct Variant {
+  bool orthographic;
+  bool differential;
+  bool shading;
+  bool adaptive;
+  int virtual_samples;  // 0, or the virtual samples between true ones (3 or 7)
+};
