@@ -69,16 +69,13 @@ float g_head, g_tail, g_t_entry;
 // The chord lattice index i visited with stride m stands for (midpoint rule): the lattice's
 // [i - 1/2, i + m - 1/2] cut at the ray's entry and exit (cpu/ray_caster-inl.h chord).
 float chord(Lattice L, int i, int m) {
-  float w = lattice_step(L, float(i), float(m));
-  if (i == 0) w += g_head;
-  if (i + m > g_ray_last) w += g_tail;
-  return w;
+  return chord_at_ends(lattice_step(L, float(i), float(m)), i, m, g_head, g_tail, g_ray_last);
 }
 void chord_ends(Lattice L, float t_exit, int last) {
   g_ray_last = last;
   g_t_entry = L.t0;
-  g_head = -lattice_step(L, 0.0, 0.5);
-  g_tail = min(t_exit - lattice_t(L, float(last)), lattice_step(L, float(last), 1.0)) - lattice_step(L, float(last), 0.5);
+  g_head = chord_head(L);
+  g_tail = chord_tail(L, t_exit, last);
 }
 
 #ifdef BRICK

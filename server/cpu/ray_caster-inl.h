@@ -91,17 +91,14 @@ class RayCaster {
   // [i - 1/2, i + m - 1/2] cut at the ray's entry and exit (see chord_ends): its whole step but
   // at the ray's ends.
   // chord_end: the first or last sample's, from its whole step (out of line, off the walk's path).
-  HWY_NOINLINE float chord_end(int i, int m, float step) const {
-    if (i == 0) step += head_;
-    if (i + m > ray_last_) step += tail_;
-    return step;
+  HWY_NOINLINE float chord_end(int i, int m, float step) {
+    return chord_at_ends(step, i, m, head_, tail_, ray_last_);
   }
   // After setup's last_: the whole ray's last index and the chord corrections at its ends.
   void chord_ends() {
     ray_last_ = last_;
-    head_ = -lattice_step(L_, 0.f, 0.5f);
-    const float last = float(last_);
-    tail_ = std::min(span_y_ - lattice_t(L_, last), lattice_step(L_, last, 1.f)) - lattice_step(L_, last, 0.5f);
+    head_ = chord_head(L_);
+    tail_ = chord_tail(L_, span_y_, last_);
   }
   // dense_run's opacity for a step other than the table's (a ray texture's multiplier) or the
   // last point's chord.

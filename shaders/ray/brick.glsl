@@ -32,6 +32,8 @@ int index_near(Lattice L, float t, vec2 span, int last) {
 // guess may be off by more than a point where the ray is nearly parallel to a face). False when
 // it owns none; else own_first..own_last, and `last` becomes the last point the walk visits.
 bool clip_to_brick(Ray r, Lattice L, vec2 span, INOUT(int) last, OUT(int) own_first, OUT(int) own_last) {
+  own_first = 0;  // an OUT parameter is undefined in GLSL until written: written on every path
+  own_last = -1;
   if (last < 0) return false;
   vec3 lo = P.own_lo * P.spacing - P.box_half, hi = P.own_hi * P.spacing - P.box_half;
   float t_in = -kHuge, t_out = kHuge;

@@ -5,7 +5,8 @@
 // subset, checked by both compilers on every build:
 // - float literals carry `f` (1.0f); a double would not mix with glm's float vectors;
 // - no swizzles but .x .y .z .w (vec3(v) takes a vec4's first three), no implicit int->float;
-// - `inout`/`out` parameters are INOUT(T)/OUT(T) (references here, copy-in/out in GLSL);
+// - `inout`/`out` parameters are INOUT(T)/OUT(T) (references here, copy-in/out in GLSL); a
+//   function writes each OUT parameter on every path (GLSL leaves an unwritten one undefined);
 // - constants at file scope are SHARED_CONST; `precise` is PRECISE (C++ builds with
 //   -ffp-contract=off, so every product is rounded by itself already);
 // - RAY_COLD marks a function the CPU keeps out of line (the GLSL compiler inlines everything);

@@ -36,3 +36,18 @@ Lattice ray_lattice(Ray r, float t_enter) {
   }
   return L;
 }
+
+// The chord a sample stands for (midpoint rule): lattice index i visited with stride m stands
+// for the lattice's [i - 1/2, i + m - 1/2], cut at the ray's entry and exit: its whole step
+// (`step`, lattice_step(L, i, m)) but at the ray's ends, where chord_head and chord_tail (the
+// whole ray's, with `ray_last` its last lattice index) correct it.
+float chord_head(Lattice L) { return -lattice_step(L, 0.0f, 0.5f); }
+float chord_tail(Lattice L, float t_exit, int ray_last) {
+  float j = float(ray_last);
+  return min(t_exit - lattice_t(L, j), lattice_step(L, j, 1.0f)) - lattice_step(L, j, 0.5f);
+}
+float chord_at_ends(float step, int i, int m, float head, float tail, int ray_last) {
+  if (i == 0) step += head;
+  if (i + m > ray_last) step += tail;
+  return step;
+}

@@ -1,0 +1,84 @@
+// One row of the function table: the shared ray code's functions called with the row's inputs
+// (kind in k.x; a, b, c), their answers in r0 and r1. Compiled as GLSL (probe.comp, a compute
+// shader over the rows) and as C++ (ray_functions_test.cpp), so both targets make the same calls.
+SHARED_CONST int kMakeRay = 0;     // make_ray
+SHARED_CONST int kSpans = 1;       // intersect_box, clip_span
+SHARED_CONST int kLattice = 2;     // ray_lattice, lattice_t, lattice_step, lattice_index
+SHARED_CONST int kChord = 3;       // chord_head, chord_tail, chord_at_ends
+SHARED_CONST int kOpacity = 4;     // step_opacity, segment_for_length
+SHARED_CONST int kComposite = 5;   // composite over a sequence across opacity edges, premultiplied, finish_pixel
+SHARED_CONST int kShade = 6;       // shade
+SHARED_CONST int kCatmullRom = 7;  // catmull_rom, catmull_rom3 (virtual-sample windows)
+SHARED_CONST int kPeakRoot = 8;    // solve_root, root_evaluations, crosses, tf_exact, peak_bin
+SHARED_CONST int kBrick = 9;       // clip_to_brick, owns, index_near (brick faces)
+SHARED_CONST int kKinds = 10;
+
+// Each function gets its inputs from the row (a ray as o = a.xyz, d = b.xyz; a lattice as c.xyz),
+// not from another function's answer, so a difference names the function it is in.
+void run_case(vec4 k, vec4 a, vec4 b, vec4 c, OUT(vec4) r0, OUT(vec4) r1) {
+  int kind = int(k.x);
+  r0 = vec4(0.0f);
+  r1 = vec4(0.0f);
+  Ray r;
+  r.o = vec3(a);
+  r.d = vec3(b);
+  r.t_eye = a.w;
+  Lattice L;
+  L.t0 = c.x;
+  L.A = c.y;
+  L.B = c.z;
+  if (kind == kMakeRay) {
+    Ray m = make_ray(vec2(a.x, a.y));
+    r0 = vec4(m.o, m.t_eye);
+    r1 = vec4(m.d, 0.0f);
+  } else if (kind == kSpans) {
+    vec2 box = intersect_box(r);
+    vec2 clipped = clip_span(r, vec2(k.y, k.z));
+    r0 = vec4(box.x, box.y, clipped.x, clipped.y);
+  } else if (kind == kLattice) {
+    float j = k.y, m = k.z;
+    Lattice R = ray_lattice(r, k.w);
+    r0 = vec4(lattice_t(L, j), lattice_step(L, j, m), lattice_index(L, c.w), 0.0f);
+    r1 = vec4(R.t0, R.A, R.B, 0.0f);
+  } else if (kind == kChord) {
+    int last = int(k.y), i = int(k.z), m = int(k.w);
+    float head = chord_head(L), tail = chord_tail(L, c.w, last);
+    r0 = vec4(head, tail, chord_at_ends(lattice_step(L, 0.0f, 1.0f), 0, 1, head, tail, last), 0.0f);
+    r1 = vec4(chord_at_ends(lattice_step(L, float(last), 1.0f), last, 1, head, tail, last),
+              chord_at_ends(lattice_step(L, float(i), float(m)), i, m, head, tail, last), 0.0f, 0.0f);
+  } else if (kind == kOpacity) {
+    r0 = vec4(step_opacity(a.x, a.y), step_opacity(a.x, P.step), step_opacity(a.z, a.w), 0.0f);
+    r1 = segment_for_length(c, a.y);
+  } else if (kind == kComposite) {
+    vec4 acc = vec4(0.0f);
+    for (int q = 0; q < 8; ++q) {
+      float alpha = q < 4 ? a[q] : c[q - 4];
+      composite(acc, vec3(0.2f, 0.5f, 0.9f) * (1.0f + 0.1f * float(q)), alpha);
+    }
+    vec4 pre = vec4(0.0f);
+    composite_premultiplied(pre, vec4(0.1f, 0.2f, 0.3f, a.x), c.x);
+    composite_premultiplied(pre, vec4(0.3f, 0.2f, 0.1f, a.y), c.y);
+    r0 = acc;
+    r1 = vec4(finish_pixel(acc), pre.w);
+  } else if (kind == kShade) {
+    r0 = vec4(shade(vec3(c), vec3(a), r.d), 0.0f);
+  } else if (kind == kCatmullRom) {
+    r0 = vec4(catmull_rom(c.x, c.y, c.z, c.w, k.y), catmull_rom3(vec3(a), vec3(c), vec3(c.w, a.w, a.x), vec3(c.z, a.y, k.z), k.y));
+  } else if (kind == kPeakRoot) {
+    float t0 = k.y, t1 = k.z;
+    float f0 = sample_field(voxel_coords(r.o + t0 * r.d)), f1 = sample_field(voxel_coords(r.o + t1 * r.d));
+    float v = mix(min(f0, f1), max(f0, f1), c.x) + c.y;  // c.y moves v off the segment's range, or onto a tangency
+    float evaluations = 0.0f;
+    float t = solve_root(r, t0, f0, t1, f1, v, evaluations);
+    r0 = vec4(t, evaluations, root_evaluations(f0, f1, v), crosses(f0, f1, v) ? 1.0f : 0.0f);
+    vec4 exact = tf_exact(c.z);
+    r1 = vec4(exact.x, exact.w, float(peak_bin(c.z)), float(peak_bin(c.w)));
+  } else if (kind == kBrick) {
+    vec2 span = vec2(k.y, k.z);
+    int last = int(k.w);
+    int walk_last = last, own_first = -1, own_last = -1;
+    bool owned = clip_to_brick(r, L, span, walk_last, own_first, own_last);
+    r0 = vec4(owned ? 1.0f : 0.0f, float(own_first), float(own_last), float(walk_last));
+    r1 = vec4(owns(r, L, int(c.w)) ? 1.0f : 0.0f, float(index_near(L, mix(span.x, span.y, a.w), span, last)), 0.0f, 0.0f);
+  }
+}
