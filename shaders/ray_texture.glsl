@@ -5,10 +5,6 @@
 //   .b blend in [-1, 1]  (b > 0 fades the DVR samples' opacity by 1 - b, b < 0 the peaks' by 1 + b)
 #ifdef RAY_TEXTURE
 layout(binding = UNIT_RAY_TEXTURE) uniform sampler2D u_ray_texture;
-float g_stop, g_dvr_weight, g_peak_weight;
-#define STOP g_stop
-#define DVR_WEIGHT g_dvr_weight
-#define PEAK_WEIGHT g_peak_weight
 
 // view: the pixel centre over the image (u right, v down); volume: the direction of the entry
 // point from the box centre in box units (u around y from +z, v from the +y pole).
@@ -24,16 +20,12 @@ vec2 ray_texture_uv(Ray r, vec2 pixel, float t_enter) {
 #endif
 }
 
-// Reads the controls and returns the step multiplier.
-float read_ray_texture(Ray r, vec2 pixel, float t_enter) {
+// Reads the controls into the ray's state and returns the step multiplier.
+float read_ray_texture(Ray r, vec2 pixel, float t_enter, inout RayState s) {
   vec3 c = texture(u_ray_texture, ray_texture_uv(r, pixel, t_enter)).rgb;
-  g_stop = c.g;
-  g_dvr_weight = 1.0 - max(c.b, 0.0);
-  g_peak_weight = 1.0 + min(c.b, 0.0);
+  s.stop = c.g;
+  s.dvr_weight = 1.0 - max(c.b, 0.0);
+  s.peak_weight = 1.0 + min(c.b, 0.0);
   return c.r;
 }
-#else
-#define STOP P.stop
-#define DVR_WEIGHT 1.0
-#define PEAK_WEIGHT 1.0
 #endif

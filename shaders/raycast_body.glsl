@@ -13,11 +13,6 @@
 layout(std430, binding = SSBO_CELL_DISTANCE) readonly buffer CellDistance { uint u_cell_distance[]; };
 #endif
 
-struct RayResult {
-  vec4 acc;
-  float samples;  // filter evaluations (root-solving steps included); -1: missed the box
-};
-
 
 #if defined(PEAKS) || defined(PREINTEGRATION) || defined(VIRTUAL_SAMPLES)
 #define SEGMENTS  // methods that look at the segment between consecutive samples
@@ -35,29 +30,13 @@ struct RayResult {
 #endif
 
 #include "ray_texture.glsl"
-// Who draws what on a brick (cpu/ray_caster-inl.h draw_): a consume (a sample with the segment
-// into it, and the early-termination test after them) is the rank's that owns the sample; a
-// true sample is owned with its lattice point, a virtual one with the true sample starting its
-// segment. g_draw: the sample being consumed is this ray's to draw; one not drawn (look-behind,
-// look-ahead) is still a segment's start and never stops the ray. One process draws everything.
-#ifdef BRICK
-bool g_draw;
-#define DRAWN g_draw
-#else
-#define DRAWN true
-#endif
-#ifdef PEAKS
+// Peak finding and preintegration are declared in every variant (the shared consume names them;
+// a variant without them folds the calls away and the compiler drops what they bind).
 #include "peak_find.glsl"
-#endif
-#ifdef PREINTEGRATION
 #include "preintegration.glsl"
-#endif
+#include "ray/consume.glsl"
 
-// The previous sample, for segment methods: a segment joins consecutive visits unless lattice
-// points between them were skipped (g_gap: an empty macrocell's). g_expect: the lattice index
-// that continues the last visit without a gap.
-float g_prev_t, g_prev_f;
-bool g_have_prev, g_gap;
+// The lattice index that continues the last visit without a gap (RayState.gap).
 int g_expect;
 // The lattice points the ray composites (BRICK: those it owns; else all of them).
 int g_own_first, g_own_last;
@@ -95,64 +74,6 @@ ivec4 g_behind;
 #endif
 
 #ifdef VIRTUAL_SAMPLES
-#define SAMPLE_GRADIENT(x, g) (g)  // interpolated like the value (Lee §4)
-#else
-#define SAMPLE_GRADIENT(x, g) field_gradient(x)
-#endif
-
-// One sample of the ray (true or virtual) at t with value f, standing for the step dt: peaks in
-// the segment from the previous sample, then the sample (post-classified, or the pre-integrated
-// segment). g: its gradient (virtual samples only; otherwise computed at x when shading needs
-// it). Returns true when the ray is opaque enough to stop.
-bool consume(Ray r, float t, float f, vec3 x, vec3 g, float dt, inout RayResult res) {
-  bool segment = g_have_prev && !g_gap;
-  bool peak_hit = false;
-#ifdef PEAKS
-  if (segment) peak_hit = find_peaks(r, g_prev_t, g_prev_f, t, f, res);
-#endif
-#if defined(PREINTEGRATION)
-  if (segment && DRAWN) {
-    vec4 c = preint_lookup(g_prev_f, f);
-#ifdef VARYING_STEPS
-    if (c.a > 0.0) {  // the table holds segments of the uniform step: correct for this one's length
-      c = segment_for_length(c, t - g_prev_t);
-    }
-#endif
-#ifdef SHADING
-    if (c.a > 0.0) {
-      vec3 rgb = shade(c.rgb / c.a, SAMPLE_GRADIENT(x, g), r.d);  // at the segment's end, as preintegration does
-      composite(res.acc, rgb, c.a * DVR_WEIGHT);
-    }
-#else
-    composite_premultiplied(res.acc, c, DVR_WEIGHT);  // opacity-weighted already: no divide
-#endif
-  }
-#elif !defined(PEAKS_ONLY)
-#ifdef BRICK
-  if (g_draw)
-#endif
-#ifdef PEAK_XOR
-  if (!peak_hit)
-#endif
-  {
-    vec4 c = tf_lookup(f);  // .a: the step's transparency
-    if (c.a < 1.0) {
-      vec3 rgb = c.rgb;
-#ifdef SHADING
-      rgb = shade(rgb, SAMPLE_GRADIENT(x, g), r.d);
-#endif
-      composite(res.acc, rgb, step_opacity(c.a, dt) * DVR_WEIGHT);
-    }
-  }
-#endif
-  g_prev_t = t;
-  g_prev_f = f;
-  g_have_prev = true;
-  g_gap = false;
-  return DRAWN && res.acc.a >= STOP;
-}
-
-#ifdef VIRTUAL_SAMPLES
 // Virtual samples (Lee et al. 2010, §3.1, §4): between consecutive true samples j and j+1, k
 // more (VIRTUAL_SAMPLES = 3 or 7) on the Catmull-Rom spline through the true samples j-1..j+2
 // (in index space; at a run's ends the end sample is repeated), gradients likewise; each of the
@@ -173,9 +94,9 @@ uint w_own;  // the window's samples owned: bit 0 the newest (.w) to bit 3 (.x)
 // Sends out the true sample at t1 (value f1, step dt1) and the virtual samples between it and
 // the next one (t2) that lie before t_limit, on the spline through f0..f3 (g0..g3).
 bool vs_segment(Ray r, float t1, float t2, float dt1, vec4 f, vec3 g0, vec3 g1, vec3 g2, vec3 g3, float t_limit,
-                bool own, inout RayResult res) {
+                bool own, inout RayState res) {
 #ifdef BRICK
-  g_draw = own;  // the segment's samples are the rank's that owns its first
+  res.draw = own;  // the segment's samples are the rank's that owns its first
 #endif
   const float k = float(VIRTUAL_SAMPLES);
   float sub = dt1 / (k + 1.0);
@@ -189,7 +110,7 @@ bool vs_segment(Ray r, float t1, float t2, float dt1, vec4 f, vec3 g0, vec3 g1, 
   float weight = sub;
   if (t1 == g_t_entry) weight -= 0.5 * sub;
   if (ends && t1 + span / (k + 1.0) > t_limit) weight += (t_limit - t1) - 0.5 * sub;
-  if (consume(r, t1, f.y, vec3(0.0), g1, weight, res)) return true;
+  if (consume(r, res, t1, f.y, g1, weight)) return true;
   for (int q = 1; q <= VIRTUAL_SAMPLES; ++q) {
     float s = float(q) / (k + 1.0);
     float t = t1 + s * span;
@@ -198,34 +119,34 @@ bool vs_segment(Ray r, float t1, float t2, float dt1, vec4 f, vec3 g0, vec3 g1, 
     if (ends && (q == VIRTUAL_SAMPLES || t1 + float(q + 1) / (k + 1.0) * span > t_limit)) weight += (t_limit - t) - 0.5 * sub;
     float v = catmull_rom(f.x, f.y, f.z, f.w, s);
     vec3 g = catmull_rom3(g0, g1, g2, g3, s);
-    if (consume(r, t, v, vec3(0.0), g, weight, res)) return true;
+    if (consume(r, res, t, v, g, weight)) return true;
   }
   return false;
 }
 
 // The segment between the two newest samples (.z, .w), the spline's end: p3 repeats .w, p0 is
 // .y when there is one.
-bool vs_last_segment(Ray r, float t_limit, inout RayResult res) {
+bool vs_last_segment(Ray r, float t_limit, inout RayState res) {
   bool prev = w_n >= 3;
   return vs_segment(r, w_t.z, w_t.w, w_dt.z, vec4(prev ? w_f.y : w_f.z, w_f.z, w_f.w, w_f.w), prev ? w_g1 : w_g2,
                     w_g2, w_g3, w_g3, t_limit, W_OWNS(2u), res);
 }
 
 // Everything still waiting: the last true sample stands for its whole step.
-bool vs_flush(Ray r, inout RayResult res) {
-  bool done = res.acc.a >= STOP;
+bool vs_flush(Ray r, inout RayState res) {
+  bool done = res.acc.a >= res.stop;
   if (!done && w_n >= 2) done = vs_last_segment(r, 3.0e38, res);
   if (!done && w_n >= 1) {
 #ifdef BRICK
-    g_draw = W_OWNS(1u);
+    res.draw = W_OWNS(1u);
 #endif
-    done = consume(r, w_t.w, w_f.w, vec3(0.0), w_g3, w_dt.w, res);
+    done = consume(r, res, w_t.w, w_f.w, w_g3, w_dt.w);
   }
   w_n = 0;
   return done;
 }
 
-bool vs_push(Ray r, float t, float f, vec3 g, float dt, bool own, inout RayResult res) {
+bool vs_push(Ray r, float t, float f, vec3 g, float dt, bool own, inout RayState res) {
 #ifdef BRICK
   w_own = ((w_own << 1) | (own ? 1u : 0u)) & 15u;
 #endif
@@ -248,8 +169,8 @@ bool vs_push(Ray r, float t, float f, vec3 g, float dt, bool own, inout RayResul
 // (index last + 1) closes the spline, and the virtual samples up to the exit go out: the ray
 // ends like a ray sampled at the sub-step would (its last sample within one sub-step of the
 // exit), not one whole step beyond it.
-void vs_finish(Ray r, Lattice L, int last, float t_exit, inout RayResult res) {
-  if (res.acc.a >= STOP || w_n == 0) return;
+void vs_finish(Ray r, Lattice L, int last, float t_exit, inout RayState res) {
+  if (res.acc.a >= res.stop || w_n == 0) return;
   if (w_t.w != lattice_t(L, float(last))) {  // the ray ended in a skipped cell
     vs_flush(r, res);
     return;
@@ -272,7 +193,7 @@ void vs_finish(Ray r, Lattice L, int last, float t_exit, inout RayResult res) {
 
 // Visits lattice index i, standing for the step to index i + m. Returns true when the ray is
 // opaque enough to stop.
-bool sample_visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
+bool sample_visit(Ray r, Lattice L, int i, int m, inout RayState res) {
 #ifdef VIRTUAL_SAMPLES
   float dt = lattice_step(L, float(i), float(m));  // the true step: vs_segment cuts the sub-samples' chords
 #else
@@ -284,16 +205,16 @@ bool sample_visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
   res.samples += 1.0;
   bool own = i >= g_own_first && i <= g_own_last;
 #ifdef BRICK
-  g_draw = own;
+  res.draw = own;
 #endif
   bool gap = i != g_expect;  // lattice points between the last visit and this one were skipped
   g_expect = i + m;
-  if (gap) g_gap = true;  // until the next sample is consumed: no segment across the gap
+  if (gap) res.gap = true;  // until the next sample is consumed: no segment across the gap
 #ifdef VIRTUAL_SAMPLES
   if (gap && w_n > 0) {  // the run before the gap ends here
-    g_gap = false;       // (its samples are contiguous among themselves)
+    res.gap = false;       // (its samples are contiguous among themselves)
     if (vs_flush(r, res)) return true;
-    g_gap = true;
+    res.gap = true;
   }
 #ifdef SHADING
   vec3 g = field_gradient(x);
@@ -302,11 +223,11 @@ bool sample_visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
 #endif
   return vs_push(r, t, f, g, dt, own, res);  // (vs_flush may have drawn another's)
 #else
-  return consume(r, t, f, x, vec3(0.0), dt, res);
+  return consume(r, res, t, f, vec3(0.0), dt);
 #endif
 }
 
-bool visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
+bool visit(Ray r, Lattice L, int i, int m, inout RayState res) {
 #ifdef BRICK
   if (i < g_own_first) {  // before the brick's points (see g_behind)
     g_behind = ivec4(i, g_behind.x, m, g_behind.z);
@@ -326,37 +247,12 @@ bool visit(Ray r, Lattice L, int i, int m, inout RayResult res) {
   return sample_visit(r, L, i, m, res);
 }
 
-#if defined(PREINTEGRATION) && !defined(VIRTUAL_SAMPLES)
-// The segment from the last lattice point visited to the exit: the table's segments cover the
-// chord between samples, this the rest of the ray. Drawn by the rank owning that point, when the
-// ray goes on there (cpu/ray_kernel.cpp close_segment).
-void close_segment(Ray r, float t_exit, inout RayResult res) {
-  if (!(g_have_prev && !g_gap && DRAWN && g_expect == g_ray_last + 1 && res.acc.a < STOP)) return;
-  vec3 x = voxel_coords(r.o + t_exit * r.d);
-  float f = sample_field(x);
-  res.samples += 1.0;
-  vec4 c = preint_lookup(g_prev_f, f);
-  if (!(c.a > 0.0)) return;
-  c = segment_for_length(c, t_exit - g_prev_t);
-#ifdef SHADING
-  composite(res.acc, shade(c.rgb / c.a, field_gradient(x), r.d), c.a * DVR_WEIGHT);
-#else
-  composite_premultiplied(res.acc, c, DVR_WEIGHT);
-#endif
-}
-#endif
-
-RayResult cast_ray(vec2 pixel) {
-  RayResult res;
-  res.acc = vec4(0.0);
-  res.samples = 0.0;
-  g_have_prev = false;
-  g_gap = false;
+RayState cast_ray(vec2 pixel) {
+  RayState res = RayState(vec4(0.0), 0.0, P.stop, 1.0, 1.0, true, 0.0, 0.0, false, false);
   g_expect = 0;
   g_own_first = 0;
   g_own_last = 2147483647;
 #ifdef BRICK
-  g_draw = true;
   g_behind = ivec4(-1, -1, 1, 1);
 #endif
 #ifdef VIRTUAL_SAMPLES
@@ -379,7 +275,7 @@ RayResult cast_ray(vec2 pixel) {
   }
   Lattice L = ray_lattice(r, span.x);
 #ifdef RAY_TEXTURE
-  float step_mult = read_ray_texture(r, pixel, t_box);
+  float step_mult = read_ray_texture(r, pixel, t_box, res);
   L.A *= step_mult;
   L.B *= step_mult;
 #endif
@@ -394,11 +290,11 @@ RayResult cast_ray(vec2 pixel) {
   if (P.front_opacity_width > 0) {
     ivec2 p = ivec2(pixel) - ivec2(P.tile_x, P.tile_y);
     float a = u_front_opacity[p.y * P.front_opacity_width + p.x];
-    if (a >= 0.0 && a >= g_stop) {  // reached in front (after a consume there): one process stopped
+    if (a >= 0.0 && a >= res.stop) {  // reached in front (after a consume there): one process stopped
       res.samples = -1.0;
       return res;
     }
-    if (a > 0.0) g_stop = (g_stop - a) / (1.0 - a);  // a + (1 - a) * acc >= stop; a < 0: none in front
+    if (a > 0.0) res.stop = (res.stop - a) / (1.0 - a);  // a + (1 - a) * acc >= stop; a < 0: none in front
   }
 #endif
 #endif
@@ -590,7 +486,7 @@ RayResult cast_ray(vec2 pixel) {
 #ifdef VIRTUAL_SAMPLES
   vs_finish(r, L, last, span.y, res);
 #elif defined(PREINTEGRATION)
-  close_segment(r, span.y, res);
+  close_segment(r, res, span.y, g_expect == g_ray_last + 1);
 #endif
   return res;
 }
@@ -600,10 +496,8 @@ RayResult cast_ray(vec2 pixel) {
 // per-pixel sample counts arrive in u_budget), reconstruction only: no TF, no compositing.
 layout(binding = UNIT_BUDGET) uniform sampler2D u_budget;
 
-RayResult cast_ray_bare(vec2 pixel, ivec2 texel) {
-  RayResult res;
-  res.acc = vec4(0.0);
-  res.samples = 0.0;
+RayState cast_ray_bare(vec2 pixel, ivec2 texel) {
+  RayState res = RayState(vec4(0.0), 0.0, P.stop, 1.0, 1.0, true, 0.0, 0.0, false, false);
   Ray r = make_ray(pixel);
   vec2 span = intersect_box(r);
   int budget = int(texelFetch(u_budget, texel, 0).r);

@@ -3,7 +3,8 @@
 // baked by the host; ray/compositing.glsl step_opacity corrects it for the step taken).
 layout(binding = UNIT_TF) uniform sampler1D u_tf;
 
-vec4 tf_lookup(float s) {
+bool tf_lookup(float s, out vec4 c) {
   float size = P.tf_size;
-  return texture(u_tf, clamp(s, 0.0, 1.0) * ((size - 1.0) / size) + 0.5 / size);
+  c = texture(u_tf, clamp(s, 0.0, 1.0) * ((size - 1.0) / size) + 0.5 / size);
+  return true;
 }

@@ -119,6 +119,7 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
   const render::TableShape shape{t->peak_bins, t->peak_layers, t->preint_size, int(t->tf_points.size() / 2)};
   f.u = render::make_ray_uniforms(s, cv.volume(), render::ValueMap{}, cells, shape, rect, sample_cap(f.key), brick);
   f.v = render::shared_variant(f.key);
+  f.brick = f.v.brick = brick != nullptr;  // (the CPU's key keeps its name: "+brick" is added to the stats)
   f.peak_any = t->peak_any.data();
   f.preint_any = t->preint_any.data();
 

@@ -15,6 +15,12 @@
 
 #include "cpu/ray_geometry-inl.h"
 #include "cpu/sampler-inl.h"
+#include "cpu/table_bits.h"
+#include "render/shader_interface.h"
+
+#ifndef NO_PEAK_TEXEL
+#define NO_PEAK_TEXEL (::peakcast::render::kNoPeakTexel)  // ray/peaks.glsl kNoPeakTexel
+#endif
 
 HWY_BEFORE_NAMESPACE();
 namespace peakcast::cpu {
@@ -31,14 +37,14 @@ class RayCaster {
         varying_steps_(f.key.differential || f.key.adaptive || f.key.virtual_samples),
         dense_(!f.key.peaks && !f.key.virtual_samples && !f.key.shading && !varying_steps_ && !f.brick) {}
 
-  RayResult cast(float px, float py) { return setup(px, py) ? walk(0) : res_; }
+  RayResult cast(float px, float py) { return setup(px, py) ? walk(0) : result(); }
   RayResult cast_bare(float px, float py, int budget);
   // The ray through (px, py) up to its traversal; false (and samples -1) when it misses the box.
   bool setup(float px, float py);
   // The traversal from lattice index `first` (walk_leaps only: the points before it lie in empty
   // cells, as leaps_to_first_occupied found), then the ray's end.
   RayResult walk(int first);
-  RayResult result() const { return res_; }
+  RayResult result() const { return {s_.acc, s_.samples}; }
   LeapInputs leap_inputs() {
     return {cell_coords(r_.o), r_.d / P.spacing, L_.t0, L_.A, L_.B, span_y_ + P.step, last_};
   }
@@ -55,6 +61,7 @@ class RayCaster {
 #include "ray/catmull_rom.glsl"
 #include "ray/peaks.glsl"
 #include "ray/brick.glsl"
+#include "ray/consume.glsl"
 
   float sample_field(vec3 x) const { return SamplePoint(f_.voxels, x); }
   vec3 field_gradient(vec3 x) const {
@@ -72,14 +79,15 @@ class RayCaster {
   // where its opacity is exactly zero.
   bool tf_lookup(float s, vec4& out) const;
   vec4 tf_point(int k) const { return f_.tf_points[k]; }
+  // The peak table's cell (i, j), layer `layer`; peak_cell_any: layer 0 holds a peak there (one
+  // bit per cell, so that a segment finding none does not read the table, which misses the cache).
+  vec4 peak_slots(int i, int j, int layer) const {
+    const float* p = f_.peak_texels + ((size_t(layer) * size_t(P.peak_bins) + size_t(j)) * size_t(P.peak_bins) + size_t(i)) * 4;
+    return vec4(p[0], p[1], p[2], p[3]);
+  }
+  bool peak_cell_any(int i, int j) const { return test_bit(f_.peak_any, size_t(j) * size_t(P.peak_bins) + size_t(i)); }
   // The table at (s_front, s_back); false, leaving `out` alone, where it is exactly zero.
   bool preint_lookup(float s_front, float s_back, vec4& out) const;
-  vec3 sample_gradient(float t, vec3 g) {
-    return f_.key.virtual_samples ? g : field_gradient(voxel_coords(r_.o + t * r_.d));
-  }
-
-  bool find_peaks(float t0, float f0, float t1, float f1);
-  bool consume(float t, float fv, vec3 g, float dt);
   // Visits lattice index i (a brick's held-back visits first, see behind_).
   bool visit(int i, int m) {
     if (f_.brick && (i < own_first_ || behind_[0] >= 0)) return visit_behind(i, m);
@@ -105,8 +113,6 @@ class RayCaster {
   HWY_NOINLINE float dense_opacity_slow(float T, int i, float dt) {
     return step_opacity(T, i == ray_last_ ? chord_end(i, 1, dt) : dt);
   }
-  // Preintegration's last segment, from the last lattice point visited to the exit.
-  void close_segment();
   // Virtual samples (Lee et al. 2010): the window of four true samples, newest last.
   bool vs_segment(float t1, float t2, float dt1, vec4 fw, vec3 g0, vec3 g1, vec3 g2, vec3 g3, float t_limit, bool own);
   bool vs_last_segment(float t_limit);
@@ -116,7 +122,7 @@ class RayCaster {
   bool walk_leaps(float span_y, int first);
   // From index i on, while the points lie in occupied cells: sample, classify and composite as
   // sample_visit and consume would, bit for bit, with the ray's colour in locals (the loop-carried
-  // chain through res_ in memory cost a store and a reload per sample). Advances i and visited;
+  // chain through s_ in memory cost a store and a reload per sample). Advances i and visited;
   // true when the ray stopped.
   // kCells false: every point (no space skipping), without the cell test.
   template <bool kCells>
@@ -131,7 +137,9 @@ class RayCaster {
   float span_x_ = 0, span_y_ = 0;
   Ray r_;
   Lattice L_;
-  RayResult res_;
+  // What the ray has composited, its termination and weights, and its previous sample (shared
+  // with the shader: shaders/ray/types.glsl).
+  RayState s_{vec4(0.f), 0.f, 1.f, 1.f, 1.f, true, 0.f, 0.f, false, false};
   int last_ = 0;
   // The whole ray's last lattice index (a brick's last_ is its own), and what the first and last
   // samples' chords differ from a whole step by (chord_end()).
@@ -140,26 +148,13 @@ class RayCaster {
   // The lattice points the ray composites (bricks: those it owns; else all of them).
   int own_first_ = 0, own_last_ = std::numeric_limits<int>::max();
   bool owned(int i) const { return i >= own_first_ && i <= own_last_; }
-  // Who draws what on a brick: a consume (a sample with the segment into it: its peaks, its
-  // preintegrated colour, its DVR term, and the test for early termination after them) is the
-  // rank's that owns the sample; a true sample is owned with its lattice point, a virtual one
-  // with the true sample starting its segment. So a ray's early termination falls between
-  // consumes, as in one process, and the opacity a rank hands on (ray textures) is one process's
-  // at that point. draw_: the sample being consumed is this ray's to draw; one not drawn (the
-  // look-behind, the Catmull-Rom look-ahead) is still a segment's start, and never stops the ray.
-  // Always true in one process.
-  bool draw_ = true;
   // The last visits before the owned points, held back unsampled (index -1: none), newest
   // first: sampled only when they lead to the first owned visit without a gap (the look-behind
   // that xor's segment into it needs, and with virtual samples the window of the segment before
   // it, whose last virtual sample starts that segment), so a walk from the ray's start costs no
   // samples in front.
   int behind_[2] = {-1, -1}, behind_m_[2] = {1, 1};
-  float stop_ = 1, dvr_weight_ = 1, peak_weight_ = 1;
-  // The previous sample, for segment methods (see raycast_body.glsl).
-  float prev_t_ = 0, prev_f_ = 0;
-  bool have_prev_ = false, gap_ = false;
-  int expect_ = 0;
+  int expect_ = 0;  // the lattice index that continues the last visit without a gap
   vec4 w_t_{0}, w_f_{0}, w_dt_{0};
   vec3 w_g0_{0}, w_g1_{0}, w_g2_{0}, w_g3_{0};
   int w_n_ = 0;

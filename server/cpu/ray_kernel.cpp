@@ -28,7 +28,6 @@
 #include "cpu/ray_geometry-inl.h"
 #include "cpu/leap_packets-inl.h"
 #include "cpu/ray_caster-inl.h"
-#include "cpu/ray_peaks-inl.h"
 #include "cpu/ray_virtual_samples-inl.h"
 #include "cpu/ray_tables-inl.h"
 #include "cpu/ray_brick-inl.h"
@@ -74,43 +73,6 @@ HWY_NOINLINE float RayCaster::new_run(int i, int m) {
 }
 
 
-// One sample (true or virtual) at t with value fv, standing for the step dt. g: its gradient
-// (virtual samples only). True when the ray is opaque enough to stop.
-bool RayCaster::consume(float t, float fv, vec3 g, float dt) {
-  const render::VariantKey& key = f_.key;
-  const bool segment = have_prev_ && !gap_;
-  bool peak_hit = false;
-  if (key.peaks && segment) peak_hit = find_peaks(prev_t_, prev_f_, t, fv);
-  if (key.preintegration) {
-    vec4 c;
-    if (segment && draw_ && preint_lookup(prev_f_, fv, c)) {  // else the segment adds exactly nothing
-      if (varying_steps_ && c.a > 0.f) {  // the table holds segments of the uniform step
-        c = segment_for_length(c, t - prev_t_);
-      }
-      if (key.shading) {
-        if (c.a > 0.f) composite(res_.acc, shade(vec3(c) / c.a, sample_gradient(t, g), r_.d), c.a * dvr_weight_);
-      } else {
-        composite_premultiplied(res_.acc, c, dvr_weight_);  // opacity-weighted already
-      }
-    }
-  } else if (draw_ && !(key.peaks && key.peak_mode == PeakMode::PeaksOnly)) {
-    if (!(key.peaks && key.peak_mode == PeakMode::Xor && peak_hit)) {
-      vec4 c;
-      if (tf_lookup(fv, c) && c.a < 1.f) {
-        vec3 rgb(c);
-        if (key.shading) rgb = shade(rgb, sample_gradient(t, g), r_.d);
-        composite(res_.acc, rgb, step_opacity(c.a, dt) * dvr_weight_);
-      }
-    }
-  }
-  prev_t_ = t;
-  prev_f_ = fv;
-  have_prev_ = true;
-  gap_ = false;
-  return draw_ && res_.acc.a >= stop_;
-}
-
-
 // Visits lattice index i, standing for the step to index i + m.
 HWY_INLINE bool RayCaster::sample_visit(int i, int m) {
   // Virtual samples: the true step (vs_segment cuts the sub-samples' chords).
@@ -118,84 +80,66 @@ HWY_INLINE bool RayCaster::sample_visit(int i, int m) {
   if (HWY_UNLIKELY((i == 0 || i + m > ray_last_)) && !f_.key.virtual_samples) dt = chord_end(i, m, dt);
   const float t = lattice_t(L_, float(i));
   const float fv = field_at(i, m);
-  res_.samples += 1.f;
+  s_.samples += 1.f;
   const bool own = owned(i);
-  draw_ = own;
+  s_.draw = own;
   const bool gap = i != expect_;  // lattice points between the last visit and this one were skipped
   expect_ = i + m;
-  if (gap) gap_ = true;  // until the next sample is consumed: no segment across the gap
+  if (gap) s_.gap = true;  // until the next sample is consumed: no segment across the gap
   if (f_.key.virtual_samples) {
     if (gap && w_n_ > 0) {  // the run before the gap ends here
-      gap_ = false;
+      s_.gap = false;
       if (vs_flush()) return true;
-      gap_ = true;
+      s_.gap = true;
     }
     const vec3 g = f_.key.shading ? field_gradient(voxel_coords(r_.o + t * r_.d)) : vec3(0.f);
     return vs_push(t, fv, g, dt, own);  // (vs_flush may have drawn another's)
   }
-  return consume(t, fv, vec3(0.f), dt);
-}
-
-// The segment from the last lattice point visited to the exit (preintegration, no virtual
-// samples): the table's segments cover the chord between samples, this the rest of the ray.
-// Drawn by the rank owning that point, when the ray goes on there.
-void RayCaster::close_segment() {
-  if (!(have_prev_ && !gap_ && draw_ && expect_ == ray_last_ + 1 && res_.acc.a < stop_)) return;
-  const vec3 x = voxel_coords(r_.o + span_y_ * r_.d);
-  const float fv = sample_field(x);
-  res_.samples += 1.f;
-  vec4 c;
-  if (!preint_lookup(prev_f_, fv, c) || !(c.a > 0.f)) return;
-  c = segment_for_length(c, span_y_ - prev_t_);
-  if (f_.key.shading) {
-    composite(res_.acc, shade(vec3(c) / c.a, field_gradient(x), r_.d), c.a * dvr_weight_);
-  } else {
-    composite_premultiplied(res_.acc, c, dvr_weight_);
-  }
+  return consume(r_, s_, t, fv, vec3(0.f), dt);
 }
 
 bool RayCaster::setup(float px, float py) {
   r_ = make_ray(vec2(px, py));
   vec2 span = intersect_box(r_);
   if (!(span.x <= span.y)) {  // missed (also false for NaN)
-    res_.samples = -1.f;
+    s_.samples = -1.f;
     return false;
   }
   const float t_box = span.x;  // the box entry: where a volume-mapped ray texture is read
   span = clip_span(r_, span);
   if (!(span.x <= span.y)) {  // the clip keeps none of the ray
-    res_.samples = 0.f;
+    s_.samples = 0.f;
     return false;
   }
   span_x_ = span.x;
   span_y_ = span.y;
   L_ = ray_lattice(r_, span_x_);
-  stop_ = P.stop;
+  s_.stop = P.stop;
   if (f_.ray_texture) {
     const glm::dvec2 uv = f_.key.ray_texture_volume
                               ? volume_uv(glm::dvec3(r_.o + t_box * r_.d), glm::dvec3(P.box_half))
                               : glm::dvec2(px / float(P.image_width), py / float(P.image_height));
     const auto c = sample_ray_texture(*f_.ray_texture, uv);
-    stop_ = float(c[1]);
-    dvr_weight_ = 1.f - std::max(float(c[2]), 0.f);
-    peak_weight_ = 1.f + std::min(float(c[2]), 0.f);
+    s_.stop = float(c[1]);
+    s_.dvr_weight = 1.f - std::max(float(c[2]), 0.f);
+    s_.peak_weight = 1.f + std::min(float(c[2]), 0.f);
     L_.A *= float(c[0]);
     L_.B *= float(c[0]);
   }
   last_ = int(std::min(std::floor(lattice_index(L_, span_y_)), float(P.sample_cap - 1)));
   chord_ends();
   if (f_.brick && !clip_to_brick(r_, L_, vec2(span_x_, span_y_), last_, own_first_, own_last_)) {  // none of its points in this brick: nothing to draw here
-    res_.samples = -1.f;
+    s_.samples = -1.f;
     return false;
   }
   if (f_.front_opacity) {  // a ray texture's termination, of the opacity over the bricks in front
     const float a = f_.front_opacity[size_t(int(py) - P.tile_y) * size_t(P.front_opacity_width) +
                                      size_t(int(px) - P.tile_x)];
-    if (a >= 0.f && a >= stop_) {  // reached in front (after a consume there): one process stopped
-      res_.samples = -1.f;
+    if (a >= 0.f && a >= s_.stop) {  // reached in front (after a consume there): one process stopped
+      s_.samples = -1.f;
       return false;
     }
-    if (a > 0.f) stop_ = (stop_ - a) / (1.f - a);  // a + (1 - a) * acc >= stop; a < 0: none in front
+    if (a > 0.f) s_.stop = (s_.stop - a) / (1.f - a);  // a + (1 - a) * acc >= stop; a < 0: none in front
   }
   return true;
 }
@@ -221,8 +165,8 @@ RayResult RayCaster::walk(int first) {
     stopped = walk_cells(span_x_, span_y_);
   }
   if (!stopped && key.virtual_samples) vs_finish(last_, span_y_);
-  if (!stopped && key.preintegration && !key.virtual_samples) close_segment();
-  return res_;
+  if (!stopped && key.preintegration && !key.virtual_samples) close_segment(r_, s_, span_y_, expect_ == ray_last_ + 1);
+  return result();
 }
 
 RayResult RayCaster::cast_bare(float px, float py, int budget) {
@@ -231,9 +175,9 @@ RayResult RayCaster::cast_bare(float px, float py, int budget) {
   last_ = budget;
   float sum = 0.f;
   for (int i = 0; i < budget; ++i) sum += field_at(i, 1);
-  res_.acc = vec4(sum * 1e-9f);  // keeps the loop from being optimised away
-  res_.samples = float(budget);
-  return res_;
+  s_.acc = vec4(sum * 1e-9f);  // keeps the loop from being optimised away
+  s_.samples = float(budget);
+  return result();
 }
 
 }  // namespace

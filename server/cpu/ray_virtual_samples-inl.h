@@ -20,7 +20,7 @@ namespace {
 bool RayCaster::vs_segment(float t1, float t2, float dt1, vec4 fw, vec3 g0, vec3 g1, vec3 g2, vec3 g3,
                            float t_limit, bool own) {
   const int vs = f_.key.virtual_samples;
-  draw_ = own;  // the segment's samples are the rank's that owns its first true one (see draw_)
+  s_.draw = own;  // the segment's samples are the rank's that owns its first true one (see s_.draw)
   const float k = float(vs);
   const float sub = dt1 / (k + 1.f);
   const float span = t2 - t1;
@@ -31,7 +31,7 @@ bool RayCaster::vs_segment(float t1, float t2, float dt1, vec4 fw, vec3 g0, vec3
   float weight = sub;
   if (t1 == L_.t0) weight -= 0.5f * sub;
   if (ends && t1 + span / (k + 1.f) > t_limit) weight += (t_limit - t1) - 0.5f * sub;
-  if (consume(t1, fw.y, g1, weight)) return true;
+  if (consume(r_, s_, t1, fw.y, g1, weight)) return true;
   for (int q = 1; q <= vs; ++q) {
     const float s = float(q) / (k + 1.f);
     const float t = t1 + s * span;
@@ -40,7 +40,7 @@ bool RayCaster::vs_segment(float t1, float t2, float dt1, vec4 fw, vec3 g0, vec3
     if (ends && (q == vs || t1 + float(q + 1) / (k + 1.f) * span > t_limit)) weight += (t_limit - t) - 0.5f * sub;
     const float v = catmull_rom(fw.x, fw.y, fw.z, fw.w, s);
     const vec3 g = catmull_rom3(g0, g1, g2, g3, s);
-    if (consume(t, v, g, weight)) return true;
+    if (consume(r_, s_, t, v, g, weight)) return true;
   }
   return false;
 }
@@ -52,11 +52,11 @@ bool RayCaster::vs_last_segment(float t_limit) {
 }
 
 bool RayCaster::vs_flush() {
-  bool done = res_.acc.a >= stop_;
+  bool done = s_.acc.a >= s_.stop;
   if (!done && w_n_ >= 2) done = vs_last_segment(kHuge);
   if (!done && w_n_ >= 1) {
-    draw_ = (w_own_ & 1u) != 0;
-    done = consume(w_t_.w, w_f_.w, w_g3_, w_dt_.w);
+    s_.draw = (w_own_ & 1u) != 0;
+    done = consume(r_, s_, w_t_.w, w_f_.w, w_g3_, w_dt_.w);
   }
   w_n_ = 0;
   return done;
@@ -79,14 +79,14 @@ bool RayCaster::vs_push(float t, float fv, vec3 g, float dt, bool own) {
 }
 
 void RayCaster::vs_finish(int last, float t_exit) {
-  if (res_.acc.a >= stop_ || w_n_ == 0) return;
+  if (s_.acc.a >= s_.stop || w_n_ == 0) return;
   if (w_t_.w != lattice_t(L_, float(last))) {  // the ray ended in a skipped cell
     vs_flush();
     return;
   }
   const float t = lattice_t(L_, float(last + 1));
   const float fv = field_at(last + 1, 1);
-  res_.samples += 1.f;
+  s_.samples += 1.f;
   const vec3 g = f_.key.shading ? field_gradient(voxel_coords(r_.o + t * r_.d)) : vec3(0.f);
   if (vs_push(t, fv, g, lattice_step(L_, float(last + 1), 1.f), owned(last + 1))) return;
   vs_last_segment(t_exit);  // the extra sample itself is not composited

@@ -73,8 +73,8 @@ bool RayCaster::walk_leaps(float span_y, int first) {
 template <bool kCells>
 bool RayCaster::dense_run(int& i, int& visited, vec3 xo, vec3 dv, ivec3 grid) {
   const bool preint = f_.key.preintegration;
-  vec4 acc = res_.acc;
-  float samples = res_.samples, prev_f = prev_f_;
+  vec4 acc = s_.acc;
+  float samples = s_.samples, prev_f = s_.prev_f;
   const int first = i;
   bool stopped = false;
   const float dt = lattice_step(L_, 0.f, 1.f);  // uniform steps (the ray texture's multiplier in it)
@@ -90,25 +90,25 @@ bool RayCaster::dense_run(int& i, int& visited, vec3 xo, vec3 dv, ivec3 grid) {
     samples += 1.f;
     vec4 s;
     if (preint) {  // the segment from the previous point (visited without a gap)
-      if (preint_lookup(prev_f, fv, s)) composite_premultiplied(acc, s, dvr_weight_);
+      if (preint_lookup(prev_f, fv, s)) composite_premultiplied(acc, s, s_.dvr_weight);
     } else if (tf_lookup(fv, s) && s.a < 1.f) {
       // (The first point is never in a run; the last one's chord is cut at the exit.) One cold
       // call: more of them made the compiler keep the ray's opacity in memory.
       const float a = HWY_LIKELY(whole && i != last_) ? 1.f - s.a : dense_opacity_slow(s.a, i, dt);
-      composite(acc, vec3(s), a * dvr_weight_);
+      composite(acc, vec3(s), a * s_.dvr_weight);
     }
     prev_f = fv;
     visited = i++;
-    if (acc.a >= stop_) {
+    if (acc.a >= s_.stop) {
       stopped = true;
       break;
     }
   }
-  res_.acc = acc;
-  res_.samples = samples;
+  s_.acc = acc;
+  s_.samples = samples;
   if (i > first) {  // as the last consume leaves them
-    prev_t_ = lattice_t(L_, float(visited));
-    prev_f_ = prev_f;
+    s_.prev_t = lattice_t(L_, float(visited));
+    s_.prev_f = prev_f;
     expect_ = visited + 1;
   }
   return stopped;

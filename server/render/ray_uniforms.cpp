@@ -79,6 +79,11 @@ ray::Variant shared_variant(const VariantKey& key) {
   v.shading = key.shading;
   v.adaptive = key.adaptive;
   v.virtual_samples = key.virtual_samples;
+  v.peaks = key.peaks;
+  v.peak_xor = key.peaks && key.peak_mode == PeakMode::Xor;
+  v.peaks_only = key.peaks && key.peak_mode == PeakMode::PeaksOnly;
+  v.preintegration = key.preintegration;
+  v.brick = key.brick;
   return v;
 }
 

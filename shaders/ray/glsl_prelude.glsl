@@ -37,4 +37,30 @@
 #else
 #define V_VIRTUAL_SAMPLES 0
 #endif
-const Variant V = Variant(V_ORTHOGRAPHIC, V_DIFFERENTIAL, V_SHADING, V_ADAPTIVE, V_VIRTUAL_SAMPLES);
+#ifdef PEAKS
+#define V_PEAKS true
+#else
+#define V_PEAKS false
+#endif
+#ifdef PEAK_XOR
+#define V_PEAK_XOR true
+#else
+#define V_PEAK_XOR false
+#endif
+#ifdef PEAKS_ONLY
+#define V_PEAKS_ONLY true
+#else
+#define V_PEAKS_ONLY false
+#endif
+#ifdef PREINTEGRATION
+#define V_PREINTEGRATION true
+#else
+#define V_PREINTEGRATION false
+#endif
+#ifdef BRICK
+#define V_BRICK true
+#else
+#define V_BRICK false
+#endif
+const Variant V = Variant(V_ORTHOGRAPHIC, V_DIFFERENTIAL, V_SHADING, V_ADAPTIVE, V_VIRTUAL_SAMPLES, V_PEAKS, V_PEAK_XOR,
+                          V_PEAKS_ONLY, V_PREINTEGRATION, V_BRICK);

@@ -3,6 +3,8 @@
 // f(t) = v between two samples, and the TF evaluated exactly at a peak. Reads the target's field
 // (sample_field) and TF points (tf_point).
 
+SHARED_CONST float kNoPeakTexel = NO_PEAK_TEXEL;  // an empty slot of the peak table (the host's value)
+
 // The peak table's bin of a value in TF coordinates.
 int peak_bin(float f) { return clamp(int(floor(f * float(P.peak_bins))), 0, P.peak_bins - 1); }
 
@@ -54,4 +56,60 @@ vec4 tf_exact(float v) {
   if (lo == n) return tf_point(2 * n - 1);
   float va = tf_point(2 * (lo - 1)).x, vb = tf_point(2 * lo).x;
   return mix(tf_point(2 * (lo - 1) + 1), tf_point(2 * lo + 1), (v - va) / (vb - va));
+}
+
+// Finds and composites, in ray order, up to P.max_peaks peaks crossed by the segment
+// (t0, f0) -> (t1, f1); true when it found one. Reads the peak table through the target's
+// peak_cell_any (false: the table's cell holds no peak, without reading it) and peak_slots (the
+// four values of a layer, NO_PEAK_TEXEL after the last).
+bool find_peaks(Ray r, INOUT(RayState) s, float t0, float f0, float t1, float f1) {
+  int i = peak_bin(f0), j = peak_bin(f1);
+  if (!peak_cell_any(i, j)) return false;
+  bool reverse = (i == j) && f0 > f1;  // the diagonal is stored ascending
+  int max_peaks = P.max_peaks;
+  float found[4];
+  int n = 0;
+  bool done = false;
+  for (int layer = 0; layer < P.peak_layers && !done; ++layer) {
+    vec4 slots = peak_slots(i, j, layer);
+    for (int q = 0; q < 4; ++q) {
+      float v = slots[q];
+      if (v == kNoPeakTexel) {
+        done = true;
+        break;
+      }
+      if (!crosses(f0, f1, v)) continue;
+      if (reverse) {  // keep the last four in table order: the first four along the ray
+        if (n == 4) {
+          found[0] = found[1];
+          found[1] = found[2];
+          found[2] = found[3];
+          n = 3;
+        }
+        found[n++] = v;
+      } else {
+        found[n++] = v;
+        if (n == max_peaks) {
+          done = true;
+          break;
+        }
+      }
+    }
+  }
+  int count = min(n, max_peaks);
+  if (V.brick && !s.draw) return count > 0;  // another brick's consume: whether it holds a peak only
+  for (int k = 0; k < count; ++k) {
+    float v = reverse ? found[n - 1 - k] : found[k];
+    vec4 c = tf_exact(v);
+    vec3 rgb = vec3(c);
+    if (V.shading) {
+      float t = solve_root(r, t0, f0, t1, f1, v, s.samples);
+      rgb = shade(rgb, field_gradient(voxel_coords(r.o + t * r.d)), r.d);
+    } else {
+      s.samples += root_evaluations(f0, f1, v);  // only shading uses the root's position
+    }
+    composite(s.acc, rgb, c.w * s.peak_weight);  // unscaled opacity at the peak (Knoll §4.2)
+    if (s.acc.w >= s.stop) break;
+  }
+  return count > 0;
 }

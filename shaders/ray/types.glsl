@@ -12,3 +12,24 @@ struct Lattice {
   float A;
   float B;
 };
+
+// One ray's compositing state while it is walked: what it has composited, its early termination
+// and ray-texture weights, whether the sample being consumed is this ray's to draw, and the
+// previous sample a segment starts from.
+struct RayState {
+  vec4 acc;           // premultiplied colour and opacity so far
+  float samples;      // filter evaluations (root-solving steps included); -1: missed the box
+  float stop;         // early-termination opacity (a ray texture's; on a brick, of the opacity over those in front)
+  float dvr_weight;   // ray textures' blend: the factor of the DVR samples' opacity
+  float peak_weight;  // ... and of the peaks'
+  // Who draws what on a brick: a consume (a sample with the segment into it: its peaks, its
+  // preintegrated colour, its DVR term, and the early-termination test after them) is the rank's
+  // that owns the sample; a true sample is owned with its lattice point, a virtual one with the
+  // true sample starting its segment. A sample not drawn (a look-behind, the Catmull-Rom
+  // look-ahead) is still a segment's start and never stops the ray. Always true in one process.
+  bool draw;
+  float prev_t;       // the previous sample (segment methods)
+  float prev_f;
+  bool have_prev;
+  bool gap;           // lattice points were skipped since it (an empty macrocell's): no segment across
+};

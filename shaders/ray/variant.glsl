@@ -7,4 +7,9 @@ struct Variant {
   bool shading;
   bool adaptive;
   int virtual_samples;  // 0, or the virtual samples between true ones (3 or 7)
+  bool peaks;           // peak finding between samples (Knoll §4)
+  bool peak_xor;        // ... the DVR term left out where a peak was found
+  bool peaks_only;      // ... peaks without the DVR term
+  bool preintegration;
+  bool brick;           // distributed rendering: one brick's part of each ray (RayState.draw)
 };

@@ -11,7 +11,9 @@ SHARED_CONST int kShade = 6;       // shade
 SHARED_CONST int kCatmullRom = 7;  // catmull_rom, catmull_rom3 (virtual-sample windows)
 SHARED_CONST int kPeakRoot = 8;    // solve_root, root_evaluations, crosses, tf_exact, peak_bin
 SHARED_CONST int kBrick = 9;       // clip_to_brick, owns, index_near (brick faces)
-SHARED_CONST int kKinds = 10;
+SHARED_CONST int kFindPeaks = 10;  // find_peaks (the slot walk, roots, compositing)
+SHARED_CONST int kConsume = 11;    // consume over a sequence of samples across opacity edges, close_segment
+SHARED_CONST int kKinds = 12;
 
 // Each function gets its inputs from the row (a ray as o = a.xyz, d = b.xyz; a lattice as c.xyz),
 // not from another function's answer, so a difference names the function it is in.
@@ -80,5 +82,22 @@ void run_case(vec4 k, vec4 a, vec4 b, vec4 c, OUT(vec4) r0, OUT(vec4) r1) {
     bool owned = clip_to_brick(r, L, span, walk_last, own_first, own_last);
     r0 = vec4(owned ? 1.0f : 0.0f, float(own_first), float(own_last), float(walk_last));
     r1 = vec4(owns(r, L, int(c.w)) ? 1.0f : 0.0f, float(index_near(L, mix(span.x, span.y, a.w), span, last)), 0.0f, 0.0f);
+  } else if (kind == kFindPeaks) {
+    RayState s = {vec4(0.0f), 0.0f, 0.95f, 1.0f, 0.7f, true, 0.0f, 0.0f, false, false};
+    bool hit = find_peaks(r, s, k.y, c.x, k.z, c.y);
+    r0 = s.acc;
+    r1 = vec4(s.samples, hit ? 1.0f : 0.0f, 0.0f, 0.0f);
+  } else if (kind == kConsume) {
+    // Six samples at t = k.y + q * k.z with values from c and a.w, the fourth after a gap.
+    RayState s = {vec4(0.0f), 0.0f, 0.99f, 0.8f, 1.0f, true, 0.0f, 0.0f, false, false};
+    bool stopped = false;
+    for (int q = 0; q < 6 && !stopped; ++q) {
+      float f = q < 4 ? c[q] : (q == 4 ? a.w : c.x);
+      if (q == 3) s.gap = true;
+      stopped = consume(r, s, k.y + float(q) * k.z, f, vec3(c.y - 0.5f, c.z - 0.5f, 0.25f), k.z * (1.0f + 0.1f * float(q)));
+    }
+    if (!stopped) close_segment(r, s, k.y + 6.5f * k.z, true);
+    r0 = s.acc;
+    r1 = vec4(s.samples, s.prev_t, s.prev_f, stopped ? 1.0f : 0.0f);
   }
 }

@@ -1,0 +1,64 @@
+// The step every sample of a ray takes, true or virtual (consume): the peaks in the segment from
+// the previous sample, then the sample itself (post-classified by the TF table, or the
+// pre-integrated segment into it), composited front to back. Reads the target's tf_lookup and
+// preint_lookup (false, leaving the colour alone, where the table is exactly zero there) and
+// field_gradient.
+
+// The gradient a sample is shaded with: interpolated like the value for a virtual sample (Lee
+// §4: g), else central differences at the sample.
+vec3 sample_gradient(Ray r, float t, vec3 g) {
+  return V.virtual_samples != 0 ? g : field_gradient(voxel_coords(r.o + t * r.d));
+}
+
+// One sample at t with value f (TF coordinates), standing for the step dt, with gradient g
+// (virtual samples). True when the ray is opaque enough to stop.
+bool consume(Ray r, INOUT(RayState) s, float t, float f, vec3 g, float dt) {
+  bool segment = s.have_prev && !s.gap;
+  bool peak_hit = false;
+  if (V.peaks && segment) peak_hit = find_peaks(r, s, s.prev_t, s.prev_f, t, f);
+  if (V.preintegration) {
+    vec4 c;
+    if (segment && (!V.brick || s.draw) && preint_lookup(s.prev_f, f, c)) {
+      // The table holds segments of the uniform step: correct for this one's length.
+      bool varying_steps = V.differential || V.adaptive || V.virtual_samples != 0;
+      if (varying_steps && c.w > 0.0f) c = segment_for_length(c, t - s.prev_t);
+      if (V.shading) {
+        // at the segment's end, as preintegration does
+        if (c.w > 0.0f) composite(s.acc, shade(vec3(c) / c.w, sample_gradient(r, t, g), r.d), c.w * s.dvr_weight);
+      } else {
+        composite_premultiplied(s.acc, c, s.dvr_weight);  // opacity-weighted already: no divide
+      }
+    }
+  } else if ((!V.brick || s.draw) && !V.peaks_only && !(V.peak_xor && peak_hit)) {
+    vec4 c;  // .w: the uniform step's transparency
+    if (tf_lookup(f, c) && c.w < 1.0f) {
+      vec3 rgb = vec3(c);
+      if (V.shading) rgb = shade(rgb, sample_gradient(r, t, g), r.d);
+      composite(s.acc, rgb, step_opacity(c.w, dt) * s.dvr_weight);
+    }
+  }
+  s.prev_t = t;
+  s.prev_f = f;
+  s.have_prev = true;
+  s.gap = false;
+  return (!V.brick || s.draw) && s.acc.w >= s.stop;
+}
+
+// The segment from the last lattice point visited to the exit (preintegration without virtual
+// samples): the table's segments cover the chord between samples, this the rest of the ray.
+// Drawn by the rank owning that point, when the ray goes on there (`continues`: the walk's last
+// visit was the ray's last lattice point, without a gap).
+void close_segment(Ray r, INOUT(RayState) s, float t_exit, bool continues) {
+  if (!(s.have_prev && !s.gap && (!V.brick || s.draw) && continues && s.acc.w < s.stop)) return;
+  vec3 x = voxel_coords(r.o + t_exit * r.d);
+  float f = sample_field(x);
+  s.samples += 1.0f;
+  vec4 c;
+  if (!preint_lookup(s.prev_f, f, c) || !(c.w > 0.0f)) return;
+  c = segment_for_length(c, t_exit - s.prev_t);
+  if (V.shading) {
+    composite(s.acc, shade(vec3(c) / c.w, field_gradient(x), r.d), c.w * s.dvr_weight);
+  } else {
+    composite_premultiplied(s.acc, c, s.dvr_weight);
+  }
+}
