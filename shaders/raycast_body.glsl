@@ -43,7 +43,7 @@ int g_own_first, g_own_last;
 // The whole ray's last lattice index (a brick's `last` is its own), and what the first and last
 // samples' chords differ from a whole step by (chord()).
 int g_ray_last;
-float g_head, g_tail, g_t_entry;
+float g_head, g_tail;
 
 // The chord lattice index i visited with stride m stands for (midpoint rule): the lattice's
 // [i - 1/2, i + m - 1/2] cut at the ray's entry and exit (cpu/ray_caster-inl.h chord).
@@ -52,7 +52,6 @@ float chord(Lattice L, int i, int m) {
 }
 void chord_ends(Lattice L, float t_exit, int last) {
   g_ray_last = last;
-  g_t_entry = L.t0;
   g_head = chord_head(L);
   g_tail = chord_tail(L, t_exit, last);
 }
@@ -73,122 +72,11 @@ layout(std430, binding = SSBO_FRONT_OPACITY) readonly buffer FrontOpacity { floa
 ivec4 g_behind;
 #endif
 
+// The field at lattice point i (the target's hook of ray/virtual_samples.glsl vs_finish).
+float lattice_field(Ray r, Lattice L, int i, int m) { return sample_field(voxel_coords(r.o + lattice_t(L, float(i)) * r.d)); }
+#include "ray/virtual_samples.glsl"
 #ifdef VIRTUAL_SAMPLES
-// Virtual samples (Lee et al. 2010, §3.1, §4): between consecutive true samples j and j+1, k
-// more (VIRTUAL_SAMPLES = 3 or 7) on the Catmull-Rom spline through the true samples j-1..j+2
-// (in index space; at a run's ends the end sample is repeated), gradients likewise; each of the
-// k+1 sub-samples stands for 1/(k+1) of the step. One new true sample per step: the true samples
-// wait in a window of four and go out one step late, with the virtual ones that follow them.
-// The window is right-aligned in registers (newest in .w, no dynamic indexing: on llvmpipe an
-// indexed array lives in memory, which cost more than the tricubic fetches it saves).
-vec4 w_t, w_f, w_dt;
-vec3 w_g0, w_g1, w_g2, w_g3;
-int w_n;  // true samples waiting (0..4), the newest w_n of the window
-#ifdef BRICK
-uint w_own;  // the window's samples owned: bit 0 the newest (.w) to bit 3 (.x)
-#define W_OWNS(bit) ((w_own & (bit)) != 0u)
-#else
-#define W_OWNS(bit) true
-#endif
-
-// Sends out the true sample at t1 (value f1, step dt1) and the virtual samples between it and
-// the next one (t2) that lie before t_limit, on the spline through f0..f3 (g0..g3).
-bool vs_segment(Ray r, float t1, float t2, float dt1, vec4 f, vec3 g0, vec3 g1, vec3 g2, vec3 g3, float t_limit,
-                bool own, inout RayState res) {
-#ifdef BRICK
-  res.draw = own;  // the segment's samples are the rank's that owns its first
-#endif
-  const float k = float(VIRTUAL_SAMPLES);
-  float sub = dt1 / (k + 1.0);
-  float span = t2 - t1;
-  // The sub-samples' chords as the true samples' (chord()), on the sub-lattice: the ray's first
-  // sample stands for half a sub-step, and the last before the exit (t_limit: the ray's last
-  // segment) for half a sub-step before it and the rest up to the exit.
-  // (The true sample outside the loop: llvmpipe's budget of loop iterations, sample_cap, counts
-  // k per true sample.)
-  bool ends = t_limit < 3.0e38;
-  float weight = sub;
-  if (t1 == g_t_entry) weight -= 0.5 * sub;
-  if (ends && t1 + span / (k + 1.0) > t_limit) weight += (t_limit - t1) - 0.5 * sub;
-  if (consume(r, res, t1, f.y, g1, weight)) return true;
-  for (int q = 1; q <= VIRTUAL_SAMPLES; ++q) {
-    float s = float(q) / (k + 1.0);
-    float t = t1 + s * span;
-    if (t > t_limit) break;
-    weight = sub;
-    if (ends && (q == VIRTUAL_SAMPLES || t1 + float(q + 1) / (k + 1.0) * span > t_limit)) weight += (t_limit - t) - 0.5 * sub;
-    float v = catmull_rom(f.x, f.y, f.z, f.w, s);
-    vec3 g = catmull_rom3(g0, g1, g2, g3, s);
-    if (consume(r, res, t, v, g, weight)) return true;
-  }
-  return false;
-}
-
-// The segment between the two newest samples (.z, .w), the spline's end: p3 repeats .w, p0 is
-// .y when there is one.
-bool vs_last_segment(Ray r, float t_limit, inout RayState res) {
-  bool prev = w_n >= 3;
-  return vs_segment(r, w_t.z, w_t.w, w_dt.z, vec4(prev ? w_f.y : w_f.z, w_f.z, w_f.w, w_f.w), prev ? w_g1 : w_g2,
-                    w_g2, w_g3, w_g3, t_limit, W_OWNS(2u), res);
-}
-
-// Everything still waiting: the last true sample stands for its whole step.
-bool vs_flush(Ray r, inout RayState res) {
-  bool done = res.acc.a >= res.stop;
-  if (!done && w_n >= 2) done = vs_last_segment(r, 3.0e38, res);
-  if (!done && w_n >= 1) {
-#ifdef BRICK
-    res.draw = W_OWNS(1u);
-#endif
-    done = consume(r, res, w_t.w, w_f.w, w_g3, w_dt.w);
-  }
-  w_n = 0;
-  return done;
-}
-
-bool vs_push(Ray r, float t, float f, vec3 g, float dt, bool own, inout RayState res) {
-#ifdef BRICK
-  w_own = ((w_own << 1) | (own ? 1u : 0u)) & 15u;
-#endif
-  w_t = vec4(w_t.yzw, t);
-  w_f = vec4(w_f.yzw, f);
-  w_dt = vec4(w_dt.yzw, dt);
-  w_g0 = w_g1;
-  w_g1 = w_g2;
-  w_g2 = w_g3;
-  w_g3 = g;
-  w_n = min(w_n + 1, 4);
-  // With samples j-1, j, j+1, j+2 (or j, j+1, j+2 at a run's start) the segment j..j+1 is known.
-  if (w_n < 3) return false;
-  bool prev = w_n == 4;
-  return vs_segment(r, w_t.y, w_t.z, w_dt.y, vec4(prev ? w_f.x : w_f.y, w_f.yzw), prev ? w_g0 : w_g1, w_g1, w_g2,
-                    w_g3, 3.0e38, W_OWNS(4u), res);
-}
-
-// The ray's end. When its last lattice point was visited, one more true sample past the exit
-// (index last + 1) closes the spline, and the virtual samples up to the exit go out: the ray
-// ends like a ray sampled at the sub-step would (its last sample within one sub-step of the
-// exit), not one whole step beyond it.
-void vs_finish(Ray r, Lattice L, int last, float t_exit, inout RayState res) {
-  if (res.acc.a >= res.stop || w_n == 0) return;
-  if (w_t.w != lattice_t(L, float(last))) {  // the ray ended in a skipped cell
-    vs_flush(r, res);
-    return;
-  }
-  float t = lattice_t(L, float(last + 1));
-  vec3 x = voxel_coords(r.o + t * r.d);
-  float f = sample_field(x);
-  res.samples += 1.0;
-#ifdef SHADING
-  vec3 g = field_gradient(x);
-#else
-  vec3 g = vec3(0.0);
-#endif
-  if (vs_push(r, t, f, g, lattice_step(L, float(last + 1), 1.0), last + 1 <= g_own_last, res)) return;
-  // Pending now: [..., last, last + 1]; the extra sample itself is not composited.
-  vs_last_segment(r, t_exit, res);
-  w_n = 0;
-}
+SampleWindow g_window;  // the virtual samples' window (ray/types.glsl)
 #endif
 
 // Visits lattice index i, standing for the step to index i + m. Returns true when the ray is
@@ -211,9 +99,9 @@ bool sample_visit(Ray r, Lattice L, int i, int m, inout RayState res) {
   g_expect = i + m;
   if (gap) res.gap = true;  // until the next sample is consumed: no segment across the gap
 #ifdef VIRTUAL_SAMPLES
-  if (gap && w_n > 0) {  // the run before the gap ends here
-    res.gap = false;       // (its samples are contiguous among themselves)
-    if (vs_flush(r, res)) return true;
+  if (gap && g_window.n > 0) {  // the run before the gap ends here
+    res.gap = false;              // (its samples are contiguous among themselves)
+    if (vs_flush(r, res, g_window, L.t0)) return true;
     res.gap = true;
   }
 #ifdef SHADING
@@ -221,7 +109,7 @@ bool sample_visit(Ray r, Lattice L, int i, int m, inout RayState res) {
 #else
   vec3 g = vec3(0.0);
 #endif
-  return vs_push(r, t, f, g, dt, own, res);  // (vs_flush may have drawn another's)
+  return vs_push(r, res, g_window, L.t0, t, f, g, dt, own);  // (vs_flush may have drawn another's)
 #else
   return consume(r, res, t, f, vec3(0.0), dt);
 #endif
@@ -256,10 +144,8 @@ RayState cast_ray(vec2 pixel) {
   g_behind = ivec4(-1, -1, 1, 1);
 #endif
 #ifdef VIRTUAL_SAMPLES
-  w_n = 0;
-#ifdef BRICK
-  w_own = 0u;
-#endif
+  g_window.n = 0;
+  g_window.own = 0u;
 #endif
   Ray r = make_ray(pixel);
   vec2 span = intersect_box(r);
@@ -484,7 +370,7 @@ RayState cast_ray(vec2 pixel) {
 #endif
 #endif
 #ifdef VIRTUAL_SAMPLES
-  vs_finish(r, L, last, span.y, res);
+  vs_finish(r, res, g_window, L, last, g_own_last, span.y);
 #elif defined(PREINTEGRATION)
   close_segment(r, res, span.y, g_expect == g_ray_last + 1);
 #endif

@@ -62,6 +62,7 @@ class RayCaster {
 #include "ray/peaks.glsl"
 #include "ray/brick.glsl"
 #include "ray/consume.glsl"
+#include "ray/virtual_samples.glsl"
 
   float sample_field(vec3 x) const { return SamplePoint(f_.voxels, x); }
   vec3 field_gradient(vec3 x) const {
@@ -73,6 +74,7 @@ class RayCaster {
   }
   // The value at lattice index i: from the current run, or a new run from i (stride m).
   float field_at(int i, int m);
+  float lattice_field(const Ray&, const Lattice&, int i, int m) { return field_at(i, m); }  // ray/virtual_samples.glsl
   float new_run(int i, int m);  // field_at's slow path: samples a new run from i
 
   // The TF table at s (colour, and the step's transparency in .a); false, leaving `out` alone,
@@ -113,12 +115,6 @@ class RayCaster {
   HWY_NOINLINE float dense_opacity_slow(float T, int i, float dt) {
     return step_opacity(T, i == ray_last_ ? chord_end(i, 1, dt) : dt);
   }
-  // Virtual samples (Lee et al. 2010): the window of four true samples, newest last.
-  bool vs_segment(float t1, float t2, float dt1, vec4 fw, vec3 g0, vec3 g1, vec3 g2, vec3 g3, float t_limit, bool own);
-  bool vs_last_segment(float t_limit);
-  bool vs_flush();
-  bool vs_push(float t, float fv, vec3 g, float dt, bool own);
-  void vs_finish(int last, float t_exit);
   bool walk_leaps(float span_y, int first);
   // From index i on, while the points lie in occupied cells: sample, classify and composite as
   // sample_visit and consume would, bit for bit, with the ray's colour in locals (the loop-carried
@@ -155,10 +151,7 @@ class RayCaster {
   // samples in front.
   int behind_[2] = {-1, -1}, behind_m_[2] = {1, 1};
   int expect_ = 0;  // the lattice index that continues the last visit without a gap
-  vec4 w_t_{0}, w_f_{0}, w_dt_{0};
-  vec3 w_g0_{0}, w_g1_{0}, w_g2_{0}, w_g3_{0};
-  int w_n_ = 0;
-  unsigned w_own_ = 0;  // the window's samples owned (bricks): bit 0 the newest (.w) to bit 3 (.x)
+  SampleWindow w_{vec4(0.f), vec4(0.f), vec4(0.f), vec3(0.f), vec3(0.f), vec3(0.f), vec3(0.f), 0, 0u};  // virtual samples
   // The current run of samples (sample_run): indices run_first_ + k * run_stride_, k < run_count_.
   float run_[kMaxRun];
   int run_first_ = 0, run_stride_ = 1, run_count_ = 0, run_batch_ = 0;

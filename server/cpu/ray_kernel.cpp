@@ -28,7 +28,6 @@
 #include "cpu/ray_geometry-inl.h"
 #include "cpu/leap_packets-inl.h"
 #include "cpu/ray_caster-inl.h"
-#include "cpu/ray_virtual_samples-inl.h"
 #include "cpu/ray_tables-inl.h"
 #include "cpu/ray_brick-inl.h"
 #include "cpu/ray_walks-inl.h"
@@ -87,13 +86,13 @@ HWY_INLINE bool RayCaster::sample_visit(int i, int m) {
   expect_ = i + m;
   if (gap) s_.gap = true;  // until the next sample is consumed: no segment across the gap
   if (f_.key.virtual_samples) {
-    if (gap && w_n_ > 0) {  // the run before the gap ends here
+    if (gap && w_.n > 0) {  // the run before the gap ends here
       s_.gap = false;
-      if (vs_flush()) return true;
+      if (vs_flush(r_, s_, w_, L_.t0)) return true;
       s_.gap = true;
     }
     const vec3 g = f_.key.shading ? field_gradient(voxel_coords(r_.o + t * r_.d)) : vec3(0.f);
-    return vs_push(t, fv, g, dt, own);  // (vs_flush may have drawn another's)
+    return vs_push(r_, s_, w_, L_.t0, t, fv, g, dt, own);  // (vs_flush may have drawn another's)
   }
   return consume(r_, s_, t, fv, vec3(0.f), dt);
 }
@@ -164,7 +163,7 @@ RayResult RayCaster::walk(int first) {
   } else {
     stopped = walk_cells(span_x_, span_y_);
   }
-  if (!stopped && key.virtual_samples) vs_finish(last_, span_y_);
+  if (!stopped && key.virtual_samples) vs_finish(r_, s_, w_, L_, last_, own_last_, span_y_);
   if (!stopped && key.preintegration && !key.virtual_samples) close_segment(r_, s_, span_y_, expect_ == ray_last_ + 1);
   return result();
 }

@@ -33,3 +33,18 @@ struct RayState {
   bool have_prev;
   bool gap;           // lattice points were skipped since it (an empty macrocell's): no segment across
 };
+
+// Virtual samples' window (Lee et al. 2010): the last four true samples, newest in .w (no dynamic
+// indexing: on llvmpipe an indexed array lives in memory, which cost more than the tricubic
+// fetches it saves).
+struct SampleWindow {
+  vec4 t;
+  vec4 f;
+  vec4 dt;
+  vec3 g0;
+  vec3 g1;
+  vec3 g2;
+  vec3 g3;
+  int n;     // true samples waiting (0..4), the newest n of the window
+  uint own;  // the window's samples owned (bricks): bit 0 the newest (.w) to bit 3 (.x)
+};

@@ -13,7 +13,12 @@ SHARED_CONST int kPeakRoot = 8;    // solve_root, root_evaluations, crosses, tf_
 SHARED_CONST int kBrick = 9;       // clip_to_brick, owns, index_near (brick faces)
 SHARED_CONST int kFindPeaks = 10;  // find_peaks (the slot walk, roots, compositing)
 SHARED_CONST int kConsume = 11;    // consume over a sequence of samples across opacity edges, close_segment
-SHARED_CONST int kKinds = 12;
+SHARED_CONST int kWindow = 12;     // the virtual-sample window: vs_push over a run with a gap, vs_finish
+SHARED_CONST int kKinds = 13;
+
+// The field at lattice point i, for vs_finish (the targets read it from their sample runs).
+float lattice_field(Ray r, Lattice L, int i, int m) { return sample_field(voxel_coords(r.o + lattice_t(L, float(i)) * r.d)); }
+#include "ray/virtual_samples.glsl"
 
 // Each function gets its inputs from the row (a ray as o = a.xyz, d = b.xyz; a lattice as c.xyz),
 // not from another function's answer, so a difference names the function it is in.
@@ -99,5 +104,26 @@ void run_case(vec4 k, vec4 a, vec4 b, vec4 c, OUT(vec4) r0, OUT(vec4) r1) {
     if (!stopped) close_segment(r, s, k.y + 6.5f * k.z, true);
     r0 = s.acc;
     r1 = vec4(s.samples, s.prev_t, s.prev_f, stopped ? 1.0f : 0.0f);
+  } else if (kind == kWindow) {
+    // True samples at lattice points 0..last of the ray's lattice, with a gap before point k.z,
+    // each pushed into the window as sample_visit does, then the ray's end.
+    RayState s = {vec4(0.0f), 0.0f, 0.995f, 1.0f, 1.0f, true, 0.0f, 0.0f, false, false};
+    SampleWindow w = {vec4(0.0f), vec4(0.0f), vec4(0.0f), vec3(0.0f), vec3(0.0f), vec3(0.0f), vec3(0.0f), 0, 0u};
+    int last = min(int(k.y), 40), gap_at = int(k.z);
+    bool stopped = false;
+    for (int i = 0; i <= last && !stopped; ++i) {
+      if (i == gap_at) continue;
+      float t = lattice_t(L, float(i));
+      if (i == gap_at + 1 && w.n > 0) {
+        stopped = vs_flush(r, s, w, L.t0);
+        s.gap = true;
+      }
+      if (!stopped)
+        stopped = vs_push(r, s, w, L.t0, t, lattice_field(r, L, i, 1), field_gradient(voxel_coords(r.o + t * r.d)),
+                          lattice_step(L, float(i), 1.0f), true);
+    }
+    if (!stopped) vs_finish(r, s, w, L, last, last, c.w);
+    r0 = s.acc;
+    r1 = vec4(s.samples, s.prev_t, float(w.n), stopped ? 1.0f : 0.0f);
   }
 }
