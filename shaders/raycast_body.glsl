@@ -36,117 +36,23 @@ layout(std430, binding = SSBO_CELL_DISTANCE) readonly buffer CellDistance { uint
 #include "preintegration.glsl"
 #include "ray/consume.glsl"
 
-// The lattice index that continues the last visit without a gap (RayState.gap).
-int g_expect;
-// The lattice points the ray composites (BRICK: those it owns; else all of them).
-int g_own_first, g_own_last;
-// The whole ray's last lattice index (a brick's `last` is its own), and what the first and last
-// samples' chords differ from a whole step by (chord()).
-int g_ray_last;
-float g_head, g_tail;
-
-// The chord lattice index i visited with stride m stands for (midpoint rule): the lattice's
-// [i - 1/2, i + m - 1/2] cut at the ray's entry and exit (cpu/ray_caster-inl.h chord).
-float chord(Lattice L, int i, int m) {
-  return chord_at_ends(lattice_step(L, float(i), float(m)), i, m, g_head, g_tail, g_ray_last);
-}
-void chord_ends(Lattice L, float t_exit, int last) {
-  g_ray_last = last;
-  g_head = chord_head(L);
-  g_tail = chord_tail(L, t_exit, last);
-}
-
-#ifdef BRICK
-#ifdef RAY_TEXTURE
+#if defined(BRICK) && defined(RAY_TEXTURE)
 // The opacity the bricks in front composited, per pixel of the drawn rect (rows of
 // P.front_opacity_width pixels; 0: the front brick, none): a ray texture's termination is of the
 // opacity over them (render/brick.h Brick::front_opacity).
 layout(std430, binding = SSBO_FRONT_OPACITY) readonly buffer FrontOpacity { float u_front_opacity[]; };
 #endif
 
-// The last visits before the owned points, held back unsampled (index -1: none), newest in .x:
-// sampled only when they lead to the first owned visit without a gap (the look-behind xor's
-// segment into it needs, and with virtual samples the window of the segment before it, whose
-// last virtual sample starts that segment), so a walk from the ray's start samples nothing in
-// front. .xy: indices, .zw: their steps.
-ivec4 g_behind;
-#endif
-
 // The field at lattice point i (the target's hook of ray/virtual_samples.glsl vs_finish).
 float lattice_field(Ray r, Lattice L, int i, int m) { return sample_field(voxel_coords(r.o + lattice_t(L, float(i)) * r.d)); }
 #include "ray/virtual_samples.glsl"
-#ifdef VIRTUAL_SAMPLES
-SampleWindow g_window;  // the virtual samples' window (ray/types.glsl)
-#endif
-
-// Visits lattice index i, standing for the step to index i + m. Returns true when the ray is
-// opaque enough to stop.
-bool sample_visit(Ray r, Lattice L, int i, int m, inout RayState res) {
-#ifdef VIRTUAL_SAMPLES
-  float dt = lattice_step(L, float(i), float(m));  // the true step: vs_segment cuts the sub-samples' chords
-#else
-  float dt = chord(L, i, m);
-#endif
-  float t = lattice_t(L, float(i));
-  vec3 x = voxel_coords(r.o + t * r.d);
-  float f = sample_field(x);
-  res.samples += 1.0;
-  bool own = i >= g_own_first && i <= g_own_last;
-#ifdef BRICK
-  res.draw = own;
-#endif
-  bool gap = i != g_expect;  // lattice points between the last visit and this one were skipped
-  g_expect = i + m;
-  if (gap) res.gap = true;  // until the next sample is consumed: no segment across the gap
-#ifdef VIRTUAL_SAMPLES
-  if (gap && g_window.n > 0) {  // the run before the gap ends here
-    res.gap = false;              // (its samples are contiguous among themselves)
-    if (vs_flush(r, res, g_window, L.t0)) return true;
-    res.gap = true;
-  }
-#ifdef SHADING
-  vec3 g = field_gradient(x);
-#else
-  vec3 g = vec3(0.0);
-#endif
-  return vs_push(r, res, g_window, L.t0, t, f, g, dt, own);  // (vs_flush may have drawn another's)
-#else
-  return consume(r, res, t, f, vec3(0.0), dt);
-#endif
-}
-
-bool visit(Ray r, Lattice L, int i, int m, inout RayState res) {
-#ifdef BRICK
-  if (i < g_own_first) {  // before the brick's points (see g_behind)
-    g_behind = ivec4(i, g_behind.x, m, g_behind.z);
-    return false;
-  }
-  if (g_behind.x >= 0) {
-    ivec4 b = g_behind;
-    g_behind = ivec4(-1, -1, 1, 1);
-    if (b.x + b.z == i) {
-#ifdef VIRTUAL_SAMPLES
-      if (b.y >= 0 && b.y + b.w == b.x && sample_visit(r, L, b.y, b.w, res)) return true;
-#endif
-      if (sample_visit(r, L, b.x, b.z, res)) return true;
-    }
-  }
-#endif
-  return sample_visit(r, L, i, m, res);
-}
+#include "ray/visit.glsl"
 
 RayState cast_ray(vec2 pixel) {
   RayState res = RayState(vec4(0.0), 0.0, P.stop, 1.0, 1.0, true, 0.0, 0.0, false, false);
-  g_expect = 0;
-  g_own_first = 0;
-  g_own_last = 2147483647;
-#ifdef BRICK
-  g_behind = ivec4(-1, -1, 1, 1);
-#endif
-#ifdef VIRTUAL_SAMPLES
-  g_window.n = 0;
-  g_window.own = 0u;
-#endif
+  SampleWindow window;  // virtual samples (its samples are written before they are read)
+  window.n = 0;
+  window.own = 0u;
   Ray r = make_ray(pixel);
   vec2 span = intersect_box(r);
   if (!(span.x <= span.y)) {  // missed (also false for NaN)
@@ -166,9 +72,9 @@ RayState cast_ray(vec2 pixel) {
   L.B *= step_mult;
 #endif
   int last = int(min(floor(lattice_index(L, span.y)), float(P.sample_cap - 1)));
-  chord_ends(L, span.y, last);
+  RayWalk walk = start_walk(L, span.y, last);
 #ifdef BRICK
-  if (!clip_to_brick(r, L, span, last, g_own_first, g_own_last)) {  // none of its points in this brick: nothing to draw here
+  if (!clip_to_brick(r, L, span, last, walk.own_first, walk.own_last)) {  // none of its points in this brick: nothing to draw here
     res.samples = -1.0;
     return res;
   }
@@ -184,7 +90,7 @@ RayState cast_ray(vec2 pixel) {
   }
 #endif
 #endif
-  // A brick starts where the points it samples before its own (g_behind: one, or two with
+  // A brick starts where the points it samples before its own (walk.behind: one, or two with
   // virtual samples) are visited as in one process: at them (a walk over every point), one
   // before them (leaps: whether a point is visited depends on its neighbours only), at the
   // ray's start (the 3D-DDA: a cell's first point depends on the cells before it).
@@ -199,9 +105,9 @@ RayState cast_ray(vec2 pixel) {
   // Nested: llvmpipe stops any single loop after 65535 iterations (LP_MAX_TGSI_LOOP_ITERATIONS),
   // far below the per-ray cap; chunks of CHUNK keep every loop under it.
   bool stop = false;
-  for (int c = max(g_own_first - behind, 0); c <= last && !stop; c += CHUNK)
+  for (int c = max(walk.own_first - behind, 0); c <= last && !stop; c += CHUNK)
     for (int i = c; i <= min(last, c + CHUNK - 1); ++i)
-      if (visit(r, L, i, 1, res)) {
+      if (visit(r, L, res, walk, window, i, 1)) {
         stop = true;
         break;
       }
@@ -221,7 +127,7 @@ RayState cast_ray(vec2 pixel) {
   bvec3 moves = greaterThanEqual(abs(dv), vec3(1e-20));
   vec3 inv_dv = mix(vec3(0.0), 1.0 / mix(vec3(1.0), dv, moves), moves);
   vec3 ahead = vec3(greaterThan(dv, vec3(0.0)));
-  int i = max(g_own_first - behind - 1, 0);
+  int i = max(walk.own_first - behind - 1, 0);
   int visited = -2;  // the last lattice index visited
   bool stop = false;
   int rounds = (last + 2 + 8 * (grid.x + grid.y + grid.z)) / CHUNK + 1;
@@ -233,12 +139,12 @@ RayState cast_ray(vec2 pixel) {
       uint empty_distance = cell_byte(u_cell_distance, c);
       if (empty_distance == 0u) {
 #ifdef SEGMENTS
-        if (i >= 1 && visited != i - 1 && visit(r, L, i - 1, 1, res)) {  // the segment into the run
+        if (i >= 1 && visited != i - 1 && visit(r, L, res, walk, window, i - 1, 1)) {  // the segment into the run
           stop = true;
           break;
         }
 #endif
-        if (visit(r, L, i, 1, res)) {
+        if (visit(r, L, res, walk, window, i, 1)) {
           stop = true;
           break;
         }
@@ -247,7 +153,7 @@ RayState cast_ray(vec2 pixel) {
       } else {
 #ifdef SEGMENTS
         if (visited == i - 1) {  // the segment out of the run
-          if (visit(r, L, i, 1, res)) {
+          if (visit(r, L, res, walk, window, i, 1)) {
             stop = true;
             break;
           }
@@ -294,7 +200,7 @@ RayState cast_ray(vec2 pixel) {
 #ifdef SEGMENTS
     if (run_end >= 0 && empty_distance != 0u) {  // an empty cell or a leap: the run ends here
       for (int j = max(next, run_end + 1); j <= min(last, run_end + EXTENSION); ++j)
-        if (visit(r, L, j, 1, res)) return res;
+        if (visit(r, L, res, walk, window, j, 1)) return res;
       next = max(next, min(last, run_end + EXTENSION) + 1);
       run_end = -1;
     }
@@ -339,12 +245,12 @@ RayState cast_ray(vec2 pixel) {
       int i = max(next, first);
 #ifdef SEGMENTS
       for (int e = EXTENSION; e >= 1; --e)
-        if (first - e >= next && visit(r, L, first - e, 1, res)) return res;
+        if (first - e >= next && visit(r, L, res, walk, window, first - e, 1)) return res;
 #endif
       while (i <= end) {  // in chunks, as above
         int chunk_end = min(end, i + (CHUNK - 1) * m);
         for (; i <= chunk_end; i += m)
-          if (visit(r, L, i, min(m, end + 1 - i), res)) return res;
+          if (visit(r, L, res, walk, window, i, min(m, end + 1 - i))) return res;
       }
       next = max(next, end + 1);
 #ifdef SEGMENTS
@@ -366,13 +272,13 @@ RayState cast_ray(vec2 pixel) {
   // visited already.
   if (run_end >= 0)
     for (int j = max(next, run_end + 1); j <= min(last, run_end + EXTENSION); ++j)
-      if (visit(r, L, j, 1, res)) return res;
+      if (visit(r, L, res, walk, window, j, 1)) return res;
 #endif
 #endif
 #ifdef VIRTUAL_SAMPLES
-  vs_finish(r, res, g_window, L, last, g_own_last, span.y);
+  vs_finish(r, res, window, L, last, walk.own_last, span.y);
 #elif defined(PREINTEGRATION)
-  close_segment(r, res, span.y, g_expect == g_ray_last + 1);
+  close_segment(r, res, span.y, walk.expect == walk.ray_last + 1);
 #endif
   return res;
 }

@@ -63,6 +63,7 @@ class RayCaster {
 #include "ray/brick.glsl"
 #include "ray/consume.glsl"
 #include "ray/virtual_samples.glsl"
+#include "ray/visit.glsl"
 
   float sample_field(vec3 x) const { return SamplePoint(f_.voxels, x); }
   vec3 field_gradient(vec3 x) const {
@@ -90,30 +91,12 @@ class RayCaster {
   bool peak_cell_any(int i, int j) const { return test_bit(f_.peak_any, size_t(j) * size_t(P.peak_bins) + size_t(i)); }
   // The table at (s_front, s_back); false, leaving `out` alone, where it is exactly zero.
   bool preint_lookup(float s_front, float s_back, vec4& out) const;
-  // Visits lattice index i (a brick's held-back visits first, see behind_).
-  bool visit(int i, int m) {
-    if (f_.brick && (i < own_first_ || behind_[0] >= 0)) return visit_behind(i, m);
-    return sample_visit(i, m);
-  }
-  bool visit_behind(int i, int m);
-  bool sample_visit(int i, int m);
-  // The chord lattice index i visited with stride m stands for (midpoint rule): the lattice's
-  // [i - 1/2, i + m - 1/2] cut at the ray's entry and exit (see chord_ends): its whole step but
-  // at the ray's ends.
-  // chord_end: the first or last sample's, from its whole step (out of line, off the walk's path).
-  HWY_NOINLINE float chord_end(int i, int m, float step) {
-    return chord_at_ends(step, i, m, head_, tail_, ray_last_);
-  }
-  // After setup's last_: the whole ray's last index and the chord corrections at its ends.
-  void chord_ends() {
-    ray_last_ = last_;
-    head_ = chord_head(L_);
-    tail_ = chord_tail(L_, span_y_, last_);
-  }
+  // The walks' visit of lattice index i with stride m (ray/visit.glsl).
+  bool visit(int i, int m) { return visit(r_, L_, s_, k_, w_, i, m); }
   // dense_run's opacity for a step other than the table's (a ray texture's multiplier) or the
   // last point's chord.
   HWY_NOINLINE float dense_opacity_slow(float T, int i, float dt) {
-    return step_opacity(T, i == ray_last_ ? chord_end(i, 1, dt) : dt);
+    return step_opacity(T, i == k_.ray_last ? chord_at_ends(dt, i, 1, k_.head, k_.tail, k_.ray_last) : dt);
   }
   bool walk_leaps(float span_y, int first);
   // From index i on, while the points lie in occupied cells: sample, classify and composite as
@@ -136,21 +119,8 @@ class RayCaster {
   // What the ray has composited, its termination and weights, and its previous sample (shared
   // with the shader: shaders/ray/types.glsl).
   RayState s_{vec4(0.f), 0.f, 1.f, 1.f, 1.f, true, 0.f, 0.f, false, false};
-  int last_ = 0;
-  // The whole ray's last lattice index (a brick's last_ is its own), and what the first and last
-  // samples' chords differ from a whole step by (chord_end()).
-  int ray_last_ = 0;
-  float head_ = 0, tail_ = 0;
-  // The lattice points the ray composites (bricks: those it owns; else all of them).
-  int own_first_ = 0, own_last_ = std::numeric_limits<int>::max();
-  bool owned(int i) const { return i >= own_first_ && i <= own_last_; }
-  // The last visits before the owned points, held back unsampled (index -1: none), newest
-  // first: sampled only when they lead to the first owned visit without a gap (the look-behind
-  // that xor's segment into it needs, and with virtual samples the window of the segment before
-  // it, whose last virtual sample starts that segment), so a walk from the ray's start costs no
-  // samples in front.
-  int behind_[2] = {-1, -1}, behind_m_[2] = {1, 1};
-  int expect_ = 0;  // the lattice index that continues the last visit without a gap
+  int last_ = 0;  // the walk's last lattice index (a brick's may end before the ray's)
+  RayWalk k_{0, 0, std::numeric_limits<int>::max(), 0, 0.f, 0.f, ivec4(-1, -1, 1, 1)};  // the walk's bookkeeping
   SampleWindow w_{vec4(0.f), vec4(0.f), vec4(0.f), vec3(0.f), vec3(0.f), vec3(0.f), vec3(0.f), 0, 0u};  // virtual samples
   // The current run of samples (sample_run): indices run_first_ + k * run_stride_, k < run_count_.
   float run_[kMaxRun];

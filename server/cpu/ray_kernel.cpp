@@ -29,7 +29,6 @@
 #include "cpu/leap_packets-inl.h"
 #include "cpu/ray_caster-inl.h"
 #include "cpu/ray_tables-inl.h"
-#include "cpu/ray_brick-inl.h"
 #include "cpu/ray_walks-inl.h"
 
 HWY_BEFORE_NAMESPACE();
@@ -72,31 +71,6 @@ HWY_NOINLINE float RayCaster::new_run(int i, int m) {
 }
 
 
-// Visits lattice index i, standing for the step to index i + m.
-HWY_INLINE bool RayCaster::sample_visit(int i, int m) {
-  // Virtual samples: the true step (vs_segment cuts the sub-samples' chords).
-  float dt = lattice_step(L_, float(i), float(m));
-  if (HWY_UNLIKELY((i == 0 || i + m > ray_last_)) && !f_.key.virtual_samples) dt = chord_end(i, m, dt);
-  const float t = lattice_t(L_, float(i));
-  const float fv = field_at(i, m);
-  s_.samples += 1.f;
-  const bool own = owned(i);
-  s_.draw = own;
-  const bool gap = i != expect_;  // lattice points between the last visit and this one were skipped
-  expect_ = i + m;
-  if (gap) s_.gap = true;  // until the next sample is consumed: no segment across the gap
-  if (f_.key.virtual_samples) {
-    if (gap && w_.n > 0) {  // the run before the gap ends here
-      s_.gap = false;
-      if (vs_flush(r_, s_, w_, L_.t0)) return true;
-      s_.gap = true;
-    }
-    const vec3 g = f_.key.shading ? field_gradient(voxel_coords(r_.o + t * r_.d)) : vec3(0.f);
-    return vs_push(r_, s_, w_, L_.t0, t, fv, g, dt, own);  // (vs_flush may have drawn another's)
-  }
-  return consume(r_, s_, t, fv, vec3(0.f), dt);
-}
-
 bool RayCaster::setup(float px, float py) {
   r_ = make_ray(vec2(px, py));
   vec2 span = intersect_box(r_);
@@ -126,8 +100,8 @@ bool RayCaster::setup(float px, float py) {
     L_.B *= float(c[0]);
   }
   last_ = int(std::min(std::floor(lattice_index(L_, span_y_)), float(P.sample_cap - 1)));
-  chord_ends();
-  if (f_.brick && !clip_to_brick(r_, L_, vec2(span_x_, span_y_), last_, own_first_, own_last_)) {  // none of its points in this brick: nothing to draw here
+  k_ = start_walk(L_, span_y_, last_);
+  if (f_.brick && !clip_to_brick(r_, L_, vec2(span_x_, span_y_), last_, k_.own_first, k_.own_last)) {  // none of its points in this brick: nothing to draw here
     s_.samples = -1.f;
     return false;
   }
@@ -146,14 +120,14 @@ bool RayCaster::setup(float px, float py) {
 RayResult RayCaster::walk(int first) {
   const render::VariantKey& key = f_.key;
   bool stopped = false;
-  // A brick starts where the points it samples before its own (see behind_: one, or two with
+  // A brick starts where the points it samples before its own (RayWalk.behind: one, or two with
   // virtual samples) are visited as in one process: at them (a walk over every point), one before
   // them (leaps: whether a point is visited depends on its neighbours only), at the ray's start
   // (the 3D-DDA: a cell's first point depends on the cells before it).
   const int behind = key.virtual_samples ? 2 : (segments_ ? 1 : 0);
-  first = std::max(first, own_first_ - behind - 1);
+  first = std::max(first, k_.own_first - behind - 1);
   if (!key.space_skipping && !key.adaptive) {
-    int i = std::max(own_first_ - behind, 0), visited = -1;
+    int i = std::max(k_.own_first - behind, 0), visited = -1;
     if (dense_ && i <= last_) {  // the first point by itself (no segment into it), then the run
       stopped = visit(i++, 1) || dense_run<false>(i, visited, vec3(0.f), vec3(0.f), ivec3(0));
     }
@@ -163,8 +137,8 @@ RayResult RayCaster::walk(int first) {
   } else {
     stopped = walk_cells(span_x_, span_y_);
   }
-  if (!stopped && key.virtual_samples) vs_finish(r_, s_, w_, L_, last_, own_last_, span_y_);
-  if (!stopped && key.preintegration && !key.virtual_samples) close_segment(r_, s_, span_y_, expect_ == ray_last_ + 1);
+  if (!stopped && key.virtual_samples) vs_finish(r_, s_, w_, L_, last_, k_.own_last, span_y_);
+  if (!stopped && key.preintegration && !key.virtual_samples) close_segment(r_, s_, span_y_, k_.expect == k_.ray_last + 1);
   return result();
 }
 

@@ -109,7 +109,7 @@ bool RayCaster::dense_run(int& i, int& visited, vec3 xo, vec3 dv, ivec3 grid) {
   if (i > first) {  // as the last consume leaves them
     s_.prev_t = lattice_t(L_, float(visited));
     s_.prev_f = prev_f;
-    expect_ = visited + 1;
+    k_.expect = visited + 1;
   }
   return stopped;
 }

@@ -46,7 +46,7 @@ float chord_tail(Lattice L, float t_exit, int ray_last) {
   float j = float(ray_last);
   return min(t_exit - lattice_t(L, j), lattice_step(L, j, 1.0f)) - lattice_step(L, j, 0.5f);
 }
-float chord_at_ends(float step, int i, int m, float head, float tail, int ray_last) {
+RAY_COLD float chord_at_ends(float step, int i, int m, float head, float tail, int ray_last) {
   if (i == 0) step += head;
   if (i + m > ray_last) step += tail;
   return step;

@@ -48,3 +48,19 @@ struct SampleWindow {
   int n;     // true samples waiting (0..4), the newest n of the window
   uint own;  // the window's samples owned (bricks): bit 0 the newest (.w) to bit 3 (.x)
 };
+
+// Where a ray's walk stands: the visits' bookkeeping that the walks (raycast_body.glsl, the CPU's
+// ray_walks-inl.h) and the visit (visit.glsl) share.
+struct RayWalk {
+  int expect;     // the lattice index that continues the last visit without a gap
+  int own_first;  // the lattice points the ray composites (a brick's own; else all of them)
+  int own_last;
+  int ray_last;   // the whole ray's last lattice index (a brick's walk may end before it)
+  float head;     // what the first and last samples' chords differ from a whole step by
+  float tail;
+  // Bricks: the last visits before the owned points, held back unsampled (index -1: none), newest
+  // in .x: sampled only when they lead to the first owned visit without a gap (the segment into
+  // it needs the one before, and virtual samples the window of the segment before that), so a
+  // walk from the ray's start samples nothing in front. .xy: indices, .zw: their strides.
+  ivec4 behind;
+};
