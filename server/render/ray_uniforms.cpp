@@ -83,6 +83,7 @@ ray::Variant shared_variant(const VariantKey& key) {
   v.peak_xor = key.peaks && key.peak_mode == PeakMode::Xor;
   v.peaks_only = key.peaks && key.peak_mode == PeakMode::PeaksOnly;
   v.preintegration = key.preintegration;
+  v.ray_texture = key.ray_texture;
   v.brick = key.brick;
   return v;
 }

@@ -3,7 +3,7 @@
 
 // Lattice point i lies in this brick's own box. P.open_lo / P.open_hi: the axes whose bound is
 // the volume's own face (none there: rounding may put a point a hair outside).
-bool owns(Ray r, Lattice L, int i) {
+bool owns(IN(Ray) r, IN(Lattice) L, int i) {
   // PRECISE: no contraction, so every call site (and every rank) computes the same x; the two
   // ranks at a face decide a shared point at different call sites of clip_to_brick.
   float j = float(i);
@@ -18,7 +18,7 @@ bool owns(Ray r, Lattice L, int i) {
 }
 
 // The lattice index nearest t (in the span), halves rounded up, at most `last`.
-int index_near(Lattice L, float t, vec2 span, int last) {
+int index_near(IN(Lattice) L, float t, vec2 span, int last) {
   float x = lattice_index(L, clamp(t, span.x, span.y));
   float i = floor(x);
   if (x - i >= 0.5f) i += 1.0f;
@@ -31,7 +31,7 @@ int index_near(Lattice L, float t, vec2 span, int last) {
 // consecutive: the box is convex and the points' coordinates are monotone along the ray; the
 // guess may be off by more than a point where the ray is nearly parallel to a face). False when
 // it owns none; else own_first..own_last, and `last` becomes the last point the walk visits.
-bool clip_to_brick(Ray r, Lattice L, vec2 span, INOUT(int) last, OUT(int) own_first, OUT(int) own_last) {
+bool clip_to_brick(IN(Ray) r, IN(Lattice) L, vec2 span, INOUT(int) last, OUT(int) own_first, OUT(int) own_last) {
   own_first = 0;  // an OUT parameter is undefined in GLSL until written: written on every path
   own_last = -1;
   if (last < 0) return false;

@@ -6,14 +6,15 @@
 
 // The gradient a sample is shaded with: interpolated like the value for a virtual sample (Lee
 // §4: g), else central differences at the sample.
-vec3 sample_gradient(Ray r, float t, vec3 g) {
+vec3 sample_gradient(IN(Ray) r, float t, vec3 g) {
   return V.virtual_samples != 0 ? g : field_gradient(voxel_coords(r.o + t * r.d));
 }
 
 // One sample at t with value f (TF coordinates), standing for the step dt, with gradient g
 // (virtual samples). True when the ray is opaque enough to stop.
-bool consume(Ray r, INOUT(RayState) s, float t, float f, vec3 g, float dt) {
+bool consume(IN(Ray) r, INOUT(RayState) s, float t, float f, vec3 g, float dt) {
   bool segment = s.have_prev && !s.gap;
+  float dvr_weight = V.ray_texture ? s.dvr_weight : 1.0f;  // (folded where no ray texture can change it)
   bool peak_hit = false;
   if (V.peaks && segment) peak_hit = find_peaks(r, s, s.prev_t, s.prev_f, t, f);
   if (V.preintegration) {
@@ -24,9 +25,9 @@ bool consume(Ray r, INOUT(RayState) s, float t, float f, vec3 g, float dt) {
       if (varying_steps && c.w > 0.0f) c = segment_for_length(c, t - s.prev_t);
       if (V.shading) {
         // at the segment's end, as preintegration does
-        if (c.w > 0.0f) composite(s.acc, shade(vec3(c) / c.w, sample_gradient(r, t, g), r.d), c.w * s.dvr_weight);
+        if (c.w > 0.0f) composite(s.acc, shade(vec3(c) / c.w, sample_gradient(r, t, g), r.d), c.w * dvr_weight);
       } else {
-        composite_premultiplied(s.acc, c, s.dvr_weight);  // opacity-weighted already: no divide
+        composite_premultiplied(s.acc, c, dvr_weight);  // opacity-weighted already: no divide
       }
     }
   } else if ((!V.brick || s.draw) && !V.peaks_only && !(V.peak_xor && peak_hit)) {
@@ -34,7 +35,7 @@ bool consume(Ray r, INOUT(RayState) s, float t, float f, vec3 g, float dt) {
     if (tf_lookup(f, c) && c.w < 1.0f) {
       vec3 rgb = vec3(c);
       if (V.shading) rgb = shade(rgb, sample_gradient(r, t, g), r.d);
-      composite(s.acc, rgb, step_opacity(c.w, dt) * s.dvr_weight);
+      composite(s.acc, rgb, step_opacity(c.w, dt) * dvr_weight);
     }
   }
   s.prev_t = t;
@@ -48,7 +49,7 @@ bool consume(Ray r, INOUT(RayState) s, float t, float f, vec3 g, float dt) {
 // samples): the table's segments cover the chord between samples, this the rest of the ray.
 // Drawn by the rank owning that point, when the ray goes on there (`continues`: the walk's last
 // visit was the ray's last lattice point, without a gap).
-void close_segment(Ray r, INOUT(RayState) s, float t_exit, bool continues) {
+void close_segment(IN(Ray) r, INOUT(RayState) s, float t_exit, bool continues) {
   if (!(s.have_prev && !s.gap && (!V.brick || s.draw) && continues && s.acc.w < s.stop)) return;
   vec3 x = voxel_coords(r.o + t_exit * r.d);
   float f = sample_field(x);

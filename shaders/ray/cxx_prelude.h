@@ -7,9 +7,12 @@
 // - no swizzles but .x .y .z .w (vec3(v) takes a vec4's first three), no implicit int->float;
 // - `inout`/`out` parameters are INOUT(T)/OUT(T) (references here, copy-in/out in GLSL); a
 //   function writes each OUT parameter on every path (GLSL leaves an unwritten one undefined);
+//   a struct read only is IN(T) (a const reference here: a call the compiler does not inline
+//   copies nothing);
 // - constants at file scope are SHARED_CONST; `precise` is PRECISE (C++ builds with
 //   -ffp-contract=off, so every product is rounded by itself already);
-// - RAY_COLD marks a function the CPU keeps out of line (the GLSL compiler inlines everything);
+// - RAY_COLD marks a function the CPU keeps out of line, RAY_INLINE one it always inlines (the
+//   GLSL compiler inlines everything);
 // - the uniform block is RAY_UNIFORMS_BEGIN ... RAY_UNIFORMS_END (ray/uniforms.glsl).
 #pragma once
 
@@ -23,12 +26,16 @@
 #include <glm/vec4.hpp>
 #include <glm/vector_relational.hpp>
 
+#define IN(T) const T&
 #define INOUT(T) T&
 #define OUT(T) T&
 #define PRECISE
 #define SHARED_CONST static constexpr
 #ifndef RAY_COLD
 #define RAY_COLD __attribute__((noinline))
+#endif
+#ifndef RAY_INLINE
+#define RAY_INLINE __attribute__((always_inline))
 #endif
 #define RAY_UNIFORMS_BEGIN struct RayUniforms {
 #define RAY_UNIFORMS_END };

@@ -2,11 +2,13 @@
 // of the subset, is cxx_prelude.h): the qualifiers both compilers read, and the variant's
 // switches as the constant `V` that the shared code tests (`if (V.peaks)`), folded by the
 // compiler so a variant holds only what its scene uses.
+#define IN(T) T
 #define INOUT(T) inout T
 #define OUT(T) out T
 #define PRECISE precise
 #define SHARED_CONST const
 #define RAY_COLD
+#define RAY_INLINE
 #define RAY_UNIFORMS_BEGIN layout(std140, binding = UBO_RAY) uniform RayUniforms {
 #define RAY_UNIFORMS_END } P;
 
@@ -57,10 +59,15 @@
 #else
 #define V_PREINTEGRATION false
 #endif
+#ifdef RAY_TEXTURE
+#define V_RAY_TEXTURE true
+#else
+#define V_RAY_TEXTURE false
+#endif
 #ifdef BRICK
 #define V_BRICK true
 #else
 #define V_BRICK false
 #endif
 const Variant V = Variant(V_ORTHOGRAPHIC, V_DIFFERENTIAL, V_SHADING, V_ADAPTIVE, V_VIRTUAL_SAMPLES, V_PEAKS, V_PEAK_XOR,
-                          V_PEAKS_ONLY, V_PREINTEGRATION, V_BRICK);
+                          V_PEAKS_ONLY, V_PREINTEGRATION, V_RAY_TEXTURE, V_BRICK);

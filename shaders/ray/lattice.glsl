@@ -4,19 +4,20 @@
 // per sample from B = max(k + A * x_enter, min step), x_enter the eye-based index of the entry.
 // Adaptive (Knoll §6.2): a macrocell with multiplier M visits the multiples of M only.
 
-float lattice_t(Lattice L, float j) { return L.t0 + j * (L.B + L.A * j * 0.5f); }
+float lattice_t(IN(Lattice) L, float j) { return L.t0 + j * (L.B + L.A * j * 0.5f); }
 // t(j + m) - t(j) without cancellation: the step a sample visited with stride m stands for.
-float lattice_step(Lattice L, float j, float m) { return m * (L.B + L.A * (j + 0.5f * m)); }
-// Continuous index x with t(x) = t (t >= t0); stable as A -> 0. On a uniform lattice
-// 2d / (B + sqrt(B^2)) is d / B exactly (the square root of a rounded square is |B|, halving is
-// exact), without the square root.
-float lattice_index(Lattice L, float t) {
+float lattice_step(IN(Lattice) L, float j, float m) { return m * (L.B + L.A * (j + 0.5f * m)); }
+// Continuous index x with t(x) = t (t >= t0); stable as A -> 0. On a uniform lattice (A = 0:
+// no differential sampling) 2d / (B + sqrt(B^2)) is d / B exactly (the square root of a rounded
+// square is |B|, halving is exact), without the square root; a test of the variant, not of A, so
+// that GLSL folds it.
+float lattice_index(IN(Lattice) L, float t) {
   float d = max(0.0f, t - L.t0);
-  if (L.A == 0.0f) return d / L.B;
+  if (!V.differential) return d / L.B;
   return 2.0f * d / (L.B + sqrt(L.B * L.B + 2.0f * L.A * d));
 }
 
-Lattice ray_lattice(Ray r, float t_enter) {
+Lattice ray_lattice(IN(Ray) r, float t_enter) {
   Lattice L;
   L.t0 = t_enter;
   if (V.differential) {
@@ -41,8 +42,8 @@ Lattice ray_lattice(Ray r, float t_enter) {
 // for the lattice's [i - 1/2, i + m - 1/2], cut at the ray's entry and exit: its whole step
 // (`step`, lattice_step(L, i, m)) but at the ray's ends, where chord_head and chord_tail (the
 // whole ray's, with `ray_last` its last lattice index) correct it.
-float chord_head(Lattice L) { return -lattice_step(L, 0.0f, 0.5f); }
-float chord_tail(Lattice L, float t_exit, int ray_last) {
+float chord_head(IN(Lattice) L) { return -lattice_step(L, 0.0f, 0.5f); }
+float chord_tail(IN(Lattice) L, float t_exit, int ray_last) {
   float j = float(ray_last);
   return min(t_exit - lattice_t(L, j), lattice_step(L, j, 1.0f)) - lattice_step(L, j, 0.5f);
 }

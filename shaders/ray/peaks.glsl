@@ -13,7 +13,7 @@ bool crosses(float f0, float f1, float v) { return min(f0, f1) < v && v <= max(f
 
 // Regula falsi (secant steps kept inside the bracket), guarded against ga == gb; each field
 // evaluation is counted in `evaluations`.
-float solve_root(Ray r, float t0, float f0, float t1, float f1, float v, INOUT(float) evaluations) {
+float solve_root(IN(Ray) r, float t0, float f0, float t1, float f1, float v, INOUT(float) evaluations) {
   float ta = t0, tb = t1, ga = f0 - v, gb = f1 - v;
   for (int k = 0; k < P.secant_iterations; ++k) {
     if (gb == ga) break;
@@ -58,13 +58,9 @@ vec4 tf_exact(float v) {
   return mix(tf_point(2 * (lo - 1) + 1), tf_point(2 * lo + 1), (v - va) / (vb - va));
 }
 
-// Finds and composites, in ray order, up to P.max_peaks peaks crossed by the segment
-// (t0, f0) -> (t1, f1); true when it found one. Reads the peak table through the target's
-// peak_cell_any (false: the table's cell holds no peak, without reading it) and peak_slots (the
-// four values of a layer, NO_PEAK_TEXEL after the last).
-bool find_peaks(Ray r, INOUT(RayState) s, float t0, float f0, float t1, float f1) {
-  int i = peak_bin(f0), j = peak_bin(f1);
-  if (!peak_cell_any(i, j)) return false;
+// The cell (i, j) of the table holds a peak: its slots walked, the peaks composited (out of line
+// on the CPU: most segments find their cell empty and stop in find_peaks).
+RAY_COLD bool peaks_in_cell(IN(Ray) r, INOUT(RayState) s, int i, int j, float t0, float f0, float t1, float f1) {
   bool reverse = (i == j) && f0 > f1;  // the diagonal is stored ascending
   int max_peaks = P.max_peaks;
   float found[4];
@@ -108,8 +104,17 @@ bool find_peaks(Ray r, INOUT(RayState) s, float t0, float f0, float t1, float f1
     } else {
       s.samples += root_evaluations(f0, f1, v);  // only shading uses the root's position
     }
-    composite(s.acc, rgb, c.w * s.peak_weight);  // unscaled opacity at the peak (Knoll §4.2)
+    composite(s.acc, rgb, c.w * (V.ray_texture ? s.peak_weight : 1.0f));  // unscaled opacity at the peak (Knoll §4.2)
     if (s.acc.w >= s.stop) break;
   }
   return count > 0;
+}
+
+// Finds and composites, in ray order, up to P.max_peaks peaks crossed by the segment
+// (t0, f0) -> (t1, f1); true when it found one. Reads the peak table through the target's
+// peak_cell_any (false: the table's cell holds no peak, without reading it) and peak_slots (the
+// four values of a layer, NO_PEAK_TEXEL after the last).
+bool find_peaks(IN(Ray) r, INOUT(RayState) s, float t0, float f0, float t1, float f1) {
+  int i = peak_bin(f0), j = peak_bin(f1);
+  return peak_cell_any(i, j) && peaks_in_cell(r, s, i, j, t0, f0, t1, f1);
 }

@@ -23,7 +23,7 @@ Ray make_ray(vec2 pixel_from_top_left) {
 }
 
 // Slab test against the box [-half, half]; returns (t_enter, t_exit), empty when x > y.
-vec2 intersect_box(Ray r) {
+vec2 intersect_box(IN(Ray) r) {
   // Axis-parallel rays: a tiny stand-in for 0 keeps every product finite (no 0 * inf = NaN).
   vec3 d = mix(r.d, vec3(1e-20f), lessThan(abs(r.d), vec3(1e-20f)));
   vec3 inv = 1.0f / d;
@@ -37,7 +37,7 @@ vec2 intersect_box(Ray r) {
 
 // render.clip (core/clip.h): the span cut to the crop box and to the kept side of the plane;
 // empty when x > y.
-vec2 clip_span(Ray r, vec2 span) {
+vec2 clip_span(IN(Ray) r, vec2 span) {
   if (P.clip_box != 0) {
     for (int a = 0; a < 3; ++a) {
       if (r.d[a] == 0.0f) {

@@ -12,7 +12,7 @@ bool window_owns(uint own, uint bit) { return !V.brick || (own & bit) != 0u; }
 
 // Sends out the true sample at t1 (value f.y, step dt1) and the virtual samples between it and
 // the next one (t2) that lie before t_limit, on the spline through f.x..f.w (g0..g3).
-bool vs_segment(Ray r, INOUT(RayState) s, float t_entry, float t1, float t2, float dt1, vec4 f, vec3 g0, vec3 g1,
+bool vs_segment(IN(Ray) r, INOUT(RayState) s, float t_entry, float t1, float t2, float dt1, vec4 f, vec3 g0, vec3 g1,
                 vec3 g2, vec3 g3, float t_limit, bool own) {
   s.draw = own;  // the segment's samples are the rank's that owns its first
   float k = float(V.virtual_samples);
@@ -44,14 +44,14 @@ bool vs_segment(Ray r, INOUT(RayState) s, float t_entry, float t1, float t2, flo
 
 // The segment between the two newest samples (.z, .w), the spline's end: p3 repeats .w, p0 is .y
 // when there is one.
-bool vs_last_segment(Ray r, INOUT(RayState) s, INOUT(SampleWindow) w, float t_entry, float t_limit) {
+bool vs_last_segment(IN(Ray) r, INOUT(RayState) s, INOUT(SampleWindow) w, float t_entry, float t_limit) {
   bool prev = w.n >= 3;
   return vs_segment(r, s, t_entry, w.t.z, w.t.w, w.dt.z, vec4(prev ? w.f.y : w.f.z, w.f.z, w.f.w, w.f.w),
                     prev ? w.g1 : w.g2, w.g2, w.g3, w.g3, t_limit, window_owns(w.own, 2u));
 }
 
 // Everything still waiting: the last true sample stands for its whole step.
-bool vs_flush(Ray r, INOUT(RayState) s, INOUT(SampleWindow) w, float t_entry) {
+bool vs_flush(IN(Ray) r, INOUT(RayState) s, INOUT(SampleWindow) w, float t_entry) {
   bool done = s.acc.w >= s.stop;
   if (!done && w.n >= 2) done = vs_last_segment(r, s, w, t_entry, kNoLimit);
   if (!done && w.n >= 1) {
@@ -64,7 +64,7 @@ bool vs_flush(Ray r, INOUT(RayState) s, INOUT(SampleWindow) w, float t_entry) {
 
 // A new true sample at t (value f, gradient g, step dt); the segment before the newest goes out
 // once it is known: with samples j-1, j, j+1, j+2 (or j, j+1, j+2 at a run's start), j..j+1.
-bool vs_push(Ray r, INOUT(RayState) s, INOUT(SampleWindow) w, float t_entry, float t, float f, vec3 g, float dt,
+bool vs_push(IN(Ray) r, INOUT(RayState) s, INOUT(SampleWindow) w, float t_entry, float t, float f, vec3 g, float dt,
              bool own) {
   w.own = ((w.own << 1u) | (own ? 1u : 0u)) & 15u;
   w.t = vec4(w.t.y, w.t.z, w.t.w, t);
@@ -85,7 +85,7 @@ bool vs_push(Ray r, INOUT(RayState) s, INOUT(SampleWindow) w, float t_entry, flo
 // (index last + 1, read by the target's lattice_field) closes the spline, and the virtual samples
 // up to the exit go out: the ray ends like a ray sampled at the sub-step would (its last sample
 // within one sub-step of the exit), not one whole step beyond it.
-void vs_finish(Ray r, INOUT(RayState) s, INOUT(SampleWindow) w, Lattice L, int last, int own_last, float t_exit) {
+void vs_finish(IN(Ray) r, INOUT(RayState) s, INOUT(SampleWindow) w, IN(Lattice) L, int last, int own_last, float t_exit) {
   if (s.acc.w >= s.stop || w.n == 0) return;
   if (w.t.w != lattice_t(L, float(last))) {  // the ray ended in a skipped cell
     vs_flush(r, s, w, L.t0);

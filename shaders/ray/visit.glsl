@@ -4,7 +4,7 @@
 
 // The walk's start, once the ray's last lattice index is known: every point owned (one
 // process; clip_to_brick narrows it on a brick) and the chord corrections at the ray's ends.
-RayWalk start_walk(Lattice L, float t_exit, int last) {
+RayWalk start_walk(IN(Lattice) L, float t_exit, int last) {
   RayWalk k;
   k.expect = 0;
   k.own_first = 0;
@@ -16,7 +16,7 @@ RayWalk start_walk(Lattice L, float t_exit, int last) {
   return k;
 }
 
-bool sample_visit(Ray r, Lattice L, INOUT(RayState) s, INOUT(RayWalk) k, INOUT(SampleWindow) w, int i, int m) {
+RAY_INLINE bool sample_visit(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, INOUT(SampleWindow) w, int i, int m) {
   // The sample's chord; with virtual samples the true step (vs_segment cuts the sub-samples').
   float dt = lattice_step(L, float(i), float(m));
   if (V.virtual_samples == 0 && (i == 0 || i + m > k.ray_last)) dt = chord_at_ends(dt, i, m, k.head, k.tail, k.ray_last);
@@ -42,7 +42,7 @@ bool sample_visit(Ray r, Lattice L, INOUT(RayState) s, INOUT(RayWalk) k, INOUT(S
 
 // A brick's visit before its points (held back in k.behind), or its first owned visit with
 // visits held back: those that lead to it without a gap are visited first.
-RAY_COLD bool visit_behind(Ray r, Lattice L, INOUT(RayState) s, INOUT(RayWalk) k, INOUT(SampleWindow) w, int i, int m) {
+RAY_COLD bool visit_behind(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, INOUT(SampleWindow) w, int i, int m) {
   if (i < k.own_first) {
     k.behind = ivec4(i, k.behind.x, m, k.behind.z);
     return false;
@@ -56,7 +56,7 @@ RAY_COLD bool visit_behind(Ray r, Lattice L, INOUT(RayState) s, INOUT(RayWalk) k
   return sample_visit(r, L, s, k, w, i, m);
 }
 
-bool visit(Ray r, Lattice L, INOUT(RayState) s, INOUT(RayWalk) k, INOUT(SampleWindow) w, int i, int m) {
+RAY_INLINE bool visit(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, INOUT(SampleWindow) w, int i, int m) {
   if (V.brick && (i < k.own_first || k.behind.x >= 0)) return visit_behind(r, L, s, k, w, i, m);
   return sample_visit(r, L, s, k, w, i, m);
 }

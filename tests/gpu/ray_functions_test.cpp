@@ -118,6 +118,7 @@ Variant variant(Config c) {
   v.virtual_samples = c == Config::Persp ? 3 : 0;
   v.peaks = v.peak_xor = c == Config::Peaks;
   v.preintegration = c == Config::Preint;
+  v.ray_texture = true;  // the table's weights are not 1
   return v;
 }
 
@@ -132,6 +133,7 @@ std::vector<std::string> defines(Config c, int rows) {
   if (v.virtual_samples) d.push_back("VIRTUAL_SAMPLES 3");
   if (v.peaks) d.insert(d.end(), {"PEAKS", "PEAK_XOR"});
   if (v.preintegration) d.push_back("PREINTEGRATION");
+  if (v.ray_texture) d.push_back("RAY_TEXTURE");
   return d;
 }
 
