@@ -12,7 +12,7 @@ samples), differential + adaptive (Marschner-Lobb, dense TF), em (900x500x930 u8
 Usage: scripts/bench_ab.py --old DIR --new DIR [--size 512] [--frames 5] [--rounds 2]
        [--backends cpu,gl] [--scenes LIST] [--data-dir bench-data/ab]
 DIR holds server/peakcast-bench and server/peakcast of a build; --old-shaders / --new-shaders
-name the shader folders the builds read (default: DIR/shaders, else the source tree's).
+name the shader folders the builds read (default: DIR/shaders; required where DIR has none).
 """
 import argparse, json, math, os, pathlib, re, statistics, subprocess, sys
 
@@ -92,15 +92,17 @@ def main():
     a.data_dir.mkdir(parents=True, exist_ok=True)
     shaders = {}
     for side, build, given in (("old", a.old, a.old_shaders), ("new", a.new, a.new_shaders)):
-        shaders[side] = given or (build / "shaders" if (build / "shaders").is_dir() else ROOT / "shaders")
+        shaders[side] = given or (build / "shaders" if (build / "shaders").is_dir() else None)
+        if shaders[side] is None:  # the source tree's shaders belong to neither build for sure
+            sys.exit(f"bench_ab: no shaders for the {side} build: give --{side}-shaders")
     builds = {"old": a.old, "new": a.new}
     rows = []
     for name in a.scenes.split(","):
         scene = scene_file(name, SCENES[name], a.new / "server/peakcast", a.data_dir, a.size)
         for backend in a.backends.split(","):
             ms = {"old": [], "new": []}
-            for _ in range(a.rounds):
-                for side in ("old", "new"):
+            for k in range(a.rounds):
+                for side in (("old", "new") if k % 2 == 0 else ("new", "old")):  # neither always first
                     r = time_scene(builds[side], shaders[side], backend, scene, a.frames)
                     ms[side].append(r["frame_ms_median"])
             old, new = statistics.median(ms["old"]), statistics.median(ms["new"])

@@ -1,7 +1,7 @@
 // The ray caster shared by the fragment and compute entry points (raycast.frag, raycast.comp).
 // Classification: post (TF table per sample), peaks (PEAKS: Knoll's peak finding between
 // samples, with PEAK_XOR / PEAKS_ONLY modes) or pre-integrated segments (PREINTEGRATION).
-// Samples lie on the ray's lattice (sampling.glsl: uniform or DIFFERENTIAL), indices
+// Samples lie on the ray's lattice (ray/lattice.glsl: uniform or DIFFERENTIAL), indices
 // 0..lattice_index(t_exit), computed from the index (no accumulated t += dt drift). Space
 // skipping visits only the lattice points inside occupied macrocells, so it changes no sample
 // that contributes; ADAPTIVE visits only the multiples of each cell's multiplier.
@@ -19,9 +19,6 @@ layout(std430, binding = SSBO_CELL_DISTANCE) readonly buffer CellDistance { uint
 #endif
 #define EXTENSION 1  // lattice points visited on each side of an occupied cell's run
 #define CHUNK 4096   // lattice points per inner loop (see cast_ray)
-#if defined(DIFFERENTIAL) || defined(ADAPTIVE) || defined(VIRTUAL_SAMPLES)
-#define VARYING_STEPS  // segments differ from the preintegration table's step
-#endif
 #if defined(SPACE_SKIPPING) || defined(ADAPTIVE)
 #define CELL_TRAVERSAL  // macrocells decide what is visited
 #if !defined(ADAPTIVE) && !defined(CELL_DDA)
@@ -50,7 +47,7 @@ float lattice_field(Ray r, Lattice L, int i, int m) { return sample_field(voxel_
 
 RayState cast_ray(vec2 pixel) {
   RayState res = RayState(vec4(0.0), 0.0, P.stop, 1.0, 1.0, true, 0.0, 0.0, false, false);
-  SampleWindow window;  // virtual samples (its samples are written before they are read)
+  SampleWindow window;  // virtual samples (n counts the samples it holds; the rest is never read)
   window.n = 0;
   window.own = 0u;
   Ray r = make_ray(pixel);

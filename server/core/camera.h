@@ -1,6 +1,6 @@
 // Camera and ray generation shared by the GL ray caster and the CPU reference (docs/scenes.md).
 // Rays are expressed in the box-centred frame, starting near the box rather than at the eye,
-// so that float precision holds for a camera far away (see shaders/ray_setup.glsl).
+// so that float precision holds for a camera far away (see shaders/ray/ray_setup.glsl).
 #pragma once
 
 #include <string>

@@ -47,7 +47,7 @@ CenteredClip<Vec, T> center_clip(const ClipSettings& c, const glm::dvec3& box_ce
 }
 
 // Cuts the ray span [t0, t1] (o + t d) to what the clip keeps; false when nothing is left.
-// Twin of clip_span in shaders/ray_setup.glsl.
+// The reference's; the GL and CPU backends share clip_span in shaders/ray/ray_setup.glsl.
 template <typename Vec, typename T>
 bool clip_span(const CenteredClip<Vec, T>& k, const Vec& o, const Vec& d, T& t0, T& t1) {
   if (k.box) {

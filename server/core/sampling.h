@@ -1,5 +1,5 @@
 // Where the samples of a ray lie (docs/scenes.md "Sampling"; Knoll §5-§6.2). One definition for
-// the GL ray caster (shaders/raycast_body.glsl mirrors it) and the CPU twin (reference/).
+// the reference (reference/); the GL and CPU backends share theirs in shaders/ray/lattice.glsl.
 //
 // Every ray samples a lattice that starts at its entry into the box:
 //     t_j = t_enter + j * (B + A * j / 2),   j = 0, 1, 2, ...

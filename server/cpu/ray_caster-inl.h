@@ -1,7 +1,9 @@
-// One ray's caster: the state raycast_body.glsl keeps in globals, and its members. Defined
-// across ray_kernel.cpp (traversal, sampling, compositing), ray_peaks-inl.h (peak finding) and
-// ray_virtual_samples-inl.h (Lee's virtual samples). Included per SIMD target by
-// cpu/ray_kernel.cpp (Highway's -inl.h convention).
+// One CPU ray: the ray code shared with the GL shader (shaders/ray/*.glsl), compiled as this
+// class's members, its hooks for that code (the field from SIMD sample runs, the tables with one
+// bit per cell), and its state (the structs of shaders/ray/types.glsl). Defined across
+// ray_kernel.cpp (setup, sample runs, entry points), ray_tables-inl.h (table lookups) and
+// ray_walks-inl.h (the walks over the lattice). Included per SIMD target by cpu/ray_kernel.cpp
+// (Highway's -inl.h convention).
 #if defined(PEAKCAST_CPU_RAY_CASTER_INL_H_) == defined(HWY_TARGET_TOGGLE)
 #ifdef PEAKCAST_CPU_RAY_CASTER_INL_H_
 #undef PEAKCAST_CPU_RAY_CASTER_INL_H_

@@ -1,14 +1,10 @@
-// shaders/raycast_body.glsl (and ray_setup, sampling, tf, compositing, shading, peak_find,
-// preintegration, ray_texture .glsl) for one ray on the CPU. Function and variable names follow
-// the shaders so the two can be read side by side; where they differ, the comment says why.
-// The caster's class is in ray_caster-inl.h, its peak finding in ray_peaks-inl.h, its virtual
-// samples in ray_virtual_samples-inl.h, its table lookups in ray_tables-inl.h, a brick's clipping
-// and held-back visits (distributed rendering) in ray_brick-inl.h, the macrocell walks in
-// ray_walks-inl.h, the geometry in ray_geometry-inl.h and the 16-ray leaps in leap_packets-inl.h;
-// this file holds the visits, sampling and compositing, the ray's setup and walk, and the entry
-// points. Compiled once per x86 SIMD target (Highway's foreach_target) and chosen at run time: the
-// scalar code gains the target's instructions (SSE4's floor, AVX's three-operand forms) and
-// calls its own target's run sampler inline.
+// One ray on the CPU. What it shares with the GL shader (shaders/ray/*.glsl) is compiled into
+// RayCaster (ray_caster-inl.h); the walks over the lattice not shared yet are in ray_walks-inl.h
+// (with the dense_run fast path), the table lookups in ray_tables-inl.h, the geometry helpers in
+// ray_geometry-inl.h and the 16-ray leaps in leap_packets-inl.h; this file holds the sample runs,
+// the ray's setup and walk, and the entry points. Compiled once per x86 SIMD target (Highway's
+// foreach_target) and chosen at run time: the scalar code gains the target's instructions
+// (SSE4's floor, AVX's three-operand forms) and calls its own target's run sampler inline.
 #include "cpu/ray_kernel.h"
 
 #include <algorithm>

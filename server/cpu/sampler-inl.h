@@ -114,7 +114,7 @@ void RunT(const VoxelGrid& g, const SampleRun& r, float* HWY_RESTRICT out) {
     // j = first + (k + lane) * stride, exact in float below 2^24 (kMaxSamplesPerRay is 2^20).
     const VF j = hn::Add(hn::Set(df, float(r.first)),
                          hn::Mul(hn::Add(hn::Set(df, float(k)), hn::Iota(df, 0.f)), hn::Set(df, float(r.stride))));
-    // t = t0 + j * (B + A * j * 0.5), then ((o + t d) + half) * inv_spacing, as ray_setup.glsl.
+    // t = t0 + j * (B + A * j * 0.5), then ((o + t d) + half) * inv_spacing, as shaders/ray/ray_setup.glsl.
     const VF t = hn::Add(hn::Set(df, r.t0),
                          hn::Mul(j, hn::Add(hn::Set(df, r.B), hn::Mul(hn::Mul(hn::Set(df, r.A), j), hn::Set(df, 0.5f)))));
     VF p[3];

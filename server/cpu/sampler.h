@@ -117,7 +117,7 @@ inline float sample_field(const VoxelGrid& g, const glm::vec3& x) {
 }
 
 // A run of lattice points along one ray: index j = first + k * stride for k < count, at
-// t_j = t0 + j (B + A j / 2), position ((o + t d) + half) * inv_spacing (ray_setup.glsl's order).
+// t_j = t0 + j (B + A j / 2), position ((o + t d) + half) * inv_spacing (shaders/ray/ray_setup.glsl's order).
 struct SampleRun {
   glm::vec3 o, d, half, inv_spacing;
   float t0 = 0, A = 0, B = 1;

@@ -30,7 +30,7 @@ T catmull_rom(const T& p0, const T& p1, const T& p2, const T& p3, double u) {
                 (3.0 * p1 - p0 - 3.0 * p2 + p3) * u * u * u);
 }
 
-// Twin of shaders/peak_find.glsl solve_root.
+// The backends' is solve_root in shaders/ray/peaks.glsl.
 double solve_root(const Frame& fr, const Ray& r, double t0, double f0, double t1, double f1, double v, int iters,
                   double& evaluations) {
   double ta = t0, tb = t1, ga = f0 - v, gb = f1 - v;
@@ -100,8 +100,8 @@ auto run_reference(const Frame& fr, const ReferenceOptions& opt, Body body) {
     const int64_t last = std::min<int64_t>(int64_t(std::floor(lattice.index_at(t1))), kMaxSamplesPerRay - 1);
     // The chord each sample stands for (midpoint rule): the lattice's [i - 1/2, i + m - 1/2], cut
     // at the ray's entry and exit, so the first sample stands for half a step and the last one
-    // for half a step before it and the rest up to the exit (twin of chord in
-    // shaders/raycast_body.glsl). Virtual samples: the same on the sub-lattice (emit).
+    // for half a step before it and the rest up to the exit (the backends' is
+    // chord_at_ends in shaders/ray/lattice.glsl). Virtual samples: the same on the sub-lattice (emit).
     const double head = -(lattice.t(0.5) - lattice.t(0.0));
     const double tail = std::min(t1 - lattice.t(double(last)), lattice.step(double(last), 1)) -
                         (lattice.t(double(last) + 0.5) - lattice.t(double(last)));
@@ -116,7 +116,7 @@ auto run_reference(const Frame& fr, const ReferenceOptions& opt, Body body) {
     bool first = true;
     // One sample (true or virtual) at t with value f, standing for `step`; g: its gradient (raw
     // units) when interpolated, else null and computed at t if shading needs it. True when the
-    // ray is opaque. Twin of consume() in shaders/raycast_body.glsl.
+    // ray is opaque. The backends' is consume() in shaders/ray/consume.glsl.
     auto consume = [&](double t, double f, const glm::dvec3* g, double step) {
       auto lit = [&](const glm::dvec3& rgb) { return fr.shading ? fr.lit_with(rgb, g ? *g : fr.grad(r, t), r) : rgb; };
       bool peak_hit = false;

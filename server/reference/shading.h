@@ -1,4 +1,4 @@
-// CPU twin of shaders/shading.glsl.
+// The reference's shading: the same model as shaders/ray/shading.glsl, in double.
 #pragma once
 
 #include <algorithm>

@@ -62,7 +62,7 @@ std::vector<uint8_t> traversal_distances(const Occupancy& occupancy, bool leaps)
 // The TF as TransferFunction::kTableSize entries over [lo, hi]: colour, and in the fourth channel
 // the transparency of the scene's uniform step, T = (1 - a)^(step / unit) (VTK's mappers bake the
 // opacity 1 - T likewise): a sample that stands for that step composites 1 - T, others correct
-// from it, 1 - T^(dt / step) (tf.glsl step_opacity). Kept as a transparency, so that a step
+// from it, 1 - T^(dt / step) (shaders/ray/compositing.glsl step_opacity). Kept as a transparency, so that a step
 // opaque to float precision (1 - T rounds to 1) still corrects to a short chord's opacity (a
 // ray's first and last samples, virtual samples). The key names the table (the TF signature and
 // the exponent).

@@ -57,9 +57,11 @@ void close_segment(IN(Ray) r, INOUT(RayState) s, float t_exit, bool continues) {
   vec4 c;
   if (!preint_lookup(s.prev_f, f, c) || !(c.w > 0.0f)) return;
   c = segment_for_length(c, t_exit - s.prev_t);
+  if (!(c.w > 0.0f)) return;  // an exit on (or a hair past) the last point: nothing left (and no 0 / 0)
+  float dvr_weight = V.ray_texture ? s.dvr_weight : 1.0f;
   if (V.shading) {
-    composite(s.acc, shade(vec3(c) / c.w, field_gradient(x), r.d), c.w * s.dvr_weight);
+    composite(s.acc, shade(vec3(c) / c.w, field_gradient(x), r.d), c.w * dvr_weight);
   } else {
-    composite_premultiplied(s.acc, c, s.dvr_weight);
+    composite_premultiplied(s.acc, c, dvr_weight);
   }
 }

@@ -9,7 +9,7 @@
 //   function writes each OUT parameter on every path (GLSL leaves an unwritten one undefined);
 //   a struct read only is IN(T) (a const reference here: a call the compiler does not inline
 //   copies nothing);
-// - constants at file scope are SHARED_CONST; `precise` is PRECISE (C++ builds with
+// - constants at file scope are SHARED_CONST; `precise` is PRECISE (the CPU backend builds with
 //   -ffp-contract=off, so every product is rounded by itself already);
 // - RAY_COLD marks a function the CPU keeps out of line, RAY_INLINE one it always inlines (the
 //   GLSL compiler inlines everything);

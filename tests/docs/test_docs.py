@@ -8,7 +8,8 @@ import os, pathlib, re, subprocess, sys
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 PEAKCAST = os.environ.get("PEAKCAST_BIN", str(ROOT / "build/server/peakcast"))
 BENCH = os.environ.get("PEAKCAST_BENCH_BIN", str(ROOT / "build/server/peakcast-bench"))
-SCRIPTS = {"bench_peers.py": ROOT / "scripts/bench_peers.py", "bench_memory.py": ROOT / "scripts/bench_memory.py"}
+SCRIPTS = {"bench_peers.py": ROOT / "scripts/bench_peers.py", "bench_memory.py": ROOT / "scripts/bench_memory.py",
+           "bench_ab.py": ROOT / "scripts/bench_ab.py"}
 
 
 def docs():

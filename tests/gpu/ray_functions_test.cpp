@@ -2,8 +2,8 @@
 // table of cases (ray_functions/cases.glsl: rays through pixels at the image's corners and
 // edges, axis-parallel and missing rays, chord ends, opacity steps across 0 and 1, composite
 // sequences across opacity edges, Catmull-Rom windows, peak roots near tangencies, brick faces,
-// clip spans) run by a GL compute shader and by the C++ build of the same source, under two
-// variants (perspective with differential sampling; orthographic, uniform). Measured on
+// clip spans, consume and peak finding, the virtual-sample window) run by a GL compute shader
+// and by the C++ build of the same source, under four variants (Config). Measured on
 // llvmpipe: equal bit for bit but where GL divides, takes roots or powers otherwise than libm
 // (kBound). A function changed in one target only (the lattice's step in GL's copy) fails the
 // comparison (BreakingOneTargetFails).
@@ -305,8 +305,12 @@ TEST(RayFunctions, GlslAndCxxAgreeRowByRow) {
       std::printf("%-6s %-12s rows %3d, answered %3d, unequal %3d, worst relative difference %.2e\n", name(config),
                   kNames[k], d[size_t(k)].rows, d[size_t(k)].answered, d[size_t(k)].unequal, d[size_t(k)].worst);
       EXPECT_GE(d[size_t(k)].answered, d[size_t(k)].rows / 2) << kNames[k] << ": most rows must ask something";
-      EXPECT_LE(d[size_t(k)].worst, kBound[k]) << kNames[k];
-      if (kBound[k] == 0.0) EXPECT_EQ(d[size_t(k)].unequal, 0) << kNames[k];
+      // A GPU's GLSL may fuse multiply-adds and divide approximately where llvmpipe does neither:
+      // there the exact kinds are held to one rounding's worth.
+      const bool software = test::gpu().context->info().software;
+      const double bound = kBound[k] == 0.0 && !software ? 2e-6 : kBound[k];
+      EXPECT_LE(d[size_t(k)].worst, bound) << kNames[k];
+      if (bound == 0.0) EXPECT_EQ(d[size_t(k)].unequal, 0) << kNames[k];
     }
   }
 }

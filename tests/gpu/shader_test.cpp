@@ -1,5 +1,5 @@
 // Shader loading: #line markers make errors name file and line; programs are cached by key;
-// the std140 block matches gpu_layout.h; the variant key follows the scene.
+// the std140 block matches render/ray_uniforms.h; the variant key follows the scene.
 #include <fstream>
 
 #include "gpu/gpu_fixture.h"
