@@ -59,25 +59,10 @@ std::unique_ptr<render::ResidentVolume> CpuRenderer::make_resident(std::shared_p
 
 int CpuRenderer::sample_cap(const render::VariantKey&) const { return kMaxSamplesPerRay; }
 
-CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, render::GpuPath path, const PixelRect& rect,
-                              const render::Brick* brick, RenderStats* stats) {
-  const MacrocellGrid& cells = cv.macrocells(s.scene.render.filter);
-  render::SetupOptions o;
-  o.leaps = seam_.leaps;
-  o.vs_widening = seam_.vs_widening;
-  o.force_variant = &seam_.force_variant;
-  const render::FrameSetup fs = render::setup_frame(cv, s, path, o, occupancy_, seam_.table_builds);
-  const auto t_tables = Clock::now();
-  const double lo = cv.tf_lo(), hi = cv.tf_hi();
-
-  CpuFrame f;
-  f.key = fs.key;
-  f.key.cpu = true;
-  f.voxels = cv.grid(s.scene.render.filter);
-  f.run_lanes = sample_run_lanes();
-
-  // The TF for the scene's step.
-  const std::string tf_key = render::step_tf_key(s, fs.tf_sig);
+// The TF baked for the scene's step, with one bit per cell (cached by its key).
+const CpuRenderer::TfTable& CpuRenderer::tf_table(const ResolvedScene& s, const std::string& tf_sig, double lo,
+                                                  double hi) {
+  const std::string tf_key = render::step_tf_key(s, tf_sig);
   TfTable* tf = cache_find(tf_tables_, tf_key);
   if (!tf) {
     std::vector<float> rgba = render::step_tf_table(s, lo, hi);
@@ -85,44 +70,39 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
     tf = &cache_insert(tf_tables_, TfTable{tf_key, std::move(rgba), std::move(bits)}, kCacheEntries);
     ++seam_.table_builds;
   }
-  f.tf = tf->rgba.data();
-  f.tf_alpha_any = tf->alpha_any.data();
+  return *tf;
+}
 
-  // Peak table + TF points, or the preintegration table.
-  const std::vector<Peak> no_peaks;
-  const std::vector<Peak>& peaks = f.key.peaks ? fs.peaks : no_peaks;
+// The peak table and TF points, or the preintegration table (cached by what they depend on).
+const CpuRenderer::Tables& CpuRenderer::tables(const ResolvedScene& s, const std::vector<Peak>& peaks, double lo,
+                                               double hi) {
   const std::string key = render::tables_key(s, lo, hi, peaks.size());
   Tables* t = cache_find(tables_, key);
-  if (!t) {
-    Tables n;
-    n.key = key;
-    if (s.scene.render.classification == Classification::Peaks) {
-      const PeakTable table = build_peak_table(peaks, lo, hi, s.scene.render.peak_table_bins);
-      n.peak_texels = render::peak_texels(table, lo, hi);
-      n.peak_bins = table.bins;
-      n.peak_layers = table.layers;
-      n.peak_any = peak_texel_bits(n.peak_texels, n.peak_bins);
-      n.tf_points = render::tf_point_pairs(s.tf, lo, hi);
-    }
-    if (s.scene.render.classification == Classification::Preint) {
-      PreintegrationTable table = render::scene_preintegration(s, lo, hi);
-      n.preint = std::move(table.rgba);
-      n.preint_size = table.size;
-      n.preint_any = preint_cell_bits(n.preint, n.preint_size);
-    }
-    t = &cache_insert(tables_, std::move(n), kCacheEntries);
-    ++seam_.table_builds;
+  if (t) return *t;
+  Tables n;
+  n.key = key;
+  if (s.scene.render.classification == Classification::Peaks) {
+    const PeakTable table = build_peak_table(peaks, lo, hi, s.scene.render.peak_table_bins);
+    n.peak_texels = render::peak_texels(table, lo, hi);
+    n.peak_bins = table.bins;
+    n.peak_layers = table.layers;
+    n.peak_any = peak_texel_bits(n.peak_texels, n.peak_bins);
+    n.tf_points = render::tf_point_pairs(s.tf, lo, hi);
   }
-  f.peak_texels = t->peak_texels.data();
-  f.tf_points = t->tf_points.data();
-  f.preint = t->preint.data();
-  const render::TableShape shape{t->peak_bins, t->peak_layers, t->preint_size, int(t->tf_points.size() / 2)};
-  f.u = render::make_ray_uniforms(s, cv.volume(), render::ValueMap{}, cells, shape, rect, sample_cap(f.key), brick);
-  f.v = render::shared_variant(f.key);
-  f.brick = f.v.brick = brick != nullptr;  // (the CPU's key keeps its name: "+brick" is added to the stats)
-  f.peak_any = t->peak_any.data();
-  f.preint_any = t->preint_any.data();
+  if (s.scene.render.classification == Classification::Preint) {
+    PreintegrationTable table = render::scene_preintegration(s, lo, hi);
+    n.preint = std::move(table.rgba);
+    n.preint_size = table.size;
+    n.preint_any = preint_cell_bits(n.preint, n.preint_size);
+  }
+  ++seam_.table_builds;
+  return cache_insert(tables_, std::move(n), kCacheEntries);
+}
 
+// The per-macrocell bytes the walks read: empty-space distances (space skipping), multipliers
+// (adaptive sampling; data only, built once per grid).
+void CpuRenderer::cell_tables(CpuFrame& f, const CpuVolume& cv, const MacrocellGrid& cells,
+                              const render::FrameSetup& fs) {
   if (f.key.space_skipping) {
     CellBytes* d = cache_find(distances_, fs.occupancy_key);
     if (!d) {
@@ -143,6 +123,41 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
     }
     f.cell_stride = m->bytes.data();
   }
+}
+
+CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, render::GpuPath path, const PixelRect& rect,
+                              const render::Brick* brick, RenderStats* stats) {
+  const MacrocellGrid& cells = cv.macrocells(s.scene.render.filter);
+  render::SetupOptions o;
+  o.leaps = seam_.leaps;
+  o.vs_widening = seam_.vs_widening;
+  o.force_variant = &seam_.force_variant;
+  const render::FrameSetup fs = render::setup_frame(cv, s, path, o, occupancy_, seam_.table_builds);
+  const auto t_tables = Clock::now();
+  const double lo = cv.tf_lo(), hi = cv.tf_hi();
+
+  CpuFrame f;
+  f.key = fs.key;
+  f.key.cpu = true;
+  f.voxels = cv.grid(s.scene.render.filter);
+  f.run_lanes = sample_run_lanes();
+
+  const TfTable& tf = tf_table(s, fs.tf_sig, lo, hi);
+  f.tf = tf.rgba.data();
+  f.tf_alpha_any = tf.alpha_any.data();
+  const std::vector<Peak> no_peaks;
+  const Tables* t = &tables(s, f.key.peaks ? fs.peaks : no_peaks, lo, hi);
+  f.peak_texels = t->peak_texels.data();
+  f.tf_points = t->tf_points.data();
+  f.preint = t->preint.data();
+  const render::TableShape shape{t->peak_bins, t->peak_layers, t->preint_size, int(t->tf_points.size() / 2)};
+  f.u = render::make_ray_uniforms(s, cv.volume(), render::ValueMap{}, cells, shape, rect, sample_cap(f.key), brick);
+  f.v = render::shared_variant(f.key);
+  f.v.brick = brick != nullptr;  // (the CPU's key keeps its name: "+brick" is added to the stats)
+  f.peak_any = t->peak_any.data();
+  f.preint_any = t->preint_any.data();
+
+  cell_tables(f, cv, cells, fs);
   if (f.key.ray_texture) {
     const auto u = ray_textures_.get(*s.ray_texture, s.scene.render.early_termination);
     f.ray_texture = &u.entry->texels;
@@ -261,7 +276,6 @@ Image CpuRenderer::render_brick(const render::ResidentVolume& v, const ResolvedS
   const int w = rect.w, h = rect.h;
   if (stats) *stats = RenderStats::for_scene(s);
   CpuFrame f = prepare(cv, s, render::GpuPath::Fragment, rect, &brick, stats);  // stop 1: until opaque
-  f.brick = true;
   if (brick.front_opacity && f.ray_texture) f.front_opacity = brick.front_opacity->data();
   Image img(w, h);
   const auto t0 = Clock::now();

@@ -78,6 +78,9 @@ class CpuRenderer : public render::Renderer {
     std::vector<uint8_t> bytes;
     bool any_occupied = true;  // distances: some cell has distance 0 (something to sample)
   };
+  const TfTable& tf_table(const ResolvedScene& s, const std::string& tf_sig, double lo, double hi);
+  const Tables& tables(const ResolvedScene& s, const std::vector<Peak>& peaks, double lo, double hi);
+  void cell_tables(CpuFrame& f, const CpuVolume& cv, const MacrocellGrid& cells, const render::FrameSetup& fs);
   static constexpr size_t kCacheEntries = 4;
   std::vector<TfTable> tf_tables_;
   std::vector<Tables> tables_;

@@ -37,7 +37,7 @@ class RayCaster {
         f_(f),
         segments_(f.key.peaks || f.key.preintegration || f.key.virtual_samples),
         varying_steps_(f.key.differential || f.key.adaptive || f.key.virtual_samples),
-        dense_(!f.key.peaks && !f.key.virtual_samples && !f.key.shading && !varying_steps_ && !f.brick) {}
+        dense_(!f.key.peaks && !f.key.virtual_samples && !f.key.shading && !varying_steps_ && !f.v.brick) {}
 
   RayResult cast(float px, float py) { return setup(px, py) ? walk(0) : result(); }
   RayResult cast_bare(float px, float py, int budget);

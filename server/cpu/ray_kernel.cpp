@@ -97,7 +97,7 @@ bool RayCaster::setup(float px, float py) {
   }
   last_ = int(std::min(std::floor(lattice_index(L_, span_y_)), float(P.sample_cap - 1)));
   k_ = start_walk(L_, span_y_, last_);
-  if (f_.brick && !clip_to_brick(r_, L_, vec2(span_x_, span_y_), last_, k_.own_first, k_.own_last)) {  // none of its points in this brick: nothing to draw here
+  if (V.brick && !clip_to_brick(r_, L_, vec2(span_x_, span_y_), last_, k_.own_first, k_.own_last)) {  // none of its points in this brick: nothing to draw here
     s_.samples = -1.f;
     return false;
   }

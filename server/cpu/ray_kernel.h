@@ -27,9 +27,8 @@ struct CpuFrame {
   // coordinates itself (VoxelGrid): value_scale and value_bias are GL's.
   ray::RayUniforms u{};
   ray::Variant v{};
-  // Distributed rendering: the resident voxels are one brick of the whole volume, whose box,
-  // camera and lattice the frame keeps (u: own_lo, own_hi, open_lo, open_hi, sample_half).
-  bool brick = false;
+  // Distributed rendering (v.brick): the resident voxels are one brick of the whole volume, whose
+  // box, camera and lattice the frame keeps (u: own_lo, own_hi, open_lo, open_hi, sample_half).
   // Ray textures on a brick: the opacity in front of it per pixel of the drawn rect (rows of
   // u.front_opacity_width from (u.tile_x, u.tile_y)); null for the front brick (render/brick.h).
   const float* front_opacity = nullptr;
