@@ -141,6 +141,7 @@ CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, rende
   f.key.cpu = true;
   f.voxels = cv.grid(s.scene.render.filter);
   f.run_lanes = sample_run_lanes();
+  f.dense_runs = dense_runs_;
 
   const TfTable& tf = tf_table(s, fs.tf_sig, lo, hi);
   f.tf = tf.rgba.data();

@@ -44,6 +44,9 @@ class CpuRenderer : public render::Renderer {
   // Off: every ray alone (cast_ray), without the packet leaps of cast_rays. Tests show both
   // give the same pixels and sample counts.
   void set_ray_packets(bool on) { packets_ = on; }
+  // Off: plain DVR walks every point through the shared visit, without the dense_run fast path.
+  // Tests show both give the same pixels and sample counts.
+  void set_dense_runs(bool on) { dense_runs_ = on; }
 
  private:
   // The frame's inputs, from the caches (built on a miss).
@@ -59,6 +62,7 @@ class CpuRenderer : public render::Renderer {
 
   int threads_ = 1;
   bool packets_ = true;
+  bool dense_runs_ = true;
   struct TfTable {
     std::string key;
     std::vector<float> rgba;

@@ -1,8 +1,8 @@
 // One CPU ray: the ray code shared with the GL shader (shaders/ray/*.glsl), compiled as this
 // class's members, its hooks for that code (the field from SIMD sample runs, the tables with one
-// bit per cell), and its state (the structs of shaders/ray/types.glsl). Defined across
-// ray_kernel.cpp (setup, sample runs, entry points), ray_tables-inl.h (table lookups) and
-// ray_walks-inl.h (the walks over the lattice). Included per SIMD target by cpu/ray_kernel.cpp
+// bit per cell, the macrocells, the dense_run fast path), and its state (the structs of
+// shaders/ray/types.glsl). Defined across ray_kernel.cpp (setup, sample runs, entry points),
+// ray_tables-inl.h (table lookups) and dense_run-inl.h (the fast path). Included per SIMD target by cpu/ray_kernel.cpp
 // (Highway's -inl.h convention).
 #if defined(PEAKCAST_CPU_RAY_CASTER_INL_H_) == defined(HWY_TARGET_TOGGLE)
 #ifdef PEAKCAST_CPU_RAY_CASTER_INL_H_
@@ -35,9 +35,8 @@ class RayCaster {
       : P(f.u),
         V(f.v),
         f_(f),
-        segments_(f.key.peaks || f.key.preintegration || f.key.virtual_samples),
-        varying_steps_(f.key.differential || f.key.adaptive || f.key.virtual_samples),
-        dense_(!f.key.peaks && !f.key.virtual_samples && !f.key.shading && !varying_steps_ && !f.v.brick) {}
+        dense_(f.dense_runs && !f.key.peaks && !f.key.virtual_samples && !f.key.shading && !f.key.differential &&
+               !f.key.adaptive && !f.v.brick) {}
 
   RayResult cast(float px, float py) { return setup(px, py) ? walk(0) : result(); }
   RayResult cast_bare(float px, float py, int budget);
@@ -66,6 +65,7 @@ class RayCaster {
 #include "ray/consume.glsl"
 #include "ray/virtual_samples.glsl"
 #include "ray/visit.glsl"
+#include "ray/walks.glsl"
 
   float sample_field(vec3 x) const { return SamplePoint(f_.voxels, x); }
   vec3 field_gradient(vec3 x) const {
@@ -93,27 +93,37 @@ class RayCaster {
   bool peak_cell_any(int i, int j) const { return test_bit(f_.peak_any, size_t(j) * size_t(P.peak_bins) + size_t(i)); }
   // The table at (s_front, s_back); false, leaving `out` alone, where it is exactly zero.
   bool preint_lookup(float s_front, float s_back, vec4& out) const;
-  // The walks' visit of lattice index i with stride m (ray/visit.glsl).
-  bool visit(int i, int m) { return visit(r_, L_, s_, k_, w_, i, m); }
-  // dense_run's opacity for a step other than the table's (a ray texture's multiplier) or the
-  // last point's chord.
-  HWY_NOINLINE float dense_opacity_slow(float T, int i, float dt) {
-    return step_opacity(T, i == k_.ray_last ? chord_at_ends(dt, i, 1, k_.head, k_.tail, k_.ray_last) : dt);
+  // The walks' hooks (ray/walks.glsl): the macrocell tables, one byte per cell in grid order.
+  size_t cell_offset(ivec3 c) const {
+    return size_t(c.x) + size_t(P.cell_grid.x) * (size_t(c.y) + size_t(P.cell_grid.y) * size_t(c.z));
   }
-  bool walk_leaps(float span_y, int first);
-  // From index i on, while the points lie in occupied cells: sample, classify and composite as
-  // sample_visit and consume would, bit for bit, with the ray's colour in locals (the loop-carried
-  // chain through s_ in memory cost a store and a reload per sample). Advances i and visited;
-  // true when the ray stopped.
-  // kCells false: every point (no space skipping), without the cell test.
+  uint cell_distance(ivec3 c) const { return f_.cell_distance[cell_offset(c)]; }
+  int cell_multiplier(ivec3 c) const { return std::clamp(int(f_.cell_stride[cell_offset(c)]), 1, 8); }
+  ivec3 cell_containing(vec3 x) const {
+    return ivec3(cell_of(x.x, P.cell_grid.x - 1), cell_of(x.y, P.cell_grid.y - 1), cell_of(x.z, P.cell_grid.z - 1));
+  }
+  // From index i on, while the points lie in occupied cells (cells: tested as walk_leaps would;
+  // else every point): sample, classify and composite as sample_visit and consume would, bit for
+  // bit, with the ray's colour in locals (the loop-carried chain through s in memory cost a store
+  // and a reload per sample). Only for plain DVR (postclassified or preintegrated, unshaded,
+  // uniform steps, one process); advances i and visited; true when the ray stopped.
+  // Held to the walks without it by tests/gpu/empty_space_test.cpp (DenseRuns).
+  bool dense_run(const Ray&, const Lattice& L, RayState& s, RayWalk& k, int& i, int& visited, int last, bool cells,
+                 vec3 xo, vec3 dv) {
+    if (!dense_) return false;
+    return cells ? dense_loop<true>(L, s, k, i, visited, last, xo, dv) : dense_loop<false>(L, s, k, i, visited, last, xo, dv);
+  }
   template <bool kCells>
-  bool dense_run(int& i, int& visited, vec3 xo, vec3 dv, ivec3 grid);
-  bool walk_cells(float span_x, float span_y);
+  bool dense_loop(const Lattice& L, RayState& s, RayWalk& k, int& i, int& visited, int last, vec3 xo, vec3 dv);
+  // dense_loop's opacity for a step other than the table's (a ray texture's multiplier) or the
+  // last point's chord.
+  HWY_NOINLINE float dense_opacity_slow(const RayWalk& k, float T, int i, float dt) {
+    return step_opacity(T, i == k.ray_last ? chord_at_ends(dt, i, 1, k.head, k.tail, k.ray_last) : dt);
+  }
 
   const CpuFrame& f_;
-  const bool segments_, varying_steps_;
   // Plain DVR (postclassified or preintegrated, unshaded, uniform steps, one process): runs of
-  // occupied points go through dense_run, which holds the colour in registers.
+  // occupied points go through dense_loop, which holds the colour in registers.
   const bool dense_;
   float span_x_ = 0, span_y_ = 0;
   Ray r_;

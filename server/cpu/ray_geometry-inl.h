@@ -24,15 +24,12 @@ namespace {
 
 namespace hn = hwy::HWY_NAMESPACE;
 
-constexpr int kExtension = 1;  // lattice points visited on each side of an occupied cell's run
 constexpr float kFar = 3.0e38f;  // ray/ray_setup.glsl kHuge, for the code outside RayCaster
 
 // The ray and its lattice (shaders/ray/types.glsl); the functions on them are RayCaster's.
 using namespace peakcast::ray;
 #include "ray/types.glsl"
 
-// A float index to int, bounded: a leap far beyond the ray's end stops at `cap`.
-int index_floor_cap(float x, int cap) { return x >= float(cap) ? cap : int(x); }
 // floor(x) clamped to [0, hi]: what a cell index needs, without floor (a library call or a
 // dozen instructions below SSE4.1). Truncation equals floor for x >= 0; x < 0 clamps to 0
 // either way; NaN goes to 0 as the clamp of the GL path's int(floor(NaN)) is undefined anyway.

@@ -1,6 +1,6 @@
-// One ray on the CPU. What it shares with the GL shader (shaders/ray/*.glsl) is compiled into
-// RayCaster (ray_caster-inl.h); the walks over the lattice not shared yet are in ray_walks-inl.h
-// (with the dense_run fast path), the table lookups in ray_tables-inl.h, the geometry helpers in
+// One ray on the CPU. What it shares with the GL shader (shaders/ray/*.glsl), the walks included,
+// is compiled into RayCaster (ray_caster-inl.h); its fast path over dense runs is in
+// dense_run-inl.h, the table lookups in ray_tables-inl.h, the geometry helpers in
 // ray_geometry-inl.h and the 16-ray leaps in leap_packets-inl.h; this file holds the sample runs,
 // the ray's setup and walk, and the entry points. Compiled once per x86 SIMD target (Highway's
 // foreach_target) and chosen at run time: the scalar code gains the target's instructions
@@ -25,7 +25,7 @@
 #include "cpu/leap_packets-inl.h"
 #include "cpu/ray_caster-inl.h"
 #include "cpu/ray_tables-inl.h"
-#include "cpu/ray_walks-inl.h"
+#include "cpu/dense_run-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace peakcast::cpu {
@@ -114,27 +114,7 @@ bool RayCaster::setup(float px, float py) {
 }
 
 RayResult RayCaster::walk(int first) {
-  const render::VariantKey& key = f_.key;
-  bool stopped = false;
-  // A brick starts where the points it samples before its own (RayWalk.behind: one, or two with
-  // virtual samples) are visited as in one process: at them (a walk over every point), one before
-  // them (leaps: whether a point is visited depends on its neighbours only), at the ray's start
-  // (the 3D-DDA: a cell's first point depends on the cells before it).
-  const int behind = key.virtual_samples ? 2 : (segments_ ? 1 : 0);
-  first = std::max(first, k_.own_first - behind - 1);
-  if (!key.space_skipping && !key.adaptive) {
-    int i = std::max(k_.own_first - behind, 0), visited = -1;
-    if (dense_ && i <= last_) {  // the first point by itself (no segment into it), then the run
-      stopped = visit(i++, 1) || dense_run<false>(i, visited, vec3(0.f), vec3(0.f), ivec3(0));
-    }
-    for (; i <= last_ && !stopped; ++i) stopped = visit(i, 1);
-  } else if (!key.adaptive && !key.cell_dda) {
-    stopped = walk_leaps(span_y_, first);
-  } else {
-    stopped = walk_cells(span_x_, span_y_);
-  }
-  if (!stopped && key.virtual_samples) vs_finish(r_, s_, w_, L_, last_, k_.own_last, span_y_);
-  if (!stopped && key.preintegration && !key.virtual_samples) close_segment(r_, s_, span_y_, k_.expect == k_.ray_last + 1);
+  walk_ray(r_, L_, s_, k_, w_, last_, vec2(span_x_, span_y_), first);
   return result();
 }
 

@@ -22,6 +22,7 @@ struct CpuFrame {
   render::VariantKey key;
   VoxelGrid voxels;
   int run_lanes = 8;  // sample_run_lanes()
+  bool dense_runs = true;  // plain DVR's fast path over runs of points (the walks' dense_run hook)
   // The uniforms and switches the shared ray code reads (shaders/ray/uniforms.glsl, variant.glsl),
   // filled by render/ray_uniforms.cpp as for GL. The CPU's sampler reads the voxels in TF
   // coordinates itself (VoxelGrid): value_scale and value_bias are GL's.

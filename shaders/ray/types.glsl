@@ -49,8 +49,8 @@ struct SampleWindow {
   uint own;  // the window's samples owned (bricks): bit 0 the newest (.w) to bit 3 (.x)
 };
 
-// Where a ray's walk stands: the visits' bookkeeping that the walks (raycast_body.glsl, the CPU's
-// ray_walks-inl.h) and the visit (visit.glsl) share.
+// Where a ray's walk stands: the visits' bookkeeping that the walks (walks.glsl) and the visit
+// (visit.glsl) share.
 struct RayWalk {
   int expect;     // the lattice index that continues the last visit without a gap
   int own_first;  // the lattice points the ray composites (a brick's own; else all of them)

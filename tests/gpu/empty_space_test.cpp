@@ -132,6 +132,38 @@ TEST_P(Leaps, CpuRayPacketsEqualSingleRays) {
   EXPECT_EQ(packets.samples, single.samples);
 }
 
+// The CPU backend walks runs of occupied points of plain DVR (post or preintegrated, uniform
+// steps) through its dense_run fast path instead of the shared visit: bit for bit what the shared
+// walks give without it, pixels and sample counts, with space skipping (the runs between leaps)
+// and without (one run along the whole ray), and with a ray texture's step multiplier and
+// early termination (the fast path's slow opacity and its stop).
+TEST_P(Leaps, CpuDenseRunsEqualTheSharedWalks) {
+  auto* cpu = dynamic_cast<cpu::CpuRenderer*>(test::gpu().caster.get());
+  if (!cpu) GTEST_SKIP() << "CPU backend only";
+  const LeapCase& c = GetParam();
+  auto v = test::make_volume(c.kind, c.dims, default_type(c.kind));
+  test::TestVolume gv(v);
+  for (const bool skip : {true, false}) {
+    json render = c.render;
+    render["sampling"] = "uniform";  // (the fast path takes uniform steps, unshaded)
+    render["shading"] = false;
+    render["space_skipping"] = skip;
+    json j = {{"image", {{"width", 61}, {"height", 53}}}, {"tf", tf_points(*v, c.tf)}, {"camera", c.camera},
+              {"render", render}};
+    const ResolvedScene s = test::make_scene(*v, j);
+    render::RenderStats st_dense, st_shared;
+    const Image dense = test::render_gpu(gv, s, render::GpuPath::Fragment, &st_dense);
+    cpu->set_dense_runs(false);
+    const Image shared = test::render_gpu(gv, s, render::GpuPath::Fragment, &st_shared);
+    cpu->set_dense_runs(true);
+    SCOPED_TRACE(st_dense.variant);
+    EXPECT_EQ(st_dense.variant.find("+skip") != std::string::npos, skip);
+    EXPECT_GT(st_shared.samples_mean, 0.0) << "nothing visible: the test would prove nothing";
+    EXPECT_EQ(dense.rgba, shared.rgba);
+    EXPECT_EQ(dense.samples, shared.samples);
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Scenes, Leaps, ::testing::ValuesIn(kCases),
                          [](const ::testing::TestParamInfo<LeapCase>& i) { return std::string(i.param.name); });
 

@@ -1,0 +1,72 @@
+// The CPU's fast path over runs of lattice points in occupied cells (the hook dense_run of
+// shaders/ray/walks.glsl): plain DVR with the ray's colour in locals. Included per SIMD target by
+// cpu/ray_kernel.cpp (Highway's -inl.h convention).
+#if defined(PEAKCAST_CPU_DENSE_RUN_INL_H_) == defined(HWY_TARGET_TOGGLE)
+#ifdef PEAKCAST_CPU_DENSE_RUN_INL_H_
+#undef PEAKCAST_CPU_DENSE_RUN_INL_H_
+#else
+#define PEAKCAST_CPU_DENSE_RUN_INL_H_
+#endif
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include <hwy/highway.h>
+
+#include "cpu/ray_caster-inl.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace peakcast::cpu {
+namespace HWY_NAMESPACE {
+namespace {
+
+template <bool kCells>
+bool RayCaster::dense_loop(const Lattice& L, RayState& st, RayWalk& k, int& i, int& visited, int last, vec3 xo, vec3 dv) {
+  const bool preint = f_.key.preintegration;
+  vec4 acc = st.acc;
+  float samples = st.samples, prev_f = st.prev_f;
+  const int first = i;
+  bool stopped = false;
+  const float dt = lattice_step(L, 0.f, 1.f);  // uniform steps (the ray texture's multiplier in it)
+  const bool whole = dt == P.step;             // the table's own step: no correction
+  while (i <= last) {
+    if constexpr (kCells) {  // walk_leaps's cell test, as it would make it
+      const vec3 x = xo + lattice_t(L, float(i)) * dv;
+      const ivec3 c = cell_containing(x * (1.f / P.cell_edge));
+      if (cell_distance(c) != 0) break;
+    }
+    const float fv = field_at(i, 1);
+    samples += 1.f;
+    vec4 s;
+    if (preint) {  // the segment from the previous point (visited without a gap)
+      if (preint_lookup(prev_f, fv, s)) composite_premultiplied(acc, s, st.dvr_weight);
+    } else if (tf_lookup(fv, s) && s.a < 1.f) {
+      // (The first point is never in a run; the last one's chord is cut at the exit.) One cold
+      // call: more of them made the compiler keep the ray's opacity in memory.
+      const float a = HWY_LIKELY(whole && i != last) ? 1.f - s.a : dense_opacity_slow(k, s.a, i, dt);
+      composite(acc, vec3(s), a * st.dvr_weight);
+    }
+    prev_f = fv;
+    visited = i++;
+    if (acc.a >= st.stop) {
+      stopped = true;
+      break;
+    }
+  }
+  st.acc = acc;
+  st.samples = samples;
+  if (i > first) {  // as the last consume leaves them
+    st.prev_t = lattice_t(L, float(visited));
+    st.prev_f = prev_f;
+    k.expect = visited + 1;
+  }
+  return stopped;
+}
+
+}  // namespace
+}  // namespace HWY_NAMESPACE
+}  // namespace peakcast::cpu
+HWY_AFTER_NAMESPACE();
+
+#endif  // PEAKCAST_CPU_DENSE_RUN_INL_H_
