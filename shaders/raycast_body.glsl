@@ -98,7 +98,7 @@ RayState cast_ray(vec2 pixel) {
   }
 #endif
 #endif
-  walk_ray(r, L, res, walk, window, last, span, 0);
+  walk_ray(r, L, res, walk, window, last, span, 0, walk_kind());
   return res;
 }
 

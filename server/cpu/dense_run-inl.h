@@ -22,7 +22,12 @@ namespace HWY_NAMESPACE {
 namespace {
 
 template <bool kCells>
-bool RayCaster::dense_loop(const Lattice& L, RayState& st, RayWalk& k, int& i, int& visited, int last, vec3 xo, vec3 dv) {
+bool RayCaster::dense_loop(const Lattice& lattice, RayState& st, RayWalk& k, int& i, int& visited, int last, vec3 xo,
+                           vec3 dv) {
+  // Locals: what the loop reads of the references, which the run sampler's stores (floats) could
+  // otherwise alias, would be reloaded after every new run.
+  const Lattice L = lattice;
+  const float stop = st.stop, dvr_weight = st.dvr_weight;
   const bool preint = f_.key.preintegration;
   vec4 acc = st.acc;
   float samples = st.samples, prev_f = st.prev_f;
@@ -40,16 +45,16 @@ bool RayCaster::dense_loop(const Lattice& L, RayState& st, RayWalk& k, int& i, i
     samples += 1.f;
     vec4 s;
     if (preint) {  // the segment from the previous point (visited without a gap)
-      if (preint_lookup(prev_f, fv, s)) composite_premultiplied(acc, s, st.dvr_weight);
+      if (preint_lookup(prev_f, fv, s)) composite_premultiplied(acc, s, dvr_weight);
     } else if (tf_lookup(fv, s) && s.a < 1.f) {
       // (The first point is never in a run; the last one's chord is cut at the exit.) One cold
       // call: more of them made the compiler keep the ray's opacity in memory.
       const float a = HWY_LIKELY(whole && i != last) ? 1.f - s.a : dense_opacity_slow(k, s.a, i, dt);
-      composite(acc, vec3(s), a * st.dvr_weight);
+      composite(acc, vec3(s), a * dvr_weight);
     }
     prev_f = fv;
     visited = i++;
-    if (acc.a >= st.stop) {
+    if (acc.a >= stop) {
       stopped = true;
       break;
     }

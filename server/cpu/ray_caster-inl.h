@@ -93,6 +93,9 @@ class RayCaster {
   bool peak_cell_any(int i, int j) const { return test_bit(f_.peak_any, size_t(j) * size_t(P.peak_bins) + size_t(i)); }
   // The table at (s_front, s_back); false, leaving `out` alone, where it is exactly zero.
   bool preint_lookup(float s_front, float s_back, vec4& out) const;
+  // The shared walk of kind kKind (walk_kind()) over this ray's state.
+  template <int kKind>
+  HWY_NOINLINE void walk_as(int first) { walk_ray(r_, L_, s_, k_, w_, last_, vec2(span_x_, span_y_), first, kKind); }
   // The walks' hooks (ray/walks.glsl): the macrocell tables, one byte per cell in grid order.
   size_t cell_offset(ivec3 c) const {
     return size_t(c.x) + size_t(P.cell_grid.x) * (size_t(c.y) + size_t(P.cell_grid.y) * size_t(c.z));

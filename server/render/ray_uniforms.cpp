@@ -85,6 +85,7 @@ ray::Variant shared_variant(const VariantKey& key) {
   v.peak_xor = key.peaks && key.peak_mode == PeakMode::Xor;
   v.peaks_only = key.peaks && key.peak_mode == PeakMode::PeaksOnly;
   v.preintegration = key.preintegration;
+  v.segments = key.peaks || key.preintegration || key.virtual_samples != 0;
   v.ray_texture = key.ray_texture;
   v.brick = key.brick;
   return v;

@@ -37,6 +37,7 @@
 #ifndef RAY_INLINE
 #define RAY_INLINE __attribute__((always_inline))
 #endif
+#define RAY_LOOP_CHUNK (1 << 20)  // GLSL's is 4096 (llvmpipe's loop limit); here the outer loops run once
 #define RAY_UNIFORMS_BEGIN struct RayUniforms {
 #define RAY_UNIFORMS_END };
 

@@ -9,6 +9,7 @@
 #define SHARED_CONST const
 #define RAY_COLD
 #define RAY_INLINE
+#define RAY_LOOP_CHUNK 4096  // llvmpipe stops any single loop after 65535 iterations (ray/walks.glsl)
 #define RAY_UNIFORMS_BEGIN layout(std140, binding = UBO_RAY) uniform RayUniforms {
 #define RAY_UNIFORMS_END } P;
 
@@ -69,6 +70,11 @@
 #else
 #define V_PREINTEGRATION false
 #endif
+#if defined(PEAKS) || defined(PREINTEGRATION) || defined(VIRTUAL_SAMPLES)
+#define V_SEGMENTS true
+#else
+#define V_SEGMENTS false
+#endif
 #ifdef RAY_TEXTURE
 #define V_RAY_TEXTURE true
 #else
@@ -80,4 +86,5 @@
 #define V_BRICK false
 #endif
 const Variant V = Variant(V_ORTHOGRAPHIC, V_DIFFERENTIAL, V_SHADING, V_ADAPTIVE, V_SPACE_SKIPPING, V_CELL_DDA,
-                          V_VIRTUAL_SAMPLES, V_PEAKS, V_PEAK_XOR, V_PEAKS_ONLY, V_PREINTEGRATION, V_RAY_TEXTURE, V_BRICK);
+                          V_VIRTUAL_SAMPLES, V_PEAKS, V_PEAK_XOR, V_PEAKS_ONLY, V_PREINTEGRATION,
+                          V_SEGMENTS, V_RAY_TEXTURE, V_BRICK);

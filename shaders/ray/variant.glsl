@@ -13,6 +13,7 @@ struct Variant {
   bool peak_xor;        // ... the DVR term left out where a peak was found
   bool peaks_only;      // ... peaks without the DVR term
   bool preintegration;
+  bool segments;        // peaks, preintegration or virtual samples: the segment between samples matters
   bool ray_texture;     // per-ray controls (Raspe 2008): RayState's stop and weights vary per ray
   bool brick;           // distributed rendering: one brick's part of each ray (RayState.draw)
 };

@@ -19,11 +19,9 @@
 
 SHARED_CONST int kExtension = 1;  // lattice points visited on each side of an occupied run
 // Lattice points per inner loop: llvmpipe stops any single loop after 65535 iterations
-// (LP_MAX_TGSI_LOOP_ITERATIONS), far below the per-ray cap, so the walks nest their loops.
-SHARED_CONST int kChunk = 4096;
-
-// Whether the variant looks at the segment between consecutive samples.
-bool segment_methods() { return V.peaks || V.preintegration || V.virtual_samples != 0; }
+// (LP_MAX_TGSI_LOOP_ITERATIONS), far below the per-ray cap, so the walks nest their loops; the
+// CPU's chunk is long enough that its outer loops run once (the preludes' RAY_LOOP_CHUNK).
+SHARED_CONST int kChunk = RAY_LOOP_CHUNK;
 
 // The ray in the macrocells' voxel coordinates, x0 + (t - t_start) dv, and per axis: the step
 // across a face, whether it moves at all (it never crosses a face where it does not), 1 / dv
@@ -38,7 +36,7 @@ struct CellRay {
   vec3 ahead;
 };
 
-CellRay cell_ray(IN(Ray) r, float t_start) {
+RAY_INLINE CellRay cell_ray(IN(Ray) r, float t_start) {
   CellRay g;
   g.t_start = t_start;
   g.x0 = cell_coords(r.o + t_start * r.d);
@@ -60,7 +58,7 @@ vec3 faces_beyond(IN(CellRay) g, ivec3 cell, int reach) {
 int index_at_most(float x, int cap) { return x >= float(cap) ? cap : int(x); }
 
 // Every lattice point from `first` on. True when the ray stopped.
-bool walk_points(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, INOUT(SampleWindow) w, int last, int first) {
+RAY_INLINE bool walk_points(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, INOUT(SampleWindow) w, int last, int first) {
   int i = first;
   int visited = -1;
   int rounds = (last - first + 1) / kChunk + 1;
@@ -76,7 +74,7 @@ bool walk_points(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, 
 
 // Space skipping by leaps from lattice point `first` on (the points before it lie in empty
 // cells). True when the ray stopped.
-bool walk_leaps(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, INOUT(SampleWindow) w, int last, vec2 span, int first) {
+RAY_INLINE bool walk_leaps(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, INOUT(SampleWindow) w, int last, vec2 span, int first) {
   CellRay g = cell_ray(r, 0.0f);
   int i = first;
   int visited = -2;  // the last lattice index visited
@@ -87,13 +85,13 @@ bool walk_leaps(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, I
       ivec3 c = cell_containing((g.x0 + lattice_t(L, float(i)) * g.dv) * (1.0f / P.cell_edge));
       uint empty_distance = cell_distance(c);
       if (empty_distance == 0u) {
-        if (segment_methods() && i >= 1 && visited != i - 1 && visit(r, L, s, k, w, i - 1, 1)) return true;  // the segment into the run
+        if (V.segments && i >= 1 && visited != i - 1 && visit(r, L, s, k, w, i - 1, 1)) return true;  // the segment into the run
         if (visit(r, L, s, k, w, i, 1)) return true;
         visited = i;
         i += 1;
         if (dense_run(r, L, s, k, i, visited, last, true, g.x0, g.dv)) return true;
       } else {
-        if (segment_methods() && visited == i - 1) {  // the segment out of the run
+        if (V.segments && visited == i - 1) {  // the segment out of the run
           if (visit(r, L, s, k, w, i, 1)) return true;
           visited = i;
         }
@@ -109,7 +107,7 @@ bool walk_leaps(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, I
 // owed), visited once the run ends (before an empty cell, a leap or the ray's end), never one
 // visited already. True when the ray stopped.
 bool end_run(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, INOUT(SampleWindow) w, int last, INOUT(int) next, INOUT(int) run_end) {
-  if (!segment_methods() || run_end < 0) return false;
+  if (!V.segments || run_end < 0) return false;
   int end = min(last, run_end + kExtension);
   for (int j = max(next, run_end + 1); j <= end; ++j)
     if (visit(r, L, s, k, w, j, 1)) return true;
@@ -123,13 +121,13 @@ bool end_run(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, INOU
 // cell's end, so the cells' samples cover the ray without gaps or overlaps. Segment methods first
 // visit the points just before the run (an occupied cell next continues the run from its own
 // first point with its own multiplier, as the reference walks it). True when the ray stopped.
-bool visit_cell(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, INOUT(SampleWindow) w, int first, int end, int m, INOUT(int) next) {
-  if (segment_methods())
+RAY_INLINE bool visit_cell(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, INOUT(SampleWindow) w, int first, int end, int m, INOUT(int) next) {
+  if (V.segments)
     for (int e = kExtension; e >= 1; --e)
       if (first - e >= next && visit(r, L, s, k, w, first - e, 1)) return true;
   int i = max(next, first);
-  while (i <= end) {  // in chunks (kChunk)
-    int chunk_end = min(end, i + (kChunk - 1) * m);
+  while (i <= end) {  // in chunks (kChunk; a target without the loop limit takes one)
+    int chunk_end = kChunk > 65535 ? end : min(end, i + (kChunk - 1) * m);
     for (; i <= chunk_end; i += m)
       if (visit(r, L, s, k, w, i, min(m, end + 1 - i))) return true;
   }
@@ -153,7 +151,7 @@ bool leap_cells(IN(CellRay) g, float t_exit, int reach, INOUT(ivec3) cell, INOUT
 }
 
 // The macrocell 3D-DDA from the ray's start. True when the ray stopped.
-bool walk_cells(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, INOUT(SampleWindow) w, int last, vec2 span) {
+RAY_INLINE bool walk_cells(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, INOUT(SampleWindow) w, int last, vec2 span) {
   CellRay g = cell_ray(r, span.x);
   ivec3 cell = cell_containing(g.x0 / P.cell_edge);
   vec3 t_delta = mix(vec3(kHuge), P.cell_edge * abs(g.inv_dv), g.moves);
@@ -193,17 +191,27 @@ bool walk_cells(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, I
   return end_run(r, L, s, k, w, last, next, run_end);  // a run that reaches the last cell (or the guard)
 }
 
-// The ray's walk from lattice point `first` (leaps only: the points before it lie in empty
-// cells), then its last segment. A brick starts where the points it samples before its own
-// (k.behind: one, or two with virtual samples) are visited as in one process: at them (every
-// point), one before them (leaps: whether a point is visited depends on its neighbours only),
-// at the ray's start (the 3D-DDA: a cell's first point depends on the cells before it).
-void walk_ray(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, INOUT(SampleWindow) w, int last, vec2 span, int first) {
-  int behind = V.virtual_samples != 0 ? 2 : (segment_methods() ? 1 : 0);
+// Which walk the variant takes (walk_ray's `kind`).
+SHARED_CONST int kWalkPoints = 0;
+SHARED_CONST int kWalkLeaps = 1;
+SHARED_CONST int kWalkCells = 2;
+int walk_kind() {
+  if (!V.space_skipping && !V.adaptive) return kWalkPoints;
+  return !V.adaptive && !V.cell_dda ? kWalkLeaps : kWalkCells;
+}
+
+// The ray's walk of the given kind (walk_kind(); a constant, so the others fold away) from
+// lattice point `first` (leaps only: the points before it lie in empty cells), then its last
+// segment. A brick starts where the points it samples before its own (k.behind: one, or two with
+// virtual samples) are visited as in one process: at them (every point), one before them (leaps:
+// whether a point is visited depends on its neighbours only), at the ray's start (the 3D-DDA: a
+// cell's first point depends on the cells before it).
+RAY_INLINE void walk_ray(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, INOUT(SampleWindow) w, int last, vec2 span, int first, int kind) {
+  int behind = V.virtual_samples != 0 ? 2 : (V.segments ? 1 : 0);
   bool stopped;
-  if (!V.space_skipping && !V.adaptive)
+  if (kind == kWalkPoints)
     stopped = walk_points(r, L, s, k, w, last, max(k.own_first - behind, 0));
-  else if (!V.adaptive && !V.cell_dda)
+  else if (kind == kWalkLeaps)
     stopped = walk_leaps(r, L, s, k, w, last, span, max(first, k.own_first - behind - 1));
   else
     stopped = walk_cells(r, L, s, k, w, last, span);

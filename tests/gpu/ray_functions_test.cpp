@@ -118,6 +118,7 @@ Variant variant(Config c) {
   v.virtual_samples = c == Config::Persp ? 3 : 0;
   v.peaks = v.peak_xor = c == Config::Peaks;
   v.preintegration = c == Config::Preint;
+  v.segments = v.peaks || v.preintegration || v.virtual_samples != 0;
   v.ray_texture = true;  // the table's weights are not 1
   return v;
 }
