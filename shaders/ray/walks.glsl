@@ -27,6 +27,8 @@ SHARED_CONST int kChunk = RAY_LOOP_CHUNK;
 // across a face, whether it moves at all (it never crosses a face where it does not), 1 / dv
 // (0 there), and the offset of the face it leaves a cell by (1 going up, 0 going down).
 struct CellRay {
+  float edge;  // the macrocells' edge in voxels, and their grid (copies of P's: read once per ray)
+  ivec3 grid;
   vec3 x0;
   float t_start;
   vec3 dv;
@@ -38,6 +40,8 @@ struct CellRay {
 
 RAY_INLINE CellRay cell_ray(IN(Ray) r, float t_start) {
   CellRay g;
+  g.edge = P.cell_edge;
+  g.grid = P.cell_grid;
   g.t_start = t_start;
   g.x0 = cell_coords(r.o + t_start * r.d);
   g.dv = r.d / P.spacing;
@@ -51,7 +55,7 @@ RAY_INLINE CellRay cell_ray(IN(Ray) r, float t_start) {
 // Per axis, where the ray leaves the cube of cells within `reach` of `cell` (kHuge on an axis it
 // does not move along); reach 0: the cell itself.
 vec3 faces_beyond(IN(CellRay) g, ivec3 cell, int reach) {
-  return mix(vec3(kHuge), g.t_start + ((vec3(cell + g.stp * reach) + g.ahead) * P.cell_edge - g.x0) * g.inv_dv, g.moves);
+  return mix(vec3(kHuge), g.t_start + ((vec3(cell + g.stp * reach) + g.ahead) * g.edge - g.x0) * g.inv_dv, g.moves);
 }
 
 // A float index to int, at most `cap`: a leap far beyond the ray's end stops there.
@@ -78,11 +82,11 @@ RAY_INLINE bool walk_leaps(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(Ra
   CellRay g = cell_ray(r, 0.0f);
   int i = first;
   int visited = -2;  // the last lattice index visited
-  int rounds = (last + 2 + 8 * (P.cell_grid.x + P.cell_grid.y + P.cell_grid.z)) / kChunk + 1;
+  int rounds = (last + 2 + 8 * (g.grid.x + g.grid.y + g.grid.z)) / kChunk + 1;
   for (int round = 0; round < rounds && i <= last; ++round)
     for (int n = 0; n < kChunk && i <= last; ++n) {
       // (a point within rounding of a face may get either cell: both ranges hold what it reads)
-      ivec3 c = cell_containing((g.x0 + lattice_t(L, float(i)) * g.dv) * (1.0f / P.cell_edge));
+      ivec3 c = cell_containing((g.x0 + lattice_t(L, float(i)) * g.dv) * (1.0f / g.edge));
       uint empty_distance = cell_distance(c);
       if (empty_distance == 0u) {
         if (V.segments && i >= 1 && visited != i - 1 && visit(r, L, s, k, w, i - 1, 1)) return true;  // the segment into the run
@@ -142,9 +146,9 @@ bool leap_cells(IN(CellRay) g, float t_exit, int reach, INOUT(ivec3) cell, INOUT
   float t_leave = min(min(t_face.x, t_face.y), t_face.z);
   if (t_leave >= t_exit) return false;
   vec3 x = g.x0 + (t_leave - g.t_start) * g.dv;
-  ivec3 beyond = clamp(ivec3(floor(x / P.cell_edge)), cell - reach, cell + reach);
+  ivec3 beyond = clamp(ivec3(floor(x / g.edge)), cell - reach, cell + reach);
   cell = ivec3(mix(vec3(beyond), vec3(cell + g.stp * (reach + 1)), lessThanEqual(t_face, vec3(t_leave))));
-  if (any(lessThan(cell, ivec3(0))) || any(greaterThanEqual(cell, P.cell_grid))) return false;
+  if (any(lessThan(cell, ivec3(0))) || any(greaterThanEqual(cell, g.grid))) return false;
   t_max = faces_beyond(g, cell, 0);
   t_in = t_leave;
   return true;
@@ -153,14 +157,14 @@ bool leap_cells(IN(CellRay) g, float t_exit, int reach, INOUT(ivec3) cell, INOUT
 // The macrocell 3D-DDA from the ray's start. True when the ray stopped.
 RAY_INLINE bool walk_cells(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayWalk) k, INOUT(SampleWindow) w, int last, vec2 span) {
   CellRay g = cell_ray(r, span.x);
-  ivec3 cell = cell_containing(g.x0 / P.cell_edge);
-  vec3 t_delta = mix(vec3(kHuge), P.cell_edge * abs(g.inv_dv), g.moves);
+  ivec3 cell = cell_containing(g.x0 / g.edge);
+  vec3 t_delta = mix(vec3(kHuge), g.edge * abs(g.inv_dv), g.moves);
   vec3 t_max = faces_beyond(g, cell, 0);
   float t_in = span.x;
   int next = 0;      // the first lattice index not yet visited
   int run_end = -1;  // the last index of the run whose points after it are owed (end_run)
-  for (int guard = 0; guard < 4 * (P.cell_grid.x + P.cell_grid.y + P.cell_grid.z) + 4; ++guard) {
-    ivec3 c = clamp(cell, ivec3(0), P.cell_grid - 1);
+  for (int guard = 0; guard < 4 * (g.grid.x + g.grid.y + g.grid.z) + 4; ++guard) {
+    ivec3 c = clamp(cell, ivec3(0), g.grid - 1);
     bool occupied = true;
     if (V.space_skipping) {
       uint empty_distance = cell_distance(c);
@@ -172,7 +176,7 @@ RAY_INLINE bool walk_cells(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(Ra
       }
     }
     float t_out = min(min(t_max.x, t_max.y), t_max.z);
-    bool final_cell = t_out >= span.y || any(lessThan(cell, ivec3(0))) || any(greaterThanEqual(cell, P.cell_grid));
+    bool final_cell = t_out >= span.y || any(lessThan(cell, ivec3(0))) || any(greaterThanEqual(cell, g.grid));
     if (occupied) {  // lattice points with t in [t_in, t_out); all remaining ones in the last cell
       int first = index_at_most(ceil(lattice_index(L, t_in)), last + 1);
       int end = final_cell ? last : min(last, index_at_most(ceil(lattice_index(L, t_out)), last + 1) - 1);
