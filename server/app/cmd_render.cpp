@@ -12,7 +12,7 @@
 #include "core/volume_io.h"
 #include "distributed/brick_sequence.h"
 #include "encode/png.h"
-#include "reference/cpu_raycaster.h"
+#include "reference/reference_renderer.h"
 #include "reference/metrics.h"
 #include "render/backend.h"
 
@@ -122,7 +122,7 @@ void add_render_commands(CLI::App& app, Runner& run) {
       render::RenderBackend b = render::open_backend(render::requested_backend(ra->backend), "", {}, ra->program_cache);
       auto gv = b.renderer->make_resident(ls.volume);
       render::RenderStats st;
-      const auto path = ra->path == "compute" ? render::GpuPath::Compute : render::GpuPath::Fragment;
+      const auto path = ra->path == "compute" ? render::RenderPath::Compute : render::RenderPath::Fragment;
       Image img = b.renderer->render(*gv, ls.scene, path, &st);
       encode::write_png(img, ra->out);
       std::printf("wrote %s: %dx%d, %s, %s\n", ra->out.c_str(), img.width, img.height, st.to_string().c_str(),

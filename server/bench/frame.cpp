@@ -60,7 +60,7 @@ void run_readback(const ReadbackArgs& a) {
     for (const auto& p : a.paths) {
       const ResolvedScene s = bench_scene(*vol, size, "trilinear");
       render::RenderRequest req;
-      req.path = p == "compute" ? render::GpuPath::Compute : render::GpuPath::Fragment;
+      req.path = p == "compute" ? render::RenderPath::Compute : render::RenderPath::Fragment;
       const size_t n = std::size(cases);
       std::vector<std::vector<double>> frame(n), rend(n), rb(n), flip(n), conv(n);
       // Cases take turns within each round so drift (other jobs on the machine) hits all alike.
@@ -118,8 +118,8 @@ void run_switch(const SwitchArgs& a) {
   {  // warm-up: compile both variants so no measured frame includes a shader compile
     auto warm_resident = caster.make_resident(vol);
     const render::ResidentVolume& warm = *warm_resident;
-    caster.render(warm, lin, render::GpuPath::Fragment);
-    caster.render(warm, cub, render::GpuPath::Fragment);
+    caster.render(warm, lin, render::RenderPath::Fragment);
+    caster.render(warm, cub, render::RenderPath::Fragment);
   }
   std::printf("%-28s %9s %10s %13s %14s %15s %14s\n", "macrocells", "loader_ms", "upload_ms", "render_cells",
               "first_frame_ms", "first_cubic_ms", "stall_ms");
@@ -137,10 +137,10 @@ void run_switch(const SwitchArgs& a) {
       const render::ResidentVolume& gv = *resident;
       const auto t1 = Clock::now();
       render::RenderStats st;
-      caster.render(gv, lin, render::GpuPath::Fragment, &st);
+      caster.render(gv, lin, render::RenderPath::Fragment, &st);
       const double first = ms_since(t1);
       const auto t2 = Clock::now();
-      caster.render(gv, cub, render::GpuPath::Fragment);
+      caster.render(gv, cub, render::RenderPath::Fragment);
       const double first_cubic = ms_since(t2);
       const double stall = ms_since(t0);
       std::printf("%-28s %9.0f %10.0f %13.0f %14.0f %15.0f %14.0f   (first frame: GPU %.0f ms, tables %.0f ms)\n",

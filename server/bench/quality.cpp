@@ -27,7 +27,7 @@
 #include "core/sampling.h"
 #include "core/volume_io.h"
 #include "encode/png.h"
-#include "reference/cpu_raycaster.h"
+#include "reference/reference_renderer.h"
 #include "reference/metrics.h"
 #include "render/backend.h"
 #include "render/renderer_seam.h"
@@ -199,7 +199,7 @@ int run_quality(const QualityArgs& a) {
         render::RenderStats st;
         Image img;
         for (int f = 0; f <= a.frames; ++f) {
-          img = caster.render(gv, s, render::GpuPath::Fragment, &st);
+          img = caster.render(gv, s, render::RenderPath::Fragment, &st);
           if (f > 0) ms.push_back(st.render_ms);
         }
         QualityRow r;
@@ -232,7 +232,7 @@ int run_quality(const QualityArgs& a) {
       render::RendererSeam::force_variant(caster, std::move(f));
       std::vector<double> ms;
       for (int i = 0; i <= a.frames; ++i) {
-        caster.render(gv, s, render::GpuPath::Fragment, &st);
+        caster.render(gv, s, render::RenderPath::Fragment, &st);
         if (i > 0) ms.push_back(st.render_ms);
       }
       render::RendererSeam::force_variant(caster, nullptr);

@@ -15,7 +15,7 @@
 #include "core/volume_io.h"
 #include "core/peaks.h"
 #include "core/preintegration.h"
-#include "reference/cpu_raycaster.h"
+#include "reference/reference_renderer.h"
 #include "reference/metrics.h"
 #include "render/backend.h"
 
@@ -101,7 +101,7 @@ void add_raycast_peaks_commands(CLI::App& app, Runner& run) {
           const glm::dvec3 c = s.camera.center;
           s.camera.eye = c + (s.camera.eye - c).z * glm::dvec3(0.55, 0.45, 0.7);
           for (const auto& p : a->paths) {
-            const auto path = p == "compute" ? render::GpuPath::Compute : render::GpuPath::Fragment;
+            const auto path = p == "compute" ? render::RenderPath::Compute : render::RenderPath::Fragment;
             std::vector<double> full_ms, bare_ms;
             render::RenderStats st, bst;
             Image img;
@@ -172,7 +172,7 @@ void add_raycast_peaks_commands(CLI::App& app, Runner& run) {
         render::RenderStats st;
         Image img;
         for (int f = 0; f <= pa->frames; ++f) {
-          img = caster.render(gv, s, render::GpuPath::Fragment, &st);
+          img = caster.render(gv, s, render::RenderPath::Fragment, &st);
           if (f > 0) ms.push_back(st.render_ms);
         }
         std::printf("%-8s %9.1f %8.1f %14s %12.1f %12.1f\n", method, median(ms), st.samples_mean, st.variant.c_str(),

@@ -13,7 +13,7 @@
 #include "bench/bench_util.h"
 #include "bench/commands.h"
 #include "core/volume_io.h"
-#include "reference/cpu_raycaster.h"
+#include "reference/reference_renderer.h"
 #include "reference/metrics.h"
 #include "render/backend.h"
 
@@ -40,7 +40,7 @@ int run_sampling_bench(const SamplingBenchArgs& a) {
     std::vector<double> ms;
     render::RenderStats st;
     for (int f = 0; f <= a.frames; ++f) {
-      t.img = caster.render(gv, s, render::GpuPath::Fragment, &st);
+      t.img = caster.render(gv, s, render::RenderPath::Fragment, &st);
       if (f > 0) ms.push_back(st.render_ms);
     }
     t.ms = median(ms);

@@ -41,7 +41,7 @@ int run_scene_bench(const SceneBenchArgs& a) {
   const double upload_total_ms = ms_between(t_upload, std::chrono::steady_clock::now());
   double first_frame_ms = 0;
   render::RenderRequest req;
-  req.path = a.path == "compute" ? render::GpuPath::Compute : render::GpuPath::Fragment;
+  req.path = a.path == "compute" ? render::RenderPath::Compute : render::RenderPath::Fragment;
   req.output = render::RenderOutput::Rgb8;  // what a viewer's stream renders: no sample counts
   std::vector<double> frame_ms, render_ms, gpu_ms;
   render::RenderStats st;

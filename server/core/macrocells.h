@@ -38,7 +38,7 @@ MacrocellGrid build_macrocells(const Volume& volume, int cell = 0,
 
 // The grids a volume's renders use (default cell size), built once per volume off the render
 // thread: the server builds them on the loader pool with the volume (VolumeEntry) and hands
-// them to GpuVolume, so a session switching volumes does not stall every other session.
+// them to GlVolume, so a session switching volumes does not stall every other session.
 struct VolumeMacrocells {
   std::shared_ptr<const MacrocellGrid> trilinear, tricubic;
   double build_ms = 0.0;  // both grids, wall time

@@ -125,7 +125,7 @@ void CpuRenderer::cell_tables(CpuFrame& f, const CpuVolume& cv, const MacrocellG
   }
 }
 
-CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, render::GpuPath path, const PixelRect& rect,
+CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, render::RenderPath path, const PixelRect& rect,
                               const render::Brick* brick, RenderStats* stats) {
   const MacrocellGrid& cells = cv.macrocells(s.scene.render.filter);
   render::SetupOptions o;
@@ -276,7 +276,7 @@ Image CpuRenderer::render_brick(const render::ResidentVolume& v, const ResolvedS
   const PixelRect rect = render::check_brick_frame(s, brick, spacing, tile);
   const int w = rect.w, h = rect.h;
   if (stats) *stats = RenderStats::for_scene(s);
-  CpuFrame f = prepare(cv, s, render::GpuPath::Fragment, rect, &brick, stats);  // stop 1: until opaque
+  CpuFrame f = prepare(cv, s, render::RenderPath::Fragment, rect, &brick, stats);  // stop 1: until opaque
   if (brick.front_opacity && f.ray_texture) f.front_opacity = brick.front_opacity->data();
   Image img(w, h);
   const auto t0 = Clock::now();
@@ -311,7 +311,7 @@ Image CpuRenderer::render_brick(const render::ResidentVolume& v, const ResolvedS
   return img;
 }
 
-Image CpuRenderer::render_bare(const render::ResidentVolume& v, const ResolvedScene& s, render::GpuPath path,
+Image CpuRenderer::render_bare(const render::ResidentVolume& v, const ResolvedScene& s, render::RenderPath path,
                                const Image& full, RenderStats* stats) {
   const CpuVolume& cv = cpu_volume(v);
   const int w = s.scene.width, h = s.scene.height;

@@ -34,7 +34,7 @@ class CpuRenderer : public render::Renderer {
   // is ignored: both draw the same pixels.
   render::RenderResult render(const render::ResidentVolume& volume, const ResolvedScene& scene,
                               const render::RenderRequest& request, render::RenderStats* stats = nullptr) override;
-  Image render_bare(const render::ResidentVolume& volume, const ResolvedScene& scene, render::GpuPath path,
+  Image render_bare(const render::ResidentVolume& volume, const ResolvedScene& scene, render::RenderPath path,
                     const Image& full, render::RenderStats* stats = nullptr) override;
   int sample_cap(const render::VariantKey&) const override;
 
@@ -50,7 +50,7 @@ class CpuRenderer : public render::Renderer {
 
  private:
   // The frame's inputs, from the caches (built on a miss).
-  CpuFrame prepare(const CpuVolume& volume, const ResolvedScene& scene, render::GpuPath path,
+  CpuFrame prepare(const CpuVolume& volume, const ResolvedScene& scene, render::RenderPath path,
                    const render::PixelRect& rect, const render::Brick* brick, render::RenderStats* stats);
   // Calls fn(x0, x1, y) for the rows of every tile of `rect` (rect-relative pixels), tiles
   // spread over the threads.

@@ -271,7 +271,7 @@ render::RenderResult MpiRenderer::render(const render::ResidentVolume& v, const 
   }
 }
 
-Image MpiRenderer::render_bare(const render::ResidentVolume&, const ResolvedScene&, render::GpuPath, const Image&,
+Image MpiRenderer::render_bare(const render::ResidentVolume&, const ResolvedScene&, render::RenderPath, const Image&,
                                render::RenderStats*) {
   throw std::invalid_argument("the bare sampling loop is not measured under MPI");
 }

@@ -18,7 +18,7 @@
 #include "net/http_text.h"
 #include "net/static_files.h"
 #include "net/session_registry.h"
-#include "session/gpu_residency.h"
+#include "session/residency.h"
 #include "session/limits.h"
 #include "session/render_service.h"
 #include "session/upload_store.h"
@@ -68,7 +68,7 @@ std::vector<std::filesystem::path> read_roots(const ServerConfig& c);
 struct AppContext {
   ServerConfig config;
   Metrics metrics;
-  GpuResidency residency;  // the GPU budget's one owner
+  Residency residency;  // the GPU budget's one owner
   VolumeStore volumes;
   UploadStore uploads;
   RenderService render;

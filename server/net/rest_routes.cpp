@@ -6,7 +6,7 @@
 
 #include <boost/asio/post.hpp>
 
-#include "reference/cpu_raycaster.h"
+#include "reference/reference_renderer.h"
 #include "render/variant.h"
 #include "session/data_listing.h"
 #include "session/protocol.h"

@@ -5,7 +5,7 @@
 #include <boost/asio/post.hpp>
 
 #include "net/ws_session.h"
-#include "reference/cpu_raycaster.h"
+#include "reference/reference_renderer.h"
 #include "session/protocol.h"
 
 namespace peakcast::net {

@@ -1,7 +1,7 @@
-// The converged reference (cpu_raycaster.h render_converged): the optical model itself, the ray
+// The converged reference (reference_renderer.h render_converged): the optical model itself, the ray
 // cut at voxel faces and TF breakpoints, each piece integrated by the midpoint rule and refined
 // until the image stops changing.
-#include "reference/cpu_raycaster.h"
+#include "reference/reference_renderer.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-// What every reference ray shares (cpu_raycaster.cpp, converged.cpp): the frame of a scene (view,
+// What every reference ray shares (reference_renderer.cpp, converged.cpp): the frame of a scene (view,
 // range, filter, clip), the front-to-back accumulator, and the loop over an image's pixels.
 // Internal to the reference renderer.
 #pragma once

@@ -27,7 +27,7 @@ struct PixelRect {
 };
 
 struct RenderRequest {
-  GpuPath path = GpuPath::Fragment;
+  RenderPath path = RenderPath::Fragment;
   RenderOutput output = RenderOutput::Float;
   // Rgb8 only: also read back the per-pixel sample counts (4 more bytes per pixel) so the stats
   // carry samples per ray. Float always reads them (they are part of the Image).

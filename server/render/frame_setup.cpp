@@ -38,7 +38,7 @@ const Occupancy& OccupancyCache::get(const std::string& key, const std::function
   return *entries_.front().occupancy;
 }
 
-FrameSetup setup_frame(const ResidentVolume& gv, const ResolvedScene& s, GpuPath path, const SetupOptions& o,
+FrameSetup setup_frame(const ResidentVolume& gv, const ResolvedScene& s, RenderPath path, const SetupOptions& o,
                        OccupancyCache& cache, size_t& builds) {
   static const Occupancy kNoSkipping;
   FrameSetup f;

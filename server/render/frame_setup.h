@@ -1,7 +1,7 @@
 // What every backend derives from a scene before it draws, on the host: the TF's peaks, the
 // macrocell occupancy (cached on the TF), the variant, and the per-TF tables (the TF baked for
 // the scene's step, the peak table in TF coordinates, the preintegration table). The GL
-// backend uploads them (raycaster.cpp, raycaster_tables.cpp); the CPU backend reads them.
+// backend uploads them (gl/gl_renderer.cpp, gl/gl_renderer_tables.cpp); the CPU backend reads them.
 #pragma once
 
 #include <functional>
@@ -52,7 +52,7 @@ struct SetupOptions {
   const std::function<void(VariantKey&)>* force_variant = nullptr;
 };
 
-FrameSetup setup_frame(const ResidentVolume& volume, const ResolvedScene& s, GpuPath path, const SetupOptions& o,
+FrameSetup setup_frame(const ResidentVolume& volume, const ResolvedScene& s, RenderPath path, const SetupOptions& o,
                        OccupancyCache& cache, size_t& builds);
 
 // The empty-space distance per cell a traversal reads: the occupancy's, or, with leaps off

@@ -1,4 +1,4 @@
-// The ray caster's interface, whichever backend draws: the GL ray caster (render/raycaster.h,
+// The ray caster's interface, whichever backend draws: the GL ray caster (gl/gl_renderer.h,
 // shaders/) or the native CPU one (cpu/cpu_renderer.h). Both take the same scene contract
 // (docs/scenes.md), choose the same variant and produce the same outputs; render/backend.h picks one.
 #pragma once
@@ -36,7 +36,7 @@ class Renderer {
   virtual RenderResult render(const ResidentVolume& volume, const ResolvedScene& scene, const RenderRequest& request,
                               RenderStats* stats = nullptr) = 0;
   // The whole image as floats (tests, CLI, reference comparisons).
-  Image render(const ResidentVolume& volume, const ResolvedScene& scene, GpuPath path = GpuPath::Fragment,
+  Image render(const ResidentVolume& volume, const ResolvedScene& scene, RenderPath path = RenderPath::Fragment,
                RenderStats* stats = nullptr) {
     RenderRequest req;
     req.path = path;
@@ -49,7 +49,7 @@ class Renderer {
   // premultiplied, no background; samples -1 where the ray owns no lattice point here.
   virtual Image render_brick(const ResidentVolume& volume, const ResolvedScene& scene, const Brick& brick,
                              RenderStats* stats = nullptr, std::optional<PixelRect> rect = std::nullopt) = 0;
-  virtual Image render_bare(const ResidentVolume& volume, const ResolvedScene& scene, GpuPath path, const Image& full,
+  virtual Image render_bare(const ResidentVolume& volume, const ResolvedScene& scene, RenderPath path, const Image& full,
                             RenderStats* stats = nullptr) = 0;
   // The most samples a ray of this variant takes (kMaxSamplesPerRay, or less where a driver
   // bounds a shader's loops: llvmpipe); rays that reach it are counted in the stats.

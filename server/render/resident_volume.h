@@ -1,5 +1,5 @@
 // A volume made ready for one rendering backend, with its macrocell grids (docs/architecture.md):
-// the GL backend's GpuVolume (a 3D texture) or the CPU backend's CpuVolume (the host voxels).
+// the GL backend's GlVolume (a 3D texture) or the CPU backend's CpuVolume (the host voxels).
 // One per loaded volume, shared by every session that views it; render thread only.
 #pragma once
 
@@ -35,7 +35,7 @@ class ResidentVolume {
   double tf_hi() const { return hi_; }
   // Frees the volume's host voxels (Volume::drop_voxels) when the backend holds its own copy
   // and both grids exist; false (nothing freed) otherwise. The server calls it only for a copy
-  // whose voxels live elsewhere: its probes read the host voxels (GpuResidency).
+  // whose voxels live elsewhere: its probes read the host voxels (Residency).
   virtual bool drop_host_voxels() = 0;
   // The voxels live in the ranks' bricks of a distributed volume, not in this process.
   bool voxels_elsewhere() const { return elsewhere_; }

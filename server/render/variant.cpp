@@ -54,7 +54,7 @@ std::vector<std::string> VariantKey::defines() const {
 }
 
 std::string VariantKey::name() const {
-  std::string n = cpu ? "cpu" : path == GpuPath::Compute ? "comp" : "frag";
+  std::string n = cpu ? "cpu" : path == RenderPath::Compute ? "comp" : "frag";
   n += tricubic ? "+tricubic" : "+trilinear";
   if (peaks) n += std::string("+peaks:") + to_string(peak_mode);
   if (preintegration) n += "+preint";
@@ -92,13 +92,13 @@ nlohmann::json capabilities() {
           {"still_formats", {"jpeg", "png"}}};
 }
 
-VariantKey choose_variant(const ResolvedScene& s, int64_t empty_cells, GpuPath path, size_t peak_count) {
+VariantKey choose_variant(const ResolvedScene& s, int64_t empty_cells, RenderPath path, size_t peak_count) {
   VariantKey k;
   k.path = path;
   k.tricubic = s.scene.render.filter == Filter::Tricubic;
   k.shading = s.scene.render.shading;
   // Virtual samples skip cells too: their cells' ranges are joined over the Catmull-Rom
-  // window's reach and widened by Lee's (M - m)/8 (Raycaster::prepare).
+  // window's reach and widened by Lee's (M - m)/8 (GlRenderer::prepare).
   k.space_skipping = s.scene.render.space_skipping && empty_cells > 0;
   k.orthographic = s.camera.orthographic;
   k.differential = s.scene.render.sampling == Sampling::Differential && !s.camera.orthographic;

@@ -11,10 +11,10 @@
 
 namespace peakcast::render {
 
-enum class GpuPath { Fragment, Compute };
+enum class RenderPath { Fragment, Compute };
 
 struct VariantKey {
-  GpuPath path = GpuPath::Fragment;
+  RenderPath path = RenderPath::Fragment;
   bool cpu = false;  // drawn by the CPU backend (cpu/): its name starts "cpu" instead of the GL path
   bool tricubic = false;
   bool shading = false;
@@ -45,6 +45,6 @@ struct VariantKey {
 nlohmann::json capabilities();
 
 // peak_count: peaks of the scene's TF (no peaks -> no peak-finding code).
-VariantKey choose_variant(const ResolvedScene& scene, int64_t empty_cells, GpuPath path, size_t peak_count = 0);
+VariantKey choose_variant(const ResolvedScene& scene, int64_t empty_cells, RenderPath path, size_t peak_count = 0);
 
 }  // namespace peakcast::render

@@ -27,7 +27,7 @@ struct RenderService::Impl {
   std::deque<Submitted> submitted;
 };
 
-RenderService::RenderService(GpuResidency& residency, Metrics& metrics, RenderServiceOptions options)
+RenderService::RenderService(Residency& residency, Metrics& metrics, RenderServiceOptions options)
     : residency_(residency), metrics_(metrics), options_(std::move(options)), scheduler_(options_.scheduling) {}
 
 RenderService::~RenderService() { stop(); }

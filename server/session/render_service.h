@@ -14,7 +14,7 @@
 #include "core/metrics.h"
 #include "encode/encode_pool.h"
 #include "render/renderer.h"
-#include "session/gpu_residency.h"
+#include "session/residency.h"
 #include "session/scheduler.h"
 
 namespace peakcast {
@@ -23,7 +23,7 @@ struct RenderServiceOptions {
   std::filesystem::path shader_dir;
   int encode_threads = 2;
   SchedulerOptions scheduling;
-  std::string egl_device;  // gpu::EglContext::create's choice; empty: PEAKCAST_EGL_DEVICE, else auto
+  std::string egl_device;  // gl::EglContext::create's choice; empty: PEAKCAST_EGL_DEVICE, else auto
   std::string backend;     // auto | gl | cpu (render/backend.h); empty: PEAKCAST_BACKEND, else auto
   std::string program_cache;  // auto | off | a folder (render/backend.h); empty: PEAKCAST_PROGRAM_CACHE
   // Distributed rendering (mpirun peakcast serve): the opened backend's renderer handed to this,
@@ -34,7 +34,7 @@ struct RenderServiceOptions {
 
 class RenderService {
  public:
-  RenderService(GpuResidency& residency, Metrics& metrics, RenderServiceOptions options);
+  RenderService(Residency& residency, Metrics& metrics, RenderServiceOptions options);
   ~RenderService();
 
   // Opens the backend on the render thread (the GL context for gl); throws if that fails.
@@ -69,7 +69,7 @@ class RenderService {
   void still_turn_done(Scheduler::Work& w);
   void refuse(StillJob& job, const std::string& code, const std::string& message);
 
-  GpuResidency& residency_;
+  Residency& residency_;
   Metrics& metrics_;
   RenderServiceOptions options_;
   Scheduler scheduler_;

@@ -41,7 +41,7 @@ nlohmann::json VolumeEntry::info(bool with_histogram) const {
   return j;
 }
 
-VolumeStore::VolumeStore(std::vector<fs::path> dirs, GpuResidency& residency, LoadOptions options, VolumeLoader loader)
+VolumeStore::VolumeStore(std::vector<fs::path> dirs, Residency& residency, LoadOptions options, VolumeLoader loader)
     : dirs_(std::move(dirs)), residency_(residency), options_(options), loader_(std::move(loader)), in_process_(!loader_) {
   if (!loader_)
     loader_ = [](const fs::path& path, const LoadOptions& o) {
@@ -104,7 +104,7 @@ void VolumeStore::finish_entry(const std::shared_ptr<VolumeEntry>& e) {
     for (auto it = entries_.begin(); it != entries_.end();)
       it = !it->second->preloaded && it->second.use_count() == 1 ? entries_.erase(it) : std::next(it);
   });
-  // Here, on the loader pool, not on the render thread at first use (GpuVolume takes them): the
+  // Here, on the loader pool, not on the render thread at first use (GlVolume takes them): the
   // em volume's two grids take ~0.6 s of CPU. After admission, so a refused volume costs none.
   if (e->volume->has_voxels()) e->macrocells = build_volume_macrocells(*e->volume);
 }

@@ -1,6 +1,6 @@
 // The server's volumes: loaded from the configured data directories (or preloaded by the
 // operator), shared by every session that views them. The GPU memory budget belongs to the
-// GpuResidency: the store asks it before keeping a volume.
+// Residency: the store asks it before keeping a volume.
 #pragma once
 
 #include <algorithm>
@@ -18,7 +18,7 @@
 #include "core/macrocells.h"
 #include "core/volume.h"
 #include "core/volume_io.h"
-#include "session/gpu_residency.h"
+#include "session/residency.h"
 
 namespace peakcast {
 namespace distributed {
@@ -49,9 +49,9 @@ struct VolumeEntry {
   std::string id;
   std::filesystem::path path;
   std::shared_ptr<const Volume> volume;
-  // Built with the volume on the loader pool; the render thread passes them to GpuVolume.
+  // Built with the volume on the loader pool; the render thread passes them to GlVolume.
   VolumeMacrocells macrocells;  // none for a distributed volume (the ranks build their bricks')
-  // What the memory budget counts (GpuResidency): the voxels this process holds for the volume.
+  // What the memory budget counts (Residency): the voxels this process holds for the volume.
   int64_t resident_bytes = 0;
   // The GPU upload's time, once the render thread made the copy (-1 before): the last load
   // phase, reported with the others in info().
@@ -76,7 +76,7 @@ class VolumeStore {
  public:
   // `loader`: how a file becomes a volume; empty: load_volume, whole (mpirun peakcast serve
   // passes the ranks' brick loader, distributed::Coordinator::load).
-  VolumeStore(std::vector<std::filesystem::path> data_dirs, GpuResidency& residency, LoadOptions options = {},
+  VolumeStore(std::vector<std::filesystem::path> data_dirs, Residency& residency, LoadOptions options = {},
               VolumeLoader loader = {});
 
   // Operator-given volumes (--volume): any readable path. Throws VolumeError.
@@ -126,7 +126,7 @@ class VolumeStore {
   };
   std::map<std::string, Upload> uploads_;
   std::vector<std::filesystem::path> dirs_;
-  GpuResidency& residency_;
+  Residency& residency_;
   LoadOptions options_;
   VolumeLoader loader_;
   bool in_process_ = false;  // the store's own loader (not the ranks'): pyramids can draw full stills

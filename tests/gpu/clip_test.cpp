@@ -6,7 +6,7 @@
 #include <glm/geometric.hpp>
 
 #include "gpu/gpu_fixture.h"
-#include "reference/cpu_raycaster.h"
+#include "reference/reference_renderer.h"
 #include "reference/metrics.h"
 #include "unit/test_util.h"
 
@@ -68,9 +68,9 @@ TEST(Clip, EveryMethodMatchesTheReference) {
     const ResolvedScene clipped = test::make_scene(*v, {{"tf", tf_for(*v)}, {"camera", camera_for(*v)}, {"render", render}});
     render.erase("clip");
     const ResolvedScene whole = test::make_scene(*v, {{"tf", tf_for(*v)}, {"camera", camera_for(*v)}, {"render", render}});
-    const Image g = test::render_gpu(gv, clipped, render::GpuPath::Fragment);
+    const Image g = test::render_gpu(gv, clipped, render::RenderPath::Fragment);
     const Image ref = reference::render_reference(*v, clipped);
-    const Image unclipped = test::render_gpu(gv, whole, render::GpuPath::Fragment);
+    const Image unclipped = test::render_gpu(gv, whole, render::RenderPath::Fragment);
     const auto e = reference::compare(g, ref);
     const auto cut = reference::compare(unclipped, ref);
     std::printf("%-16s clipped vs reference: PSNR %.1f dB, max %.4f; the unclipped image: %.1f dB\n", m.name, e.psnr,
@@ -91,7 +91,7 @@ TEST(Clip, ABoxCoveringTheVolumeChangesNoPixel) {
     render["clip"] = {{"box", {{lo.x - 2, lo.y - 2, lo.z - 2}, {hi.x + 2, hi.y + 2, hi.z + 2}}},
                       {"plane", {{"point", {lo.x - 1, 0, 0}}, {"normal", {1, 0, 0}}}}};  // keeps all of it
     const ResolvedScene covered = test::make_scene(*v, {{"tf", tf_for(*v)}, {"camera", camera_for(*v)}, {"render", render}});
-    for (auto path : {render::GpuPath::Fragment, render::GpuPath::Compute}) {
+    for (auto path : {render::RenderPath::Fragment, render::RenderPath::Compute}) {
       const auto e = reference::compare(test::render_gpu(gv, covered, path), test::render_gpu(gv, plain, path));
       EXPECT_EQ(e.max_abs, 0.0) << m.name;
     }
@@ -111,7 +111,7 @@ TEST(Clip, ClippedSpaceContributesNothing) {
     render["clip"] = {{"plane", {{"point", {16, 0, 0}}, {"normal", {1, 0, 0}}}}};
     const ResolvedScene clipped = test::make_scene(*v, {{"tf", tf}, {"camera", camera}, {"render", render}});
     double most = 0, most_whole = 0;
-    for (auto path : {render::GpuPath::Fragment, render::GpuPath::Compute}) {
+    for (auto path : {render::RenderPath::Fragment, render::RenderPath::Compute}) {
       const Image c = test::render_gpu(gv, clipped, path), w = test::render_gpu(gv, whole, path);
       for (size_t i = 3; i < c.rgba.size(); i += 4) {
         most = std::max<double>(most, c.rgba[i]);

@@ -4,7 +4,7 @@
 #include <string>
 
 #include "gpu/gpu_fixture.h"
-#include "reference/cpu_raycaster.h"
+#include "reference/reference_renderer.h"
 
 using namespace peakcast;
 
@@ -37,7 +37,7 @@ TEST(Convergence, GpuErrorFallsAsTheStepHalves) {
     for (double step : {2.0, 1.0, 0.5, 0.25}) {
       over["render"]["step"] = step;
       ResolvedScene si = test::make_scene(*v, over);
-      Image g = test::render_gpu(gv, si, render::GpuPath::Fragment);
+      Image g = test::render_gpu(gv, si, render::RenderPath::Fragment);
       const auto e = reference::compare(g, conv.image);
       errors.push_back(e.rmse);
       std::printf("%s step %.3f: RMSE %.3e, PSNR %.1f dB", classification, step, e.rmse, e.psnr);

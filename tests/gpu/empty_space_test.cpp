@@ -76,11 +76,11 @@ TEST_P(Leaps, SkipExactlyWhatSteppingThroughEmptyCellsSkips) {
   ASSERT_GT(*std::max_element(occ.distance.begin(), occ.distance.end()), 2) << "nothing to leap over";
   auto& caster = *test::gpu().caster;
   render::RenderStats st_lattice, st_leap, st_step;
-  const Image lattice = test::render_gpu(gv, s, render::GpuPath::Fragment, &st_lattice);
+  const Image lattice = test::render_gpu(gv, s, render::RenderPath::Fragment, &st_lattice);
   render::RendererSeam::force_variant(caster, [](render::VariantKey& k) { k.cell_dda = true; });
-  const Image leap = test::render_gpu(gv, s, render::GpuPath::Fragment, &st_leap);
+  const Image leap = test::render_gpu(gv, s, render::RenderPath::Fragment, &st_leap);
   render::RendererSeam::set_empty_space_leaps(caster, false);
-  const Image step = test::render_gpu(gv, s, render::GpuPath::Fragment, &st_step);
+  const Image step = test::render_gpu(gv, s, render::RenderPath::Fragment, &st_step);
   render::RendererSeam::set_empty_space_leaps(caster, true);
   render::RendererSeam::force_variant(caster, nullptr);
   ASSERT_NE(st_lattice.variant.find("+skip"), std::string::npos) << st_lattice.variant;
@@ -122,9 +122,9 @@ TEST_P(Leaps, CpuRayPacketsEqualSingleRays) {
             {"render", c.render}};
   const ResolvedScene s = test::make_scene(*v, j);
   render::RenderStats st_packets, st_single;
-  const Image packets = test::render_gpu(gv, s, render::GpuPath::Fragment, &st_packets);
+  const Image packets = test::render_gpu(gv, s, render::RenderPath::Fragment, &st_packets);
   cpu->set_ray_packets(false);
-  const Image single = test::render_gpu(gv, s, render::GpuPath::Fragment, &st_single);
+  const Image single = test::render_gpu(gv, s, render::RenderPath::Fragment, &st_single);
   cpu->set_ray_packets(true);
   ASSERT_NE(st_packets.variant.find("+skip"), std::string::npos) << st_packets.variant;
   EXPECT_GT(st_single.samples_mean, 0.0) << "nothing visible: the test would prove nothing";
@@ -152,9 +152,9 @@ TEST_P(Leaps, CpuDenseRunsEqualTheSharedWalks) {
               {"render", render}};
     const ResolvedScene s = test::make_scene(*v, j);
     render::RenderStats st_dense, st_shared;
-    const Image dense = test::render_gpu(gv, s, render::GpuPath::Fragment, &st_dense);
+    const Image dense = test::render_gpu(gv, s, render::RenderPath::Fragment, &st_dense);
     cpu->set_dense_runs(false);
-    const Image shared = test::render_gpu(gv, s, render::GpuPath::Fragment, &st_shared);
+    const Image shared = test::render_gpu(gv, s, render::RenderPath::Fragment, &st_shared);
     cpu->set_dense_runs(true);
     SCOPED_TRACE(st_dense.variant);
     EXPECT_EQ(st_dense.variant.find("+skip") != std::string::npos, skip);

@@ -20,9 +20,9 @@ Gpu& gpu() {
     if (cpu_backend()) {
       x.caster = std::make_unique<cpu::CpuRenderer>();
     } else {
-      x.context = gpu::EglContext::create();
-      x.shaders = std::make_unique<gpu::ShaderCache>(std::filesystem::path(PEAKCAST_SOURCE_DIR) / "shaders");
-      auto gl = std::make_unique<render::Raycaster>(*x.shaders);
+      x.context = gl::EglContext::create();
+      x.shaders = std::make_unique<gl::ShaderCache>(std::filesystem::path(PEAKCAST_SOURCE_DIR) / "shaders");
+      auto gl = std::make_unique<gl::GlRenderer>(*x.shaders);
       x.gl = gl.get();
       x.caster = std::move(gl);
     }
@@ -50,7 +50,7 @@ std::shared_ptr<Volume> make_volume(GeneratorKind kind, Dims dims, SourceType ty
   return std::make_shared<Volume>(generate_volume(s));
 }
 
-Image render_gpu(const render::ResidentVolume& gv, const ResolvedScene& s, render::GpuPath path, render::RenderStats* st) {
+Image render_gpu(const render::ResidentVolume& gv, const ResolvedScene& s, render::RenderPath path, render::RenderStats* st) {
   return gpu().caster->render(gv, s, path, st);
 }
 

@@ -14,20 +14,20 @@
 #include "core/generators.h"
 #include "core/image.h"
 #include "core/scene.h"
-#include "gpu/egl_context.h"
-#include "gpu/shader_cache.h"
+#include "gl/egl_context.h"
+#include "gl/shader_cache.h"
 #include "reference/metrics.h"
-#include "render/gpu_volume.h"
-#include "render/raycaster.h"
+#include "gl/gl_volume.h"
+#include "gl/gl_renderer.h"
 #include "render/renderer.h"
 
 namespace peakcast::test {
 
 struct Gpu {
-  std::unique_ptr<gpu::EglContext> context;  // GL backend only
-  std::unique_ptr<gpu::ShaderCache> shaders;
+  std::unique_ptr<gl::EglContext> context;  // GL backend only
+  std::unique_ptr<gl::ShaderCache> shaders;
   std::unique_ptr<render::Renderer> caster;  // the backend under test
-  render::Raycaster* gl = nullptr;           // the same renderer when it is the GL one
+  gl::GlRenderer* gl = nullptr;           // the same renderer when it is the GL one
 };
 Gpu& gpu();  // created on first use
 bool cpu_backend();  // PEAKCAST_TEST_BACKEND=cpu
@@ -38,7 +38,7 @@ bool cpu_backend();  // PEAKCAST_TEST_BACKEND=cpu
     if (::peakcast::test::cpu_backend()) GTEST_SKIP() << "GL backend only"; \
   } while (0)
 
-// A volume made ready for the backend under test (a GpuVolume or a CpuVolume).
+// A volume made ready for the backend under test (a GlVolume or a CpuVolume).
 class TestVolume {
  public:
   explicit TestVolume(std::shared_ptr<const Volume> v, VolumeMacrocells cells = {});
@@ -58,7 +58,7 @@ ResolvedScene make_scene(const Volume& v, const nlohmann::json& overrides = {});
 std::shared_ptr<Volume> make_volume(GeneratorKind kind, Dims dims, SourceType type,
                                     glm::dvec3 spacing = {1, 1, 1});
 
-Image render_gpu(const render::ResidentVolume& gv, const ResolvedScene& s, render::GpuPath path,
+Image render_gpu(const render::ResidentVolume& gv, const ResolvedScene& s, render::RenderPath path,
                  render::RenderStats* stats = nullptr);
 
 // Writes actual/expected/diff PNGs named after the current test.

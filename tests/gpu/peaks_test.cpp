@@ -6,7 +6,7 @@
 
 #include "core/volume_io.h"
 #include "gpu/gpu_fixture.h"
-#include "reference/cpu_raycaster.h"
+#include "reference/reference_renderer.h"
 #include "unit/test_util.h"
 
 using namespace peakcast;
@@ -67,7 +67,7 @@ TEST_P(SameAlgorithm, GpuMatchesTheCpuTwin) {
                   {{"classification", m.classification}, {"peak_mode", m.mode}, {"max_peaks", m.max_peaks},
                    {"filter", filter}, {"shading", true}}}});
       render::RenderStats st;
-      Image g = test::render_gpu(gv, s, render::GpuPath::Fragment, &st);
+      Image g = test::render_gpu(gv, s, render::RenderPath::Fragment, &st);
       Image c = reference::render_reference(*vol, s);
       const auto e = reference::compare(g, c);
       std::printf("%-6s %-10s max%d %-9s %-22s PSNR %.1f dB, samples/ray %.1f [%s]\n", m.classification, m.mode,
@@ -120,8 +120,8 @@ TEST_P(DiracPeak, PeakFindingMatchesThePeakModelWherePostclassificationFails) {
   ResolvedScene post = test::make_scene(*vol, over);
   auto ref = reference::render_converged(*vol, peaks, reference::OpticalModel::Peaks, 1e-4, 1.0 / 16.0);
   render::RenderStats st;
-  Image pf = test::render_gpu(gv, peaks, render::GpuPath::Fragment, &st);
-  Image pc = test::render_gpu(gv, post, render::GpuPath::Fragment);
+  Image pf = test::render_gpu(gv, peaks, render::RenderPath::Fragment, &st);
+  Image pc = test::render_gpu(gv, post, render::RenderPath::Fragment);
   const auto e_pf = reference::compare(pf, ref.image), e_pc = reference::compare(pc, ref.image);
   std::printf("%s width %.0e: reference step %.4f (change %.1e); peak finding %.1f dB (%.1f samples/ray), "
               "postclassification %.1f dB\n",
@@ -167,7 +167,7 @@ TEST(PeakOrder, SeveralPeaksInOneSegmentComeOutInRayOrder) {
                              {"projection", "orthographic"}, {"height", 6}}},
                  {"render", {{"classification", "peaks"}, {"step", 8.0}, {"peak_mode", "peaks_only"}}}};
     ResolvedScene s = test::make_scene(*vol, over);
-    Image g = test::render_gpu(gv, s, render::GpuPath::Fragment);
+    Image g = test::render_gpu(gv, s, render::RenderPath::Fragment);
     Image c = reference::render_reference(*vol, s);
     const float* px = g.pixel(4, 4);
     if (from < 0) {  // rising field along the ray: 0.40 (red) first
@@ -194,7 +194,7 @@ TEST(PeakEdgeCases, NoNanWhenBothSamplesEqualTheIsovalue) {
                {"camera", {{"eye", {-30, 4, 4}}, {"center", {8, 4, 4}}, {"up", {0, 0, 1}},
                            {"projection", "orthographic"}, {"height", 6}}},
                {"render", {{"classification", "peaks"}, {"peak_mode", "peaks_only"}, {"filter", filter}}}});
-    Image g = test::render_gpu(gv, s, render::GpuPath::Fragment);
+    Image g = test::render_gpu(gv, s, render::RenderPath::Fragment);
     ASSERT_TRUE(test::all_finite(g));
     // The field rises 0 -> 0.5, stays at 0.5, rises to 1: one crossing of 0.5, one surface.
     EXPECT_NEAR(g.pixel(4, 4)[3], 0.7, 1e-5) << filter;
@@ -219,8 +219,8 @@ TEST(PeakModes, PeaksOnlyAddsNoDvrAndDvrOnlyIsPostclassification) {
   ResolvedScene only = test::make_scene(*vol, over);
   over["tf"] = tf_with_ramp(0.0);  // the same spike without the ramp
   ResolvedScene only_no_ramp = test::make_scene(*vol, over);
-  Image a = test::render_gpu(gv, only, render::GpuPath::Fragment);
-  Image b = test::render_gpu(gv, only_no_ramp, render::GpuPath::Fragment);
+  Image a = test::render_gpu(gv, only, render::RenderPath::Fragment);
+  Image b = test::render_gpu(gv, only_no_ramp, render::RenderPath::Fragment);
   EXPECT_EQ(reference::compare(a, b).max_abs, 0.0) << "peaks_only must ignore the DVR part of the TF";
   over["tf"] = tf_with_ramp(0.1);
   over["render"]["peak_mode"] = "dvr_only";
@@ -228,17 +228,17 @@ TEST(PeakModes, PeaksOnlyAddsNoDvrAndDvrOnlyIsPostclassification) {
   over["render"] = {{"classification", "post"}};
   ResolvedScene post = test::make_scene(*vol, over);
   render::RenderStats st;
-  Image c = test::render_gpu(gv, dvr_only, render::GpuPath::Fragment, &st);
-  Image d = test::render_gpu(gv, post, render::GpuPath::Fragment);
+  Image c = test::render_gpu(gv, dvr_only, render::RenderPath::Fragment, &st);
+  Image d = test::render_gpu(gv, post, render::RenderPath::Fragment);
   EXPECT_EQ(reference::compare(c, d).max_abs, 0.0);
   EXPECT_EQ(st.variant.find("peaks"), std::string::npos) << "dvr_only compiles no peak code";
   // dvr+peaks = postclassification plus the surfaces: the image gets more opaque (a faint ramp,
   // so that early termination does not saturate both).
   over["tf"] = tf_with_ramp(0.01);
   over["render"] = {{"classification", "post"}};
-  d = test::render_gpu(gv, test::make_scene(*vol, over), render::GpuPath::Fragment);
+  d = test::render_gpu(gv, test::make_scene(*vol, over), render::RenderPath::Fragment);
   over["render"] = {{"classification", "peaks"}};
-  Image e = test::render_gpu(gv, test::make_scene(*vol, over), render::GpuPath::Fragment);
+  Image e = test::render_gpu(gv, test::make_scene(*vol, over), render::RenderPath::Fragment);
   double alpha_post = 0, alpha_peaks = 0, alpha_only = 0;
   for (size_t i = 3; i < e.rgba.size(); i += 4) {
     alpha_post += d.rgba[i];
@@ -271,8 +271,8 @@ TEST(Preintegration, AgreesWithTheConvergedDvrReferenceOnASmoothTf) {
     over["render"]["classification"] = "post";
     ResolvedScene post = test::make_scene(*vol, over);
     auto ref = reference::render_converged(*vol, pre, reference::OpticalModel::Dvr, 1e-4, 1.0 / 16.0);
-    Image a = test::render_gpu(gv, pre, render::GpuPath::Fragment);
-    Image b = test::render_gpu(gv, post, render::GpuPath::Fragment);
+    Image a = test::render_gpu(gv, pre, render::RenderPath::Fragment);
+    Image b = test::render_gpu(gv, post, render::RenderPath::Fragment);
     const auto ea = reference::compare(a, ref.image), eb = reference::compare(b, ref.image);
     std::printf("%s step 2: preintegration %.1f dB, postclassification %.1f dB vs converged DVR\n", vol->name.c_str(),
                 ea.psnr, eb.psnr);
@@ -300,9 +300,9 @@ TEST(PeakModes, UnshadedPeaksCountTheRootStepsTheyNoLongerTake) {
                       {{"classification", "peaks"}, {"peak_mode", mode}, {"secant_iterations", secant},
                        {"space_skipping", false}}}};
         render::RenderStats flat_st, shaded_st;
-        Image flat = test::render_gpu(gv, test::make_scene(*vol, over), render::GpuPath::Fragment, &flat_st);
+        Image flat = test::render_gpu(gv, test::make_scene(*vol, over), render::RenderPath::Fragment, &flat_st);
         over["render"]["shading"] = true;
-        Image shaded = test::render_gpu(gv, test::make_scene(*vol, over), render::GpuPath::Fragment, &shaded_st);
+        Image shaded = test::render_gpu(gv, test::make_scene(*vol, over), render::RenderPath::Fragment, &shaded_st);
         ASSERT_GT(flat_st.samples_total, 0.0);
         EXPECT_EQ(flat_st.samples_total, shaded_st.samples_total) << vol->name << " " << mode << " secant " << secant;
         double alpha_diff = 0;

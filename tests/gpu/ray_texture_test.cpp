@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "gpu/ray_texture_scenes.h"
-#include "reference/cpu_raycaster.h"
+#include "reference/reference_renderer.h"
 
 namespace peakcast {
 namespace {
@@ -47,11 +47,11 @@ double disk_distance(int x, int y, double u, double v) { return std::hypot((x + 
 TEST(ray_texture, WithoutStrokesRendersAsNoTexturePixelForPixel) {
   auto v = ml();
   test::TestVolume gv(v);
-  const Image none = test::render_gpu(gv, test::make_scene(*v, scene(nullptr)), render::GpuPath::Fragment);
+  const Image none = test::render_gpu(gv, test::make_scene(*v, scene(nullptr)), render::RenderPath::Fragment);
   for (const char* mapping : {"view", "volume"}) {
     render::RenderStats st;
     const Image with = test::render_gpu(gv, test::make_scene(*v, scene(texture(mapping, json::array()))),
-                                        render::GpuPath::Fragment, &st);
+                                        render::RenderPath::Fragment, &st);
     EXPECT_NE(st.variant.find("+raytex"), std::string::npos) << st.variant;  // the code runs
     size_t differing = 0;
     for (size_t i = 0; i < none.rgba.size(); ++i) differing += none.rgba[i] != with.rgba[i];
@@ -66,7 +66,7 @@ TEST(ray_texture, GpuMatchesTheCpuTwin) {
                         stroke("blend", 0.3, 0.8, 0.2, 0.8)};
   for (const char* mapping : {"view", "volume"}) {
     const ResolvedScene s = test::make_scene(*v, scene(texture(mapping, strokes)));
-    const Image g = test::render_gpu(gv, s, render::GpuPath::Fragment);
+    const Image g = test::render_gpu(gv, s, render::RenderPath::Fragment);
     const Image c = reference::render_reference(*v, s);
     const double psnr = reference::compare(g, c).psnr;
     std::printf("%s: GPU against CPU twin %.1f dB\n", mapping, psnr);
@@ -82,11 +82,11 @@ TEST(ray_texture, StepStrokeChangesTheErrorInsideItsDiskOnly) {
   const ResolvedScene plain = test::make_scene(*v, scene(nullptr));
   const auto conv = reference::render_converged(*v, plain, reference::OpticalModel::Dvr, 1e-4);
   ASSERT_TRUE(conv.converged);
-  const Image base = test::render_gpu(gv, plain, render::GpuPath::Fragment);
+  const Image base = test::render_gpu(gv, plain, render::RenderPath::Fragment);
   const double u = 0.5, vv = 0.45, radius = 0.2;
   for (double value : {0.25, 8.0}) {
     const Image img = test::render_gpu(gv, test::make_scene(*v, scene(texture("view", {stroke("step", u, vv, radius, value)}))),
-                                       render::GpuPath::Fragment);
+                                       render::RenderPath::Fragment);
     double err_in = 0, err_base_in = 0;
     int in = 0, outside_changed = 0;
     for (int y = 0; y < 96; ++y)
@@ -120,9 +120,9 @@ TEST(ray_texture, VolumeAlignedEditsFollowTheCameraViewAlignedOnesDoNot) {
   auto v = ml();
   test::TestVolume gv(v);
   auto changed = [&](const char* mapping, double azimuth) {
-    const Image a = test::render_gpu(gv, test::make_scene(*v, scene(nullptr, azimuth)), render::GpuPath::Fragment);
+    const Image a = test::render_gpu(gv, test::make_scene(*v, scene(nullptr, azimuth)), render::RenderPath::Fragment);
     const json t = texture(mapping, {stroke("termination", 0.55, 0.5, 0.12, 0.05)});
-    const Image b = test::render_gpu(gv, test::make_scene(*v, scene(t, azimuth)), render::GpuPath::Fragment);
+    const Image b = test::render_gpu(gv, test::make_scene(*v, scene(t, azimuth)), render::RenderPath::Fragment);
     double sx = 0;
     int n = 0;
     for (size_t i = 0; i < a.rgba.size() / 4; ++i)
@@ -146,11 +146,11 @@ TEST(ray_texture, VolumeAlignedEditsFollowTheCameraViewAlignedOnesDoNot) {
 TEST(ray_texture, TerminationAndBlendChangeOnlyTheirDisk) {
   auto v = ml();
   test::TestVolume gv(v);
-  const Image base = test::render_gpu(gv, test::make_scene(*v, scene(nullptr)), render::GpuPath::Fragment);
+  const Image base = test::render_gpu(gv, test::make_scene(*v, scene(nullptr)), render::RenderPath::Fragment);
   const double u = 0.45, vv = 0.55, radius = 0.18;
   for (const auto& [channel, value] : {std::pair{"termination", 0.05}, std::pair{"blend", 1.0}}) {
     const Image img = test::render_gpu(
-        gv, test::make_scene(*v, scene(texture("view", {stroke(channel, u, vv, radius, value)}))), render::GpuPath::Fragment);
+        gv, test::make_scene(*v, scene(texture("view", {stroke(channel, u, vv, radius, value)}))), render::RenderPath::Fragment);
     int inside_changed = 0, outside_changed = 0;
     for (int y = 0; y < 96; ++y)
       for (int x = 0; x < 96; ++x) {

@@ -44,23 +44,23 @@ TEST(ray_texture, PaintedStrokesUploadOnlyTheirRegionAndMatchAFreshBuild) {
   auto spec = std::make_shared<const RayTextureSpec>(parse_ray_texture({{"mapping", "view"}, {"size", {128, 128}}}));
   spec = with_stroke(*spec, stroke("step", 0.3, 0.3, 0.2, 0.5));
   render::RenderStats st;
-  test::render_gpu(gv, scene_of(*v, spec), render::GpuPath::Fragment, &st);
+  test::render_gpu(gv, scene_of(*v, spec), render::RenderPath::Fragment, &st);
   EXPECT_EQ(st.ray_texture_strokes, 1);
   EXPECT_EQ(st.ray_texture_texels, 128 * 128);  // a new lineage: built and uploaded whole
-  test::render_gpu(gv, scene_of(*v, spec), render::GpuPath::Fragment, &st);
+  test::render_gpu(gv, scene_of(*v, spec), render::RenderPath::Fragment, &st);
   EXPECT_EQ(st.ray_texture_strokes, 0);
   EXPECT_EQ(st.ray_texture_texels, 0);  // unchanged: nothing goes up
 
   // A direct stroke: its disk's bounding box (radius 0.1 of 128 texels: about 26 x 26).
   spec = with_stroke(*spec, stroke("termination", 0.6, 0.5, 0.1, 0.05));
-  const Image direct = test::render_gpu(gv, scene_of(*v, spec), render::GpuPath::Fragment, &st);
+  const Image direct = test::render_gpu(gv, scene_of(*v, spec), render::RenderPath::Fragment, &st);
   std::printf("direct stroke: %lld texels uploaded, %.3f ms\n", (long long)st.ray_texture_texels, st.ray_texture_ms);
   EXPECT_EQ(st.ray_texture_strokes, 1);
   EXPECT_GT(st.ray_texture_texels, 20 * 20);
   EXPECT_LE(st.ray_texture_texels, 28 * 28);
   // A hierarchical one (level 3): whole 8 x 8 blocks.
   spec = with_stroke(*spec, stroke("blend", 0.4, 0.7, 0.12, 0.8, 3));
-  const Image both = test::render_gpu(gv, scene_of(*v, spec), render::GpuPath::Fragment, &st);
+  const Image both = test::render_gpu(gv, scene_of(*v, spec), render::RenderPath::Fragment, &st);
   std::printf("level-3 stroke: %lld texels uploaded\n", (long long)st.ray_texture_texels);
   EXPECT_EQ(st.ray_texture_texels % 64, 0);
   EXPECT_LE(st.ray_texture_texels, 40 * 40);
@@ -68,7 +68,7 @@ TEST(ray_texture, PaintedStrokesUploadOnlyTheirRegionAndMatchAFreshBuild) {
 
   // The same strokes parsed anew (a new lineage, built from scratch): the same image.
   const auto fresh = std::make_shared<const RayTextureSpec>(parse_ray_texture(to_json(*spec)));
-  const Image rebuilt = test::render_gpu(gv, scene_of(*v, fresh), render::GpuPath::Fragment, &st);
+  const Image rebuilt = test::render_gpu(gv, scene_of(*v, fresh), render::RenderPath::Fragment, &st);
   EXPECT_EQ(st.ray_texture_texels, 128 * 128);
   EXPECT_EQ(differing(both, rebuilt), 0u);
 }
@@ -80,12 +80,12 @@ TEST(ray_texture, AnOlderSpecOfTheLineageIsRebuilt) {
   test::TestVolume gv(v);
   const auto base = std::make_shared<const RayTextureSpec>(parse_ray_texture({{"mapping", "view"}, {"size", {64, 64}}}));
   const auto one = with_stroke(*base, stroke("termination", 0.5, 0.5, 0.2, 0.05));
-  const Image first = test::render_gpu(gv, scene_of(*v, one), render::GpuPath::Fragment);
+  const Image first = test::render_gpu(gv, scene_of(*v, one), render::RenderPath::Fragment);
   const auto two = with_stroke(*one, stroke("termination", 0.2, 0.2, 0.2, 0.05));
-  const Image second = test::render_gpu(gv, scene_of(*v, two), render::GpuPath::Fragment);
+  const Image second = test::render_gpu(gv, scene_of(*v, two), render::RenderPath::Fragment);
   EXPECT_GT(differing(first, second), 0u);
   render::RenderStats st;
-  const Image again = test::render_gpu(gv, scene_of(*v, one), render::GpuPath::Fragment, &st);
+  const Image again = test::render_gpu(gv, scene_of(*v, one), render::RenderPath::Fragment, &st);
   EXPECT_EQ(st.ray_texture_texels, 64 * 64);
   EXPECT_EQ(differing(first, again), 0u);
 }
@@ -97,7 +97,7 @@ TEST(ray_texture, PngTexturesRenderAsTheirStrokes) {
   test::TestVolume gv(v);
   const auto dir = std::filesystem::temp_directory_path() / ("peakcast_rtpng_gpu_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  const Image none = test::render_gpu(gv, scene_of(*v, nullptr), render::GpuPath::Fragment);
+  const Image none = test::render_gpu(gv, scene_of(*v, nullptr), render::RenderPath::Fragment);
   auto painted = std::make_shared<const RayTextureSpec>(parse_ray_texture({{"mapping", "view"}, {"size", {64, 64}}}));
   const double termination = 1.0 - 1.0 / 255.0;
   write_ray_texture_png(build_ray_texture(*painted, termination), dir / "defaults.png");
@@ -108,10 +108,10 @@ TEST(ray_texture, PngTexturesRenderAsTheirStrokes) {
   const PngLocator here = [&](const std::string& p) { return dir / p; };
   auto from_png = [&](const char* name) {
     auto spec = std::make_shared<const RayTextureSpec>(parse_ray_texture({{"mapping", "view"}, {"png", name}}));
-    return test::render_gpu(gv, scene_of(*v, load_ray_texture_png(spec, here)), render::GpuPath::Fragment);
+    return test::render_gpu(gv, scene_of(*v, load_ray_texture_png(spec, here)), render::RenderPath::Fragment);
   };
   EXPECT_EQ(differing(none, from_png("defaults.png")), 0u);
-  const Image strokes = test::render_gpu(gv, scene_of(*v, painted), render::GpuPath::Fragment);
+  const Image strokes = test::render_gpu(gv, scene_of(*v, painted), render::RenderPath::Fragment);
   const double psnr = reference::compare(from_png("painted.png"), strokes).psnr;
   const double moved = reference::compare(none, strokes).psnr;
   std::printf("PNG of the strokes vs the strokes: %.1f dB (the strokes vs no texture: %.1f dB)\n", psnr, moved);

@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "gpu/gpu_fixture.h"
-#include "reference/cpu_raycaster.h"
+#include "reference/reference_renderer.h"
 
 using namespace peakcast;
 using nlohmann::json;
@@ -33,7 +33,7 @@ TEST_P(Cameras, FiniteAndMatchesTheReference) {
   const CameraCase cc = GetParam();
   auto v = odd_volume();
   test::TestVolume gv(v);
-  for (auto path : {render::GpuPath::Fragment, render::GpuPath::Compute}) {
+  for (auto path : {render::RenderPath::Fragment, render::RenderPath::Compute}) {
     ResolvedScene s = test::make_scene(*v, {{"tf", grey_tf(*v)}, {"camera", cc.camera}});
     render::RenderStats st;
     Image g = test::render_gpu(gv, s, path, &st);
@@ -75,7 +75,7 @@ TEST(Orientation, RowZeroIsTheTop) {
   ResolvedScene s = test::make_scene(
       *v, {{"tf", tf}, {"image", {{"width", 32}, {"height", 64}}},
            {"camera", {{"eye", {7.5, 7.5, 60}}, {"center", {7.5, 7.5, 7.5}}, {"up", {1, 0, 0}}, {"fov_y", 30}}}});
-  for (auto path : {render::GpuPath::Fragment, render::GpuPath::Compute}) {
+  for (auto path : {render::RenderPath::Fragment, render::RenderPath::Compute}) {
     Image g = test::render_gpu(gv, s, path);
     Image c = reference::render_reference(*v, s);
     auto row_brightness = [](const Image& img, int y) {
@@ -96,7 +96,7 @@ TEST(Orientation, RightIsCrossOfViewAndUp) {
   test::TestVolume gv(v);
   json tf = {{"points", {{0.0, 1, 1, 1, 0.0}, {1.0, 1, 1, 1, 1.0}}}};
   ResolvedScene s = test::make_scene(*v, {{"tf", tf}, {"image", {{"width", 64}, {"height", 32}}}});
-  Image g = test::render_gpu(gv, s, render::GpuPath::Fragment);
+  Image g = test::render_gpu(gv, s, render::RenderPath::Fragment);
   EXPECT_GT(g.pixel(40, 16)[0], g.pixel(24, 16)[0]);
 }
 
@@ -104,7 +104,7 @@ TEST(Background, ShowsWhereTheRayMisses) {
   auto v = odd_volume();
   test::TestVolume gv(v);
   ResolvedScene s = test::make_scene(*v, {{"tf", grey_tf(*v)}, {"background", {0.25, 0.5, 0.75}}});
-  Image g = test::render_gpu(gv, s, render::GpuPath::Fragment);
+  Image g = test::render_gpu(gv, s, render::RenderPath::Fragment);
   EXPECT_NEAR(g.pixel(0, 0)[0], 0.25, 1e-6);
   EXPECT_NEAR(g.pixel(0, 0)[1], 0.5, 1e-6);
   EXPECT_NEAR(g.pixel(0, 0)[2], 0.75, 1e-6);

@@ -6,7 +6,7 @@
 
 #include "core/volume_io.h"
 #include "gpu/gpu_fixture.h"
-#include "reference/cpu_raycaster.h"
+#include "reference/reference_renderer.h"
 #include "unit/test_util.h"
 
 using namespace peakcast;
@@ -57,7 +57,7 @@ std::vector<SceneCase> cases() {
 struct Param {
   int scene;
   Filter filter;
-  render::GpuPath path;
+  render::RenderPath path;
   bool shading;
 };
 
@@ -83,7 +83,7 @@ TEST_P(GpuVsCpu, SameStepMatchesTheReference) {
   Image c = reference::render_reference(*v, s);
   const auto e = reference::compare(g, c);
   std::printf("%-26s %-9s %-4s shade=%d: PSNR %.1f dB, max %.4f, samples/ray %.1f [%s]\n", sc.name.c_str(),
-              to_string(p.filter), p.path == render::GpuPath::Compute ? "comp" : "frag", p.shading, e.psnr, e.max_abs,
+              to_string(p.filter), p.path == render::RenderPath::Compute ? "comp" : "frag", p.shading, e.psnr, e.max_abs,
               st.samples_mean, st.variant.c_str());
   EXPECT_GE(e.psnr, kMinPsnr);
   EXPECT_GT(st.samples_mean, 5.0);
@@ -98,13 +98,13 @@ std::vector<Param> params() {
   std::vector<Param> out;
   for (int s = 0; s < int(cases().size()); ++s)
     for (auto f : {Filter::Trilinear, Filter::Tricubic})
-      for (auto path : {render::GpuPath::Fragment, render::GpuPath::Compute}) out.push_back({s, f, path, s % 2 == 1});
+      for (auto path : {render::RenderPath::Fragment, render::RenderPath::Compute}) out.push_back({s, f, path, s % 2 == 1});
   return out;
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, GpuVsCpu, ::testing::ValuesIn(params()), [](const auto& info) {
   return cases()[size_t(info.param.scene)].name + "_" + to_string(info.param.filter) +
-         (info.param.path == render::GpuPath::Compute ? "_compute" : "_fragment");
+         (info.param.path == render::RenderPath::Compute ? "_compute" : "_fragment");
 });
 
 class Skipping : public ::testing::TestWithParam<int> {};
@@ -121,8 +121,8 @@ TEST_P(Skipping, OnAndOffAgreeWithin1Over255) {
     over["render"]["space_skipping"] = false;
     ResolvedScene off = test::make_scene(*v, over);
     render::RenderStats st_on, st_off;
-    Image a = test::render_gpu(gv, on, render::GpuPath::Fragment, &st_on);
-    Image b = test::render_gpu(gv, off, render::GpuPath::Fragment, &st_off);
+    Image a = test::render_gpu(gv, on, render::RenderPath::Fragment, &st_on);
+    Image b = test::render_gpu(gv, off, render::RenderPath::Fragment, &st_off);
     EXPECT_GT(st_on.empty_cells, 0) << "the TF must leave cells empty, or the test proves nothing";
     EXPECT_NE(st_on.variant, st_off.variant);
     const auto e = reference::compare(a, b);

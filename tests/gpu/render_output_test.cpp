@@ -44,9 +44,9 @@ std::vector<std::pair<std::string, json>> scenes(const Volume& v) {
   };
 }
 
-const char* name(render::GpuPath p) { return p == render::GpuPath::Compute ? "comp" : "frag"; }
+const char* name(render::RenderPath p) { return p == render::RenderPath::Compute ? "comp" : "frag"; }
 
-render::RenderResult draw(const render::ResidentVolume& gv, const ResolvedScene& s, render::GpuPath path,
+render::RenderResult draw(const render::ResidentVolume& gv, const ResolvedScene& s, render::RenderPath path,
                             render::RenderOutput out, std::optional<render::PixelRect> tile = std::nullopt,
                             render::RenderStats* st = nullptr, bool sample_stats = false) {
   render::RenderRequest r;
@@ -64,7 +64,7 @@ TEST(Rgb8Output, EqualsToRgb8OfTheFloatOutput) {
   auto v = blobs();
   test::TestVolume gv(v);
   for (const auto& [label, over] : scenes(*v))
-    for (auto path : {render::GpuPath::Fragment, render::GpuPath::Compute}) {
+    for (auto path : {render::RenderPath::Fragment, render::RenderPath::Compute}) {
       const ResolvedScene s = test::make_scene(*v, over);
       const Image f = draw(gv, s, path, render::RenderOutput::Float).image;
       const render::Rgb8Image b = draw(gv, s, path, render::RenderOutput::Rgb8).rgb8;
@@ -98,7 +98,7 @@ TEST(Tiles, EqualTheFullRenderExactly) {
     std::vector<std::vector<render::PixelRect>> layouts = {
         render::tile_grid(W, H, 32, 32), render::tile_grid(W, H, 13, 7), render::tile_grid(W, H, W, 1),
         render::tile_grid(W, H, 1, H)};
-    for (auto path : {render::GpuPath::Fragment, render::GpuPath::Compute}) {
+    for (auto path : {render::RenderPath::Fragment, render::RenderPath::Compute}) {
       render::RenderStats full_st;
       const Image full = draw(gv, s, path, render::RenderOutput::Float, std::nullopt, &full_st).image;
       const render::Rgb8Image full8 = draw(gv, s, path, render::RenderOutput::Rgb8).rgb8;
@@ -153,12 +153,12 @@ TEST(Tiles, InterleavedWithAnotherTfRebuildNothing) {
     b["tf"] = other_tf;
     const ResolvedScene still = test::make_scene(*v, a), view = test::make_scene(*v, b);
     auto& caster = *test::gpu().caster;
-    draw(gv, still, render::GpuPath::Fragment, render::RenderOutput::Rgb8, render::PixelRect{0, 0, 8, 8});
-    draw(gv, view, render::GpuPath::Fragment, render::RenderOutput::Rgb8);
+    draw(gv, still, render::RenderPath::Fragment, render::RenderOutput::Rgb8, render::PixelRect{0, 0, 8, 8});
+    draw(gv, view, render::RenderPath::Fragment, render::RenderOutput::Rgb8);
     const size_t built = render::RendererSeam::table_builds(caster);
     for (const auto& r : render::tile_grid(still.scene.width, still.scene.height, 32, 32)) {
-      draw(gv, still, render::GpuPath::Fragment, render::RenderOutput::Rgb8, r);
-      draw(gv, view, render::GpuPath::Fragment, render::RenderOutput::Rgb8);
+      draw(gv, still, render::RenderPath::Fragment, render::RenderOutput::Rgb8, r);
+      draw(gv, view, render::RenderPath::Fragment, render::RenderOutput::Rgb8);
     }
     EXPECT_EQ(render::RendererSeam::table_builds(caster), built);
   }
@@ -173,7 +173,7 @@ TEST(Tiles, RefusesRectanglesOutsideTheImage) {
                               render::PixelRect{36, 0, 5, 5}, render::PixelRect{0, 26, 5, 5},
                               render::PixelRect{1, 1, 2147483647, 1}}) {
     try {
-      draw(gv, s, render::GpuPath::Fragment, render::RenderOutput::Rgb8, r);
+      draw(gv, s, render::RenderPath::Fragment, render::RenderOutput::Rgb8, r);
       ADD_FAILURE() << r.to_string() << " was accepted";
     } catch (const std::invalid_argument& e) {
       const std::string msg = e.what();
@@ -194,9 +194,9 @@ TEST(Rgb8Output, SampleStatsOnlyWhenAsked) {
   test::TestVolume gv(v);
   const ResolvedScene s = test::make_scene(*v, scenes(*v)[0].second);
   render::RenderStats f, without, with;
-  draw(gv, s, render::GpuPath::Fragment, render::RenderOutput::Float, std::nullopt, &f);
-  draw(gv, s, render::GpuPath::Fragment, render::RenderOutput::Rgb8, std::nullopt, &without);
-  draw(gv, s, render::GpuPath::Fragment, render::RenderOutput::Rgb8, std::nullopt, &with, true);
+  draw(gv, s, render::RenderPath::Fragment, render::RenderOutput::Float, std::nullopt, &f);
+  draw(gv, s, render::RenderPath::Fragment, render::RenderOutput::Rgb8, std::nullopt, &without);
+  draw(gv, s, render::RenderPath::Fragment, render::RenderOutput::Rgb8, std::nullopt, &with, true);
   EXPECT_TRUE(f.has_samples);
   EXPECT_FALSE(without.has_samples);
   EXPECT_EQ(without.rays_hit, 0);
@@ -216,7 +216,7 @@ TEST(RenderStats, JsonUsesTheStreamKeysAndToStringMatches) {
   test::TestVolume gv(v);
   const ResolvedScene s = test::make_scene(*v, scenes(*v)[2].second);  // peaks: peaks and empty cells > 0
   render::RenderStats st;
-  draw(gv, s, render::GpuPath::Fragment, render::RenderOutput::Float, std::nullopt, &st);
+  draw(gv, s, render::RenderPath::Fragment, render::RenderOutput::Float, std::nullopt, &st);
   const json j = st.to_json();
   std::set<std::string> want = {"render_ms", "readback_ms", "table_ms", "samples_per_ray",
                                       "samples_per_ray_max", "rays_hit", "rays_at_sample_cap", "sample_cap", "variant", "peaks",

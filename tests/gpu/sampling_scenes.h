@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "gpu/gpu_fixture.h"
-#include "reference/cpu_raycaster.h"
+#include "reference/reference_renderer.h"
 #include "unit/test_util.h"
 
 namespace peakcast::sampling_scenes {
@@ -55,7 +55,7 @@ inline void check_twins(const Volume& v, const render::ResidentVolume& gv, const
   for (const auto& t : twins) {
     const ResolvedScene s = test::make_scene(v, scene_json(t.camera, t.render));
     render::RenderStats st;
-    const Image g = test::render_gpu(gv, s, render::GpuPath::Fragment, &st);
+    const Image g = test::render_gpu(gv, s, render::RenderPath::Fragment, &st);
     const Image c = reference::render_reference(v, s);
     const auto e = reference::compare(g, c);
     std::printf("%-30s %-40s PSNR %.1f dB, samples/ray GPU %.1f CPU %.1f\n", t.name.c_str(), st.variant.c_str(), e.psnr,

@@ -10,7 +10,7 @@
 
 #include "core/sampling.h"
 #include "gpu/gpu_fixture.h"
-#include "reference/cpu_raycaster.h"
+#include "reference/reference_renderer.h"
 #include "gpu/sampling_scenes.h"
 
 using namespace peakcast;
@@ -76,13 +76,13 @@ EqualCost differential_vs_uniform(const Volume& v, const render::ResidentVolume&
   const ResolvedScene sd = test::make_scene(v, dj);
   const auto conv = reference::render_converged(v, sd, reference::OpticalModel::Dvr, 1e-4);
   EXPECT_TRUE(conv.converged);
-  const Image d = test::render_gpu(gv, sd, render::GpuPath::Fragment);
+  const Image d = test::render_gpu(gv, sd, render::RenderPath::Fragment);
   EqualCost r{mean_samples(d), reference::compare(d, conv.image).psnr, 0, 1.0};
   for (int k = 0; k < 5; ++k) {  // match the sample count (within 2%)
     json uj = dj;
     uj["render"].erase("sampling");
     uj["render"]["step"] = r.uniform_step;
-    const Image u = test::render_gpu(gv, test::make_scene(v, uj), render::GpuPath::Fragment);
+    const Image u = test::render_gpu(gv, test::make_scene(v, uj), render::RenderPath::Fragment);
     r.psnr_uniform = reference::compare(u, conv.image).psnr;
     const double ratio = mean_samples(u) / r.samples;
     if (std::abs(ratio - 1.0) < 0.02) break;
@@ -137,13 +137,13 @@ TEST(Differential, AgainstUniformAtEqualCostOnAVesselCloseUp) {
       dj["render"]["sampling"] = "differential";
       dj["render"]["s_k"] = sk;
       render::RenderStats sd, su;
-      const Image d = test::render_gpu(gv, test::make_scene(*v, dj), render::GpuPath::Fragment, &sd);
+      const Image d = test::render_gpu(gv, test::make_scene(*v, dj), render::RenderPath::Fragment, &sd);
       const double psnr_d = reference::compare(d, conv.image).psnr;
       double step = 1.0, psnr_u = 0.0;
       for (int k = 0; k < 6; ++k) {  // match the visited samples per ray (within 2%)
         json uj = base;
         uj["render"]["step"] = step;
-        const Image u = test::render_gpu(gv, test::make_scene(*v, uj), render::GpuPath::Fragment, &su);
+        const Image u = test::render_gpu(gv, test::make_scene(*v, uj), render::RenderPath::Fragment, &su);
         psnr_u = reference::compare(u, conv.image).psnr;
         const double ratio = su.samples_mean / sd.samples_mean;
         if (std::abs(ratio - 1.0) < 0.02) break;
@@ -176,7 +176,7 @@ TEST(Differential, SkSweepIsStableAndConverges) {
   for (double sk : sks) {
     const ResolvedScene s = test::make_scene(*v, scene_json(close_camera(), {{"sampling", "differential"}, {"s_k", sk}}, 48));
     render::RenderStats st;
-    const Image g = test::render_gpu(gv, s, render::GpuPath::Fragment, &st);
+    const Image g = test::render_gpu(gv, s, render::RenderPath::Fragment, &st);
     ASSERT_TRUE(test::all_finite(g)) << "s_k " << sk;
     const auto e = reference::compare(g, conv.image);
     rmse.push_back(e.rmse);
@@ -217,7 +217,7 @@ TEST(Sampling, PerRayCapIsReportedWhenHit) {
       sj["tf"] = peak_tf;
     }
     render::RenderStats st;
-    const Image g = test::render_gpu(gv, test::make_scene(*v, sj), render::GpuPath::Fragment, &st);
+    const Image g = test::render_gpu(gv, test::make_scene(*v, sj), render::RenderPath::Fragment, &st);
     EXPECT_TRUE(test::all_finite(g));
     ASSERT_GT(st.sample_cap, 1000) << "vs " << vs;
     EXPECT_LE(st.sample_cap, kMaxSamplesPerRay);
@@ -226,7 +226,7 @@ TEST(Sampling, PerRayCapIsReportedWhenHit) {
     // Just under the cap: every lattice point of the ray, counted exactly.
     const double step = 1199.0 / (0.9 * st.sample_cap);
     sj["render"]["step"] = step;
-    test::render_gpu(gv, test::make_scene(*v, sj), render::GpuPath::Fragment, &st);
+    test::render_gpu(gv, test::make_scene(*v, sj), render::RenderPath::Fragment, &st);
     EXPECT_EQ(st.rays_at_cap, 0) << "vs " << vs;
     EXPECT_NEAR(st.samples_max, std::floor(1199.0 / step) + 1 + (vs ? 1 : 0), 1.0) << "vs " << vs;
   }
@@ -242,9 +242,9 @@ TEST(Differential, OrthographicIsUniformAtTheFootprint) {
   EXPECT_FALSE(plan.differential);
   EXPECT_NEAR(plan.step, 3 * std::hypot(60.0 / 64, 60.0 / 64), 1e-9);  // s_k x the pixel diagonal
   render::RenderStats st;
-  const Image d = test::render_gpu(gv, sd, render::GpuPath::Fragment, &st);
+  const Image d = test::render_gpu(gv, sd, render::RenderPath::Fragment, &st);
   EXPECT_EQ(st.variant.find("+diff"), std::string::npos) << st.variant;
-  const Image u = test::render_gpu(gv, test::make_scene(*v, scene_json(cam, {{"step", plan.step}})), render::GpuPath::Fragment);
+  const Image u = test::render_gpu(gv, test::make_scene(*v, scene_json(cam, {{"step", plan.step}})), render::RenderPath::Fragment);
   EXPECT_GE(reference::compare(d, u).psnr, 100.0);
 }
 
@@ -261,10 +261,10 @@ TEST(Adaptive, ConstantVolumeSameImageEighthOfTheSamples) {
   json over = {{"image", {{"width", 64}, {"height", 64}}}, {"tf", tf}, {"camera", far_camera()},
                {"render", {{"step", 0.5}, {"early_termination", 1.0}}}};
   render::RenderStats su, sa;
-  const Image u = test::render_gpu(gv, test::make_scene(*v, over), render::GpuPath::Fragment, &su);
+  const Image u = test::render_gpu(gv, test::make_scene(*v, over), render::RenderPath::Fragment, &su);
   over["render"]["adaptive"] = true;
   const ResolvedScene sa_scene = test::make_scene(*v, over);
-  const Image a = test::render_gpu(gv, sa_scene, render::GpuPath::Fragment, &sa);
+  const Image a = test::render_gpu(gv, sa_scene, render::RenderPath::Fragment, &sa);
   const auto e = reference::compare(a, u);
   std::printf("constant volume: uniform %.1f samples/ray, adaptive %.1f (%s); PSNR %.1f dB\n", su.samples_mean,
               sa.samples_mean, sa.variant.c_str(), e.psnr);
@@ -304,7 +304,7 @@ TEST(Adaptive, GpuMatchesTheCpuTwinAndTheReference) {
                              json{{"adaptive", true}, {"step", 0.5}, {"classification", "peaks"}}}) {
     const ResolvedScene s = test::make_scene(*v, scene_json(far_camera(), render));
     render::RenderStats st;
-    const Image g = test::render_gpu(gv, s, render::GpuPath::Fragment, &st);
+    const Image g = test::render_gpu(gv, s, render::RenderPath::Fragment, &st);
     const Image c = reference::render_reference(*v, s);
     const auto e = reference::compare(g, c);
     std::printf("%-70s %-40s PSNR %.1f dB, samples/ray %.1f vs %.1f\n", render.dump().c_str(), st.variant.c_str(), e.psnr,

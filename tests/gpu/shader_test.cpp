@@ -3,7 +3,7 @@
 #include <fstream>
 
 #include "gpu/gpu_fixture.h"
-#include "render/gpu_layout.h"
+#include "gl/uniform_layout.h"
 #include "render/ray_uniforms.h"
 #include "unit/test_util.h"
 
@@ -16,11 +16,11 @@ TEST(ShaderCache, CompileErrorNamesFileAndLine) {
   test::TempDir dir;
   std::ofstream(dir / "main.frag") << "#include \"helper.glsl\"\nout vec4 c;\nvoid main() { c = helper(); }\n";
   std::ofstream(dir / "helper.glsl") << "vec4 helper() {\n  return vec4(1.0);\n  this is not glsl;\n}\n";
-  gpu::ShaderCache cache(dir.path());
+  gl::ShaderCache cache(dir.path());
   try {
     cache.get("broken", {"main.frag"}, {});
     FAIL() << "compiled a broken shader";
-  } catch (const gpu::ShaderError& e) {
+  } catch (const gl::ShaderError& e) {
     EXPECT_NE(std::string(e.what()).find("helper.glsl:3"), std::string::npos) << e.what();
   }
 }
@@ -47,31 +47,31 @@ TEST(ShaderCache, ProgramsAreCachedByKey) {
 
 TEST(ShaderCache, UniformBlockOffsetsMatchTheHostStruct) {
   auto& g = test::gpu();
-  for (auto path : {render::GpuPath::Fragment, render::GpuPath::Compute}) {
+  for (auto path : {render::RenderPath::Fragment, render::RenderPath::Compute}) {
     render::VariantKey k;
     k.path = path;
     k.space_skipping = k.shading = k.tricubic = true;
-    const auto offsets = render::gl_uniform_offsets(g.gl->program(k));
+    const auto offsets = gl::uniform_offsets(g.gl->program(k));
     const auto host = render::host_uniform_offsets();
     ASSERT_EQ(offsets.size(), host.size());
     for (const auto& [name, off] : host) {
       ASSERT_TRUE(offsets.count(name)) << name;
       EXPECT_EQ(offsets.at(name), off) << name;
     }
-    EXPECT_EQ(render::gl_uniform_block_size(g.gl->program(k)), sizeof(ray::RayUniforms));
+    EXPECT_EQ(gl::uniform_block_size(g.gl->program(k)), sizeof(ray::RayUniforms));
   }
 }
 
 TEST(Variant, ChosenFromTheScene) {
   auto v = test::make_volume(GeneratorKind::Blobs, {20, 20, 20}, SourceType::U8);
   ResolvedScene s = test::make_scene(*v, {{"render", {{"filter", "tricubic"}, {"shading", true}}}});
-  auto k = render::choose_variant(s, 0, render::GpuPath::Fragment);
+  auto k = render::choose_variant(s, 0, render::RenderPath::Fragment);
   EXPECT_TRUE(k.tricubic);
   EXPECT_TRUE(k.shading);
   EXPECT_FALSE(k.space_skipping) << "dense volume: no macrocell loop";
-  EXPECT_TRUE(render::choose_variant(s, 5, render::GpuPath::Fragment).space_skipping);
+  EXPECT_TRUE(render::choose_variant(s, 5, render::RenderPath::Fragment).space_skipping);
   s.scene.render.space_skipping = false;
-  EXPECT_FALSE(render::choose_variant(s, 5, render::GpuPath::Fragment).space_skipping);
+  EXPECT_FALSE(render::choose_variant(s, 5, render::RenderPath::Fragment).space_skipping);
   EXPECT_EQ(k.name(), "frag+tricubic+shade");
 }
 

@@ -16,7 +16,7 @@
 #include "core/value_range.h"
 #include "core/volume_io.h"
 #include "gpu/gpu_fixture.h"
-#include "reference/cpu_raycaster.h"
+#include "reference/reference_renderer.h"
 #include "reference/ray_events.h"
 #include "unit/test_util.h"
 
@@ -234,7 +234,7 @@ TEST_P(Stiff, BoundedFiniteAndRightOrRefused) {
   const ResolvedScene s = resolve(*v, overrides);
   test::TestVolume gv(v);
   render::RenderStats st;
-  const Image g = test::render_gpu(gv, s, render::GpuPath::Fragment, &st);
+  const Image g = test::render_gpu(gv, s, render::RenderPath::Fragment, &st);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ASSERT_TRUE(test::all_finite(g)) << c.name;
   EXPECT_LT(seconds, 60.0) << c.name;
@@ -253,7 +253,7 @@ TEST_P(Stiff, BoundedFiniteAndRightOrRefused) {
       json p = c.scene;
       p["tf"] = ramp_tf(0.0, 1.0);
       test::TestVolume pv(plain);
-      const Image ref = test::render_gpu(pv, resolve(*plain, p), render::GpuPath::Fragment);
+      const Image ref = test::render_gpu(pv, resolve(*plain, p), render::RenderPath::Fragment);
       psnr = reference::compare(g, ref).psnr;
       EXPECT_GT(brightest(ref), 0.1f) << "the unscaled picture is blank: the case proves nothing";
       if (psnr < c.min_psnr) test::save_artifacts(g, ref, c.name);

@@ -73,7 +73,7 @@ TEST_P(Variants, HoldOnlyWhatTheSceneUsesAndOmissionsChangeNoPixel) {
   j.merge_patch(c.scene);
   const ResolvedScene s = test::make_scene(*v, j);
   render::RenderStats st;
-  const Image chosen = test::render_gpu(gv, s, render::GpuPath::Fragment, &st);
+  const Image chosen = test::render_gpu(gv, s, render::RenderPath::Fragment, &st);
   EXPECT_EQ(st.variant.rfind(test::cpu_backend() ? "cpu+" : "frag+", 0), 0u) << st.variant << ": the backend's name first";
   for (const char* part : c.has) EXPECT_NE(st.variant.find(part), std::string::npos) << st.variant << " lacks " << part;
   for (const char* part : c.lacks) EXPECT_EQ(st.variant.find(part), std::string::npos) << st.variant << " has " << part;
@@ -81,7 +81,7 @@ TEST_P(Variants, HoldOnlyWhatTheSceneUsesAndOmissionsChangeNoPixel) {
   auto& caster = *test::gpu().caster;
   render::RendererSeam::force_variant(caster, c.put_back);
   render::RenderStats full_st;
-  const Image full = test::render_gpu(gv, s, render::GpuPath::Fragment, &full_st);
+  const Image full = test::render_gpu(gv, s, render::RenderPath::Fragment, &full_st);
   render::RendererSeam::force_variant(caster, nullptr);
   ASSERT_NE(full_st.variant, st.variant) << "nothing was put back";
   float worst = 0;
@@ -120,8 +120,8 @@ TEST_P(Variants, GlAndTheCpuBackendDrawTheSamePicture) {
       for (auto& p : j["tf"]["points"]) p[0] = v->min_value + p[0].get<double>() * (v->max_value - v->min_value);
     const ResolvedScene s = test::make_scene(*v, j);
     render::RenderStats gl_st, cpu_st;
-    const Image a = test::gpu().caster->render(*gl_v, s, render::GpuPath::Fragment, &gl_st);
-    const Image b = cpu_caster.render(*cpu_v, s, render::GpuPath::Fragment, &cpu_st);
+    const Image a = test::gpu().caster->render(*gl_v, s, render::RenderPath::Fragment, &gl_st);
+    const Image b = cpu_caster.render(*cpu_v, s, render::RenderPath::Fragment, &cpu_st);
     float worst = 0;
     size_t off = 0;  // pixels off by more than 1/255 in some channel
     for (size_t p = 0; p < a.rgba.size() / 4; ++p) {

@@ -53,7 +53,7 @@ TEST(VirtualSamples, StepOnePlusThreeAgainstStepQuarter) {
     render::RenderStats st;
     std::vector<double> ms;
     for (int f = 0; f < 4; ++f) {
-      row.img = test::render_gpu(gv, s, render::GpuPath::Fragment, &st);
+      row.img = test::render_gpu(gv, s, render::RenderPath::Fragment, &st);
       if (f) ms.push_back(st.render_ms);
     }
     std::sort(ms.begin(), ms.end());
@@ -134,7 +134,7 @@ TEST(VirtualSamples, WideningKeepsTheCellsSkippingWouldStreak) {
   auto render = [&](bool skipping, double widening, render::RenderStats* st = nullptr) {
     sj["render"]["space_skipping"] = skipping;
     render::RendererSeam::set_virtual_sample_widening(caster, widening);
-    Image img = test::render_gpu(gv, test::make_scene(*v, sj), render::GpuPath::Fragment, st);
+    Image img = test::render_gpu(gv, test::make_scene(*v, sj), render::RenderPath::Fragment, st);
     render::RendererSeam::set_virtual_sample_widening(caster, kCatmullRomOvershoot);
     return img;
   };

@@ -7,7 +7,7 @@
 #include "cpu/cpu_renderer.h"
 #include "gpu/gpu_fixture.h"
 #include "render/backend.h"
-#include "session/gpu_residency.h"
+#include "session/residency.h"
 #include "session/volume_store.h"
 
 using namespace peakcast;
@@ -26,7 +26,7 @@ ResolvedScene scene(const Volume& v, const char* filter) {
 // A 40x33x21 blobs volume loaded through the server's store (from a NRRD in a scratch directory).
 struct Stored {
   std::shared_ptr<Volume> v = test::make_volume(GeneratorKind::Blobs, {40, 33, 21}, SourceType::U8);
-  GpuResidency residency{int64_t(1) << 30};
+  Residency residency{int64_t(1) << 30};
   std::unique_ptr<VolumeStore> store;
   std::shared_ptr<VolumeEntry> e;
   Stored() {
@@ -60,8 +60,8 @@ TEST(VolumeCells, ResidentVolumeUsesTheGivenGridsAndRendersTheSame) {
   for (const char* filter : {"trilinear", "tricubic"}) {
     const ResolvedScene s = scene(*v, filter);
     render::RenderStats a, b;
-    const Image ia = test::render_gpu(given, s, render::GpuPath::Fragment, &a);
-    const Image ib = test::render_gpu(built, s, render::GpuPath::Fragment, &b);
+    const Image ia = test::render_gpu(given, s, render::RenderPath::Fragment, &a);
+    const Image ib = test::render_gpu(built, s, render::RenderPath::Fragment, &b);
     EXPECT_EQ(ia.rgba, ib.rgba) << filter;
     EXPECT_GT(a.empty_cells, 0) << filter << ": the TF should leave cells empty (skipping in use)";
     EXPECT_EQ(a.empty_cells, b.empty_cells) << filter;
@@ -92,11 +92,11 @@ TEST(VolumeCells, ResidencyKeepsTheVolumeOnceAfterTheUpload) {
   Stored st;
   auto& v = st.v;
   auto& e = st.e;
-  GpuResidency& residency = st.residency;
+  Residency& residency = st.residency;
   ASSERT_TRUE(e->volume->has_voxels());
   const ResolvedScene s = scene(*e->volume, "tricubic");
   test::TestVolume fresh(v);  // the same voxels, kept
-  const Image want = test::render_gpu(fresh, s, render::GpuPath::Fragment);
+  const Image want = test::render_gpu(fresh, s, render::RenderPath::Fragment);
   const render::ResidentVolume& gv = residency.acquire(e, *test::gpu().caster);
   EXPECT_TRUE(e->volume->has_voxels()) << "probes read the host voxels after the upload";
   if (test::cpu_backend()) EXPECT_EQ(gv.resident_bytes(), 0u) << "no second copy of integer voxels";
@@ -104,12 +104,12 @@ TEST(VolumeCells, ResidencyKeepsTheVolumeOnceAfterTheUpload) {
   EXPECT_EQ(e->volume->min_value, v->min_value);
   EXPECT_EQ(e->volume->histogram, v->histogram);
   for (const char* filter : {"trilinear", "tricubic"}) {
-    const Image got = test::render_gpu(gv, scene(*e->volume, filter), render::GpuPath::Fragment);
-    const Image ref = test::render_gpu(fresh, scene(*v, filter), render::GpuPath::Fragment);
+    const Image got = test::render_gpu(gv, scene(*e->volume, filter), render::RenderPath::Fragment);
+    const Image ref = test::render_gpu(fresh, scene(*v, filter), render::RenderPath::Fragment);
     EXPECT_EQ(got.rgba, ref.rgba) << filter;
   }
   EXPECT_EQ(&residency.acquire(e, *test::gpu().caster), &gv) << "a second frame must reuse the copy";
-  EXPECT_EQ(test::render_gpu(gv, s, render::GpuPath::Fragment).rgba, want.rgba);
+  EXPECT_EQ(test::render_gpu(gv, s, render::RenderPath::Fragment).rgba, want.rgba);
   auto dropped = test::make_volume(GeneratorKind::Blobs, {8, 8, 8}, SourceType::U8);
   dropped->drop_voxels();
   try {
@@ -132,7 +132,7 @@ TEST(Backends, RefuseAnotherBackendsVolumeAndUnknownNames) {
   cpu::CpuRenderer cpu_renderer;
   auto cpu_volume = cpu_renderer.make_resident(v);
   if (!test::cpu_backend()) {
-    render::Raycaster& gl = *test::gpu().gl;
+    gl::GlRenderer& gl = *test::gpu().gl;
     auto gl_volume = gl.make_resident(v);
     try {
       gl.render(*cpu_volume, s);

@@ -1,9 +1,9 @@
-// The probe (reference/cpu_raycaster.h probe_reference): where along a pixel's ray the
+// The probe (reference/reference_renderer.h probe_reference): where along a pixel's ray the
 // accumulated opacity passes one half, on a ramp whose answers are known in closed form.
 #include <gtest/gtest.h>
 
 #include "core/generators.h"
-#include "reference/cpu_raycaster.h"
+#include "reference/reference_renderer.h"
 
 using namespace peakcast;
 

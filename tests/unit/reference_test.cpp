@@ -7,7 +7,7 @@
 #include <cmath>
 
 #include "core/generators.h"
-#include "reference/cpu_raycaster.h"
+#include "reference/reference_renderer.h"
 #include "reference/field.h"
 #include "reference/metrics.h"
 

@@ -6,7 +6,7 @@
 #include <memory>
 #include <string>
 
-namespace peakcast::gpu {
+namespace peakcast::gl {
 
 struct GlInfo {
   std::string vendor, renderer, version;
@@ -42,4 +42,4 @@ class EglContext {
   GlInfo info_;
 };
 
-}  // namespace peakcast::gpu
+}  // namespace peakcast::gl

@@ -7,12 +7,12 @@
 #include <vector>
 #include <string>
 
-#include "gpu/gl_objects.h"
+#include "gl/gl_objects.h"
 
-namespace peakcast::render {
+namespace peakcast::gl {
 
 // What GL reports for the linked program's RayUniforms block.
-std::map<std::string, size_t> gl_uniform_offsets(const gpu::Program& program);
-size_t gl_uniform_block_size(const gpu::Program& program);
+std::map<std::string, size_t> uniform_offsets(const gl::Program& program);
+size_t uniform_block_size(const gl::Program& program);
 
-}  // namespace peakcast::render
+}  // namespace peakcast::gl

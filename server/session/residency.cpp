@@ -1,4 +1,4 @@
-#include "session/gpu_residency.h"
+#include "session/residency.h"
 
 #include <algorithm>
 #include <string>
@@ -8,11 +8,11 @@
 
 namespace peakcast {
 
-GpuResidency::GpuResidency(int64_t budget_bytes) : budget_(budget_bytes) {}
+Residency::Residency(int64_t budget_bytes) : budget_(budget_bytes) {}
 
-GpuResidency::~GpuResidency() = default;
+Residency::~Residency() = default;
 
-int64_t GpuResidency::count_locked() const {
+int64_t Residency::count_locked() const {
   admitted_.erase(std::remove_if(admitted_.begin(), admitted_.end(), [](auto& w) { return w.expired(); }),
                   admitted_.end());
   int64_t total = 0;
@@ -21,7 +21,7 @@ int64_t GpuResidency::count_locked() const {
   return total;
 }
 
-void GpuResidency::admit(const std::shared_ptr<VolumeEntry>& e, const std::function<void()>& release_unused) {
+void Residency::admit(const std::shared_ptr<VolumeEntry>& e, const std::function<void()>& release_unused) {
   const int64_t bytes = e->resident_bytes;
   if (bytes > budget_)
     throw VolumeError(e->path, "GPU memory budget: this volume needs " + std::to_string(bytes >> 20) +
@@ -41,18 +41,18 @@ void GpuResidency::admit(const std::shared_ptr<VolumeEntry>& e, const std::funct
   admitted_.push_back(e);
 }
 
-int64_t GpuResidency::counted_bytes() const {
+int64_t Residency::counted_bytes() const {
   std::lock_guard lock(m_);
   return count_locked();
 }
 
-size_t GpuResidency::counted_volumes() const {
+size_t Residency::counted_volumes() const {
   std::lock_guard lock(m_);
   count_locked();
   return admitted_.size();
 }
 
-render::ResidentVolume& GpuResidency::acquire(const std::shared_ptr<VolumeEntry>& e, render::Renderer& renderer) {
+render::ResidentVolume& Residency::acquire(const std::shared_ptr<VolumeEntry>& e, render::Renderer& renderer) {
   for (auto it = copies_.begin(); it != copies_.end();)
     it = it->second.entry.expired() ? copies_.erase(it) : std::next(it);
   auto& c = copies_[e.get()];
@@ -69,14 +69,14 @@ render::ResidentVolume& GpuResidency::acquire(const std::shared_ptr<VolumeEntry>
   return *c.gpu;
 }
 
-int64_t GpuResidency::gpu_bytes() const {
+int64_t Residency::gpu_bytes() const {
   int64_t total = 0;
   for (auto& [_, c] : copies_) total += int64_t(c.gpu->resident_bytes());
   return total;
 }
 
-size_t GpuResidency::gpu_volumes() const { return copies_.size(); }
+size_t Residency::gpu_volumes() const { return copies_.size(); }
 
-void GpuResidency::release_gpu() { copies_.clear(); }
+void Residency::release_gpu() { copies_.clear(); }
 
 }  // namespace peakcast

@@ -1,8 +1,8 @@
-#include "gpu/compute_table.h"
+#include "gl/compute_table.h"
 
 #include <algorithm>
 
-namespace peakcast::gpu {
+namespace peakcast::gl {
 
 std::vector<float> run_compute_table(const Program& program, const ComputeTable& t) {
   Buffer ubo, in, out;
@@ -27,4 +27,4 @@ std::vector<float> run_compute_table(const Program& program, const ComputeTable&
   return result;
 }
 
-}  // namespace peakcast::gpu
+}  // namespace peakcast::gl

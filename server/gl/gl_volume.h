@@ -3,16 +3,16 @@
 
 #include <memory>
 
-#include "gpu/gl_objects.h"
+#include "gl/gl_objects.h"
 #include "render/resident_volume.h"
 
-namespace peakcast::render {
+namespace peakcast::gl {
 
-class GpuVolume : public ResidentVolume {
+class GlVolume : public render::ResidentVolume {
  public:
   // `cells`: grids built off the render thread (VolumeEntry::macrocells; checked against the
   // volume, std::invalid_argument otherwise); see ResidentVolume::macrocells.
-  explicit GpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells = {});
+  explicit GlVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells = {});
 
   size_t gpu_bytes() const { return volume_->byte_size(); }
   size_t resident_bytes() const override { return gpu_bytes(); }
@@ -24,8 +24,8 @@ class GpuVolume : public ResidentVolume {
   bool drop_host_voxels() override;
 
  private:
-  gpu::Texture texture_;
+  gl::Texture texture_;
   float scale_ = 1.f, bias_ = 0.f;
 };
 
-}  // namespace peakcast::render
+}  // namespace peakcast::gl

@@ -14,17 +14,17 @@
 #include "core/sampling.h"
 #include "core/ray_texture.h"
 #include "core/scene.h"
-#include "gpu/gl_objects.h"
-#include "gpu/shader_cache.h"
+#include "gl/gl_objects.h"
+#include "gl/shader_cache.h"
 #include "render/frame.h"
 #include "render/frame_setup.h"
-#include "render/gpu_volume.h"
+#include "gl/gl_volume.h"
 #include "render/ray_texture_cache.h"
 #include "render/render_stats.h"
 #include "render/renderer.h"
 #include "render/variant.h"
 
-namespace peakcast::render {
+namespace peakcast::gl {
 
 // Sizes of the per-TF tables bound for a frame.
 struct RayTables {
@@ -33,122 +33,122 @@ struct RayTables {
   size_t peak_count = 0;
 };
 
-class Raycaster : public Renderer {
+class GlRenderer : public render::Renderer {
  public:
-  explicit Raycaster(gpu::ShaderCache& shaders);
+  explicit GlRenderer(gl::ShaderCache& shaders);
   const char* backend() const override { return "gl"; }
   std::string description() const override;
-  // A GpuVolume: the texture upload.
-  std::unique_ptr<ResidentVolume> make_resident(std::shared_ptr<const Volume> volume,
+  // A GlVolume: the texture upload.
+  std::unique_ptr<render::ResidentVolume> make_resident(std::shared_ptr<const Volume> volume,
                                                 VolumeMacrocells cells = {}) override;
-  using Renderer::render;
-  // `volume` must be a GpuVolume (std::invalid_argument otherwise).
-  RenderResult render(const ResidentVolume& volume, const ResolvedScene& scene, const RenderRequest& request,
-                      RenderStats* stats = nullptr) override;
-  Image render_bare(const ResidentVolume& volume, const ResolvedScene& scene, GpuPath path, const Image& full,
-                    RenderStats* stats = nullptr) override;
+  using render::Renderer::render;
+  // `volume` must be a GlVolume (std::invalid_argument otherwise).
+  render::RenderResult render(const render::ResidentVolume& volume, const ResolvedScene& scene, const render::RenderRequest& request,
+                      render::RenderStats* stats = nullptr) override;
+  Image render_bare(const render::ResidentVolume& volume, const ResolvedScene& scene, render::RenderPath path, const Image& full,
+                    render::RenderStats* stats = nullptr) override;
   // The fragment path with BRICK: ownership, look-behind and look-ahead as the CPU backend's.
-  Image render_brick(const ResidentVolume& volume, const ResolvedScene& scene, const Brick& brick,
-                     RenderStats* stats = nullptr, std::optional<PixelRect> rect = std::nullopt) override;
-  int sample_cap(const VariantKey& key) const override;
+  Image render_brick(const render::ResidentVolume& volume, const ResolvedScene& scene, const render::Brick& brick,
+                     render::RenderStats* stats = nullptr, std::optional<render::PixelRect> rect = std::nullopt) override;
+  int sample_cap(const render::VariantKey& key) const override;
   // For the layout test: the linked program of a variant.
-  const gpu::Program& program(const VariantKey& key);
+  const gl::Program& program(const render::VariantKey& key);
 
  private:
   // Render targets of one size and format. A few are kept: a still's tiles interleave with
   // stream frames of another size, and reallocating every draw would cost more than the tile.
   struct Targets {
     int w = 0, h = 0;
-    RenderOutput output = RenderOutput::Float;
-    gpu::Texture color, samples;
-    gpu::Framebuffer fbo;
+    render::RenderOutput output = render::RenderOutput::Float;
+    gl::Texture color, samples;
+    gl::Framebuffer fbo;
   };
-  Targets& targets(int w, int h, RenderOutput output);
+  Targets& targets(int w, int h, render::RenderOutput output);
   // Tables, occupancy and the variant for a scene (cached on the TF).
-  VariantKey prepare(const GpuVolume& volume, const ResolvedScene& scene, GpuPath path, RenderStats* stats);
+  render::VariantKey prepare(const GlVolume& volume, const ResolvedScene& scene, render::RenderPath path, render::RenderStats* stats);
   // Builds and binds the peak table + TF points or the preintegration table the scene needs.
-  void upload_tables(const GpuVolume& volume, const ResolvedScene& scene, const std::vector<Peak>& peaks);
-  void bind_tf_table(const GpuVolume& volume, const ResolvedScene& scene, const std::string& tf_sig);
-  void bind_multipliers(const GpuVolume& volume, const MacrocellGrid& cells);
-  RenderResult draw(const GpuVolume& volume, const ResolvedScene& scene, const VariantKey& key, const PixelRect& rect,
-                    bool read_samples, RenderStats* stats, const Brick* brick = nullptr);
+  void upload_tables(const GlVolume& volume, const ResolvedScene& scene, const std::vector<Peak>& peaks);
+  void bind_tf_table(const GlVolume& volume, const ResolvedScene& scene, const std::string& tf_sig);
+  void bind_multipliers(const GlVolume& volume, const MacrocellGrid& cells);
+  render::RenderResult draw(const GlVolume& volume, const ResolvedScene& scene, const render::VariantKey& key, const render::PixelRect& rect,
+                    bool read_samples, render::RenderStats* stats, const render::Brick* brick = nullptr);
   // A draw in parts, shared by draw() and the asynchronous frames: the program (its wait in
   // stats->compile_ms), uniforms and targets; then the draw or dispatch between a timer
   // query's begin and end; then the query's result (waits for it).
-  Targets& setup_draw(const GpuVolume& volume, const ResolvedScene& scene, const VariantKey& key, const PixelRect& rect,
-                      const Brick* brick, RenderStats* stats);
-  void dispatch(const VariantKey& key, Targets& targets, bool read_samples, const gpu::GpuTimer& timer);
+  Targets& setup_draw(const GlVolume& volume, const ResolvedScene& scene, const render::VariantKey& key, const render::PixelRect& rect,
+                      const render::Brick* brick, render::RenderStats* stats);
+  void dispatch(const render::VariantKey& key, Targets& targets, bool read_samples, const gl::GpuTimer& timer);
 
-  gpu::ShaderCache& shaders_;
-  gpu::Buffer ubo_;
-  gpu::Buffer front_opacity_;  // render_brick with a ray texture: Brick::front_opacity
-  gpu::VertexArray vao_;
-  gpu::Texture budget_texture_;
+  gl::ShaderCache& shaders_;
+  gl::Buffer ubo_;
+  gl::Buffer front_opacity_;  // render_brick with a ray texture: Brick::front_opacity
+  gl::VertexArray vao_;
+  gl::Texture budget_texture_;
   // Per-TF state in small caches, most recent first: sessions with different TFs (and a still's
   // tiles between their frames) take turns without rebuilding tables at every draw.
   struct TfTable {  // the 1D TF table over the value range
     std::string key;
-    gpu::Texture texture;
+    gl::Texture texture;
   };
   struct Tables {  // peak table + TF points, or the preintegration table
     std::string key;
     RayTables sizes;
-    gpu::Texture peak_table, preint_table;
-    gpu::Buffer tf_points;
+    gl::Texture peak_table, preint_table;
+    gl::Buffer tf_points;
   };
   struct DistanceEntry {  // the empty-space distance per cell of one occupancy (its key)
     std::string key;
-    gpu::Buffer buffer;
+    gl::Buffer buffer;
   };
   static constexpr size_t kCacheEntries = 4;
   std::vector<TfTable> tf_tables_;
   std::vector<Tables> tables_cache_;
-  OccupancyCache occupancy_cache_;
+  render::OccupancyCache occupancy_cache_;
   std::vector<DistanceEntry> distance_cache_;
   struct StrideEntry {  // adaptive multipliers of one volume's grid
     std::string key;
-    gpu::Buffer buffer;
+    gl::Buffer buffer;
   };
   std::vector<StrideEntry> stride_cache_;
   // Ray textures on the host (strokes read them: add, multiply), each with its texture.
-  using RayTextureEntry = RayTextureCache<gpu::Texture>::Entry;
-  RayTextureCache<gpu::Texture> ray_textures_;
+  using RayTextureEntry = render::RayTextureCache<gl::Texture>::Entry;
+  render::RayTextureCache<gl::Texture> ray_textures_;
   // Binds the scene's ray texture: a new lineage is uploaded whole; new strokes of a held one
   // upload only the texels they touched (Raspe §3.2).
-  void bind_ray_texture(const ResolvedScene& scene, RenderStats* stats);
+  void bind_ray_texture(const ResolvedScene& scene, render::RenderStats* stats);
   RayTables tables_;  // what the current frame's tables hold (for the uniforms and stats)
   bool llvmpipe_ = false;
-  VariantKey last_key_;           // the last draw's variant (prefetch_variants starts from it)
+  render::VariantKey last_key_;           // the last draw's variant (prefetch_variants starts from it)
   std::vector<Targets> targets_;  // most recently used first
-  gpu::GpuTimer timer_;           // the synchronous draws' timer
+  gl::GpuTimer timer_;           // the synchronous draws' timer
 
-  // Asynchronous frames (raycaster_async.cpp): a ring of pixel-buffer objects, each with the
+  // Asynchronous frames (gl_renderer_async.cpp): a ring of pixel-buffer objects, each with the
   // fence after its read-back and its draw's timer query.
   struct InFlight {
-    gpu::Buffer pbo;
+    gl::Buffer pbo;
     size_t bytes = 0;       // the buffer's size
-    gpu::GpuTimer timer;
-    gpu::Fence fence;
+    gl::GpuTimer timer;
+    gl::Fence fence;
     int w = 0, h = 0, cap = 0;
     bool samples = false;   // per-pixel sample counts follow the RGB bytes
-    RenderStats stats;
+    render::RenderStats stats;
     std::chrono::steady_clock::time_point issued;
   };
   std::vector<InFlight> ring_;  // kFramesInFlight slots
   size_t ring_head_ = 0, ring_count_ = 0;
 
  public:
-  void submit(const ResidentVolume& volume, const ResolvedScene& scene, const RenderRequest& request) override;
-  RenderResult collect(RenderStats* stats = nullptr) override;
+  void submit(const render::ResidentVolume& volume, const ResolvedScene& scene, const render::RenderRequest& request) override;
+  render::RenderResult collect(render::RenderStats* stats = nullptr) override;
   size_t in_flight() const override { return ring_count_; }
   bool asynchronous() const override { return !llvmpipe_; }
   void prefetch_variants() override;
 };
 
 // Adds per-pixel sample counts (-1: the ray missed the box) to the stats.
-void count_samples(const std::vector<float>& samples, int cap, RenderStats& stats);
+void count_samples(const std::vector<float>& samples, int cap, render::RenderStats& stats);
 
 using peakcast::kMaxSamplesPerRay;
 constexpr int kLlvmpipeLoopBudget = 60000;  // of llvmpipe's 65535 loop iterations per invocation
 
-}  // namespace peakcast::render
+}  // namespace peakcast::gl

@@ -1,20 +1,22 @@
 // The ray caster's tables: TF-dependent ones (peak table, preintegration table) and the ones
 // that follow the data or the scene (adaptive multipliers, ray texture), each cached on what
-// it depends on. See raycaster.cpp for the frame itself.
+// it depends on. See gl_renderer.cpp for the frame itself.
 #include <sstream>
 
 #include "core/preintegration.h"
-#include "render/raycaster.h"
+#include "gl/gl_renderer.h"
 #include "render/shader_interface.h"
-#include "render/table_cache.h"
+#include "gl/table_cache.h"
 
-namespace peakcast::render {
+namespace peakcast::gl {
 
-gpu::Buffer make_cell_buffer(const MacrocellGrid& cells, const std::vector<uint8_t>& bytes) {
+using namespace render;  // the renderer interface and frame setup this implements
+
+gl::Buffer make_cell_buffer(const MacrocellGrid& cells, const std::vector<uint8_t>& bytes) {
   if (bytes.size() != cells.size()) throw std::invalid_argument("make_cell_buffer: one byte per cell");
   std::vector<uint32_t> words((bytes.size() + 3) / 4, 0u);
   for (size_t i = 0; i < bytes.size(); ++i) words[i / 4] |= uint32_t(bytes[i]) << (8 * (i % 4));
-  gpu::Buffer buf = gpu::make_buffer();
+  gl::Buffer buf = gl::make_buffer();
   glNamedBufferStorage(buf.id(), GLsizeiptr(std::max<size_t>(1, words.size()) * sizeof(uint32_t)), words.data(), 0);
   return buf;
 }
@@ -22,12 +24,12 @@ gpu::Buffer make_cell_buffer(const MacrocellGrid& cells, const std::vector<uint8
 // The ray texture as an RGB32F texture read with linear filtering between texel centres,
 // clamped at the edges (what sample_ray_texture does on the CPU): made when the host cache
 // builds a lineage, refreshed by the rectangle new strokes touched.
-void Raycaster::bind_ray_texture(const ResolvedScene& s, RenderStats* stats) {
+void GlRenderer::bind_ray_texture(const ResolvedScene& s, RenderStats* stats) {
   const auto t0 = Clock::now();
   auto u = ray_textures_.get(*s.ray_texture, s.scene.render.early_termination);
   RayTextureEntry& e = *u.entry;
   if (u.created) {
-    e.extra = gpu::make_texture(GL_TEXTURE_2D);
+    e.extra = gl::make_texture(GL_TEXTURE_2D);
     glTextureStorage2D(e.extra.id(), 1, GL_RGB32F, e.texels.width(), e.texels.height());
     glTextureParameteri(e.extra.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     glTextureParameteri(e.extra.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
@@ -53,7 +55,7 @@ void Raycaster::bind_ray_texture(const ResolvedScene& s, RenderStats* stats) {
 }
 
 // The adaptive multipliers of a volume's grid: data only (no TF), so built once per grid.
-void Raycaster::bind_multipliers(const GpuVolume& gv, const MacrocellGrid& cells) {
+void GlRenderer::bind_multipliers(const GlVolume& gv, const MacrocellGrid& cells) {
   const std::string key = std::to_string(gv.serial()) + " " + cells.to_string();
   StrideEntry* e = cache_find(stride_cache_, key);
   if (!e) {
@@ -64,7 +66,7 @@ void Raycaster::bind_multipliers(const GpuVolume& gv, const MacrocellGrid& cells
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboCellStride, e->buffer.id());
 }
 
-void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const std::vector<Peak>& peaks) {
+void GlRenderer::upload_tables(const GlVolume& gv, const ResolvedScene& s, const std::vector<Peak>& peaks) {
   const RenderSettings& r = s.scene.render;
   const double lo = gv.tf_lo(), hi = gv.tf_hi();
   // The tables depend on the TF, the value range, the method's sizes and (preintegration) the
@@ -82,7 +84,7 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
   if (r.classification == Classification::Peaks) {
     const PeakTable table = build_peak_table(peaks, lo, hi, r.peak_table_bins);
     const std::vector<float> texels = peak_texels(table, lo, hi);
-    t.peak_table = gpu::make_texture(GL_TEXTURE_2D_ARRAY);
+    t.peak_table = gl::make_texture(GL_TEXTURE_2D_ARRAY);
     glTextureStorage3D(t.peak_table.id(), 1, GL_RGBA32F, table.bins, table.bins, table.layers);
     glTextureSubImage3D(t.peak_table.id(), 0, 0, 0, 0, table.bins, table.bins, table.layers, GL_RGBA, GL_FLOAT,
                         texels.data());
@@ -90,7 +92,7 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
     glTextureParameteri(t.peak_table.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     glBindTextureUnit(kUnitPeakTable, t.peak_table.id());
     const std::vector<glm::vec4> points = tf_point_pairs(s.tf, lo, hi);
-    t.tf_points = gpu::make_buffer();
+    t.tf_points = gl::make_buffer();
     glNamedBufferStorage(t.tf_points.id(), GLsizeiptr(points.size() * sizeof(glm::vec4)), points.data(), 0);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboTfPoints, t.tf_points.id());
     t.sizes.peak_bins = table.bins;
@@ -102,7 +104,7 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
   }
   if (r.classification == Classification::Preint) {
     const PreintegrationTable table = scene_preintegration(s, lo, hi);
-    t.preint_table = gpu::make_texture(GL_TEXTURE_2D);
+    t.preint_table = gl::make_texture(GL_TEXTURE_2D);
     glTextureStorage2D(t.preint_table.id(), 1, GL_RGBA32F, table.size, table.size);
     glTextureSubImage2D(t.preint_table.id(), 0, 0, 0, table.size, table.size, GL_RGBA, GL_FLOAT, table.rgba.data());
     glTextureParameteri(t.preint_table.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
@@ -117,4 +119,4 @@ void Raycaster::upload_tables(const GpuVolume& gv, const ResolvedScene& s, const
   ++seam_.table_builds;
 }
 
-}  // namespace peakcast::render
+}  // namespace peakcast::gl

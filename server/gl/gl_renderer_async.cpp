@@ -6,15 +6,17 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "render/raycaster.h"
+#include "gl/gl_renderer.h"
 #include "render/shader_interface.h"
-#include "render/table_cache.h"
+#include "gl/table_cache.h"
 
-namespace peakcast::render {
+namespace peakcast::gl {
 
-void Raycaster::submit(const ResidentVolume& v, const ResolvedScene& s, const RenderRequest& req) {
+using namespace render;  // the renderer interface and frame setup this implements
+
+void GlRenderer::submit(const ResidentVolume& v, const ResolvedScene& s, const RenderRequest& req) {
   check_submit(req, ring_count_);
-  const auto* gv = dynamic_cast<const GpuVolume*>(&v);
+  const auto* gv = dynamic_cast<const GlVolume*>(&v);
   if (!gv) throw std::invalid_argument("the GL renderer draws GPU volumes only (this one was made by another backend)");
   if (ring_.size() < kFramesInFlight) ring_.resize(kFramesInFlight);
   InFlight& f = ring_[(ring_head_ + ring_count_) % ring_.size()];
@@ -30,7 +32,7 @@ void Raycaster::submit(const ResidentVolume& v, const ResolvedScene& s, const Re
   f.stats.variant = key.name();
   f.stats.sample_cap = f.cap;
   Targets& t = setup_draw(*gv, s, key, rect, nullptr, &f.stats);
-  if (!f.timer.begin) f.timer = gpu::GpuTimer::make();
+  if (!f.timer.begin) f.timer = gl::GpuTimer::make();
   f.issued = Clock::now();
   dispatch(key, t, f.samples, f.timer);
 
@@ -38,7 +40,7 @@ void Raycaster::submit(const ResidentVolume& v, const ResolvedScene& s, const Re
   const size_t rgb = size_t(f.w) * f.h * 3, rgb_padded = (rgb + 3) / 4 * 4;
   const size_t bytes = rgb_padded + (f.samples ? size_t(f.w) * f.h * 4 : 0);
   if (!f.pbo || f.bytes < bytes) {
-    f.pbo = gpu::make_buffer();
+    f.pbo = gl::make_buffer();
     glNamedBufferStorage(f.pbo.id(), GLsizeiptr(bytes), nullptr, GL_MAP_READ_BIT | GL_CLIENT_STORAGE_BIT);
     f.bytes = bytes;
   }
@@ -51,12 +53,12 @@ void Raycaster::submit(const ResidentVolume& v, const ResolvedScene& s, const Re
                       reinterpret_cast<void*>(rgb_padded));
   }
   glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
-  f.fence = gpu::fence_now();
-  gpu::check_gl("asynchronous frame");
+  f.fence = gl::fence_now();
+  gl::check_gl("asynchronous frame");
   ++ring_count_;
 }
 
-RenderResult Raycaster::collect(RenderStats* stats) {
+RenderResult GlRenderer::collect(RenderStats* stats) {
   if (ring_count_ == 0) throw std::logic_error("collect: no frame was submitted");
   InFlight& f = ring_[ring_head_];
   ring_head_ = (ring_head_ + 1) % ring_.size();
@@ -87,4 +89,4 @@ RenderResult Raycaster::collect(RenderStats* stats) {
   return res;
 }
 
-}  // namespace peakcast::render
+}  // namespace peakcast::gl

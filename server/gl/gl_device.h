@@ -7,19 +7,19 @@
 #include <memory>
 #include <string>
 
-#include "gpu/egl_context.h"  // GlInfo: strings only
+#include "gl/egl_context.h"  // GlInfo: strings only
 #include "render/renderer.h"
 
-namespace peakcast::render {
+namespace peakcast::gl {
 
 class GlDevice {
  public:
   virtual ~GlDevice() = default;
-  virtual const gpu::GlInfo& info() const = 0;
+  virtual const gl::GlInfo& info() const = 0;
   virtual std::string description() const = 0;  // renderer, version and EGL platform, one line
   // The GL ray caster on this device (shaders from `shader_dir`, linked programs kept as driver
   // binaries in `program_cache`, empty: off); the device must outlive it.
-  virtual std::unique_ptr<Renderer> make_renderer(const std::filesystem::path& shader_dir,
+  virtual std::unique_ptr<render::Renderer> make_renderer(const std::filesystem::path& shader_dir,
                                                   const std::filesystem::path& program_cache) = 0;
 };
 
@@ -32,4 +32,4 @@ std::filesystem::path gl_shader_dir();
 // The program cache's default folder ($XDG_CACHE_HOME or ~/.cache, then peakcast/programs).
 std::filesystem::path gl_program_cache_dir();
 
-}  // namespace peakcast::render
+}  // namespace peakcast::gl

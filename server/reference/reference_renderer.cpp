@@ -1,4 +1,4 @@
-#include "reference/cpu_raycaster.h"
+#include "reference/reference_renderer.h"
 
 
 #include <algorithm>

@@ -19,12 +19,12 @@ class Renderer;
 class ResidentVolume;
 }
 
-class GpuResidency {
+class Residency {
  public:
-  explicit GpuResidency(int64_t budget_bytes);
-  ~GpuResidency();
-  GpuResidency(const GpuResidency&) = delete;
-  GpuResidency& operator=(const GpuResidency&) = delete;
+  explicit Residency(int64_t budget_bytes);
+  ~Residency();
+  Residency(const Residency&) = delete;
+  Residency& operator=(const Residency&) = delete;
 
   int64_t budget() const { return budget_; }
   // Any thread. Counts `e` against the budget. When it does not fit, `release_unused` is called

@@ -1,4 +1,4 @@
-#include "render/raycaster.h"
+#include "gl/gl_renderer.h"
 
 #include <algorithm>
 #include <chrono>
@@ -9,38 +9,40 @@
 #include "core/preintegration.h"
 #include "render/ray_uniforms.h"
 #include "render/shader_interface.h"
-#include "render/table_cache.h"
+#include "gl/table_cache.h"
 
-namespace peakcast::render {
+namespace peakcast::gl {
 
-Raycaster::Raycaster(gpu::ShaderCache& shaders) : shaders_(shaders) {
+using namespace render;  // the renderer interface and frame setup this implements
+
+GlRenderer::GlRenderer(gl::ShaderCache& shaders) : shaders_(shaders) {
   const char* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
   llvmpipe_ = renderer && std::string(renderer).find("llvmpipe") != std::string::npos;
-  ubo_ = gpu::make_buffer();
-  front_opacity_ = gpu::make_buffer();
-  timer_ = gpu::GpuTimer::make();
+  ubo_ = gl::make_buffer();
+  front_opacity_ = gl::make_buffer();
+  timer_ = gl::GpuTimer::make();
   glNamedBufferStorage(ubo_.id(), sizeof(ray::RayUniforms), nullptr, GL_DYNAMIC_STORAGE_BIT);
-  vao_ = gpu::make_vertex_array();
+  vao_ = gl::make_vertex_array();
 }
 
-std::string Raycaster::description() const {
+std::string GlRenderer::description() const {
   const char* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
   return std::string("OpenGL: ") + (renderer ? renderer : "unknown");
 }
 
-std::unique_ptr<ResidentVolume> Raycaster::make_resident(std::shared_ptr<const Volume> volume, VolumeMacrocells cells) {
-  return std::make_unique<GpuVolume>(std::move(volume), std::move(cells));
+std::unique_ptr<ResidentVolume> GlRenderer::make_resident(std::shared_ptr<const Volume> volume, VolumeMacrocells cells) {
+  return std::make_unique<GlVolume>(std::move(volume), std::move(cells));
 }
 
 namespace {
-const GpuVolume& gpu_volume(const ResidentVolume& v) {
-  const auto* gv = dynamic_cast<const GpuVolume*>(&v);
+const GlVolume& gpu_volume(const ResidentVolume& v) {
+  const auto* gv = dynamic_cast<const GlVolume*>(&v);
   if (!gv) throw std::invalid_argument("the GL renderer draws GPU volumes only (this one was made by another backend)");
   return *gv;
 }
 }  // namespace
 
-int Raycaster::sample_cap(const VariantKey& key) const {
+int GlRenderer::sample_cap(const VariantKey& key) const {
   if (!llvmpipe_) return kMaxSamplesPerRay;
   // llvmpipe ends a shader invocation's loops after 65535 iterations in all, shared by every
   // loop (gallivm's LP_MAX_TGSI_LOOP_ITERATIONS): leave room for the macrocell walk and the
@@ -53,12 +55,12 @@ int Raycaster::sample_cap(const VariantKey& key) const {
   return kLlvmpipeLoopBudget / per_sample;
 }
 
-const gpu::Program& Raycaster::program(const VariantKey& key) {
-  if (key.path == GpuPath::Compute) return shaders_.get(key.name(), {"raycast.comp"}, key.defines());
+const gl::Program& GlRenderer::program(const VariantKey& key) {
+  if (key.path == RenderPath::Compute) return shaders_.get(key.name(), {"raycast.comp"}, key.defines());
   return shaders_.get(key.name(), {"fullscreen.vert", "raycast.frag"}, key.defines());
 }
 
-void Raycaster::prefetch_variants() {
+void GlRenderer::prefetch_variants() {
   // Around the last frame's variant: the other classifications, shading toggled, and the float
   // output of stills; built on the shader cache's thread, most likely first.
   std::vector<VariantKey> next;
@@ -75,12 +77,12 @@ void Raycaster::prefetch_variants() {
   with([](VariantKey& v) { v.peaks = true, v.preintegration = false; });
   with([](VariantKey& v) { v.rgb8 = !v.rgb8; });
   for (const VariantKey& v : next) {
-    if (v.path == GpuPath::Compute) shaders_.prefetch(v.name(), {"raycast.comp"}, v.defines());
+    if (v.path == RenderPath::Compute) shaders_.prefetch(v.name(), {"raycast.comp"}, v.defines());
     else shaders_.prefetch(v.name(), {"fullscreen.vert", "raycast.frag"}, v.defines());
   }
 }
 
-Raycaster::Targets& Raycaster::targets(int w, int h, RenderOutput output) {
+GlRenderer::Targets& GlRenderer::targets(int w, int h, RenderOutput output) {
   auto it = std::find_if(targets_.begin(), targets_.end(),
                          [&](const Targets& t) { return t.w == w && t.h == h && t.output == output; });
   if (it == targets_.end()) {
@@ -88,16 +90,16 @@ Raycaster::Targets& Raycaster::targets(int w, int h, RenderOutput output) {
     t.w = w;
     t.h = h;
     t.output = output;
-    t.color = gpu::make_texture(GL_TEXTURE_2D);
+    t.color = gl::make_texture(GL_TEXTURE_2D);
     glTextureStorage2D(t.color.id(), 1, output == RenderOutput::Rgb8 ? GL_RGBA8UI : GL_RGBA32F, w, h);
-    t.samples = gpu::make_texture(GL_TEXTURE_2D);
+    t.samples = gl::make_texture(GL_TEXTURE_2D);
     glTextureStorage2D(t.samples.id(), 1, GL_R32F, w, h);
-    t.fbo = gpu::make_framebuffer();
+    t.fbo = gl::make_framebuffer();
     glNamedFramebufferTexture(t.fbo.id(), GL_COLOR_ATTACHMENT0, t.color.id(), 0);
     glNamedFramebufferTexture(t.fbo.id(), GL_COLOR_ATTACHMENT1, t.samples.id(), 0);
     if (glCheckNamedFramebufferStatus(t.fbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
       throw std::runtime_error("render target incomplete");
-    gpu::check_gl("render targets");
+    gl::check_gl("render targets");
     if (targets_.size() >= 3) targets_.pop_back();  // a stream size, a tile size, one spare
     targets_.insert(targets_.begin(), std::move(t));
     return targets_.front();
@@ -106,9 +108,9 @@ Raycaster::Targets& Raycaster::targets(int w, int h, RenderOutput output) {
   return targets_.front();
 }
 
-RenderResult Raycaster::render(const ResidentVolume& v, const ResolvedScene& s, const RenderRequest& req,
+RenderResult GlRenderer::render(const ResidentVolume& v, const ResolvedScene& s, const RenderRequest& req,
                                RenderStats* stats) {
-  const GpuVolume& gv = gpu_volume(v);
+  const GlVolume& gv = gpu_volume(v);
   const PixelRect rect = req.tile.value_or(PixelRect{0, 0, s.scene.width, s.scene.height});
   check_rect(rect, s.scene.width, s.scene.height);
   if (stats) *stats = RenderStats::for_scene(s);
@@ -117,23 +119,23 @@ RenderResult Raycaster::render(const ResidentVolume& v, const ResolvedScene& s, 
   return draw(gv, s, key, rect, req.output == RenderOutput::Float || req.sample_stats, stats);
 }
 
-Image Raycaster::render_brick(const ResidentVolume& v, const ResolvedScene& s, const Brick& brick, RenderStats* stats,
+Image GlRenderer::render_brick(const ResidentVolume& v, const ResolvedScene& s, const Brick& brick, RenderStats* stats,
                              std::optional<PixelRect> tile) {
-  const GpuVolume& gv = gpu_volume(v);
+  const GlVolume& gv = gpu_volume(v);
   const PixelRect rect = check_brick_frame(s, brick, gv.volume().spacing, tile);
   if (stats) *stats = RenderStats::for_scene(s);
-  VariantKey key = prepare(gv, s, GpuPath::Fragment, stats);
+  VariantKey key = prepare(gv, s, RenderPath::Fragment, stats);
   key.brick = true;
   key.rgb8 = false;
   return std::move(draw(gv, s, key, rect, true, stats, &brick).image);
 }
 
 // The TF table for the scene's step (render/frame_setup.h), linearly filtered like a texture.
-void Raycaster::bind_tf_table(const GpuVolume& gv, const ResolvedScene& s, const std::string& tf_sig) {
+void GlRenderer::bind_tf_table(const GlVolume& gv, const ResolvedScene& s, const std::string& tf_sig) {
   const std::string sig = step_tf_key(s, tf_sig);
   TfTable* tf_table = cache_find(tf_tables_, sig);
   if (!tf_table) {
-    TfTable e{sig, gpu::make_texture(GL_TEXTURE_1D)};
+    TfTable e{sig, gl::make_texture(GL_TEXTURE_1D)};
     glTextureStorage1D(e.texture.id(), 1, GL_RGBA32F, TransferFunction::kTableSize);
     glTextureParameteri(e.texture.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     glTextureParameteri(e.texture.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
@@ -146,7 +148,7 @@ void Raycaster::bind_tf_table(const GpuVolume& gv, const ResolvedScene& s, const
   glBindTextureUnit(kUnitTf, tf_table->texture.id());
 }
 
-VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPath path, RenderStats* stats) {
+VariantKey GlRenderer::prepare(const GlVolume& gv, const ResolvedScene& s, RenderPath path, RenderStats* stats) {
   const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
   SetupOptions o;
   o.leaps = seam_.leaps;
@@ -176,14 +178,14 @@ VariantKey Raycaster::prepare(const GpuVolume& gv, const ResolvedScene& s, GpuPa
   return f.key;
 }
 
-Image Raycaster::render_bare(const ResidentVolume& v, const ResolvedScene& s, GpuPath path, const Image& full,
+Image GlRenderer::render_bare(const ResidentVolume& v, const ResolvedScene& s, RenderPath path, const Image& full,
                              RenderStats* stats) {
-  const GpuVolume& gv = gpu_volume(v);
+  const GlVolume& gv = gpu_volume(v);
   const int w = s.scene.width, h = s.scene.height;
   if (full.width != w || full.height != h) throw std::invalid_argument("render_bare: image size differs");
   std::vector<float> budget(full.samples.size());  // rows top-down, like the render targets
   for (size_t p = 0; p < budget.size(); ++p) budget[p] = std::max(0.f, full.samples[p]);
-  budget_texture_ = gpu::make_texture(GL_TEXTURE_2D);
+  budget_texture_ = gl::make_texture(GL_TEXTURE_2D);
   glTextureStorage2D(budget_texture_.id(), 1, GL_R32F, w, h);
   glTextureSubImage2D(budget_texture_.id(), 0, 0, 0, w, h, GL_RED, GL_FLOAT, budget.data());
   glTextureParameteri(budget_texture_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
@@ -196,12 +198,12 @@ Image Raycaster::render_bare(const ResidentVolume& v, const ResolvedScene& s, Gp
   return std::move(draw(gv, s, key, PixelRect{0, 0, w, h}, true, stats).image);
 }
 
-Raycaster::Targets& Raycaster::setup_draw(const GpuVolume& gv, const ResolvedScene& s, const VariantKey& key,
+GlRenderer::Targets& GlRenderer::setup_draw(const GlVolume& gv, const ResolvedScene& s, const VariantKey& key,
                                            const PixelRect& rect, const Brick* brick, RenderStats* stats) {
   const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
   const auto t_program = Clock::now();
   const bool was_ready = shaders_.ready(key.name());
-  const gpu::Program& prog = program(key);
+  const gl::Program& prog = program(key);
   if (stats && !was_ready) stats->compile_ms = ms_since(t_program);  // built, loaded or waited for
   last_key_ = key;
   const TableShape shape{tables_.peak_bins, tables_.peak_layers, tables_.preint_size, tables_.tf_points};
@@ -220,9 +222,9 @@ Raycaster::Targets& Raycaster::setup_draw(const GpuVolume& gv, const ResolvedSce
   return t;
 }
 
-void Raycaster::dispatch(const VariantKey& key, Targets& t, bool read_samples, const gpu::GpuTimer& timer) {
+void GlRenderer::dispatch(const VariantKey& key, Targets& t, bool read_samples, const gl::GpuTimer& timer) {
   timer.start();
-  if (key.path == GpuPath::Compute) {
+  if (key.path == RenderPath::Compute) {
     glBindImageTexture(kImageColor, t.color.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, key.rgb8 ? GL_RGBA8UI : GL_RGBA32F);
     glBindImageTexture(kImageSamples, t.samples.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_R32F);
     glDispatchCompute(GLuint((t.w + 7) / 8), GLuint((t.h + 7) / 8), 1);
@@ -241,7 +243,7 @@ void Raycaster::dispatch(const VariantKey& key, Targets& t, bool read_samples, c
   timer.stop();
 }
 
-RenderResult Raycaster::draw(const GpuVolume& gv, const ResolvedScene& s, const VariantKey& key,
+RenderResult GlRenderer::draw(const GlVolume& gv, const ResolvedScene& s, const VariantKey& key,
                            const PixelRect& rect, bool read_samples, RenderStats* stats, const Brick* brick) {
   const int w = rect.w, h = rect.h;
   const RenderOutput output = key.rgb8 ? RenderOutput::Rgb8 : RenderOutput::Float;
@@ -252,7 +254,7 @@ RenderResult Raycaster::draw(const GpuVolume& gv, const ResolvedScene& s, const 
   dispatch(key, t, read_samples, timer_);
   glFinish();
   const double render_ms = ms_since(t0);
-  gpu::check_gl("ray cast");
+  gl::check_gl("ray cast");
 
   // The targets hold rows top-down: read straight into the result, no flip.
   const auto t1 = Clock::now();
@@ -276,7 +278,7 @@ RenderResult Raycaster::draw(const GpuVolume& gv, const ResolvedScene& s, const 
       glGetTextureImage(t.samples.id(), 0, GL_RED, GL_FLOAT, GLsizei(samples.size() * 4), samples.data());
     }
   }
-  gpu::check_gl("read-back");
+  gl::check_gl("read-back");
   if (stats) {
     stats->render_ms = render_ms;
     stats->gpu_ms = timer_.elapsed_ms();
@@ -300,4 +302,4 @@ void count_samples(const std::vector<float>& samples, int cap, RenderStats& stat
   stats.samples_mean = stats.rays_hit ? stats.samples_total / double(stats.rays_hit) : 0.0;
 }
 
-}  // namespace peakcast::render
+}  // namespace peakcast::gl

@@ -1,4 +1,4 @@
-#include "gpu/program_binaries.h"
+#include "gl/program_binaries.h"
 
 #include <cstdint>
 #include <cstdlib>
@@ -11,7 +11,7 @@
 
 namespace fs = std::filesystem;
 
-namespace peakcast::gpu {
+namespace peakcast::gl {
 namespace {
 
 constexpr char kMagic[4] = {'P', 'C', 'P', 'B'};
@@ -100,4 +100,4 @@ fs::path default_program_cache_dir() {
   return {};
 }
 
-}  // namespace peakcast::gpu
+}  // namespace peakcast::gl

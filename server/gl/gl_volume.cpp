@@ -1,4 +1,4 @@
-#include "render/gpu_volume.h"
+#include "gl/gl_volume.h"
 
 #include <chrono>
 #include <stdexcept>
@@ -7,9 +7,11 @@
 #include "core/value_range.h"
 #include "render/small_cache.h"
 
-namespace peakcast::render {
+namespace peakcast::gl {
 
-GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells)
+using namespace render;  // the renderer interface and frame setup this implements
+
+GlVolume::GlVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells)
     : ResidentVolume(std::move(volume), std::move(cells)) {
   const auto t0 = std::chrono::steady_clock::now();
   const Volume& v = *volume_;
@@ -31,7 +33,7 @@ GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cell
     if (d[a] > max_size)
       throw std::runtime_error("volume dimension " + std::to_string(d[a]) + " exceeds the GPU's 3D texture limit " +
                                std::to_string(max_size));
-  texture_ = gpu::make_texture(GL_TEXTURE_3D);
+  texture_ = gl::make_texture(GL_TEXTURE_3D);
   glTextureStorage3D(texture_.id(), 1, internal, GLsizei(d[0]), GLsizei(d[1]), GLsizei(d[2]));
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   const ValueRange range = table_range(v.min_value, v.max_value);
@@ -60,7 +62,7 @@ GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cell
   glTextureParameteri(texture_.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
   for (GLenum wrap : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R})
     glTextureParameteri(texture_.id(), wrap, GL_CLAMP_TO_EDGE);
-  gpu::check_gl("volume upload");
+  gl::check_gl("volume upload");
   upload_ms_ = ms_since(t0);
 
   scale_ = normalise ? 1.0f : float(texel_to_stored / (range.hi - range.lo));
@@ -68,12 +70,12 @@ GpuVolume::GpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cell
   ensure_trilinear_grid();
 }
 
-bool GpuVolume::drop_host_voxels() {
+bool GlVolume::drop_host_voxels() {
   if (!has_both_grids()) return false;  // a grid may still need the voxels
   volume_->drop_voxels();
   return true;
 }
 
-void GpuVolume::bind(unsigned unit) const { glBindTextureUnit(unit, texture_.id()); }
+void GlVolume::bind(unsigned unit) const { glBindTextureUnit(unit, texture_.id()); }
 
-}  // namespace peakcast::render
+}  // namespace peakcast::gl

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "gpu/gl_objects.h"
+#include "gl/gl_objects.h"
 
-namespace peakcast::gpu {
+namespace peakcast::gl {
 
 class ProgramBinaries {
  public:
@@ -38,4 +38,4 @@ class ProgramBinaries {
 // when neither is known.
 std::filesystem::path default_program_cache_dir();
 
-}  // namespace peakcast::gpu
+}  // namespace peakcast::gl
