@@ -85,7 +85,7 @@ void leaps_to_first_occupied(const CpuFrame& f, const LeapInputs* in, int n, int
       const auto idx = hn::IfThenElse(hn::Eq(vA, hn::Zero(df)), hn::Div(dd, vB), general);
       const auto next = hn::Ceil(idx);
       const auto cap = hn::Add(vlast, hn::Set(di, 1));
-      // index_floor_cap: next >= cap ? cap : int(next)
+      // index_at_most (ray/walks.glsl): next >= cap ? cap : int(next)
       const auto capped = hn::IfThenElse(hn::RebindMask(di, hn::Ge(next, hn::ConvertTo(df, cap))), cap,
                                          hn::ConvertTo(di, hn::Min(next, hn::ConvertTo(df, cap))));
       const auto leapt = hn::Max(hn::Add(i, hn::Set(di, 1)), capped);

@@ -110,7 +110,8 @@ class RayCaster {
   // bit, with the ray's colour in locals (the loop-carried chain through s in memory cost a store
   // and a reload per sample). Only for plain DVR (postclassified or preintegrated, unshaded,
   // uniform steps, one process); advances i and visited; true when the ray stopped.
-  // Held to the walks without it by tests/gpu/empty_space_test.cpp (DenseRuns).
+  // Held to the walks without it by Leaps.CpuDenseRunsEqualTheSharedWalks
+  // (tests/gpu/empty_space_test.cpp).
   bool dense_run(const Ray&, const Lattice& L, RayState& s, RayWalk& k, int& i, int& visited, int last, bool cells,
                  vec3 xo, vec3 dv) {
     if (!dense_) return false;

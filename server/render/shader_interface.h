@@ -1,5 +1,5 @@
 // The binding points and encodings the ray-cast shaders share with the host (like the uniform
-// block in gpu_layout.h): one definition here, handed to every shader as #defines by
+// block, shaders/ray/uniforms.glsl): one definition here, handed to every shader as #defines by
 // interface_defines(), so GLSL never carries a bare unit number (shaders/README.md lists them).
 #pragma once
 

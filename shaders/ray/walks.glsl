@@ -9,7 +9,8 @@
 // - walk_cells: the macrocell 3D-DDA (Amanatides & Woo), for adaptive multipliers (each cell
 //   visits the multiples of its multiplier m) and, leaping likewise, the tests' CELL_DDA.
 // Segment methods (peaks, preintegration, virtual samples) also visit kExtension points on each
-// side of a run of occupied cells, so the segments that enter or leave the run are not lost.
+// side of a run of occupied cells, so the segments that enter or leave the run are not lost
+// (walk_leaps visits the one point on each side itself: it assumes kExtension == 1).
 //
 // What a target supplies (its hooks): cell_distance(c), space skipping's byte per macrocell
 // (Chebyshev distance in cells to the nearest occupied one, 0: occupied); cell_multiplier(c),

@@ -1,4 +1,4 @@
-// Empty-space leaps: the GL traversal leaps across the cube of empty macrocells the
+// Empty-space leaps: the shared traversal (shaders/ray/walks.glsl) leaps across the cube of empty macrocells the
 // empty-space distance promises instead of stepping through them one by one, and is driven by
 // the lattice (an iteration per sample or leap) rather than by the cells crossed. A leap must skip
 // exactly the lattice points the steps skip: the same pixels and the same samples per ray, over
@@ -135,8 +135,9 @@ TEST_P(Leaps, CpuRayPacketsEqualSingleRays) {
 // The CPU backend walks runs of occupied points of plain DVR (post or preintegrated, uniform
 // steps) through its dense_run fast path instead of the shared visit: bit for bit what the shared
 // walks give without it, pixels and sample counts, with space skipping (the runs between leaps)
-// and without (one run along the whole ray), and with a ray texture's step multiplier and
-// early termination (the fast path's slow opacity and its stop).
+// and without (one run along the whole ray), with the default early termination (the fast
+// path's stop). Not covered: a ray texture's step multiplier (the fast path's slow opacity on
+// every sample); blobs_peaks does not take the fast path (peaks).
 TEST_P(Leaps, CpuDenseRunsEqualTheSharedWalks) {
   auto* cpu = dynamic_cast<cpu::CpuRenderer*>(test::gpu().caster.get());
   if (!cpu) GTEST_SKIP() << "CPU backend only";
