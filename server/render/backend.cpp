@@ -46,7 +46,7 @@ bool gl_built() {
 
 std::filesystem::path default_shader_dir() {
 #ifdef PEAKCAST_HAVE_GL
-  return gl::gl_shader_dir();
+  return gpu::gl_shader_dir();
 #else
   return {};
 #endif
@@ -66,7 +66,7 @@ std::filesystem::path program_cache_dir(const std::string& choice) {
   if (c == "off") return {};
   if (!c.empty() && c != "auto") return c;
 #ifdef PEAKCAST_HAVE_GL
-  return gl::gl_program_cache_dir();
+  return gpu::gl_program_cache_dir();
 #else
   return {};
 #endif
@@ -85,7 +85,7 @@ RenderBackend open_backend(Backend requested, const std::string& egl_device, con
   if (requested == Backend::Cpu) return std::move(on_cpu(""));
 #ifdef PEAKCAST_HAVE_GL
   try {
-    b.device = gl::open_gl_device(egl_device);
+    b.device = gpu::open_gl_device(egl_device);
   } catch (const std::exception& e) {
     if (requested == Backend::Gl) throw;
     return std::move(on_cpu(std::string("auto: EGL failed: ") + e.what()));

@@ -8,7 +8,7 @@
 #include <memory>
 #include <string>
 
-#include "gl/gl_device.h"
+#include "gpu/gl_device.h"
 #include "render/renderer.h"
 
 namespace peakcast::render {
@@ -29,7 +29,7 @@ bool gl_built();
 // decide) and kept only for gl; a forced cpu backend opens no EGL display at all.
 struct RenderBackend {
   Backend backend = Backend::Gl;     // resolved: gl or cpu
-  std::unique_ptr<gl::GlDevice> device;  // gl only; outlives the renderer (declared first)
+  std::unique_ptr<gpu::GlDevice> device;  // gl only; outlives the renderer (declared first)
   std::unique_ptr<Renderer> renderer;
   std::string why;  // how auto chose (empty for a forced backend)
   // One line for logs and stats: "gl: <GL renderer>" or "cpu: AVX3, 2 threads (...)".

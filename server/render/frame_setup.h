@@ -1,7 +1,7 @@
 // What every backend derives from a scene before it draws, on the host: the TF's peaks, the
 // macrocell occupancy (cached on the TF), the variant, and the per-TF tables (the TF baked for
 // the scene's step, the peak table in TF coordinates, the preintegration table). The GL
-// backend uploads them (gl/gl_renderer.cpp, gl/gl_renderer_tables.cpp); the CPU backend reads them.
+// backend uploads them (gpu/gl_renderer.cpp, gpu/gl_renderer_tables.cpp); the CPU backend reads them.
 #pragma once
 
 #include <functional>

@@ -1,4 +1,4 @@
-// The ray caster's interface, whichever backend draws: the GL ray caster (gl/gl_renderer.h,
+// The ray caster's interface, whichever backend draws: the GL ray caster (gpu/gl_renderer.h,
 // shaders/) or the native CPU one (cpu/cpu_renderer.h). Both take the same scene contract
 // (docs/scenes.md), choose the same variant and produce the same outputs; render/backend.h picks one.
 #pragma once

@@ -23,7 +23,7 @@ struct RenderServiceOptions {
   std::filesystem::path shader_dir;
   int encode_threads = 2;
   SchedulerOptions scheduling;
-  std::string egl_device;  // gl::EglContext::create's choice; empty: PEAKCAST_EGL_DEVICE, else auto
+  std::string egl_device;  // gpu::EglContext::create's choice; empty: PEAKCAST_EGL_DEVICE, else auto
   std::string backend;     // auto | gl | cpu (render/backend.h); empty: PEAKCAST_BACKEND, else auto
   std::string program_cache;  // auto | off | a folder (render/backend.h); empty: PEAKCAST_PROGRAM_CACHE
   // Distributed rendering (mpirun peakcast serve): the opened backend's renderer handed to this,

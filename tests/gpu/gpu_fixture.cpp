@@ -20,9 +20,9 @@ Gpu& gpu() {
     if (cpu_backend()) {
       x.caster = std::make_unique<cpu::CpuRenderer>();
     } else {
-      x.context = gl::EglContext::create();
-      x.shaders = std::make_unique<gl::ShaderCache>(std::filesystem::path(PEAKCAST_SOURCE_DIR) / "shaders");
-      auto gl = std::make_unique<gl::GlRenderer>(*x.shaders);
+      x.context = gpu::EglContext::create();
+      x.shaders = std::make_unique<gpu::ShaderCache>(std::filesystem::path(PEAKCAST_SOURCE_DIR) / "shaders");
+      auto gl = std::make_unique<gpu::GlRenderer>(*x.shaders);
       x.gl = gl.get();
       x.caster = std::move(gl);
     }

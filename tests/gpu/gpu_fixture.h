@@ -14,20 +14,20 @@
 #include "core/generators.h"
 #include "core/image.h"
 #include "core/scene.h"
-#include "gl/egl_context.h"
-#include "gl/shader_cache.h"
+#include "gpu/egl_context.h"
+#include "gpu/shader_cache.h"
 #include "reference/metrics.h"
-#include "gl/gl_volume.h"
-#include "gl/gl_renderer.h"
+#include "gpu/gl_volume.h"
+#include "gpu/gl_renderer.h"
 #include "render/renderer.h"
 
 namespace peakcast::test {
 
 struct Gpu {
-  std::unique_ptr<gl::EglContext> context;  // GL backend only
-  std::unique_ptr<gl::ShaderCache> shaders;
+  std::unique_ptr<gpu::EglContext> context;  // GL backend only
+  std::unique_ptr<gpu::ShaderCache> shaders;
   std::unique_ptr<render::Renderer> caster;  // the backend under test
-  gl::GlRenderer* gl = nullptr;           // the same renderer when it is the GL one
+  gpu::GlRenderer* gl = nullptr;           // the same renderer when it is the GL one
 };
 Gpu& gpu();  // created on first use
 bool cpu_backend();  // PEAKCAST_TEST_BACKEND=cpu

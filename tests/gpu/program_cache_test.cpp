@@ -24,7 +24,7 @@ render::VariantKey variant(bool shading) {
   return k;
 }
 
-const gl::Program& get(gl::ShaderCache& cache, const render::VariantKey& k) {
+const gpu::Program& get(gpu::ShaderCache& cache, const render::VariantKey& k) {
   return cache.get(k.name(), {"fullscreen.vert", "raycast.frag"}, k.defines());
 }
 
@@ -43,7 +43,7 @@ TEST(ProgramCache, ALaterCacheLoadsWhatAnEarlierOneCompiled) {
   test::TempDir dir;
   const fs::path bins = dir / "programs";
   {
-    gl::ShaderCache first(kShaders, bins);
+    gpu::ShaderCache first(kShaders, bins);
     get(first, variant(true));
     EXPECT_EQ(first.compiles(), 1u);
     EXPECT_EQ(first.loads(), 0u);
@@ -52,7 +52,7 @@ TEST(ProgramCache, ALaterCacheLoadsWhatAnEarlierOneCompiled) {
   if (saved.empty()) GTEST_SKIP() << "this driver keeps no program binaries (GL_NUM_PROGRAM_BINARY_FORMATS 0)";
   ASSERT_EQ(saved.size(), 1u);
   {
-    gl::ShaderCache later(kShaders, bins);
+    gpu::ShaderCache later(kShaders, bins);
     get(later, variant(true));
     EXPECT_EQ(later.compiles(), 0u) << "compiled again instead of loading " << saved[0];
     EXPECT_EQ(later.loads(), 1u);
@@ -66,7 +66,7 @@ TEST(ProgramCache, ALaterCacheLoadsWhatAnEarlierOneCompiled) {
   const auto size = fs::file_size(saved[0]);
   fs::resize_file(saved[0], size / 2);
   {
-    gl::ShaderCache damaged(kShaders, bins);
+    gpu::ShaderCache damaged(kShaders, bins);
     get(damaged, variant(true));
     EXPECT_EQ(damaged.compiles(), 1u);
     EXPECT_EQ(damaged.loads(), 0u);
@@ -79,7 +79,7 @@ TEST(ProgramCache, ALaterCacheLoadsWhatAnEarlierOneCompiled) {
     f.write(junk.data(), std::streamsize(junk.size()));
   }
   {
-    gl::ShaderCache foreign(kShaders, bins);
+    gpu::ShaderCache foreign(kShaders, bins);
     EXPECT_NO_THROW(get(foreign, variant(true)));
     EXPECT_EQ(foreign.compiles(), 1u);
   }
@@ -90,7 +90,7 @@ TEST(ProgramCache, AFolderThatCannotBeWrittenOnlyCostsTheSaving) {
   test::gpu();
   test::TempDir dir;
   std::ofstream(dir / "a-file") << "x";  // a file where the folder should be
-  gl::ShaderCache cache(kShaders, dir / "a-file" / "programs");
+  gpu::ShaderCache cache(kShaders, dir / "a-file" / "programs");
   EXPECT_NO_THROW(get(cache, variant(true)));
   EXPECT_EQ(cache.compiles(), 1u);
 }
@@ -98,13 +98,13 @@ TEST(ProgramCache, AFolderThatCannotBeWrittenOnlyCostsTheSaving) {
 TEST(ProgramCache, PrefetchBuildsOnAnotherThreadAndGetWaitsForIt) {
   PEAKCAST_GL_ONLY();
   auto& g = test::gpu();
-  gl::ShaderCache cache(kShaders, {}, g.context.get());
+  gpu::ShaderCache cache(kShaders, {}, g.context.get());
   const render::VariantKey k = variant(true);
   cache.prefetch(k.name(), {"fullscreen.vert", "raycast.frag"}, k.defines());
   cache.prefetch(k.name(), {"fullscreen.vert", "raycast.frag"}, k.defines());  // once is enough
   for (int i = 0; i < 600 && !cache.ready(k.name()); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(50));
   ASSERT_TRUE(cache.ready(k.name()));
-  const gl::Program& p = get(cache, k);
+  const gpu::Program& p = get(cache, k);
   EXPECT_NE(p.id(), 0u);
   EXPECT_EQ(cache.compiles(), 0u) << "the render thread compiled what the background had built";
   EXPECT_EQ(cache.background_builds(), 1u);
@@ -124,14 +124,14 @@ TEST(ProgramCache, APrefetchedShaderThatFailsThrowsWhereItIsUsed) {
   auto& g = test::gpu();
   test::TempDir dir;
   std::ofstream(dir / "bad.frag") << "out vec4 c;\nvoid main() { c = nonsense; }\n";
-  gl::ShaderCache cache(dir.path(), {}, g.context.get());
+  gpu::ShaderCache cache(dir.path(), {}, g.context.get());
   cache.prefetch("bad", {"bad.frag"}, {});
   std::this_thread::sleep_for(std::chrono::milliseconds(200));  // most likely failed by now
   EXPECT_FALSE(cache.ready("bad"));
   try {
     cache.get("bad", {"bad.frag"}, {});
     FAIL() << "a broken shader was used";
-  } catch (const gl::ShaderError& e) {
+  } catch (const gpu::ShaderError& e) {
     EXPECT_NE(std::string(e.what()).find("bad.frag:2"), std::string::npos) << e.what();
   }
 }

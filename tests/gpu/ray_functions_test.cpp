@@ -17,7 +17,7 @@
 
 #include <glm/geometric.hpp>
 
-#include "gl/compute_table.h"
+#include "gpu/compute_table.h"
 #include "gpu/gpu_fixture.h"
 #include "render/ray_uniforms.h"
 #include "render/shader_interface.h"
@@ -239,16 +239,16 @@ std::vector<float> run_gl(Config config, const std::vector<float>& rows, const s
   const fs::path comp = probe_dir() / (key + ".comp");
   std::ofstream(comp) << s;
   const int n = int(rows.size() / 16);
-  const gl::Program& program = test::gpu().shaders->get(key, {comp.string()}, defines(config, n));
+  const gpu::Program& program = test::gpu().shaders->get(key, {comp.string()}, defines(config, n));
   const RayUniforms u = uniforms(config);
-  gl::ComputeTable t;
+  gpu::ComputeTable t;
   t.uniforms = &u;
   t.uniform_bytes = sizeof u;
   t.ubo_binding = render::kUboRay;
   t.in = rows;
   t.out_floats = size_t(n) * 8;
   t.rows = n;
-  return gl::run_compute_table(program, t);
+  return gpu::run_compute_table(program, t);
 }
 
 struct KindDiff {

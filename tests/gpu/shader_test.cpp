@@ -3,7 +3,7 @@
 #include <fstream>
 
 #include "gpu/gpu_fixture.h"
-#include "gl/uniform_layout.h"
+#include "gpu/uniform_layout.h"
 #include "render/ray_uniforms.h"
 #include "unit/test_util.h"
 
@@ -16,11 +16,11 @@ TEST(ShaderCache, CompileErrorNamesFileAndLine) {
   test::TempDir dir;
   std::ofstream(dir / "main.frag") << "#include \"helper.glsl\"\nout vec4 c;\nvoid main() { c = helper(); }\n";
   std::ofstream(dir / "helper.glsl") << "vec4 helper() {\n  return vec4(1.0);\n  this is not glsl;\n}\n";
-  gl::ShaderCache cache(dir.path());
+  gpu::ShaderCache cache(dir.path());
   try {
     cache.get("broken", {"main.frag"}, {});
     FAIL() << "compiled a broken shader";
-  } catch (const gl::ShaderError& e) {
+  } catch (const gpu::ShaderError& e) {
     EXPECT_NE(std::string(e.what()).find("helper.glsl:3"), std::string::npos) << e.what();
   }
 }
@@ -51,14 +51,14 @@ TEST(ShaderCache, UniformBlockOffsetsMatchTheHostStruct) {
     render::VariantKey k;
     k.path = path;
     k.space_skipping = k.shading = k.tricubic = true;
-    const auto offsets = gl::uniform_offsets(g.gl->program(k));
+    const auto offsets = gpu::uniform_offsets(g.gl->program(k));
     const auto host = render::host_uniform_offsets();
     ASSERT_EQ(offsets.size(), host.size());
     for (const auto& [name, off] : host) {
       ASSERT_TRUE(offsets.count(name)) << name;
       EXPECT_EQ(offsets.at(name), off) << name;
     }
-    EXPECT_EQ(gl::uniform_block_size(g.gl->program(k)), sizeof(ray::RayUniforms));
+    EXPECT_EQ(gpu::uniform_block_size(g.gl->program(k)), sizeof(ray::RayUniforms));
   }
 }
 

@@ -132,7 +132,7 @@ TEST(Backends, RefuseAnotherBackendsVolumeAndUnknownNames) {
   cpu::CpuRenderer cpu_renderer;
   auto cpu_volume = cpu_renderer.make_resident(v);
   if (!test::cpu_backend()) {
-    gl::GlRenderer& gl = *test::gpu().gl;
+    gpu::GlRenderer& gl = *test::gpu().gl;
     auto gl_volume = gl.make_resident(v);
     try {
       gl.render(*cpu_volume, s);

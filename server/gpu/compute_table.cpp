@@ -1,8 +1,8 @@
-#include "gl/compute_table.h"
+#include "gpu/compute_table.h"
 
 #include <algorithm>
 
-namespace peakcast::gl {
+namespace peakcast::gpu {
 
 std::vector<float> run_compute_table(const Program& program, const ComputeTable& t) {
   Buffer ubo, in, out;
@@ -27,4 +27,4 @@ std::vector<float> run_compute_table(const Program& program, const ComputeTable&
   return result;
 }
 
-}  // namespace peakcast::gl
+}  // namespace peakcast::gpu

@@ -1,10 +1,10 @@
-#include "gl/gl_objects.h"
+#include "gpu/gl_objects.h"
 
 #include <cstdio>
 #include <stdexcept>
 #include <string>
 
-namespace peakcast::gl {
+namespace peakcast::gpu {
 
 Texture make_texture(GLenum target) {
   GLuint id = 0;
@@ -61,4 +61,4 @@ void check_gl(const char* what) {
 }
 #endif
 
-}  // namespace peakcast::gl
+}  // namespace peakcast::gpu

@@ -6,7 +6,7 @@
 #include <memory>
 #include <string>
 
-namespace peakcast::gl {
+namespace peakcast::gpu {
 
 struct GlInfo {
   std::string vendor, renderer, version;
@@ -42,4 +42,4 @@ class EglContext {
   GlInfo info_;
 };
 
-}  // namespace peakcast::gl
+}  // namespace peakcast::gpu

@@ -7,15 +7,15 @@
 #include <memory>
 #include <string>
 
-#include "gl/egl_context.h"  // GlInfo: strings only
+#include "gpu/egl_context.h"  // GlInfo: strings only
 #include "render/renderer.h"
 
-namespace peakcast::gl {
+namespace peakcast::gpu {
 
 class GlDevice {
  public:
   virtual ~GlDevice() = default;
-  virtual const gl::GlInfo& info() const = 0;
+  virtual const gpu::GlInfo& info() const = 0;
   virtual std::string description() const = 0;  // renderer, version and EGL platform, one line
   // The GL ray caster on this device (shaders from `shader_dir`, linked programs kept as driver
   // binaries in `program_cache`, empty: off); the device must outlive it.
@@ -32,4 +32,4 @@ std::filesystem::path gl_shader_dir();
 // The program cache's default folder ($XDG_CACHE_HOME or ~/.cache, then peakcast/programs).
 std::filesystem::path gl_program_cache_dir();
 
-}  // namespace peakcast::gl
+}  // namespace peakcast::gpu

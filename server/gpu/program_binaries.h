@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "gl/gl_objects.h"
+#include "gpu/gl_objects.h"
 
-namespace peakcast::gl {
+namespace peakcast::gpu {
 
 class ProgramBinaries {
  public:
@@ -38,4 +38,4 @@ class ProgramBinaries {
 // when neither is known.
 std::filesystem::path default_program_cache_dir();
 
-}  // namespace peakcast::gl
+}  // namespace peakcast::gpu

@@ -1,8 +1,8 @@
-#include "gl/uniform_layout.h"
+#include "gpu/uniform_layout.h"
 
-namespace peakcast::gl {
+namespace peakcast::gpu {
 
-std::map<std::string, size_t> uniform_offsets(const gl::Program& program) {
+std::map<std::string, size_t> uniform_offsets(const gpu::Program& program) {
   std::map<std::string, size_t> out;
   const GLuint block = glGetProgramResourceIndex(program.id(), GL_UNIFORM_BLOCK, "RayUniforms");
   if (block == GL_INVALID_INDEX) return out;
@@ -23,7 +23,7 @@ std::map<std::string, size_t> uniform_offsets(const gl::Program& program) {
   return out;
 }
 
-size_t uniform_block_size(const gl::Program& program) {
+size_t uniform_block_size(const gpu::Program& program) {
   const GLuint block = glGetProgramResourceIndex(program.id(), GL_UNIFORM_BLOCK, "RayUniforms");
   const GLenum prop = GL_BUFFER_DATA_SIZE;
   GLint size = 0;
@@ -31,4 +31,4 @@ size_t uniform_block_size(const gl::Program& program) {
   return size_t(size);
 }
 
-}  // namespace peakcast::gl
+}  // namespace peakcast::gpu

@@ -6,11 +6,11 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "gl/gl_renderer.h"
+#include "gpu/gl_renderer.h"
 #include "render/shader_interface.h"
-#include "gl/table_cache.h"
+#include "gpu/table_cache.h"
 
-namespace peakcast::gl {
+namespace peakcast::gpu {
 
 using namespace render;  // the renderer interface and frame setup this implements
 
@@ -32,7 +32,7 @@ void GlRenderer::submit(const ResidentVolume& v, const ResolvedScene& s, const R
   f.stats.variant = key.name();
   f.stats.sample_cap = f.cap;
   Targets& t = setup_draw(*gv, s, key, rect, nullptr, &f.stats);
-  if (!f.timer.begin) f.timer = gl::GpuTimer::make();
+  if (!f.timer.begin) f.timer = gpu::GpuTimer::make();
   f.issued = Clock::now();
   dispatch(key, t, f.samples, f.timer);
 
@@ -40,7 +40,7 @@ void GlRenderer::submit(const ResidentVolume& v, const ResolvedScene& s, const R
   const size_t rgb = size_t(f.w) * f.h * 3, rgb_padded = (rgb + 3) / 4 * 4;
   const size_t bytes = rgb_padded + (f.samples ? size_t(f.w) * f.h * 4 : 0);
   if (!f.pbo || f.bytes < bytes) {
-    f.pbo = gl::make_buffer();
+    f.pbo = gpu::make_buffer();
     glNamedBufferStorage(f.pbo.id(), GLsizeiptr(bytes), nullptr, GL_MAP_READ_BIT | GL_CLIENT_STORAGE_BIT);
     f.bytes = bytes;
   }
@@ -53,8 +53,8 @@ void GlRenderer::submit(const ResidentVolume& v, const ResolvedScene& s, const R
                       reinterpret_cast<void*>(rgb_padded));
   }
   glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
-  f.fence = gl::fence_now();
-  gl::check_gl("asynchronous frame");
+  f.fence = gpu::fence_now();
+  gpu::check_gl("asynchronous frame");
   ++ring_count_;
 }
 
@@ -89,4 +89,4 @@ RenderResult GlRenderer::collect(RenderStats* stats) {
   return res;
 }
 
-}  // namespace peakcast::gl
+}  // namespace peakcast::gpu

@@ -1,4 +1,4 @@
-#include "gl/gl_renderer.h"
+#include "gpu/gl_renderer.h"
 
 #include <algorithm>
 #include <chrono>
@@ -9,20 +9,20 @@
 #include "core/preintegration.h"
 #include "render/ray_uniforms.h"
 #include "render/shader_interface.h"
-#include "gl/table_cache.h"
+#include "gpu/table_cache.h"
 
-namespace peakcast::gl {
+namespace peakcast::gpu {
 
 using namespace render;  // the renderer interface and frame setup this implements
 
-GlRenderer::GlRenderer(gl::ShaderCache& shaders) : shaders_(shaders) {
+GlRenderer::GlRenderer(gpu::ShaderCache& shaders) : shaders_(shaders) {
   const char* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
   llvmpipe_ = renderer && std::string(renderer).find("llvmpipe") != std::string::npos;
-  ubo_ = gl::make_buffer();
-  front_opacity_ = gl::make_buffer();
-  timer_ = gl::GpuTimer::make();
+  ubo_ = gpu::make_buffer();
+  front_opacity_ = gpu::make_buffer();
+  timer_ = gpu::GpuTimer::make();
   glNamedBufferStorage(ubo_.id(), sizeof(ray::RayUniforms), nullptr, GL_DYNAMIC_STORAGE_BIT);
-  vao_ = gl::make_vertex_array();
+  vao_ = gpu::make_vertex_array();
 }
 
 std::string GlRenderer::description() const {
@@ -55,7 +55,7 @@ int GlRenderer::sample_cap(const VariantKey& key) const {
   return kLlvmpipeLoopBudget / per_sample;
 }
 
-const gl::Program& GlRenderer::program(const VariantKey& key) {
+const gpu::Program& GlRenderer::program(const VariantKey& key) {
   if (key.path == RenderPath::Compute) return shaders_.get(key.name(), {"raycast.comp"}, key.defines());
   return shaders_.get(key.name(), {"fullscreen.vert", "raycast.frag"}, key.defines());
 }
@@ -90,16 +90,16 @@ GlRenderer::Targets& GlRenderer::targets(int w, int h, RenderOutput output) {
     t.w = w;
     t.h = h;
     t.output = output;
-    t.color = gl::make_texture(GL_TEXTURE_2D);
+    t.color = gpu::make_texture(GL_TEXTURE_2D);
     glTextureStorage2D(t.color.id(), 1, output == RenderOutput::Rgb8 ? GL_RGBA8UI : GL_RGBA32F, w, h);
-    t.samples = gl::make_texture(GL_TEXTURE_2D);
+    t.samples = gpu::make_texture(GL_TEXTURE_2D);
     glTextureStorage2D(t.samples.id(), 1, GL_R32F, w, h);
-    t.fbo = gl::make_framebuffer();
+    t.fbo = gpu::make_framebuffer();
     glNamedFramebufferTexture(t.fbo.id(), GL_COLOR_ATTACHMENT0, t.color.id(), 0);
     glNamedFramebufferTexture(t.fbo.id(), GL_COLOR_ATTACHMENT1, t.samples.id(), 0);
     if (glCheckNamedFramebufferStatus(t.fbo.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
       throw std::runtime_error("render target incomplete");
-    gl::check_gl("render targets");
+    gpu::check_gl("render targets");
     if (targets_.size() >= 3) targets_.pop_back();  // a stream size, a tile size, one spare
     targets_.insert(targets_.begin(), std::move(t));
     return targets_.front();
@@ -135,7 +135,7 @@ void GlRenderer::bind_tf_table(const GlVolume& gv, const ResolvedScene& s, const
   const std::string sig = step_tf_key(s, tf_sig);
   TfTable* tf_table = cache_find(tf_tables_, sig);
   if (!tf_table) {
-    TfTable e{sig, gl::make_texture(GL_TEXTURE_1D)};
+    TfTable e{sig, gpu::make_texture(GL_TEXTURE_1D)};
     glTextureStorage1D(e.texture.id(), 1, GL_RGBA32F, TransferFunction::kTableSize);
     glTextureParameteri(e.texture.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     glTextureParameteri(e.texture.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
@@ -185,7 +185,7 @@ Image GlRenderer::render_bare(const ResidentVolume& v, const ResolvedScene& s, R
   if (full.width != w || full.height != h) throw std::invalid_argument("render_bare: image size differs");
   std::vector<float> budget(full.samples.size());  // rows top-down, like the render targets
   for (size_t p = 0; p < budget.size(); ++p) budget[p] = std::max(0.f, full.samples[p]);
-  budget_texture_ = gl::make_texture(GL_TEXTURE_2D);
+  budget_texture_ = gpu::make_texture(GL_TEXTURE_2D);
   glTextureStorage2D(budget_texture_.id(), 1, GL_R32F, w, h);
   glTextureSubImage2D(budget_texture_.id(), 0, 0, 0, w, h, GL_RED, GL_FLOAT, budget.data());
   glTextureParameteri(budget_texture_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
@@ -203,7 +203,7 @@ GlRenderer::Targets& GlRenderer::setup_draw(const GlVolume& gv, const ResolvedSc
   const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
   const auto t_program = Clock::now();
   const bool was_ready = shaders_.ready(key.name());
-  const gl::Program& prog = program(key);
+  const gpu::Program& prog = program(key);
   if (stats && !was_ready) stats->compile_ms = ms_since(t_program);  // built, loaded or waited for
   last_key_ = key;
   const TableShape shape{tables_.peak_bins, tables_.peak_layers, tables_.preint_size, tables_.tf_points};
@@ -222,7 +222,7 @@ GlRenderer::Targets& GlRenderer::setup_draw(const GlVolume& gv, const ResolvedSc
   return t;
 }
 
-void GlRenderer::dispatch(const VariantKey& key, Targets& t, bool read_samples, const gl::GpuTimer& timer) {
+void GlRenderer::dispatch(const VariantKey& key, Targets& t, bool read_samples, const gpu::GpuTimer& timer) {
   timer.start();
   if (key.path == RenderPath::Compute) {
     glBindImageTexture(kImageColor, t.color.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, key.rgb8 ? GL_RGBA8UI : GL_RGBA32F);
@@ -254,7 +254,7 @@ RenderResult GlRenderer::draw(const GlVolume& gv, const ResolvedScene& s, const 
   dispatch(key, t, read_samples, timer_);
   glFinish();
   const double render_ms = ms_since(t0);
-  gl::check_gl("ray cast");
+  gpu::check_gl("ray cast");
 
   // The targets hold rows top-down: read straight into the result, no flip.
   const auto t1 = Clock::now();
@@ -278,7 +278,7 @@ RenderResult GlRenderer::draw(const GlVolume& gv, const ResolvedScene& s, const 
       glGetTextureImage(t.samples.id(), 0, GL_RED, GL_FLOAT, GLsizei(samples.size() * 4), samples.data());
     }
   }
-  gl::check_gl("read-back");
+  gpu::check_gl("read-back");
   if (stats) {
     stats->render_ms = render_ms;
     stats->gpu_ms = timer_.elapsed_ms();
@@ -302,4 +302,4 @@ void count_samples(const std::vector<float>& samples, int cap, RenderStats& stat
   stats.samples_mean = stats.rays_hit ? stats.samples_total / double(stats.rays_hit) : 0.0;
 }
 
-}  // namespace peakcast::gl
+}  // namespace peakcast::gpu

@@ -6,9 +6,9 @@
 #include <cstddef>
 #include <vector>
 
-#include "gl/gl_objects.h"
+#include "gpu/gl_objects.h"
 
-namespace peakcast::gl {
+namespace peakcast::gpu {
 
 struct ComputeTable {
   const void* uniforms = nullptr;  // bound as a uniform block at ubo_binding (null: none)
@@ -24,4 +24,4 @@ struct ComputeTable {
 // Runs `program` over the table and returns its results.
 std::vector<float> run_compute_table(const Program& program, const ComputeTable& table);
 
-}  // namespace peakcast::gl
+}  // namespace peakcast::gpu

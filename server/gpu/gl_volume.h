@@ -3,10 +3,10 @@
 
 #include <memory>
 
-#include "gl/gl_objects.h"
+#include "gpu/gl_objects.h"
 #include "render/resident_volume.h"
 
-namespace peakcast::gl {
+namespace peakcast::gpu {
 
 class GlVolume : public render::ResidentVolume {
  public:
@@ -24,8 +24,8 @@ class GlVolume : public render::ResidentVolume {
   bool drop_host_voxels() override;
 
  private:
-  gl::Texture texture_;
+  gpu::Texture texture_;
   float scale_ = 1.f, bias_ = 0.f;
 };
 
-}  // namespace peakcast::gl
+}  // namespace peakcast::gpu

@@ -1,4 +1,4 @@
-#include "gl/gl_volume.h"
+#include "gpu/gl_volume.h"
 
 #include <chrono>
 #include <stdexcept>
@@ -7,7 +7,7 @@
 #include "core/value_range.h"
 #include "render/small_cache.h"
 
-namespace peakcast::gl {
+namespace peakcast::gpu {
 
 using namespace render;  // the renderer interface and frame setup this implements
 
@@ -33,7 +33,7 @@ GlVolume::GlVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells)
     if (d[a] > max_size)
       throw std::runtime_error("volume dimension " + std::to_string(d[a]) + " exceeds the GPU's 3D texture limit " +
                                std::to_string(max_size));
-  texture_ = gl::make_texture(GL_TEXTURE_3D);
+  texture_ = gpu::make_texture(GL_TEXTURE_3D);
   glTextureStorage3D(texture_.id(), 1, internal, GLsizei(d[0]), GLsizei(d[1]), GLsizei(d[2]));
   glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
   const ValueRange range = table_range(v.min_value, v.max_value);
@@ -62,7 +62,7 @@ GlVolume::GlVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells)
   glTextureParameteri(texture_.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
   for (GLenum wrap : {GL_TEXTURE_WRAP_S, GL_TEXTURE_WRAP_T, GL_TEXTURE_WRAP_R})
     glTextureParameteri(texture_.id(), wrap, GL_CLAMP_TO_EDGE);
-  gl::check_gl("volume upload");
+  gpu::check_gl("volume upload");
   upload_ms_ = ms_since(t0);
 
   scale_ = normalise ? 1.0f : float(texel_to_stored / (range.hi - range.lo));
@@ -78,4 +78,4 @@ bool GlVolume::drop_host_voxels() {
 
 void GlVolume::bind(unsigned unit) const { glBindTextureUnit(unit, texture_.id()); }
 
-}  // namespace peakcast::gl
+}  // namespace peakcast::gpu

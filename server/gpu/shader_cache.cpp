@@ -1,4 +1,4 @@
-#include "gl/shader_cache.h"
+#include "gpu/shader_cache.h"
 
 #include <algorithm>
 #include <cstdlib>
@@ -11,7 +11,7 @@
 
 namespace fs = std::filesystem;
 
-namespace peakcast::gl {
+namespace peakcast::gpu {
 namespace {
 
 void expand_into(const fs::path& dir, const std::string& file, ExpandedSource& out,
@@ -245,4 +245,4 @@ fs::path default_shader_dir() {
 #endif
 }
 
-}  // namespace peakcast::gl
+}  // namespace peakcast::gpu

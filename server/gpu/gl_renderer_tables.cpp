@@ -4,19 +4,19 @@
 #include <sstream>
 
 #include "core/preintegration.h"
-#include "gl/gl_renderer.h"
+#include "gpu/gl_renderer.h"
 #include "render/shader_interface.h"
-#include "gl/table_cache.h"
+#include "gpu/table_cache.h"
 
-namespace peakcast::gl {
+namespace peakcast::gpu {
 
 using namespace render;  // the renderer interface and frame setup this implements
 
-gl::Buffer make_cell_buffer(const MacrocellGrid& cells, const std::vector<uint8_t>& bytes) {
+gpu::Buffer make_cell_buffer(const MacrocellGrid& cells, const std::vector<uint8_t>& bytes) {
   if (bytes.size() != cells.size()) throw std::invalid_argument("make_cell_buffer: one byte per cell");
   std::vector<uint32_t> words((bytes.size() + 3) / 4, 0u);
   for (size_t i = 0; i < bytes.size(); ++i) words[i / 4] |= uint32_t(bytes[i]) << (8 * (i % 4));
-  gl::Buffer buf = gl::make_buffer();
+  gpu::Buffer buf = gpu::make_buffer();
   glNamedBufferStorage(buf.id(), GLsizeiptr(std::max<size_t>(1, words.size()) * sizeof(uint32_t)), words.data(), 0);
   return buf;
 }
@@ -29,7 +29,7 @@ void GlRenderer::bind_ray_texture(const ResolvedScene& s, RenderStats* stats) {
   auto u = ray_textures_.get(*s.ray_texture, s.scene.render.early_termination);
   RayTextureEntry& e = *u.entry;
   if (u.created) {
-    e.extra = gl::make_texture(GL_TEXTURE_2D);
+    e.extra = gpu::make_texture(GL_TEXTURE_2D);
     glTextureStorage2D(e.extra.id(), 1, GL_RGB32F, e.texels.width(), e.texels.height());
     glTextureParameteri(e.extra.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     glTextureParameteri(e.extra.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
@@ -84,7 +84,7 @@ void GlRenderer::upload_tables(const GlVolume& gv, const ResolvedScene& s, const
   if (r.classification == Classification::Peaks) {
     const PeakTable table = build_peak_table(peaks, lo, hi, r.peak_table_bins);
     const std::vector<float> texels = peak_texels(table, lo, hi);
-    t.peak_table = gl::make_texture(GL_TEXTURE_2D_ARRAY);
+    t.peak_table = gpu::make_texture(GL_TEXTURE_2D_ARRAY);
     glTextureStorage3D(t.peak_table.id(), 1, GL_RGBA32F, table.bins, table.bins, table.layers);
     glTextureSubImage3D(t.peak_table.id(), 0, 0, 0, 0, table.bins, table.bins, table.layers, GL_RGBA, GL_FLOAT,
                         texels.data());
@@ -92,7 +92,7 @@ void GlRenderer::upload_tables(const GlVolume& gv, const ResolvedScene& s, const
     glTextureParameteri(t.peak_table.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     glBindTextureUnit(kUnitPeakTable, t.peak_table.id());
     const std::vector<glm::vec4> points = tf_point_pairs(s.tf, lo, hi);
-    t.tf_points = gl::make_buffer();
+    t.tf_points = gpu::make_buffer();
     glNamedBufferStorage(t.tf_points.id(), GLsizeiptr(points.size() * sizeof(glm::vec4)), points.data(), 0);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboTfPoints, t.tf_points.id());
     t.sizes.peak_bins = table.bins;
@@ -104,7 +104,7 @@ void GlRenderer::upload_tables(const GlVolume& gv, const ResolvedScene& s, const
   }
   if (r.classification == Classification::Preint) {
     const PreintegrationTable table = scene_preintegration(s, lo, hi);
-    t.preint_table = gl::make_texture(GL_TEXTURE_2D);
+    t.preint_table = gpu::make_texture(GL_TEXTURE_2D);
     glTextureStorage2D(t.preint_table.id(), 1, GL_RGBA32F, table.size, table.size);
     glTextureSubImage2D(t.preint_table.id(), 0, 0, 0, table.size, table.size, GL_RGBA, GL_FLOAT, table.rgba.data());
     glTextureParameteri(t.preint_table.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
@@ -119,4 +119,4 @@ void GlRenderer::upload_tables(const GlVolume& gv, const ResolvedScene& s, const
   ++seam_.table_builds;
 }
 
-}  // namespace peakcast::gl
+}  // namespace peakcast::gpu

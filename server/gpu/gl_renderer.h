@@ -14,17 +14,17 @@
 #include "core/sampling.h"
 #include "core/ray_texture.h"
 #include "core/scene.h"
-#include "gl/gl_objects.h"
-#include "gl/shader_cache.h"
+#include "gpu/gl_objects.h"
+#include "gpu/shader_cache.h"
 #include "render/frame.h"
 #include "render/frame_setup.h"
-#include "gl/gl_volume.h"
+#include "gpu/gl_volume.h"
 #include "render/ray_texture_cache.h"
 #include "render/render_stats.h"
 #include "render/renderer.h"
 #include "render/variant.h"
 
-namespace peakcast::gl {
+namespace peakcast::gpu {
 
 // Sizes of the per-TF tables bound for a frame.
 struct RayTables {
@@ -35,7 +35,7 @@ struct RayTables {
 
 class GlRenderer : public render::Renderer {
  public:
-  explicit GlRenderer(gl::ShaderCache& shaders);
+  explicit GlRenderer(gpu::ShaderCache& shaders);
   const char* backend() const override { return "gl"; }
   std::string description() const override;
   // A GlVolume: the texture upload.
@@ -52,7 +52,7 @@ class GlRenderer : public render::Renderer {
                      render::RenderStats* stats = nullptr, std::optional<render::PixelRect> rect = std::nullopt) override;
   int sample_cap(const render::VariantKey& key) const override;
   // For the layout test: the linked program of a variant.
-  const gl::Program& program(const render::VariantKey& key);
+  const gpu::Program& program(const render::VariantKey& key);
 
  private:
   // Render targets of one size and format. A few are kept: a still's tiles interleave with
@@ -60,8 +60,8 @@ class GlRenderer : public render::Renderer {
   struct Targets {
     int w = 0, h = 0;
     render::RenderOutput output = render::RenderOutput::Float;
-    gl::Texture color, samples;
-    gl::Framebuffer fbo;
+    gpu::Texture color, samples;
+    gpu::Framebuffer fbo;
   };
   Targets& targets(int w, int h, render::RenderOutput output);
   // Tables, occupancy and the variant for a scene (cached on the TF).
@@ -77,28 +77,28 @@ class GlRenderer : public render::Renderer {
   // query's begin and end; then the query's result (waits for it).
   Targets& setup_draw(const GlVolume& volume, const ResolvedScene& scene, const render::VariantKey& key, const render::PixelRect& rect,
                       const render::Brick* brick, render::RenderStats* stats);
-  void dispatch(const render::VariantKey& key, Targets& targets, bool read_samples, const gl::GpuTimer& timer);
+  void dispatch(const render::VariantKey& key, Targets& targets, bool read_samples, const gpu::GpuTimer& timer);
 
-  gl::ShaderCache& shaders_;
-  gl::Buffer ubo_;
-  gl::Buffer front_opacity_;  // render_brick with a ray texture: Brick::front_opacity
-  gl::VertexArray vao_;
-  gl::Texture budget_texture_;
+  gpu::ShaderCache& shaders_;
+  gpu::Buffer ubo_;
+  gpu::Buffer front_opacity_;  // render_brick with a ray texture: Brick::front_opacity
+  gpu::VertexArray vao_;
+  gpu::Texture budget_texture_;
   // Per-TF state in small caches, most recent first: sessions with different TFs (and a still's
   // tiles between their frames) take turns without rebuilding tables at every draw.
   struct TfTable {  // the 1D TF table over the value range
     std::string key;
-    gl::Texture texture;
+    gpu::Texture texture;
   };
   struct Tables {  // peak table + TF points, or the preintegration table
     std::string key;
     RayTables sizes;
-    gl::Texture peak_table, preint_table;
-    gl::Buffer tf_points;
+    gpu::Texture peak_table, preint_table;
+    gpu::Buffer tf_points;
   };
   struct DistanceEntry {  // the empty-space distance per cell of one occupancy (its key)
     std::string key;
-    gl::Buffer buffer;
+    gpu::Buffer buffer;
   };
   static constexpr size_t kCacheEntries = 4;
   std::vector<TfTable> tf_tables_;
@@ -107,12 +107,12 @@ class GlRenderer : public render::Renderer {
   std::vector<DistanceEntry> distance_cache_;
   struct StrideEntry {  // adaptive multipliers of one volume's grid
     std::string key;
-    gl::Buffer buffer;
+    gpu::Buffer buffer;
   };
   std::vector<StrideEntry> stride_cache_;
   // Ray textures on the host (strokes read them: add, multiply), each with its texture.
-  using RayTextureEntry = render::RayTextureCache<gl::Texture>::Entry;
-  render::RayTextureCache<gl::Texture> ray_textures_;
+  using RayTextureEntry = render::RayTextureCache<gpu::Texture>::Entry;
+  render::RayTextureCache<gpu::Texture> ray_textures_;
   // Binds the scene's ray texture: a new lineage is uploaded whole; new strokes of a held one
   // upload only the texels they touched (Raspe §3.2).
   void bind_ray_texture(const ResolvedScene& scene, render::RenderStats* stats);
@@ -120,15 +120,15 @@ class GlRenderer : public render::Renderer {
   bool llvmpipe_ = false;
   render::VariantKey last_key_;           // the last draw's variant (prefetch_variants starts from it)
   std::vector<Targets> targets_;  // most recently used first
-  gl::GpuTimer timer_;           // the synchronous draws' timer
+  gpu::GpuTimer timer_;           // the synchronous draws' timer
 
   // Asynchronous frames (gl_renderer_async.cpp): a ring of pixel-buffer objects, each with the
   // fence after its read-back and its draw's timer query.
   struct InFlight {
-    gl::Buffer pbo;
+    gpu::Buffer pbo;
     size_t bytes = 0;       // the buffer's size
-    gl::GpuTimer timer;
-    gl::Fence fence;
+    gpu::GpuTimer timer;
+    gpu::Fence fence;
     int w = 0, h = 0, cap = 0;
     bool samples = false;   // per-pixel sample counts follow the RGB bytes
     render::RenderStats stats;
@@ -151,4 +151,4 @@ void count_samples(const std::vector<float>& samples, int cap, render::RenderSta
 using peakcast::kMaxSamplesPerRay;
 constexpr int kLlvmpipeLoopBudget = 60000;  // of llvmpipe's 65535 loop iterations per invocation
 
-}  // namespace peakcast::gl
+}  // namespace peakcast::gpu

@@ -14,11 +14,11 @@
 #include <thread>
 #include <vector>
 
-#include "gl/egl_context.h"
-#include "gl/gl_objects.h"
-#include "gl/program_binaries.h"
+#include "gpu/egl_context.h"
+#include "gpu/gl_objects.h"
+#include "gpu/program_binaries.h"
 
-namespace peakcast::gl {
+namespace peakcast::gpu {
 
 class ShaderError : public std::runtime_error {
  public:
@@ -88,4 +88,4 @@ class ShaderCache {
 // Default shader directory: $PEAKCAST_SHADER_DIR, else the one next to the source tree.
 std::filesystem::path default_shader_dir();
 
-}  // namespace peakcast::gl
+}  // namespace peakcast::gpu

@@ -1,4 +1,4 @@
-#include "gl/program_binaries.h"
+#include "gpu/program_binaries.h"
 
 #include <cstdint>
 #include <cstdlib>
@@ -11,7 +11,7 @@
 
 namespace fs = std::filesystem;
 
-namespace peakcast::gl {
+namespace peakcast::gpu {
 namespace {
 
 constexpr char kMagic[4] = {'P', 'C', 'P', 'B'};
@@ -100,4 +100,4 @@ fs::path default_program_cache_dir() {
   return {};
 }
 
-}  // namespace peakcast::gl
+}  // namespace peakcast::gpu

@@ -7,12 +7,12 @@
 #include <vector>
 #include <string>
 
-#include "gl/gl_objects.h"
+#include "gpu/gl_objects.h"
 
-namespace peakcast::gl {
+namespace peakcast::gpu {
 
 // What GL reports for the linked program's RayUniforms block.
-std::map<std::string, size_t> uniform_offsets(const gl::Program& program);
-size_t uniform_block_size(const gl::Program& program);
+std::map<std::string, size_t> uniform_offsets(const gpu::Program& program);
+size_t uniform_block_size(const gpu::Program& program);
 
-}  // namespace peakcast::gl
+}  // namespace peakcast::gpu

@@ -1,11 +1,11 @@
-// Move-only owners for GL objects. GL names never leave server/gl.
+// Move-only owners for GL objects. GL names never leave server/gpu.
 #pragma once
 
 #include <epoxy/gl.h>
 
 #include <utility>
 
-namespace peakcast::gl {
+namespace peakcast::gpu {
 
 template <void (*Delete)(GLuint)>
 class GlObject {
@@ -105,4 +105,4 @@ void check_gl(const char* what);
 inline void check_gl(const char*) {}
 #endif
 
-}  // namespace peakcast::gl
+}  // namespace peakcast::gpu

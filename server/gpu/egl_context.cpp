@@ -1,4 +1,4 @@
-#include "gl/egl_context.h"
+#include "gpu/egl_context.h"
 
 #include <epoxy/egl.h>
 #include <epoxy/gl.h>
@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <vector>
 
-namespace peakcast::gl {
+namespace peakcast::gpu {
 namespace {
 
 bool has_extension(const char* list, const char* name) {
@@ -175,4 +175,4 @@ void EglContext::make_current() {
     throw std::runtime_error("eglMakeCurrent failed");
 }
 
-}  // namespace peakcast::gl
+}  // namespace peakcast::gpu
