@@ -28,7 +28,7 @@ layout(std430, binding = SSBO_FRONT_OPACITY) readonly buffer FrontOpacity { floa
 #endif
 
 // The field at lattice point i (the target's hook of ray/virtual_samples.glsl vs_finish).
-float lattice_field(Ray r, Lattice L, int i, int m) { return sample_field(voxel_coords(r.o + lattice_t(L, float(i)) * r.d)); }
+float lattice_field(Ray r, Lattice L, int i, int m) { return sample_field(r, voxel_at(r, lattice_t(L, float(i)))); }
 #include "ray/virtual_samples.glsl"
 #include "ray/visit.glsl"
 
@@ -114,7 +114,7 @@ RayState cast_ray_bare(vec2 pixel, ivec2 texel) {
   int budget = int(texelFetch(u_budget, texel, 0).r);
   float sum = 0.0;
   Lattice L = ray_lattice(r, span.x);
-  for (int i = 0; i < budget; ++i) sum += sample_field(voxel_coords(r.o + lattice_t(L, float(i)) * r.d));
+  for (int i = 0; i < budget; ++i) sum += sample_field(r, voxel_at(r, lattice_t(L, float(i))));
   res.acc = vec4(sum * 1e-9);  // keeps the loop from being optimised away
   res.samples = float(budget);
   return res;

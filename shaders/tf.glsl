@@ -4,7 +4,7 @@
 layout(binding = UNIT_TF) uniform sampler1D u_tf;
 
 bool tf_lookup(float s, out vec4 c) {
-  float size = P.tf_size;
+  float size = float(TF_TABLE_SIZE);
   c = texture(u_tf, clamp(s, 0.0, 1.0) * ((size - 1.0) / size) + 0.5 / size);
   return true;
 }

@@ -45,7 +45,7 @@ bool RayCaster::dense_loop(const Lattice& lattice, RayState& st, RayWalk& k, int
     samples += 1.f;
     vec4 s;
     if (preint) {  // the segment from the previous point (visited without a gap)
-      if (preint_lookup(prev_f, fv, s)) composite_premultiplied(acc, s, dvr_weight);
+      if (preint_lookup(r_, prev_f, fv, s)) composite_premultiplied(acc, s, dvr_weight);
     } else if (tf_lookup(fv, s) && s.a < 1.f) {
       // (The first point is never in a run; the last one's chord is cut at the exit.) One cold
       // call: more of them made the compiler keep the ray's opacity in memory.

@@ -67,12 +67,13 @@ class RayCaster {
 #include "ray/visit.glsl"
 #include "ray/walks.glsl"
 
-  float sample_field(vec3 x) const { return SamplePoint(f_.voxels, x); }
-  vec3 field_gradient(vec3 x) const {
+  // The field's hooks (the ray's copies of the uniforms are GL's: P is read here).
+  float sample_field(const Ray&, vec3 x) const { return SamplePoint(f_.voxels, x); }
+  vec3 field_gradient(const Ray& r, vec3 x) const {
     vec3 g;
-    g.x = sample_field(x + vec3(1, 0, 0)) - sample_field(x - vec3(1, 0, 0));
-    g.y = sample_field(x + vec3(0, 1, 0)) - sample_field(x - vec3(0, 1, 0));
-    g.z = sample_field(x + vec3(0, 0, 1)) - sample_field(x - vec3(0, 0, 1));
+    g.x = sample_field(r, x + vec3(1, 0, 0)) - sample_field(r, x - vec3(1, 0, 0));
+    g.y = sample_field(r, x + vec3(0, 1, 0)) - sample_field(r, x - vec3(0, 1, 0));
+    g.z = sample_field(r, x + vec3(0, 0, 1)) - sample_field(r, x - vec3(0, 0, 1));
     return g / (2.f * P.spacing);
   }
   // The value at lattice index i: from the current run, or a new run from i (stride m).
@@ -92,7 +93,7 @@ class RayCaster {
   }
   bool peak_cell_any(int i, int j) const { return test_bit(f_.peak_any, size_t(j) * size_t(P.peak_bins) + size_t(i)); }
   // The table at (s_front, s_back); false, leaving `out` alone, where it is exactly zero.
-  bool preint_lookup(float s_front, float s_back, vec4& out) const;
+  bool preint_lookup(const Ray&, float s_front, float s_back, vec4& out) const;
   // The shared walk of kind kKind (walk_kind()) over this ray's state.
   template <int kKind>
   HWY_NOINLINE void walk_as(int first) { walk_ray(r_, L_, s_, k_, w_, last_, vec2(span_x_, span_y_), first, kKind); }
@@ -122,7 +123,7 @@ class RayCaster {
   // dense_loop's opacity for a step other than the table's (a ray texture's multiplier) or the
   // last point's chord.
   HWY_NOINLINE float dense_opacity_slow(const RayWalk& k, float T, int i, float dt) {
-    return step_opacity(T, i == k.ray_last ? chord_at_ends(dt, i, 1, k.head, k.tail, k.ray_last) : dt);
+    return step_opacity(T, i == k.ray_last ? chord_at_ends(dt, i, 1, k.head, k.tail, k.ray_last) : dt, P.step);
   }
 
   const CpuFrame& f_;

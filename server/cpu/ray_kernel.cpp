@@ -13,6 +13,7 @@
 #include <glm/geometric.hpp>
 
 #include "core/ray_texture_mapping.h"
+#include "core/transfer_function.h"
 #include "render/shader_interface.h"
 
 #undef HWY_TARGET_INCLUDE

@@ -24,7 +24,7 @@ namespace {
 
 HWY_INLINE bool RayCaster::tf_lookup(float s, vec4& out) const {
   // GL_LINEAR between texel centres of an n-entry table, clamped: texel space u = s (n - 1).
-  const int size = int(P.tf_size);
+  const int size = TransferFunction::kTableSize;
   const float u = std::clamp(s, 0.f, 1.f) * float(size - 1);
   const int i = std::min(int(u), size - 2);
   if (!test_bit(f_.tf_alpha_any, size_t(i))) return false;  // both texels transparent
@@ -33,7 +33,7 @@ HWY_INLINE bool RayCaster::tf_lookup(float s, vec4& out) const {
   return true;
 }
 
-HWY_INLINE bool RayCaster::preint_lookup(float s_front, float s_back, vec4& out) const {
+HWY_INLINE bool RayCaster::preint_lookup(const Ray&, float s_front, float s_back, vec4& out) const {
   const int n = P.preint_size;
   const float u = std::clamp(s_front, 0.f, 1.f) * float(n - 1), v = std::clamp(s_back, 0.f, 1.f) * float(n - 1);
   const int i = std::min(int(u), n - 2), j = std::min(int(v), n - 2);

@@ -36,7 +36,6 @@ ray::RayUniforms make_ray_uniforms(const ResolvedScene& s, const Volume& residen
   const auto dims = resident.dims();
   u.inv_dims = 1.f / glm::vec3(float(dims[0]), float(dims[1]), float(dims[2]));
   u.background = glm::vec3(s.scene.background);
-  u.tf_size = float(TransferFunction::kTableSize);
   u.cell_grid = glm::ivec3(int(cells.grid[0]), int(cells.grid[1]), int(cells.grid[2]));
   u.cell_edge = float(cells.cell);
   const auto clip = center_clip<glm::vec3, float>(s.scene.render.clip, center);
@@ -100,7 +99,7 @@ std::map<std::string, size_t> host_uniform_offsets() {
           PEAKCAST_OFFSET(stop),        PEAKCAST_OFFSET(sample_half),      PEAKCAST_OFFSET(sample_cap),
           PEAKCAST_OFFSET(spacing),     PEAKCAST_OFFSET(min_spacing),      PEAKCAST_OFFSET(inv_spacing),
           PEAKCAST_OFFSET(value_scale), PEAKCAST_OFFSET(inv_dims),         PEAKCAST_OFFSET(value_bias),
-          PEAKCAST_OFFSET(background),  PEAKCAST_OFFSET(tf_size),          PEAKCAST_OFFSET(cell_grid),
+          PEAKCAST_OFFSET(background),  PEAKCAST_OFFSET(unused3),          PEAKCAST_OFFSET(cell_grid),
           PEAKCAST_OFFSET(cell_edge),   PEAKCAST_OFFSET(own_lo),           PEAKCAST_OFFSET(open_lo),
           PEAKCAST_OFFSET(own_hi),      PEAKCAST_OFFSET(open_hi),          PEAKCAST_OFFSET(clip_lo),
           PEAKCAST_OFFSET(clip_box),    PEAKCAST_OFFSET(clip_hi),          PEAKCAST_OFFSET(clip_plane),

@@ -2,6 +2,7 @@
 
 #include <sstream>
 
+#include "core/transfer_function.h"
 #include "render/shader_interface.h"
 
 namespace peakcast::render {
@@ -23,7 +24,8 @@ std::vector<std::string> interface_defines() {
           "SSBO_CELL_DISTANCE " + std::to_string(kSsboCellDistance),
           "SSBO_CELL_STRIDE " + std::to_string(kSsboCellStride),
           "SSBO_FRONT_OPACITY " + std::to_string(kSsboFrontOpacity),
-          "NO_PEAK_TEXEL " + no_peak.str()};
+          "NO_PEAK_TEXEL " + no_peak.str(),
+          "TF_TABLE_SIZE " + std::to_string(TransferFunction::kTableSize)};
 }
 
 // The variant's switches, then the host interface (the program file, .frag or .comp, is

@@ -7,7 +7,7 @@
 // The gradient a sample is shaded with: interpolated like the value for a virtual sample (Lee
 // §4: g), else central differences at the sample.
 vec3 sample_gradient(IN(Ray) r, float t, vec3 g) {
-  return V.virtual_samples != 0 ? g : field_gradient(voxel_coords(r.o + t * r.d));
+  return V.virtual_samples != 0 ? g : field_gradient(r, voxel_at(r, t));
 }
 
 // One sample at t with value f (TF coordinates), standing for the step dt, with gradient g
@@ -19,13 +19,13 @@ bool consume(IN(Ray) r, INOUT(RayState) s, float t, float f, vec3 g, float dt) {
   if (V.peaks && segment) peak_hit = find_peaks(r, s, s.prev_t, s.prev_f, t, f);
   if (V.preintegration) {
     vec4 c;
-    if (segment && (!V.brick || s.draw) && preint_lookup(s.prev_f, f, c)) {
+    if (segment && (!V.brick || s.draw) && preint_lookup(r, s.prev_f, f, c)) {
       // The table holds segments of the uniform step: correct for this one's length.
       bool varying_steps = V.differential || V.adaptive || V.virtual_samples != 0;
-      if (varying_steps && c.w > 0.0f) c = segment_for_length(c, t - s.prev_t);
+      if (varying_steps && c.w > 0.0f) c = segment_for_length(c, t - s.prev_t, r.step);
       if (V.shading) {
         // at the segment's end, as preintegration does
-        if (c.w > 0.0f) composite(s.acc, shade(vec3(c) / c.w, sample_gradient(r, t, g), r.d), c.w * dvr_weight);
+        if (c.w > 0.0f) composite(s.acc, shade(r, vec3(c) / c.w, sample_gradient(r, t, g)), c.w * dvr_weight);
       } else {
         composite_premultiplied(s.acc, c, dvr_weight);  // opacity-weighted already: no divide
       }
@@ -34,8 +34,8 @@ bool consume(IN(Ray) r, INOUT(RayState) s, float t, float f, vec3 g, float dt) {
     vec4 c;  // .w: the uniform step's transparency
     if (tf_lookup(f, c) && c.w < 1.0f) {
       vec3 rgb = vec3(c);
-      if (V.shading) rgb = shade(rgb, sample_gradient(r, t, g), r.d);
-      composite(s.acc, rgb, step_opacity(c.w, dt) * dvr_weight);
+      if (V.shading) rgb = shade(r, rgb, sample_gradient(r, t, g));
+      composite(s.acc, rgb, step_opacity(c.w, dt, r.step) * dvr_weight);
     }
   }
   s.prev_t = t;
@@ -51,16 +51,16 @@ bool consume(IN(Ray) r, INOUT(RayState) s, float t, float f, vec3 g, float dt) {
 // visit was the ray's last lattice point, without a gap).
 void close_segment(IN(Ray) r, INOUT(RayState) s, float t_exit, bool continues) {
   if (!(s.have_prev && !s.gap && (!V.brick || s.draw) && continues && s.acc.w < s.stop)) return;
-  vec3 x = voxel_coords(r.o + t_exit * r.d);
-  float f = sample_field(x);
+  vec3 x = voxel_at(r, t_exit);
+  float f = sample_field(r, x);
   s.samples += 1.0f;
   vec4 c;
-  if (!preint_lookup(s.prev_f, f, c) || !(c.w > 0.0f)) return;
-  c = segment_for_length(c, t_exit - s.prev_t);
+  if (!preint_lookup(r, s.prev_f, f, c) || !(c.w > 0.0f)) return;
+  c = segment_for_length(c, t_exit - s.prev_t, r.step);
   if (!(c.w > 0.0f)) return;  // an exit on (or a hair past) the last point: nothing left (and no 0 / 0)
   float dvr_weight = V.ray_texture ? s.dvr_weight : 1.0f;
   if (V.shading) {
-    composite(s.acc, shade(vec3(c) / c.w, field_gradient(x), r.d), c.w * dvr_weight);
+    composite(s.acc, shade(r, vec3(c) / c.w, field_gradient(r, x)), c.w * dvr_weight);
   } else {
     composite_premultiplied(s.acc, c, dvr_weight);
   }

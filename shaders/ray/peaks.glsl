@@ -6,7 +6,7 @@
 SHARED_CONST float kNoPeakTexel = NO_PEAK_TEXEL;  // an empty slot of the peak table (the host's value)
 
 // The peak table's bin of a value in TF coordinates.
-int peak_bin(float f) { return clamp(int(floor(f * float(P.peak_bins))), 0, P.peak_bins - 1); }
+int peak_bin(float f, int bins) { return clamp(int(floor(f * float(bins))), 0, bins - 1); }
 
 // The errata: the segment f0 -> f1 crosses v when min < v <= max (both equal: no crossing).
 bool crosses(float f0, float f1, float v) { return min(f0, f1) < v && v <= max(f0, f1); }
@@ -18,7 +18,7 @@ float solve_root(IN(Ray) r, float t0, float f0, float t1, float f1, float v, INO
   for (int k = 0; k < P.secant_iterations; ++k) {
     if (gb == ga) break;
     float t = clamp(ta - ga * (tb - ta) / (gb - ga), min(ta, tb), max(ta, tb));
-    float g = sample_field(voxel_coords(r.o + t * r.d)) - v;
+    float g = sample_field(r, voxel_at(r, t)) - v;
     evaluations += 1.0f;
     if ((g >= 0.0f) == (ga >= 0.0f)) {
       ta = t;
@@ -100,7 +100,7 @@ RAY_COLD bool peaks_in_cell(IN(Ray) r, INOUT(RayState) s, int i, int j, float t0
     vec3 rgb = vec3(c);
     if (V.shading) {
       float t = solve_root(r, t0, f0, t1, f1, v, s.samples);
-      rgb = shade(rgb, field_gradient(voxel_coords(r.o + t * r.d)), r.d);
+      rgb = shade(r, rgb, field_gradient(r, voxel_at(r, t)));
     } else {
       s.samples += root_evaluations(f0, f1, v);  // only shading uses the root's position
     }
@@ -115,6 +115,6 @@ RAY_COLD bool peaks_in_cell(IN(Ray) r, INOUT(RayState) s, int i, int j, float t0
 // peak_cell_any (false: the table's cell holds no peak, without reading it) and peak_slots (the
 // four values of a layer, NO_PEAK_TEXEL after the last).
 bool find_peaks(IN(Ray) r, INOUT(RayState) s, float t0, float f0, float t1, float f1) {
-  int i = peak_bin(f0), j = peak_bin(f1);
+  int i = peak_bin(f0, r.peak_bins), j = peak_bin(f1, r.peak_bins);
   return peak_cell_any(i, j) && peaks_in_cell(r, s, i, j, t0, f0, t1, f1);
 }

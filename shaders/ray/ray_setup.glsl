@@ -3,23 +3,33 @@
 
 SHARED_CONST float kHuge = 3.0e38f;
 
+// The ray o + t d (t_eye: the eye's t) with the frame's values its samples read.
+Ray ray_from(vec3 o, vec3 d, float t_eye) {
+  Ray r;
+  r.o = o;
+  r.d = d;
+  r.t_eye = t_eye;
+  r.voxel_half = P.sample_half;
+  r.inv_spacing = P.inv_spacing;
+  r.spacing = P.spacing;
+  r.inv_dims = P.inv_dims;
+  r.value_scale = P.value_scale;
+  r.value_bias = P.value_bias;
+  r.step = P.step;
+  r.min_spacing = P.min_spacing;
+  r.peak_bins = P.peak_bins;
+  r.preint_size = P.preint_size;
+  return r;
+}
+
 Ray make_ray(vec2 pixel_from_top_left) {
   float nx = pixel_from_top_left.x / float(P.image_width) * 2.0f - 1.0f;
   float ny = 1.0f - pixel_from_top_left.y / float(P.image_height) * 2.0f;
   vec3 lateral = nx * P.half_width * P.right + ny * P.half_height * P.up;
-  Ray r;
-  if (V.orthographic) {
-    r.o = P.p0 + lateral;
-    r.d = P.forward;
-    r.t_eye = -P.eye_distance;
-  } else {
-    vec3 d = P.forward + lateral;  // depth 1 along the view axis
-    float len = length(d);
-    r.o = P.p0 + P.eye_distance * lateral;
-    r.d = d / len;
-    r.t_eye = -P.eye_distance * len;
-  }
-  return r;
+  if (V.orthographic) return ray_from(P.p0 + lateral, P.forward, -P.eye_distance);
+  vec3 d = P.forward + lateral;  // depth 1 along the view axis
+  float len = length(d);
+  return ray_from(P.p0 + P.eye_distance * lateral, d / len, -P.eye_distance * len);
 }
 
 // Slab test against the box [-half, half]; returns (t_enter, t_exit), empty when x > y.
@@ -58,9 +68,9 @@ vec2 clip_span(IN(Ray) r, vec2 span) {
   return span;
 }
 
-// Where point p (box-centred world units) lies in the resident voxels (voxel i at i); a brick's
-// are moved by its first voxel (P.sample_half).
-vec3 voxel_coords(vec3 p) { return (p + P.sample_half) * P.inv_spacing; }
+// Where the ray's point at t lies in the resident voxels (voxel i at i); a brick's are moved by
+// its first voxel (P.sample_half).
+vec3 voxel_at(IN(Ray) r, float t) { return (r.o + t * r.d + r.voxel_half) * r.inv_spacing; }
 // Where the macrocells are looked up: the whole volume's voxel coordinates (a brick's grids are
 // the whole volume's, core/macrocell_share.h); voxel_coords in one process.
 vec3 cell_coords(vec3 p) { return (p + P.box_half) * P.inv_spacing; }

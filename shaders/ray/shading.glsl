@@ -5,10 +5,11 @@ SHARED_CONST float kDiffuse = 0.6f;
 SHARED_CONST float kSpecular = 0.25f;
 SHARED_CONST float kShininess = 32.0f;
 
-vec3 shade(vec3 rgb, vec3 gradient, vec3 view_dir) {
+// (The view direction is the ray's.)
+vec3 shade(IN(Ray) r, vec3 rgb, vec3 gradient) {
   float len = length(gradient);
-  if (len * P.min_spacing < 1e-5f) return rgb;
+  if (len * r.min_spacing < 1e-5f) return rgb;
   vec3 n = gradient / len;
-  float ndotl = abs(dot(n, -view_dir));  // head light: the light's direction is the eye's, so h = l
+  float ndotl = abs(dot(n, -r.d));  // head light: the light's direction is the eye's, so h = l
   return rgb * (kAmbient + kDiffuse * ndotl) + vec3(kSpecular * pow(ndotl, kShininess));
 }

@@ -5,6 +5,19 @@ struct Ray {
   vec3 o;
   vec3 d;
   float t_eye;
+  // The frame's values the per-sample code reads, copied from the uniforms once per ray
+  // (ray_from): on llvmpipe a uniform-block member read inside the sample loop is a gather on
+  // every sample, which cost GL a third of its frame (docs/performance.md).
+  vec3 voxel_half;    // voxel_at: the point at t lies at (o + t d + voxel_half) * inv_spacing (P.sample_half)
+  vec3 inv_spacing;
+  vec3 spacing;       // the field's gradient per world unit (field_gradient)
+  vec3 inv_dims;      // 1 / the resident texture's voxels (GL's sample_field)
+  float value_scale;  // texel value -> TF coordinate (GL's sample_field)
+  float value_bias;
+  float step;         // the scene's uniform step, the TF table's (step_opacity, segment_for_length)
+  float min_spacing;  // shade
+  int peak_bins;      // peak_bin
+  int preint_size;    // the preintegration table's entries per side (GL's preint_lookup)
 };
 
 struct Lattice {

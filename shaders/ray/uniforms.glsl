@@ -14,7 +14,7 @@ RAY_UNIFORMS_BEGIN
   vec3 spacing;       float min_spacing;   // voxel spacing (world units per voxel); its smallest
   vec3 inv_spacing;   float value_scale;   // 1 / spacing; texel value -> TF coordinate: value_scale * v + value_bias
   vec3 inv_dims;      float value_bias;    // 1 / the resident texture's voxels per axis
-  vec3 background;    float tf_size;       // background colour; entries of the TF table
+  vec3 background;    int unused3;         // background colour
   ivec3 cell_grid;    float cell_edge;     // macrocells per axis; a cell's edge in voxels
   vec3 own_lo;        int open_lo;         // a brick's own box (whole-volume voxels) and the axes (bits) where that bound is the volume's own face, so none
   vec3 own_hi;        int open_hi;

@@ -94,7 +94,7 @@ void vs_finish(IN(Ray) r, INOUT(RayState) s, INOUT(SampleWindow) w, IN(Lattice) 
   float t = lattice_t(L, float(last + 1));
   float f = lattice_field(r, L, last + 1, 1);
   s.samples += 1.0f;
-  vec3 g = V.shading ? field_gradient(voxel_coords(r.o + t * r.d)) : vec3(0.0f);
+  vec3 g = V.shading ? field_gradient(r, voxel_at(r, t)) : vec3(0.0f);
   if (vs_push(r, s, w, L.t0, t, f, g, lattice_step(L, float(last + 1), 1.0f), last + 1 <= own_last)) return;
   vs_last_segment(r, s, w, L.t0, t_exit);  // pending now: [..., last, last + 1]; the extra sample is not composited
   w.n = 0;

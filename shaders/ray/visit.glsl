@@ -34,7 +34,7 @@ RAY_INLINE bool sample_visit(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(
       if (vs_flush(r, s, w, L.t0)) return true;
       s.gap = true;
     }
-    vec3 g = V.shading ? field_gradient(voxel_coords(r.o + t * r.d)) : vec3(0.0f);
+    vec3 g = V.shading ? field_gradient(r, voxel_at(r, t)) : vec3(0.0f);
     return vs_push(r, s, w, L.t0, t, f, g, dt, own);  // (vs_flush may have drawn another's)
   }
   return consume(r, s, t, f, vec3(0.0f), dt);

@@ -102,7 +102,7 @@ RAY_INLINE bool walk_leaps(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(Ra
         }
         vec3 t_face = faces_beyond(g, c, int(empty_distance) - 1);
         float t_leave = min(min(t_face.x, t_face.y), t_face.z);
-        i = max(i + 1, index_at_most(ceil(lattice_index(L, min(t_leave, span.y + P.step))), last + 1));
+        i = max(i + 1, index_at_most(ceil(lattice_index(L, min(t_leave, span.y + r.step))), last + 1));
       }
     }
   return false;

@@ -17,7 +17,7 @@ SHARED_CONST int kWindow = 12;     // the virtual-sample window: vs_push over a 
 SHARED_CONST int kKinds = 13;
 
 // The field at lattice point i, for vs_finish (the targets read it from their sample runs).
-float lattice_field(Ray r, Lattice L, int i, int m) { return sample_field(voxel_coords(r.o + lattice_t(L, float(i)) * r.d)); }
+float lattice_field(Ray r, Lattice L, int i, int m) { return sample_field(r, voxel_at(r, lattice_t(L, float(i)))); }
 #include "ray/virtual_samples.glsl"
 
 // Each function gets its inputs from the row (a ray as o = a.xyz, d = b.xyz; a lattice as c.xyz),
@@ -26,10 +26,7 @@ void run_case(vec4 k, vec4 a, vec4 b, vec4 c, OUT(vec4) r0, OUT(vec4) r1) {
   int kind = int(k.x);
   r0 = vec4(0.0f);
   r1 = vec4(0.0f);
-  Ray r;
-  r.o = vec3(a);
-  r.d = vec3(b);
-  r.t_eye = a.w;
+  Ray r = ray_from(vec3(a), vec3(b), a.w);
   Lattice L;
   L.t0 = c.x;
   L.A = c.y;
@@ -54,8 +51,8 @@ void run_case(vec4 k, vec4 a, vec4 b, vec4 c, OUT(vec4) r0, OUT(vec4) r1) {
     r1 = vec4(chord_at_ends(lattice_step(L, float(last), 1.0f), last, 1, head, tail, last),
               chord_at_ends(lattice_step(L, float(i), float(m)), i, m, head, tail, last), 0.0f, 0.0f);
   } else if (kind == kOpacity) {
-    r0 = vec4(step_opacity(a.x, a.y), step_opacity(a.x, P.step), step_opacity(a.z, a.w), 0.0f);
-    r1 = segment_for_length(c, a.y);
+    r0 = vec4(step_opacity(a.x, a.y, r.step), step_opacity(a.x, r.step, r.step), step_opacity(a.z, a.w, r.step), 0.0f);
+    r1 = segment_for_length(c, a.y, r.step);
   } else if (kind == kComposite) {
     vec4 acc = vec4(0.0f);
     for (int q = 0; q < 8; ++q) {
@@ -68,18 +65,18 @@ void run_case(vec4 k, vec4 a, vec4 b, vec4 c, OUT(vec4) r0, OUT(vec4) r1) {
     r0 = acc;
     r1 = vec4(finish_pixel(acc), pre.w);
   } else if (kind == kShade) {
-    r0 = vec4(shade(vec3(c), vec3(a), r.d), 0.0f);
+    r0 = vec4(shade(r, vec3(c), vec3(a)), 0.0f);
   } else if (kind == kCatmullRom) {
     r0 = vec4(catmull_rom(c.x, c.y, c.z, c.w, k.y), catmull_rom3(vec3(a), vec3(c), vec3(c.w, a.w, a.x), vec3(c.z, a.y, k.z), k.y));
   } else if (kind == kPeakRoot) {
     float t0 = k.y, t1 = k.z;
-    float f0 = sample_field(voxel_coords(r.o + t0 * r.d)), f1 = sample_field(voxel_coords(r.o + t1 * r.d));
+    float f0 = sample_field(r, voxel_at(r, t0)), f1 = sample_field(r, voxel_at(r, t1));
     float v = mix(min(f0, f1), max(f0, f1), c.x) + c.y;  // c.y moves v off the segment's range, or onto a tangency
     float evaluations = 0.0f;
     float t = solve_root(r, t0, f0, t1, f1, v, evaluations);
     r0 = vec4(t, evaluations, root_evaluations(f0, f1, v), crosses(f0, f1, v) ? 1.0f : 0.0f);
     vec4 exact = tf_exact(c.z);
-    r1 = vec4(exact.x, exact.w, float(peak_bin(c.z)), float(peak_bin(c.w)));
+    r1 = vec4(exact.x, exact.w, float(peak_bin(c.z, r.peak_bins)), float(peak_bin(c.w, r.peak_bins)));
   } else if (kind == kBrick) {
     vec2 span = vec2(k.y, k.z);
     int last = int(k.w);
@@ -119,7 +116,7 @@ void run_case(vec4 k, vec4 a, vec4 b, vec4 c, OUT(vec4) r0, OUT(vec4) r1) {
         s.gap = true;
       }
       if (!stopped)
-        stopped = vs_push(r, s, w, L.t0, t, lattice_field(r, L, i, 1), field_gradient(voxel_coords(r.o + t * r.d)),
+        stopped = vs_push(r, s, w, L.t0, t, lattice_field(r, L, i, 1), field_gradient(r, voxel_at(r, t)),
                           lattice_step(L, float(i), 1.0f), true);
     }
     if (!stopped) vs_finish(r, s, w, L, last, last, c.w);

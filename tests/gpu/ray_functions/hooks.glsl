@@ -4,7 +4,7 @@
 
 // A bowl with a slope, in TF coordinates: rays through it cross values twice, and graze their
 // minimum (peak roots near tangencies).
-float sample_field(vec3 x) {
+float sample_field(IN(Ray) r, vec3 x) {
   vec3 d = x - vec3(7.5f, 8.25f, 9.0f);
   return 0.002f * dot(d, d) + 0.01f * x.x;
 }
@@ -18,12 +18,12 @@ vec4 tf_point(int k) {
 }
 
 // Central differences of the field one voxel apart, per world unit (as the targets' own).
-vec3 field_gradient(vec3 x) {
+vec3 field_gradient(IN(Ray) r, vec3 x) {
   vec3 g;
-  g.x = sample_field(x + vec3(1.0f, 0.0f, 0.0f)) - sample_field(x - vec3(1.0f, 0.0f, 0.0f));
-  g.y = sample_field(x + vec3(0.0f, 1.0f, 0.0f)) - sample_field(x - vec3(0.0f, 1.0f, 0.0f));
-  g.z = sample_field(x + vec3(0.0f, 0.0f, 1.0f)) - sample_field(x - vec3(0.0f, 0.0f, 1.0f));
-  return g / (2.0f * P.spacing);
+  g.x = sample_field(r, x + vec3(1.0f, 0.0f, 0.0f)) - sample_field(r, x - vec3(1.0f, 0.0f, 0.0f));
+  g.y = sample_field(r, x + vec3(0.0f, 1.0f, 0.0f)) - sample_field(r, x - vec3(0.0f, 1.0f, 0.0f));
+  g.z = sample_field(r, x + vec3(0.0f, 0.0f, 1.0f)) - sample_field(r, x - vec3(0.0f, 0.0f, 1.0f));
+  return g / (2.0f * r.spacing);
 }
 
 // A peak table whose cell (i, j) lists the peaks at 1/3 and 2/3 where the bins' values could
@@ -50,7 +50,7 @@ bool tf_lookup(float s, OUT(vec4) c) {
   c = vec4(s, 1.0f - s, 0.5f, T);
   return T < 1.0f;
 }
-bool preint_lookup(float s_front, float s_back, OUT(vec4) c) {
+bool preint_lookup(IN(Ray) r, float s_front, float s_back, OUT(vec4) c) {
   float a = clamp(0.5f * (s_front + s_back), 0.0f, 1.0f);
   c = vec4(0.3f * a, 0.2f * a, 0.1f * a, a);
   return a > 0.0f;
