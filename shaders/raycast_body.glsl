@@ -13,19 +13,12 @@
 layout(std430, binding = SSBO_CELL_DISTANCE) readonly buffer CellDistance { uint u_cell_distance[]; };
 #endif
 
-#include "ray_texture.glsl"
 // Peak finding and preintegration are declared in every variant (the shared consume names them;
 // a variant without them folds the calls away and the compiler drops what they bind).
 #include "peak_find.glsl"
 #include "preintegration.glsl"
 #include "ray/consume.glsl"
 
-#if defined(BRICK) && defined(RAY_TEXTURE)
-// The opacity the bricks in front composited, per pixel of the drawn rect (rows of
-// P.front_opacity_width pixels; 0: the front brick, none): a ray texture's termination is of the
-// opacity over them (render/brick.h Brick::front_opacity).
-layout(std430, binding = SSBO_FRONT_OPACITY) readonly buffer FrontOpacity { float u_front_opacity[]; };
-#endif
 
 // The field at lattice point i (the target's hook of ray/virtual_samples.glsl vs_finish).
 float lattice_field(Ray r, Lattice L, int i, int m) { return sample_field(r, voxel_at(r, lattice_t(L, float(i)))); }
@@ -55,50 +48,20 @@ bool dense_run(Ray r, Lattice L, inout RayState s, inout RayWalk k, inout int i,
   return false;
 }
 #include "ray/walks.glsl"
+#include "ray_texture.glsl"
+#include "ray/ray_start.glsl"
 
 RayState cast_ray(vec2 pixel) {
   RayState res = RayState(vec4(0.0), 0.0, P.stop, 1.0, 1.0, true, 0.0, 0.0, false, false);
   SampleWindow window;  // virtual samples (n counts the samples it holds; the rest is never read)
   window.n = 0;
   window.own = 0u;
-  Ray r = make_ray(pixel);
-  vec2 span = intersect_box(r);
-  if (!(span.x <= span.y)) {  // missed (also false for NaN)
-    res.samples = -1.0;
-    return res;
-  }
-  float t_box = span.x;  // the box entry: where a volume-mapped ray texture is read
-  span = clip_span(r, span);
-  if (!(span.x <= span.y)) {  // the clip keeps none of the ray
-    res.samples = 0.0;
-    return res;
-  }
-  Lattice L = ray_lattice(r, span.x);
-#ifdef RAY_TEXTURE
-  float step_mult = read_ray_texture(r, pixel, t_box, res);
-  L.A *= step_mult;
-  L.B *= step_mult;
-#endif
-  int last = int(min(floor(lattice_index(L, span.y)), float(P.sample_cap - 1)));
-  RayWalk walk = start_walk(L, span.y, last);
-#ifdef BRICK
-  if (!clip_to_brick(r, L, span, last, walk.own_first, walk.own_last)) {  // none of its points in this brick: nothing to draw here
-    res.samples = -1.0;
-    return res;
-  }
-#ifdef RAY_TEXTURE
-  if (P.front_opacity_width > 0) {
-    ivec2 p = ivec2(pixel) - ivec2(P.tile_x, P.tile_y);
-    float a = u_front_opacity[p.y * P.front_opacity_width + p.x];
-    if (a >= 0.0 && a >= res.stop) {  // reached in front (after a consume there): one process stopped
-      res.samples = -1.0;
-      return res;
-    }
-    if (a > 0.0) res.stop = (res.stop - a) / (1.0 - a);  // a + (1 - a) * acc >= stop; a < 0: none in front
-  }
-#endif
-#endif
-  walk_ray(r, L, res, walk, window, last, span, 0, walk_kind());
+  Ray r;
+  Lattice L;
+  RayWalk walk;
+  vec2 span;
+  int last;
+  if (start_ray(pixel, r, L, res, walk, span, last)) walk_ray(r, L, res, walk, window, last, span, 0, walk_kind());
   return res;
 }
 

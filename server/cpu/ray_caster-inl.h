@@ -66,6 +66,7 @@ class RayCaster {
 #include "ray/virtual_samples.glsl"
 #include "ray/visit.glsl"
 #include "ray/walks.glsl"
+#include "ray/ray_start.glsl"
 
   // The field's hooks (the ray's copies of the uniforms are GL's: P is read here).
   float sample_field(const Ray&, vec3 x) const { return SamplePoint(f_.voxels, x); }
@@ -97,6 +98,16 @@ class RayCaster {
   // The shared walk of kind kKind (walk_kind()) over this ray's state.
   template <int kKind>
   HWY_NOINLINE void walk_as(int first) { walk_ray(r_, L_, s_, k_, w_, last_, vec2(span_x_, span_y_), first, kKind); }
+  // The ray start's hooks (ray/ray_start.glsl): the ray texture's controls at uv (bilinear
+  // between texel centres, as GL's sampler) and the opacity of the bricks in front.
+  vec3 ray_texture_at(vec2 uv) const {
+    const auto c = sample_ray_texture(*f_.ray_texture, glm::dvec2(uv));
+    return vec3(float(c[0]), float(c[1]), float(c[2]));
+  }
+  float front_opacity(vec2 pixel) const {
+    if (!f_.front_opacity) return -1.f;
+    return f_.front_opacity[size_t(int(pixel.y) - P.tile_y) * size_t(P.front_opacity_width) + size_t(int(pixel.x) - P.tile_x)];
+  }
   // The walks' hooks (ray/walks.glsl): the macrocell tables, one byte per cell in grid order.
   size_t cell_offset(ivec3 c) const {
     return size_t(c.x) + size_t(P.cell_grid.x) * (size_t(c.y) + size_t(P.cell_grid.y) * size_t(c.z));

@@ -69,48 +69,11 @@ HWY_NOINLINE float RayCaster::new_run(int i, int m) {
 
 
 bool RayCaster::setup(float px, float py) {
-  r_ = make_ray(vec2(px, py));
-  vec2 span = intersect_box(r_);
-  if (!(span.x <= span.y)) {  // missed (also false for NaN)
-    s_.samples = -1.f;
-    return false;
-  }
-  const float t_box = span.x;  // the box entry: where a volume-mapped ray texture is read
-  span = clip_span(r_, span);
-  if (!(span.x <= span.y)) {  // the clip keeps none of the ray
-    s_.samples = 0.f;
-    return false;
-  }
+  s_.stop = P.stop;
+  vec2 span;
+  if (!start_ray(vec2(px, py), r_, L_, s_, k_, span, last_)) return false;
   span_x_ = span.x;
   span_y_ = span.y;
-  L_ = ray_lattice(r_, span_x_);
-  s_.stop = P.stop;
-  if (f_.ray_texture) {
-    const glm::dvec2 uv = f_.key.ray_texture_volume
-                              ? volume_uv(glm::dvec3(r_.o + t_box * r_.d), glm::dvec3(P.box_half))
-                              : glm::dvec2(px / float(P.image_width), py / float(P.image_height));
-    const auto c = sample_ray_texture(*f_.ray_texture, uv);
-    s_.stop = float(c[1]);
-    s_.dvr_weight = 1.f - std::max(float(c[2]), 0.f);
-    s_.peak_weight = 1.f + std::min(float(c[2]), 0.f);
-    L_.A *= float(c[0]);
-    L_.B *= float(c[0]);
-  }
-  last_ = int(std::min(std::floor(lattice_index(L_, span_y_)), float(P.sample_cap - 1)));
-  k_ = start_walk(L_, span_y_, last_);
-  if (V.brick && !clip_to_brick(r_, L_, vec2(span_x_, span_y_), last_, k_.own_first, k_.own_last)) {  // none of its points in this brick: nothing to draw here
-    s_.samples = -1.f;
-    return false;
-  }
-  if (f_.front_opacity) {  // a ray texture's termination, of the opacity over the bricks in front
-    const float a = f_.front_opacity[size_t(int(py) - P.tile_y) * size_t(P.front_opacity_width) +
-                                     size_t(int(px) - P.tile_x)];
-    if (a >= 0.f && a >= s_.stop) {  // reached in front (after a consume there): one process stopped
-      s_.samples = -1.f;
-      return false;
-    }
-    if (a > 0.f) s_.stop = (s_.stop - a) / (1.f - a);  // a + (1 - a) * acc >= stop; a < 0: none in front
-  }
   return true;
 }
 

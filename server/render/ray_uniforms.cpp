@@ -86,6 +86,7 @@ ray::Variant shared_variant(const VariantKey& key) {
   v.preintegration = key.preintegration;
   v.segments = key.peaks || key.preintegration || key.virtual_samples != 0;
   v.ray_texture = key.ray_texture;
+  v.ray_texture_volume = key.ray_texture && key.ray_texture_volume;
   v.brick = key.brick;
   return v;
 }

@@ -21,6 +21,7 @@
 #include <glm/common.hpp>
 #include <glm/exponential.hpp>
 #include <glm/geometric.hpp>
+#include <glm/trigonometric.hpp>
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
@@ -54,7 +55,9 @@ using glm::vec3;
 using glm::vec4;
 
 using glm::abs;
+using glm::acos;
 using glm::any;
+using glm::atan;
 using glm::ceil;
 using glm::clamp;
 using glm::dot;

@@ -80,6 +80,11 @@
 #else
 #define V_RAY_TEXTURE false
 #endif
+#ifdef RAY_TEXTURE_VOLUME
+#define V_RAY_TEXTURE_VOLUME true
+#else
+#define V_RAY_TEXTURE_VOLUME false
+#endif
 #ifdef BRICK
 #define V_BRICK true
 #else
@@ -87,4 +92,4 @@
 #endif
 const Variant V = Variant(V_ORTHOGRAPHIC, V_DIFFERENTIAL, V_SHADING, V_ADAPTIVE, V_SPACE_SKIPPING, V_CELL_DDA,
                           V_VIRTUAL_SAMPLES, V_PEAKS, V_PEAK_XOR, V_PEAKS_ONLY, V_PREINTEGRATION,
-                          V_SEGMENTS, V_RAY_TEXTURE, V_BRICK);
+                          V_SEGMENTS, V_RAY_TEXTURE, V_RAY_TEXTURE_VOLUME, V_BRICK);

@@ -15,5 +15,6 @@ struct Variant {
   bool preintegration;
   bool segments;        // peaks, preintegration or virtual samples: the segment between samples matters
   bool ray_texture;     // per-ray controls (Raspe 2008): RayState's stop and weights vary per ray
+  bool ray_texture_volume;  // ... read where the ray enters the box (else at its pixel)
   bool brick;           // distributed rendering: one brick's part of each ray (RayState.draw)
 };
