@@ -72,5 +72,5 @@ vec2 clip_span(IN(Ray) r, vec2 span) {
 // its first voxel (P.sample_half).
 vec3 voxel_at(IN(Ray) r, float t) { return (r.o + t * r.d + r.voxel_half) * r.inv_spacing; }
 // Where the macrocells are looked up: the whole volume's voxel coordinates (a brick's grids are
-// the whole volume's, core/macrocell_share.h); voxel_coords in one process.
+// the whole volume's, core/macrocell_share.h); voxel_at in one process.
 vec3 cell_coords(vec3 p) { return (p + P.box_half) * P.inv_spacing; }
