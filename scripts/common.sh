@@ -23,10 +23,11 @@ PEAKCAST_RUNTIME_PACKAGES=(
 )
 # The README's commands: building plus the scripts' own tools.
 PEAKCAST_PACKAGES=("${PEAKCAST_BUILD_PACKAGES[@]}" git python3 python3-jsonschema python3-websockets python3-pil)
-# Only the test command needs these (browser tests: Debian's chromium + playwright-core; the
-# container label: buildah and debootstrap; manifests: python3-yaml; the mpi label: OpenMPI and
-# IceT from ParaView's packages; python3-zarr reads and writes the OME-Zarr the tests check).
-PEAKCAST_TEST_PACKAGES=(chromium nodejs python3-vtk9 xvfb xauth clang libclang-rt-14-dev
+# Only the test command needs these (browser tests: Debian's chromium + playwright-core;
+# clang-format: the unit label's format check; the container label: buildah and debootstrap;
+# manifests: python3-yaml; the mpi label: OpenMPI and IceT from ParaView's packages;
+# python3-zarr reads and writes the OME-Zarr the tests check).
+PEAKCAST_TEST_PACKAGES=(chromium nodejs python3-vtk9 xvfb xauth clang clang-format libclang-rt-14-dev
   buildah debootstrap python3-yaml python3-pytest python3-numpy python3-venv python3-zarr
   libopenmpi-dev openmpi-bin paraview-dev)
 # paraview-dev brings IceT (the mpi label). --no-install-recommends matters for it: with

@@ -63,16 +63,23 @@ int render_within_budget(const RenderArgs& a) {
                  "(%.1f MiB) beside two bricks: the still held more than the budget; raise --memory-budget-mib\n",
                  (long long)a.memory_budget_mib, r.image.width, r.image.height, double(r.beside_bytes) / 1048576.0);
   const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("wrote %s: %dx%d by %d bricks (ghost %d, largest %.1f MiB; budget %lld MiB for %.1f MiB of voxels), "
-              "statistics %.0f ms, read %.0f ms, render %.0f ms, wall %.0f ms, %s\n",
-              a.out.c_str(), r.image.width, r.image.height, r.bricks, r.ghost, double(r.largest_brick_bytes) / 1048576.0,
-              (long long)a.memory_budget_mib, double(bytes) / 1048576.0, stats.ms, r.read_ms, r.render_ms, wall,
-              b.description().c_str());
+  std::printf(
+      "wrote %s: %dx%d by %d bricks (ghost %d, largest %.1f MiB; budget %lld MiB for %.1f MiB of voxels), "
+      "statistics %.0f ms, read %.0f ms, render %.0f ms, wall %.0f ms, %s\n",
+      a.out.c_str(), r.image.width, r.image.height, r.bricks, r.ghost, double(r.largest_brick_bytes) / 1048576.0,
+      (long long)a.memory_budget_mib, double(bytes) / 1048576.0, stats.ms, r.read_ms, r.render_ms, wall,
+      b.description().c_str());
   if (!a.stats.empty()) {
-    const nlohmann::json j = {{"bricks", r.bricks}, {"ghost", r.ghost}, {"largest_brick_bytes", r.largest_brick_bytes},
-                              {"statistics_bricks", stats.bricks}, {"bytes_read", stats.bytes_read + r.bytes_read},
-                              {"statistics_ms", stats.ms}, {"read_ms", r.read_ms}, {"render_ms", r.render_ms},
-                              {"wall_ms", wall}, {"budget_too_small", stats.budget_too_small || r.budget_too_small},
+    const nlohmann::json j = {{"bricks", r.bricks},
+                              {"ghost", r.ghost},
+                              {"largest_brick_bytes", r.largest_brick_bytes},
+                              {"statistics_bricks", stats.bricks},
+                              {"bytes_read", stats.bytes_read + r.bytes_read},
+                              {"statistics_ms", stats.ms},
+                              {"read_ms", r.read_ms},
+                              {"render_ms", r.render_ms},
+                              {"wall_ms", wall},
+                              {"budget_too_small", stats.budget_too_small || r.budget_too_small},
                               {"backend", render::to_string(b.backend)},
                               {"renderer", b.renderer->description()}};
     std::ofstream(a.stats) << j.dump(2) << "\n";
@@ -94,15 +101,17 @@ void add_render_commands(CLI::App& app, Runner& run) {
   render->add_option("scene", ra->scene, "scene JSON (proto/scene.schema.json)")->required()->check(CLI::ExistingFile);
   render->add_option("-o,--out", ra->out, "output PNG")->required();
   render->add_option("--stats", ra->stats, "write render stats as JSON here");
-  render->add_option("--path", ra->path, "fragment | compute (GL backend)")->check(CLI::IsMember({"fragment", "compute"}));
+  render->add_option("--path", ra->path, "fragment | compute (GL backend)")
+      ->check(CLI::IsMember({"fragment", "compute"}));
   render->add_option("--backend", ra->backend, "auto | gl | cpu (default: PEAKCAST_BACKEND, else auto)")
       ->check(CLI::IsMember({"auto", "gl", "cpu"}));
   render->add_option("--program-cache", ra->program_cache,
                      "GL: where linked shader programs are kept between runs: auto | off | a folder "
                      "(default: PEAKCAST_PROGRAM_CACHE, else auto, ~/.cache/peakcast/programs)");
-  render->add_option("--memory-budget-mib", ra->memory_budget_mib,
-                     "host memory for voxels: a volume larger than this is drawn by bricks, front to back, "
-                     "read one after another (docs/chunked-volumes.md)")
+  render
+      ->add_option("--memory-budget-mib", ra->memory_budget_mib,
+                   "host memory for voxels: a volume larger than this is drawn by bricks, front to back, "
+                   "read one after another (docs/chunked-volumes.md)")
       ->check(CLI::PositiveNumber);
   render->callback([ra, &run] {
     run = [ra] {
@@ -110,8 +119,9 @@ void add_render_commands(CLI::App& app, Runner& run) {
 #ifdef PEAKCAST_HAVE_MPI
         return mpi_render(MpiRenderArgs{ra->scene, ra->out, ra->stats, ra->backend});
 #else
-        throw std::invalid_argument("launched by mpirun with several ranks, but this peakcast was built without MPI "
-                                    "(install libopenmpi-dev and paraview-dev, rebuild with PEAKCAST_WITH_MPI=ON)");
+        throw std::invalid_argument(
+            "launched by mpirun with several ranks, but this peakcast was built without MPI "
+            "(install libopenmpi-dev and paraview-dev, rebuild with PEAKCAST_WITH_MPI=ON)");
 #endif
       }
       if (ra->memory_budget_mib > 0) {
@@ -166,13 +176,13 @@ void add_render_commands(CLI::App& app, Runner& run) {
       Image img;
       std::string how;
       if (fa->converged) {
-        const bool peaks = fa->model.empty() ? ls.scene.scene.render.classification == Classification::Peaks
-                                             : fa->model == "peaks";
+        const bool peaks =
+            fa->model.empty() ? ls.scene.scene.render.classification == Classification::Peaks : fa->model == "peaks";
         auto c = reference::render_converged(*ls.volume, ls.scene,
                                              peaks ? reference::OpticalModel::Peaks : reference::OpticalModel::Dvr);
         img = std::move(c.image);
-        how = std::string(peaks ? "peak" : "DVR") + " model, converged=" + std::string(c.converged ? "yes" : "no") + " step " + std::to_string(c.step) +
-              " last change " + std::to_string(c.last_change);
+        how = std::string(peaks ? "peak" : "DVR") + " model, converged=" + std::string(c.converged ? "yes" : "no") +
+              " step " + std::to_string(c.step) + " last change " + std::to_string(c.last_change);
       } else {
         reference::ReferenceOptions opt;
         opt.step = fa->step;

@@ -122,8 +122,9 @@ int run(const MpiRenderArgs& a, int rank, int size) {
     MPI_Allreduce(&gl, &all_gl, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
     MPI_Allreduce(&gl, &any_gl, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
     if (all_gl != any_gl)
-      throw std::invalid_argument("the ranks chose different backends (gl on some, cpu on others): pass --backend gl or "
-                                  "--backend cpu");
+      throw std::invalid_argument(
+          "the ranks chose different backends (gl on some, cpu on others): pass --backend gl or "
+          "--backend cpu");
   }
   auto resident = renderer.make_resident(brick, read.cells);
   const glm::dvec3 eye = (scene.camera.eye - box.origin) / box.spacing;
@@ -168,21 +169,31 @@ int run(const MpiRenderArgs& a, int rank, int size) {
     render_max = std::max(render_max, f.render_ms);
     composite_max = std::max(composite_max, f.composite_ms);
     auto ivec = [](const double* v) { return nlohmann::json::array({int64_t(v[0]), int64_t(v[1]), int64_t(v[2])}); };
-    ranks.push_back({{"rank", r}, {"brick", {{"lo", ivec(f.lo)}, {"hi", ivec(f.hi)}}},
-                     {"read", {{"lo", ivec(f.read_lo)}, {"hi", ivec(f.read_hi)}}}, {"voxels", int64_t(f.voxels_read)},
+    ranks.push_back({{"rank", r},
+                     {"brick", {{"lo", ivec(f.lo)}, {"hi", ivec(f.hi)}}},
+                     {"read", {{"lo", ivec(f.read_lo)}, {"hi", ivec(f.read_hi)}}},
+                     {"voxels", int64_t(f.voxels_read)},
                      {"voxel_bytes", int64_t(f.voxels_read) * int64_t(voxel_bytes(brick->type()))},
-                     {"load_ms", f.load_ms}, {"render_ms", f.render_ms}, {"composite_ms", f.composite_ms},
-                     {"peak_rss_mib", f.rss_mib}, {"samples_per_ray", f.samples_mean}});
+                     {"load_ms", f.load_ms},
+                     {"render_ms", f.render_ms},
+                     {"composite_ms", f.composite_ms},
+                     {"peak_rss_mib", f.rss_mib},
+                     {"samples_per_ray", f.samples_mean}});
   }
-  std::printf("wrote %s: %dx%d, %d ranks (k-d bricks, ghost %d), render %.1f ms (slowest rank), composite %.1f ms "
-              "(IceT), %.0f ms in all, %s\n",
-              a.out.c_str(), img.width, img.height, size, ghost, render_max, composite_max, wall_ms,
-              renderer.description().c_str());
+  std::printf(
+      "wrote %s: %dx%d, %d ranks (k-d bricks, ghost %d), render %.1f ms (slowest rank), composite %.1f ms "
+      "(IceT), %.0f ms in all, %s\n",
+      a.out.c_str(), img.width, img.height, size, ghost, render_max, composite_max, wall_ms,
+      renderer.description().c_str());
   if (!a.stats.empty()) {
-    nlohmann::json j = {{"ranks", size},          {"ghost", ghost},
-                        {"render_ms", render_max}, {"composite_ms", composite_max},
-                        {"wall_ms", wall_ms},      {"variant", st.variant},
-                        {"backend", renderer.backend()}, {"renderer", renderer.description()},
+    nlohmann::json j = {{"ranks", size},
+                        {"ghost", ghost},
+                        {"render_ms", render_max},
+                        {"composite_ms", composite_max},
+                        {"wall_ms", wall_ms},
+                        {"variant", st.variant},
+                        {"backend", renderer.backend()},
+                        {"renderer", renderer.description()},
                         {"volume_dims", {dims[0], dims[1], dims[2]}},
                         {"per_rank", ranks}};
     std::ofstream(a.stats) << j.dump(2) << "\n";

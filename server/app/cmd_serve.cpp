@@ -22,8 +22,13 @@ int serve(const net::ServerConfig& c, const ServeOptions& o) {
   // This line on stdout is the contract scripts and tests wait for; the log goes to stderr.
   std::printf("peakcast: serving on http://%s:%u (renderer %s)\n", c.bind.c_str(), unsigned(server.port()),
               server.app().render.gl_renderer().c_str());
-  log::info("serving", {{"bind", c.bind}, {"port", server.port()}, {"renderer", server.app().render.gl_renderer()},
-                        {"data", o.data}, {"volumes", o.volumes}, {"auth", !c.token.empty() || !c.user_tokens.empty()}, {"ranks", c.ranks}});
+  log::info("serving", {{"bind", c.bind},
+                        {"port", server.port()},
+                        {"renderer", server.app().render.gl_renderer()},
+                        {"data", o.data},
+                        {"volumes", o.volumes},
+                        {"auth", !c.token.empty() || !c.user_tokens.empty()},
+                        {"ranks", c.ranks}});
   std::fflush(stdout);
   server.run_until_signal();
   std::printf("peakcast: stopped\n");

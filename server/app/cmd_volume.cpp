@@ -51,7 +51,8 @@ struct ChunkSelectArgs {
 };
 
 void add_chunk_select(CLI::App* cmd, ChunkSelectArgs& a) {
-  cmd->add_option("--level", a.level, "chunked volumes: pyramid level (0: full resolution)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--level", a.level, "chunked volumes: pyramid level (0: full resolution)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--time", a.time, "chunked volumes: time point (OME-Zarr t axis)")->check(CLI::NonNegativeNumber);
   cmd->add_option("--channel", a.channel, "chunked volumes: channel (OME-Zarr c axis, precomputed channels)")
       ->check(CLI::NonNegativeNumber);
@@ -95,15 +96,18 @@ chunked::ZarrWriteOptions zarr_options(const ConvertArgs& a) {
 int convert_by_slabs(const ConvertArgs& a, int64_t budget) {
   const auto r = chunked::convert_to_ome_zarr_by_slabs(a.in, a.out, a.select.options(), zarr_options(a), budget);
   const Dims& d = r.header.dims;
-  std::printf("wrote %s: OME-Zarr, %d level%s, %lld chunks, %.1f MiB (%lldx%lldx%lld %s, read by slabs of %lld "
-              "planes within %.0f MiB: largest slab %.1f MiB, %d pass%s over the input), peak RSS %.1f MiB\n",
-              a.out.c_str(), r.zarr.levels, r.zarr.levels == 1 ? "" : "s", (long long)r.zarr.chunks,
-              double(r.zarr.bytes) / 1048576.0, (long long)d[0], (long long)d[1], (long long)d[2],
-              to_string(r.header.source), (long long)r.slab_planes, double(budget) / 1048576.0,
-              double(r.slab_bytes) / 1048576.0, r.passes, r.passes == 1 ? "" : "es", peak_rss_mib());
+  std::printf(
+      "wrote %s: OME-Zarr, %d level%s, %lld chunks, %.1f MiB (%lldx%lldx%lld %s, read by slabs of %lld "
+      "planes within %.0f MiB: largest slab %.1f MiB, %d pass%s over the input), peak RSS %.1f MiB\n",
+      a.out.c_str(), r.zarr.levels, r.zarr.levels == 1 ? "" : "s", (long long)r.zarr.chunks,
+      double(r.zarr.bytes) / 1048576.0, (long long)d[0], (long long)d[1], (long long)d[2], to_string(r.header.source),
+      (long long)r.slab_planes, double(budget) / 1048576.0, double(r.slab_bytes) / 1048576.0, r.passes,
+      r.passes == 1 ? "" : "es", peak_rss_mib());
   if (2 * r.slab_bytes > budget)
-    std::fprintf(stderr, "note: two slabs of one chunk edge (%.1f MiB each) exceed the budget; a smaller --chunk makes "
-                 "them thinner\n", double(r.slab_bytes) / 1048576.0);
+    std::fprintf(stderr,
+                 "note: two slabs of one chunk edge (%.1f MiB each) exceed the budget; a smaller --chunk makes "
+                 "them thinner\n",
+                 double(r.slab_bytes) / 1048576.0);
   return 0;
 }
 
@@ -133,7 +137,8 @@ void print_pyramid(const std::string& path) {
 
 void add_volume_commands(CLI::App& app, Runner& run) {
   auto mv = std::make_shared<MakeVolumeArgs>();
-  auto* make = app.add_subcommand("make-volume", "Write a procedural volume (raw+JSON, NRRD or MetaImage by extension)");
+  auto* make =
+      app.add_subcommand("make-volume", "Write a procedural volume (raw+JSON, NRRD or MetaImage by extension)");
   make->add_option("kind", mv->kind, "marschner-lobb | blobs | fire | em | sphere | ramp | vessels")->required();
   make->add_option("--dims", mv->dims, "X Y Z (default depends on the kind; em: 900 500 930)")->expected(3);
   make->add_option("--out,-o", mv->out, "output file: .raw (+.json sidecar), .nrrd, .nhdr, .mhd, .mha")->required();
@@ -161,14 +166,17 @@ void add_volume_commands(CLI::App& app, Runner& run) {
   });
 
   auto ca = std::make_shared<ConvertArgs>();
-  auto* conv = app.add_subcommand("convert", "Load a volume and write it again: .raw+.json, .nrrd, .nhdr, .mhd, .mha, "
-                                             "or an OME-Zarr folder (.zarr, with --pyramid for Neuroglancer and BigDataViewer)");
-  conv->add_option("in", ca->in, "volume file, TIFF directory, OME-Zarr or Neuroglancer precomputed folder")->required();
+  auto* conv = app.add_subcommand("convert",
+                                  "Load a volume and write it again: .raw+.json, .nrrd, .nhdr, .mhd, .mha, "
+                                  "or an OME-Zarr folder (.zarr, with --pyramid for Neuroglancer and BigDataViewer)");
+  conv->add_option("in", ca->in, "volume file, TIFF directory, OME-Zarr or Neuroglancer precomputed folder")
+      ->required();
   conv->add_option("out", ca->out, "output; the format follows the extension (.zarr: OME-Zarr)")->required();
   conv->add_flag("--gzip", ca->gzip, "gzip-compress the data (.raw, .nrrd, .nhdr)");
   conv->add_flag("--pyramid", ca->pyramid, "OME-Zarr: add 2x2x2-mean levels until one fits a chunk");
   conv->add_option("--chunk", ca->chunk, "OME-Zarr: chunk edge in voxels (default 128)")->check(CLI::Range(1, 512));
-  conv->add_option("--compressor", ca->compressor, "OME-Zarr: blosc (zstd, byte shuffle; default) | zstd | zlib | gzip | none")
+  conv->add_option("--compressor", ca->compressor,
+                   "OME-Zarr: blosc (zstd, byte shuffle; default) | zstd | zlib | gzip | none")
       ->check(CLI::IsMember({"blosc", "zstd", "zlib", "gzip", "none"}));
   conv->add_option("--memory-budget-mib", ca->memory_budget_mib,
                    "OME-Zarr: an input whose whole read would take more than this (about 2.25x its voxel bytes) "
@@ -180,8 +188,10 @@ void add_volume_commands(CLI::App& app, Runner& run) {
       const bool zarr = lower_ext(ca->out) == ".zarr";
       if (!zarr && (ca->pyramid || ca->compressor != "blosc" || ca->chunk != 128))
         throw std::invalid_argument("--pyramid, --chunk and --compressor are for an OME-Zarr output (OUT.zarr)");
-      if (zarr && ca->gzip) throw std::invalid_argument("--gzip is for .raw, .nrrd and .nhdr; OME-Zarr takes --compressor");
-      if (!zarr && ca->memory_budget_mib > 0) throw std::invalid_argument("--memory-budget-mib is for an OME-Zarr output");
+      if (zarr && ca->gzip)
+        throw std::invalid_argument("--gzip is for .raw, .nrrd and .nhdr; OME-Zarr takes --compressor");
+      if (!zarr && ca->memory_budget_mib > 0)
+        throw std::invalid_argument("--memory-budget-mib is for an OME-Zarr output");
       if (zarr) {
         const int64_t budget = ca->memory_budget_mib > 0 ? ca->memory_budget_mib << 20 : half_of_memory();
         try {
@@ -223,15 +233,16 @@ void add_volume_commands(CLI::App& app, Runner& run) {
       Volume v = load_volume(ia->file, opt);
       const auto& d = v.dims();
       std::printf("file: %s\ndims: %lld %lld %lld\ntype: %s (stored as %s, value offset %g)\n", ia->file.c_str(),
-                  (long long)d[0], (long long)d[1], (long long)d[2], to_string(v.source_type()),
-                  to_string(v.type()), v.value_offset);
-      std::printf("spacing: %g %g %g\norigin: %g %g %g\nrange: %.9g %.9g\nmemory: %.1f MiB\n"
-                  "load: %.1f ms (read %.1f ms, range and histogram %.1f ms)\n",
-                  v.spacing.x, v.spacing.y, v.spacing.z, v.origin.x, v.origin.y, v.origin.z, v.min_value,
-                  v.max_value, double(v.byte_size()) / 1048576.0, v.load_ms, v.load_ms - v.statistics_ms,
-                  v.statistics_ms);
+                  (long long)d[0], (long long)d[1], (long long)d[2], to_string(v.source_type()), to_string(v.type()),
+                  v.value_offset);
+      std::printf(
+          "spacing: %g %g %g\norigin: %g %g %g\nrange: %.9g %.9g\nmemory: %.1f MiB\n"
+          "load: %.1f ms (read %.1f ms, range and histogram %.1f ms)\n",
+          v.spacing.x, v.spacing.y, v.spacing.z, v.origin.x, v.origin.y, v.origin.z, v.min_value, v.max_value,
+          double(v.byte_size()) / 1048576.0, v.load_ms, v.load_ms - v.statistics_ms, v.statistics_ms);
       if (v.nonfinite_replaced > 0)
-        std::printf("warning: %lld NaN/Inf voxels replaced by the finite range ends\n", (long long)v.nonfinite_replaced);
+        std::printf("warning: %lld NaN/Inf voxels replaced by the finite range ends\n",
+                    (long long)v.nonfinite_replaced);
       if (ia->macrocells && ia->cell == 0) {  // what the server builds: both grids
         const VolumeMacrocells both = build_volume_macrocells(v);
         std::printf("macrocells (trilinear and tricubic): %lldx%lldx%lld cells of %d voxels, build %.1f ms\n",

@@ -86,7 +86,8 @@ net::ServerConfig ServeOptions::resolved() const {
   if (!user_token_file.empty()) c.user_tokens = net::read_user_tokens(user_token_file);
   for (const std::string& h : c.allowed_hosts)
     if (h != "*" && net::host_name(h).empty())
-      throw std::invalid_argument("--allowed-host '" + h + "' is not a host name (a name or an address; '*' for any; "
+      throw std::invalid_argument("--allowed-host '" + h +
+                                  "' is not a host name (a name or an address; '*' for any; "
                                   "no wildcards in names)");
   return c;
 }
@@ -111,8 +112,9 @@ void add_serve_options(CLI::App& s, ServeOptions& o) {
                "require this bearer token (HTTP header, ?token= or hello.token); it shows in the process list: "
                "prefer --token-file");
   s.add_option("--token-file", o.token_file, "read the admin token from the first line of this file");
-  s.add_option("--user-token-file", o.user_token_file,
-               "user tokens, a line \"NAME TOKEN\" each: they view, render and upload, and delete only their own uploads");
+  s.add_option(
+      "--user-token-file", o.user_token_file,
+      "user tokens, a line \"NAME TOKEN\" each: they view, render and upload, and delete only their own uploads");
   s.add_option("--allow-origin", c.allow_origins, "WebSocket Origin to accept besides the server's own (repeatable)");
   s.add_option("--allowed-host", c.allowed_hosts,
                "a Host name to answer besides the bind address and localhost (repeatable; * for any): DNS rebinding");
@@ -148,13 +150,16 @@ void add_serve_options(CLI::App& s, ServeOptions& o) {
       ->check(CLI::IsMember({"text", "json"}));
   s.add_option("--io-threads", c.io_threads, "network threads")->check(CLI::Range(1, 64));
   s.add_option("--encode-threads", c.encode_threads, "JPEG encode threads")->check(CLI::Range(1, 64));
-  s.add_option("--upload-dir", o.upload_dir,
-               "where uploaded volumes are kept (POST /api/volumes); empty: uploads are off. Never inside a --data directory");
-  s.add_option("--max-upload-mib", o.max_upload_mib, "MiB of one upload")->check(CLI::Range(int64_t(1), int64_t(1) << 22));
+  s.add_option(
+      "--upload-dir", o.upload_dir,
+      "where uploaded volumes are kept (POST /api/volumes); empty: uploads are off. Never inside a --data directory");
+  s.add_option("--max-upload-mib", o.max_upload_mib, "MiB of one upload")
+      ->check(CLI::Range(int64_t(1), int64_t(1) << 22));
   s.add_option("--upload-budget-mib", o.upload_budget_mib, "MiB of every upload kept, in all")
       ->check(CLI::Range(int64_t(1), int64_t(1) << 26));
   s.add_option("--max-uploads", o.max_uploads, "uploads received at once; beyond, 503")->check(CLI::Range(1, 64));
-  s.add_option("--uploads-per-minute", o.uploads_per_minute, "uploads one client address may start a minute (a burst of 10); beyond, 429")
+  s.add_option("--uploads-per-minute", o.uploads_per_minute,
+               "uploads one client address may start a minute (a burst of 10); beyond, 429")
       ->check(CLI::Range(1.0, 1e6));
   s.add_option("--upload-timeout", o.upload_timeout, "seconds an upload may send nothing before it is ended")
       ->check(CLI::Range(1, 3600));
@@ -172,8 +177,9 @@ void add_serve_options(CLI::App& s, ServeOptions& o) {
                            std::all_of(v.begin(), v.end(), [](unsigned char ch) { return std::isdigit(ch) != 0; });
         return v == "auto" || v == "surfaceless" || index ? std::string() : "auto, surfaceless or a device index";
       });
-  s.add_option("--program-cache", c.program_cache,
-               "where GL keeps linked shader programs between runs: auto (~/.cache/peakcast/programs) | off | a folder");
+  s.add_option(
+      "--program-cache", c.program_cache,
+      "where GL keeps linked shader programs between runs: auto (~/.cache/peakcast/programs) | off | a folder");
   s.add_option("--backend", c.backend,
                "auto (the CPU backend when EGL offers only a software rasteriser, else GL) | gl | cpu")
       ->check(CLI::IsMember({"auto", "gl", "cpu"}));

@@ -24,7 +24,8 @@ struct ServeOptions {
   int64_t memory_budget_mib = 0;
   std::string web_dir, shader_dir;
   std::string upload_dir;
-  int64_t max_upload_mib = limits::kDefaultMaxUploadBytes >> 20, upload_budget_mib = limits::kDefaultUploadBudgetBytes >> 20;
+  int64_t max_upload_mib = limits::kDefaultMaxUploadBytes >> 20,
+          upload_budget_mib = limits::kDefaultUploadBudgetBytes >> 20;
   int max_uploads = limits::kDefaultMaxConcurrentUploads;
   double uploads_per_minute = limits::kUploadsPerMinutePerClient;
   int upload_timeout = int(limits::kDefaultUploadIdleTimeout.count());

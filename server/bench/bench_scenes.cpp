@@ -21,10 +21,13 @@ std::shared_ptr<Volume> bench_volume(const std::string& what) {
 
 ResolvedScene bench_scene(const Volume& vol, int size, const std::string& filter) {
   const double lo = vol.min_value, hi = vol.max_value;
-  nlohmann::json j = {{"volume", "bench"}, {"image", {{"width", size}, {"height", size}}},
-                      {"render", {{"filter", filter}}}};
-  j["tf"] = {{"points", {{lo, 0, 0, 0, 0}, {lo + 0.3 * (hi - lo), 0.2, 0.4, 1.0, 0.0},
-                         {lo + 0.6 * (hi - lo), 1.0, 0.8, 0.4, 0.3}, {hi, 1, 1, 1, 0.6}}}};
+  nlohmann::json j = {
+      {"volume", "bench"}, {"image", {{"width", size}, {"height", size}}}, {"render", {{"filter", filter}}}};
+  j["tf"] = {{"points",
+              {{lo, 0, 0, 0, 0},
+               {lo + 0.3 * (hi - lo), 0.2, 0.4, 1.0, 0.0},
+               {lo + 0.6 * (hi - lo), 1.0, 0.8, 0.4, 0.3},
+               {hi, 1, 1, 1, 0.6}}}};
   ResolvedScene s = resolve_scene(parse_scene(j), vol);
   const glm::dvec3 c = s.camera.center;
   s.camera.eye = c + (s.camera.eye - c).z * glm::dvec3(0.55, 0.45, 0.7);

@@ -11,12 +11,12 @@
 
 namespace peakcast::bench {
 
-double median(std::vector<double> v);                  // 0 when empty
-double percentile(std::vector<double> v, double p);    // p in [0, 1]; NaN when empty
+double median(std::vector<double> v);                // 0 when empty
+double percentile(std::vector<double> v, double p);  // p in [0, 1]; NaN when empty
 double ms_between(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b);
-double rss_mib();                                      // VmRSS of this process
-double peak_rss_mib();                                 // VmHWM: the peak since the start or reset_peak_rss
-void reset_peak_rss();                                 // VmHWM back to the current RSS
+double rss_mib();       // VmRSS of this process
+double peak_rss_mib();  // VmHWM: the peak since the start or reset_peak_rss
+void reset_peak_rss();  // VmHWM back to the current RSS
 
 struct HttpAnswer {
   int status = 0;  // 0: no answer (the body holds the error)

@@ -99,13 +99,15 @@ void run_readback(const ReadbackArgs& a) {
       const double before = median(frame[0]);
       for (size_t c = 0; c < n; ++c)
         std::printf("%5d %-5s %-22s %9.2f %9.2f %11.2f %9.2f %11.2f %8.3f\n", size, p == "compute" ? "comp" : "frag",
-                    cases[c].name, median(frame[c]), median(rend[c]), median(rb[c]), median(flip[c]),
-                    median(conv[c]), median(frame[c]) / before);
+                    cases[c].name, median(frame[c]), median(rend[c]), median(rb[c]), median(flip[c]), median(conv[c]),
+                    median(frame[c]) / before);
       std::fflush(stdout);
     }
-  std::printf("medians of %d frames; frame_ms: the render thread's time per frame (render call + flip); ratio: "
-              "frame_ms / frame_ms of 'float20+flip (before)'; to_rgb8_ms: CPU conversion the float cases leave to "
-              "the encode pool\n", a.frames);
+  std::printf(
+      "medians of %d frames; frame_ms: the render thread's time per frame (render call + flip); ratio: "
+      "frame_ms / frame_ms of 'float20+flip (before)'; to_rgb8_ms: CPU conversion the float cases leave to "
+      "the encode pool\n",
+      a.frames);
 }
 
 void run_switch(const SwitchArgs& a) {
@@ -148,9 +150,11 @@ void run_switch(const SwitchArgs& a) {
                   gv.macrocell_ms(), first, first_cubic, stall, st.render_ms, st.table_ms);
       std::fflush(stdout);
     }
-  std::printf("stall_ms: render-thread time from the resident volume's construction through the first trilinear and the first "
-              "tricubic frame (%dx%d); render_cells: macrocell builds on the render thread; loader_ms: both grids "
-              "built on the loader pool\n", a.size, a.size);
+  std::printf(
+      "stall_ms: render-thread time from the resident volume's construction through the first trilinear and the first "
+      "tricubic frame (%dx%d); render_cells: macrocell builds on the render thread; loader_ms: both grids "
+      "built on the loader pool\n",
+      a.size, a.size);
 }
 
 }  // namespace
@@ -160,7 +164,9 @@ void add_frame_commands(CLI::App& bench, Runner& run) {
   auto* rb = bench.add_subcommand("readback", "A streamed frame: float read-back + CPU flip (before) vs 8-bit RGB");
   rb->add_option("--volume", ra->volume, "volume file, or a generator kind made in memory (default blobs 256^3)");
   rb->add_option("--sizes", ra->sizes, "square image sizes")->delimiter(',');
-  rb->add_option("--paths", ra->paths, "fragment, compute")->delimiter(',')->check(CLI::IsMember({"fragment", "compute"}));
+  rb->add_option("--paths", ra->paths, "fragment, compute")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"fragment", "compute"}));
   rb->add_option("--frames", ra->frames, "timed frames per case (after one warm-up)")->check(CLI::Range(1, 1000));
   rb->callback([ra, &run] {
     run = [ra] {
@@ -169,9 +175,12 @@ void add_frame_commands(CLI::App& bench, Runner& run) {
     };
   });
   auto sa = std::make_shared<SwitchArgs>();
-  auto* sw = bench.add_subcommand("volume-switch", "Render-thread stall switching to a fresh volume: macrocells built "
-                                                    "there vs on the loader pool");
-  sw->add_option("volume", sa->volume, "volume file (e.g. make-volume em -o em.nrrd)")->required()->check(CLI::ExistingFile);
+  auto* sw = bench.add_subcommand("volume-switch",
+                                  "Render-thread stall switching to a fresh volume: macrocells built "
+                                  "there vs on the loader pool");
+  sw->add_option("volume", sa->volume, "volume file (e.g. make-volume em -o em.nrrd)")
+      ->required()
+      ->check(CLI::ExistingFile);
   sw->add_option("--size", sa->size, "square image size")->check(CLI::Range(16, 4096));
   sw->add_option("--repeats", sa->repeats, "measurements of each")->check(CLI::Range(1, 20));
   sw->callback([sa, &run] {

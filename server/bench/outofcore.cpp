@@ -155,10 +155,11 @@ int run_outofcore(const OutOfCoreArgs& a) {
     std::printf("  full-resolution still %8.1f s    (%d bricks; statistics %.1f s over %d bricks; %.1f GiB read)\n",
                 out["still_s"].get<double>(), r.bricks, stats.ms / 1000.0, stats.bricks,
                 out["still_bytes_read_gib"].get<double>());
-    std::printf("  peak RSS during still %8.1f MiB  (%.1f MiB over the %.1f MiB before it; goal <= budget + 10%% = %.0f;"
-                " statistics alone %.1f over)\n",
-                out["still_peak_rss_mib"].get<double>(), out["still_peak_rss_mib"].get<double>() - rss_before, rss_before,
-                1.1 * double(a.budget_mib), out["statistics_peak_rss_over_before_mib"].get<double>());
+    std::printf(
+        "  peak RSS during still %8.1f MiB  (%.1f MiB over the %.1f MiB before it; goal <= budget + 10%% = %.0f;"
+        " statistics alone %.1f over)\n",
+        out["still_peak_rss_mib"].get<double>(), out["still_peak_rss_mib"].get<double>() - rss_before, rss_before,
+        1.1 * double(a.budget_mib), out["statistics_peak_rss_over_before_mib"].get<double>());
   }
   return 0;
 }
@@ -167,11 +168,14 @@ int run_outofcore(const OutOfCoreArgs& a) {
 
 void add_outofcore_command(CLI::App& bench, Runner& run) {
   auto args = std::make_shared<OutOfCoreArgs>();
-  auto* c = bench.add_subcommand("outofcore", "A synthetic pyramid larger than memory: open, first frame, full-resolution still");
+  auto* c = bench.add_subcommand("outofcore",
+                                 "A synthetic pyramid larger than memory: open, first frame, full-resolution still");
   c->add_option("--size", args->size, "edge of the uint8 cube (default 4096: 64 GiB)")->check(CLI::Range(64, 16384));
   c->add_option("--chunk", args->chunk, "chunk edge (default 128)")->check(CLI::Range(16, 512));
-  c->add_option("--budget-mib", args->budget_mib, "host memory budget for voxels (default 4096)")->check(CLI::PositiveNumber);
-  c->add_option("--preview-voxels", args->preview_voxels, "the first look's most voxels, as serve (default 16777216; 0: none)")
+  c->add_option("--budget-mib", args->budget_mib, "host memory budget for voxels (default 4096)")
+      ->check(CLI::PositiveNumber);
+  c->add_option("--preview-voxels", args->preview_voxels,
+                "the first look's most voxels, as serve (default 16777216; 0: none)")
       ->check(CLI::Range(int64_t(0), int64_t(1) << 40));
   c->add_option("--image", args->image, "frame and still edge in pixels (default 1024)")->check(CLI::Range(16, 8192));
   c->add_option("--dir", args->dir, "where to write the pyramid (default: the temp folder)");

@@ -61,13 +61,17 @@ std::vector<Method> methods_for(const ResolvedScene& s) {
       {"preint/uniform/trilinear", {{"classification", "preint"}}, "step"},
       {"post/uniform/trilinear/adaptive", {{"classification", "post"}, {"adaptive", true}}, "step"},
       {"post/uniform/tricubic", {{"classification", "post"}, {"filter", "tricubic"}}, "step"},
-      {"post/uniform/tricubic/vs3", {{"classification", "post"}, {"filter", "tricubic"}, {"virtual_samples", 3}}, "step"},
+      {"post/uniform/tricubic/vs3",
+       {{"classification", "post"}, {"filter", "tricubic"}, {"virtual_samples", 3}},
+       "step"},
   };
   if (!s.camera.orthographic)
     m.push_back({"post/differential/trilinear", {{"classification", "post"}, {"sampling", "differential"}}, "s_k"});
   if (has_peaks) {
     m.push_back({"peaks/uniform/trilinear", {{"classification", "peaks"}}, "step"});
-    m.push_back({"peaks/uniform/tricubic/vs3", {{"classification", "peaks"}, {"filter", "tricubic"}, {"virtual_samples", 3}}, "step"});
+    m.push_back({"peaks/uniform/tricubic/vs3",
+                 {{"classification", "peaks"}, {"filter", "tricubic"}, {"virtual_samples", 3}},
+                 "step"});
     if (!s.camera.orthographic)
       m.push_back({"peaks/differential/trilinear", {{"classification", "peaks"}, {"sampling", "differential"}}, "s_k"});
   }
@@ -120,7 +124,8 @@ std::string machine_line(const render::RenderBackend& backend) {
       cpu = line.substr(line.find(':') + 2);
       break;
     }
-  return "Machine: " + cpu + ", " + std::to_string(std::thread::hardware_concurrency()) + " cores; renderer: " + backend.description();
+  return "Machine: " + cpu + ", " + std::to_string(std::thread::hardware_concurrency()) +
+         " cores; renderer: " + backend.description();
 }
 
 int run_quality(const QualityArgs& a) {
@@ -148,7 +153,8 @@ int run_quality(const QualityArgs& a) {
     auto resident = caster.make_resident(vol);
     const render::ResidentVolume& gv = *resident;
     const ResolvedScene base = resolve_scene(parse_scene(base_json), *vol);
-    std::printf("scene %s: %s, %dx%d\n", scene_name.c_str(), vol->to_string().c_str(), base.scene.width, base.scene.height);
+    std::printf("scene %s: %s, %dx%d\n", scene_name.c_str(), vol->to_string().c_str(), base.scene.width,
+                base.scene.height);
     std::fflush(stdout);
     // The converged references, one per optical model and filter the methods need.
     std::map<std::string, Image> conv;
@@ -161,9 +167,10 @@ int run_quality(const QualityArgs& a) {
       const auto t0 = Clock::now();
       // The B-spline field costs 8 trilinear fetches a sample on the CPU too: its references
       // stop refining at 1/16 voxel (their last change is reported), the trilinear ones at 1/64.
-      const auto c = reference::render_converged(*vol, resolve_scene(parse_scene(j), *vol),
-                                                 peaks_model ? reference::OpticalModel::Peaks : reference::OpticalModel::Dvr,
-                                                 a.tolerance, filter == "tricubic" ? 1.0 / 16 : 1.0 / 64);
+      const auto c =
+          reference::render_converged(*vol, resolve_scene(parse_scene(j), *vol),
+                                      peaks_model ? reference::OpticalModel::Peaks : reference::OpticalModel::Dvr,
+                                      a.tolerance, filter == "tricubic" ? 1.0 / 16 : 1.0 / 64);
       refs.push_back({scene_name, key, ms_between(t0, Clock::now()), c.step, c.last_change});
       std::printf("  converged %s: %.0f ms, step %.4g, last change %.1e%s\n", key.c_str(), refs.back().ms, c.step,
                   c.last_change, c.converged ? "" : " (NOT converged)");
@@ -190,10 +197,13 @@ int run_quality(const QualityArgs& a) {
       for (double k : knobs) {
         json j = base_json;
         // Every method key set, so a scene file's own sampling or filter never relabels a row.
-        j["render"].update({{"sampling", "uniform"}, {"filter", "trilinear"}, {"virtual_samples", 0}, {"adaptive", false}});
+        j["render"].update(
+            {{"sampling", "uniform"}, {"filter", "trilinear"}, {"virtual_samples", 0}, {"adaptive", false}});
         j["render"].update(m.render);
-        if (m.knob == "s_k") j["render"]["s_k"] = k;
-        else j["render"]["step"] = k * base.min_spacing;
+        if (m.knob == "s_k")
+          j["render"]["s_k"] = k;
+        else
+          j["render"]["step"] = k * base.min_spacing;
         const ResolvedScene s = resolve_scene(parse_scene(j), *vol);
         std::vector<double> ms;
         render::RenderStats st;
@@ -265,14 +275,16 @@ int run_quality(const QualityArgs& a) {
 
 void add_quality_command(CLI::App& bench, Runner& run) {
   auto a = std::make_shared<QualityArgs>();
-  auto* q = bench.add_subcommand("quality", "Error against run time per scene and method: report.csv, report.md and an "
-                                            "SVG per scene (default: the standard scenes in tests/bench/quality)");
+  auto* q = bench.add_subcommand("quality",
+                                 "Error against run time per scene and method: report.csv, report.md and an "
+                                 "SVG per scene (default: the standard scenes in tests/bench/quality)");
   q->add_option("--scene", a->scenes, "scene file (repeatable); volume relative to it, or generate:KIND:WxHxD")
       ->check(CLI::ExistingFile);
   q->add_option("--out", a->out, "output directory")->required();
   q->add_flag("--images", a->images, "write each rendered image as a PNG (the CSV names them)");
   q->add_option("--frames", a->frames, "timed frames per point (after one warm-up)")->check(CLI::Range(1, 100));
-  q->add_option("--tolerance", a->tolerance, "the converged references' stopping change")->check(CLI::Range(1e-7, 1e-2));
+  q->add_option("--tolerance", a->tolerance, "the converged references' stopping change")
+      ->check(CLI::Range(1e-7, 1e-2));
   q->callback([a, &run] { run = [a] { return run_quality(*a); }; });
 }
 

@@ -35,10 +35,14 @@ std::vector<std::string> methods_of(const std::vector<QualityRow>& rows, const s
 std::string escape_xml(const std::string& s) {
   std::string o;
   for (char c : s) {
-    if (c == '<') o += "&lt;";
-    else if (c == '>') o += "&gt;";
-    else if (c == '&') o += "&amp;";
-    else o += c;
+    if (c == '<')
+      o += "&lt;";
+    else if (c == '>')
+      o += "&gt;";
+    else if (c == '&')
+      o += "&amp;";
+    else
+      o += c;
   }
   return o;
 }
@@ -79,7 +83,8 @@ void write_markdown(const std::filesystem::path& file, const std::vector<Quality
                     const std::vector<ConvergedTime>& references, const std::vector<Omission>& omissions,
                     const std::string& machine) {
   auto out = open_out(file);
-  out << "# Error against run time\n\n" << machine << "\n\n"
+  out << "# Error against run time\n\n"
+      << machine << "\n\n"
       << "Error is against the converged image (CPU, double) of the method's own optical model: the DVR model "
          "for post and preint, the peak model for peaks; `other` is the PSNR against the other model where the "
          "TF has peaks. ms: median GPU time of a frame. Order: slope of log RMSE over log step (or s_k).\n";
@@ -111,7 +116,8 @@ void write_markdown(const std::filesystem::path& file, const std::vector<Quality
     out << "\n";
   }
   if (!omissions.empty()) {
-    out << "\n## What leaving code out saves\n\n| scene | left out | chosen variant | ms | with the code | ms | saved |\n"
+    out << "\n## What leaving code out saves\n\n| scene | left out | chosen variant | ms | with the code | ms | saved "
+           "|\n"
         << "|---|---|---|---|---|---|---|\n";
     for (const auto& o : omissions)
       out << "| " << o.scene << " | " << o.left_out << " | " << o.chosen_variant << " | " << fmt("%.2f", o.chosen_ms)
@@ -136,8 +142,8 @@ void write_svg(const std::filesystem::path& file, const std::string& scene, cons
   const double W = 760, H = 480, L = 70, R = 220, T = 40, B = 50;
   auto X = [&](double t) { return L + (std::log10(t) - lt0) / std::max(lt1 - lt0, 1.0) * (W - L - R); };
   auto Y = [&](double e) { return T + (le1 - std::log10(e)) / std::max(le1 - le0, 1.0) * (H - T - B); };
-  static const char* colours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf", "#8c564b", "#e377c2",
-                                  "#7f7f7f", "#bcbd22"};
+  static const char* colours[] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e",
+                                  "#17becf", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22"};
   auto out = open_out(file);
   out << "<svg xmlns='http://www.w3.org/2000/svg' width='" << W << "' height='" << H << "' font-family='sans-serif' "
       << "font-size='12'>\n<rect width='100%' height='100%' fill='white'/>\n"
@@ -145,7 +151,8 @@ void write_svg(const std::filesystem::path& file, const std::string& scene, cons
       << ": RMSE against the converged image vs frame time</text>\n";
   for (double p = lt0; p <= lt1; ++p)
     out << "<line x1='" << X(std::pow(10, p)) << "' y1='" << T << "' x2='" << X(std::pow(10, p)) << "' y2='" << H - B
-        << "' stroke='#ddd'/><text x='" << X(std::pow(10, p)) - 12 << "' y='" << H - B + 16 << "'>1e" << p << "</text>\n";
+        << "' stroke='#ddd'/><text x='" << X(std::pow(10, p)) - 12 << "' y='" << H - B + 16 << "'>1e" << p
+        << "</text>\n";
   for (double p = le0; p <= le1; ++p)
     out << "<line x1='" << L << "' y1='" << Y(std::pow(10, p)) << "' x2='" << W - R << "' y2='" << Y(std::pow(10, p))
         << "' stroke='#ddd'/><text x='" << 22 << "' y='" << Y(std::pow(10, p)) + 4 << "'>1e" << p << "</text>\n";
@@ -161,7 +168,8 @@ void write_svg(const std::filesystem::path& file, const std::string& scene, cons
     out << "<polyline fill='none' stroke='" << c << "' stroke-width='1.8' points='";
     for (const auto& [t, e] : pts) out << X(t) << ',' << Y(e) << ' ';
     out << "'/>\n";
-    for (const auto& [t, e] : pts) out << "<circle cx='" << X(t) << "' cy='" << Y(e) << "' r='3' fill='" << c << "'/>\n";
+    for (const auto& [t, e] : pts)
+      out << "<circle cx='" << X(t) << "' cy='" << Y(e) << "' r='3' fill='" << c << "'/>\n";
     out << "<line x1='" << W - R + 12 << "' y1='" << T + 14 + 18 * k << "' x2='" << W - R + 32 << "' y2='"
         << T + 14 + 18 * k << "' stroke='" << c << "' stroke-width='2'/><text x='" << W - R + 36 << "' y='"
         << T + 18 + 18 * k << "'>" << escape_xml(m) << "</text>\n";

@@ -14,8 +14,8 @@ struct QualityRow {
   double value = 0;           // the knob's value
   double ms = 0, samples_per_ray = 0;
   double rmse = 0, psnr = 0, max_abs = 0, share_off = 0;  // against the method's own optical model
-  double psnr_other = -1;  // against the other optical model where meaningful (-1: none)
-  std::string image;       // PNG path relative to the output directory, or empty
+  double psnr_other = -1;                                 // against the other optical model where meaningful (-1: none)
+  std::string image;                                      // PNG path relative to the output directory, or empty
 };
 
 struct ConvergedTime {

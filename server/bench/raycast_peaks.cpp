@@ -47,10 +47,14 @@ BenchVolume bench_volume(const std::string& name) {
   GeneratorSpec s;
   s.kind = parse_generator_kind(name);
   s.type = default_type(s.kind);
-  if (s.kind == GeneratorKind::Blobs) s.dims = {256, 256, 256};
-  else if (s.kind == GeneratorKind::MarschnerLobb) s.dims = {128, 128, 128};
-  else if (s.kind == GeneratorKind::Em) s.dims = {900, 500, 930};
-  else s.dims = {256, 256, 256};
+  if (s.kind == GeneratorKind::Blobs)
+    s.dims = {256, 256, 256};
+  else if (s.kind == GeneratorKind::MarschnerLobb)
+    s.dims = {128, 128, 128};
+  else if (s.kind == GeneratorKind::Em)
+    s.dims = {900, 500, 930};
+  else
+    s.dims = {256, 256, 256};
   std::ostringstream n;
   n << name << "_" << s.dims[0] << "x" << s.dims[1] << "x" << s.dims[2];
   return {n.str(), s};
@@ -73,7 +77,8 @@ std::shared_ptr<Volume> load_or_make(const BenchVolume& bv, const fs::path& dir)
 void add_raycast_peaks_commands(CLI::App& app, Runner& run) {
   CLI::App* bench = &app;
   auto a = std::make_shared<BenchArgs>();
-  auto* rc = bench->add_subcommand("raycast", "GL ray caster vs a bare sampling loop: blobs 256^3, ML 128^3, em 900x500x930");
+  auto* rc =
+      bench->add_subcommand("raycast", "GL ray caster vs a bare sampling loop: blobs 256^3, ML 128^3, em 900x500x930");
   rc->add_option("--volumes", a->volumes, "generator kinds (blobs, marschner-lobb, em, fire)")->delimiter(',');
   rc->add_option("--sizes", a->sizes, "square image sizes")->delimiter(',');
   rc->add_option("--paths", a->paths, "fragment, compute")->delimiter(',');
@@ -94,8 +99,11 @@ void add_raycast_peaks_commands(CLI::App& app, Runner& run) {
         for (int size : a->sizes) {
           nlohmann::json j = {{"volume", bv.name}, {"image", {{"width", size}, {"height", size}}}};
           const double lo = vol->min_value, hi = vol->max_value;
-          j["tf"] = {{"points", {{lo, 0, 0, 0, 0}, {lo + 0.3 * (hi - lo), 0.2, 0.4, 1.0, 0.0},
-                                 {lo + 0.6 * (hi - lo), 1.0, 0.8, 0.4, 0.3}, {hi, 1, 1, 1, 0.6}}}};
+          j["tf"] = {{"points",
+                      {{lo, 0, 0, 0, 0},
+                       {lo + 0.3 * (hi - lo), 0.2, 0.4, 1.0, 0.0},
+                       {lo + 0.6 * (hi - lo), 1.0, 0.8, 0.4, 0.3},
+                       {hi, 1, 1, 1, 0.6}}}};
           ResolvedScene s = resolve_scene(parse_scene(j), *vol);
           // A three-quarter view rather than the axis-aligned default.
           const glm::dvec3 c = s.camera.center;
@@ -128,14 +136,15 @@ void add_raycast_peaks_commands(CLI::App& app, Runner& run) {
   });
 
   auto pa = std::make_shared<PeaksArgs>();
-  auto* pk = bench->add_subcommand("peaks", "Knoll Table 1 / Fig. 3: peak finding vs postclassification vs preintegration");
+  auto* pk =
+      bench->add_subcommand("peaks", "Knoll Table 1 / Fig. 3: peak finding vs postclassification vs preintegration");
   pk->add_option("--volume", pa->volume, "volume file (default: the heptane sample)");
   pk->add_option("--size", pa->size, "square image size");
   pk->add_option("--frames", pa->frames, "timed frames per method");
   pk->callback([pa, &run] {
     run = [pa] {
-      const fs::path file = pa->volume.empty() ? fs::path(PEAKCAST_SOURCE_DIR) / "tests/data/heptane_151.nrrd"
-                                               : fs::path(pa->volume);
+      const fs::path file =
+          pa->volume.empty() ? fs::path(PEAKCAST_SOURCE_DIR) / "tests/data/heptane_151.nrrd" : fs::path(pa->volume);
       auto vol = std::make_shared<Volume>(load_volume(file));
       render::RenderBackend b = render::open_backend(render::requested_backend());
       std::printf("renderer: %s\n", b.description().c_str());
@@ -147,9 +156,13 @@ void add_raycast_peaks_commands(CLI::App& app, Runner& run) {
       const double lo = vol->min_value, span = vol->max_value - vol->min_value;
       auto x = [&](double r) { return lo + r * span; };
       nlohmann::json tf = {{"points",
-                            {{x(0.0), 0.1, 0.3, 1.0, 0.0}, {x(0.15), 0.2, 0.5, 1.0, 0.0}, {x(0.35), 0.2, 0.5, 1.0, 0.04},
-                             {x(0.55), 0.2, 0.5, 1.0, 0.0}, {x(0.78) - 1e-4 * span, 1.0, 0.1, 0.0, 0.0},
-                             {x(0.78), 1.0, 0.1, 0.0, 0.9}, {x(0.78) + 1e-4 * span, 1.0, 0.1, 0.0, 0.0},
+                            {{x(0.0), 0.1, 0.3, 1.0, 0.0},
+                             {x(0.15), 0.2, 0.5, 1.0, 0.0},
+                             {x(0.35), 0.2, 0.5, 1.0, 0.04},
+                             {x(0.55), 0.2, 0.5, 1.0, 0.0},
+                             {x(0.78) - 1e-4 * span, 1.0, 0.1, 0.0, 0.0},
+                             {x(0.78), 1.0, 0.1, 0.0, 0.9},
+                             {x(0.78) + 1e-4 * span, 1.0, 0.1, 0.0, 0.0},
                              {x(1.0), 1.0, 1.0, 1.0, 0.0}}}};
       const glm::dvec3 c = vol->origin + vol->extent() * 0.5;
       const double dist = glm::length(vol->extent()) * 0.5 / std::sin(15.0 * M_PI / 180.0);

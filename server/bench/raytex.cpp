@@ -66,19 +66,21 @@ void run_raytex(const RaytexArgs& a) {
   std::printf("volume: %s, image %dx%d, ray texture %dx%d (view), stroke radius %.3f, %d frames over %.0f deg each\n",
               vol->to_string().c_str(), a.size, a.size, a.size, a.size, a.radius, a.frames, a.orbit);
   const ResolvedScene base = bench_scene(*vol, a.size, "trilinear");
-  std::vector<Case> cases = {{"ray casting (RC)", Kind::None, nullptr, {}, {}, {}},
-                             {"RC + static ray texture (defaults)", Kind::StaticDefaults, empty_texture(a.size), {}, {}, {}},
-                             {"RC + static ray texture (40 strokes)", Kind::StaticPainted, empty_texture(a.size), {}, {}, {}},
-                             {"direct update (level 0)", Kind::Direct, empty_texture(a.size), {}, {}, {}},
-                             {"hierarchical update (level L)", Kind::Hierarchical, empty_texture(a.size), {}, {}, {}},
-                             {"direct, whole texture uploaded", Kind::DirectFullUpload, empty_texture(a.size), {}, {}, {}}};
+  std::vector<Case> cases = {
+      {"ray casting (RC)", Kind::None, nullptr, {}, {}, {}},
+      {"RC + static ray texture (defaults)", Kind::StaticDefaults, empty_texture(a.size), {}, {}, {}},
+      {"RC + static ray texture (40 strokes)", Kind::StaticPainted, empty_texture(a.size), {}, {}, {}},
+      {"direct update (level 0)", Kind::Direct, empty_texture(a.size), {}, {}, {}},
+      {"hierarchical update (level L)", Kind::Hierarchical, empty_texture(a.size), {}, {}, {}},
+      {"direct, whole texture uploaded", Kind::DirectFullUpload, empty_texture(a.size), {}, {}, {}}};
   for (int i = 0; i < 40; ++i) cases[2].spec = with_stroke(*cases[2].spec, stroke_at(i, a.radius, 0));
-  std::vector<Stroke> painted;  // the full-upload case's strokes so far
+  std::vector<Stroke> painted;           // the full-upload case's strokes so far
   for (int f = 0; f <= a.frames; ++f) {  // frame 0 warms up: shader compiles, first texture
     ResolvedScene s = base;
     const double ang = a.orbit * f * 3.14159265358979 / 180.0;
     const glm::dvec3 c = s.camera.center, e = s.camera.eye - c;
-    s.camera.eye = c + glm::dvec3(e.x * std::cos(ang) - e.z * std::sin(ang), e.y, e.x * std::sin(ang) + e.z * std::cos(ang));
+    s.camera.eye =
+        c + glm::dvec3(e.x * std::cos(ang) - e.z * std::sin(ang), e.y, e.x * std::sin(ang) + e.z * std::cos(ang));
     painted.push_back(stroke_at(f, a.radius, 0));
     for (auto& k : cases) {
       if (k.kind == Kind::Direct) k.spec = with_stroke(*k.spec, stroke_at(f, a.radius, 0));
@@ -107,16 +109,19 @@ void run_raytex(const RaytexArgs& a) {
   for (const auto& k : cases)
     std::printf("%-38s %9.2f %7.1f %10.3f %14.0f %8.3f\n", k.name, median(k.frame_ms), 1000.0 / median(k.frame_ms),
                 median(k.update_ms), median(k.texels), median(k.frame_ms) / rc);
-  std::printf("medians of %d frames (Rgb8 read-back, the render thread's time per frame); update_ms: strokes applied "
-              "on the host + upload, inside frame_ms; level L = %d; ratio: frame_ms / RC's\n", a.frames, a.level);
+  std::printf(
+      "medians of %d frames (Rgb8 read-back, the render thread's time per frame); update_ms: strokes applied "
+      "on the host + upload, inside frame_ms; level L = %d; ratio: frame_ms / RC's\n",
+      a.frames, a.level);
 }
 
 }  // namespace
 
 void add_raytex_command(CLI::App& bench, Runner& run) {
   auto a = std::make_shared<RaytexArgs>();
-  auto* c = bench.add_subcommand("raytex", "Raspe Table 1: ray casting without, with a static, and with a painted "
-                                           "ray texture (direct vs hierarchical updates)");
+  auto* c = bench.add_subcommand("raytex",
+                                 "Raspe Table 1: ray casting without, with a static, and with a painted "
+                                 "ray texture (direct vs hierarchical updates)");
   c->add_option("--volume", a->volume, "volume file, or a generator kind made in memory (default blobs 256^3)");
   c->add_option("--size", a->size, "square image (and ray texture) size")->check(CLI::Range(16, 2048));
   c->add_option("--frames", a->frames, "timed frames per case (after one warm-up)")->check(CLI::Range(1, 1000));

@@ -1,7 +1,7 @@
 // `bench sampling`: Knoll Table 2 style. Uniform against differential sampling (and each with
-// adaptive sampling), and Lee Table 1 style virtual samples, on a close and a far camera: GPU frame time (median), samples per ray and
-// PSNR against the converged image of the same scene, so equal-time and equal-error pairs can
-// be read off. A benchmark command, not a test.
+// adaptive sampling), and Lee Table 1 style virtual samples, on a close and a far camera: GPU frame time (median),
+// samples per ray and PSNR against the converged image of the same scene, so equal-time and equal-error pairs can be
+// read off. A benchmark command, not a test.
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -54,8 +54,11 @@ int run_sampling_bench(const SamplingBenchArgs& a) {
     const render::ResidentVolume& gv = *resident;
     const double lo = vol->min_value, hi = vol->max_value;
     nlohmann::json j = {{"volume", vol->name}, {"image", {{"width", a.size}, {"height", a.size}}}};
-    j["tf"] = {{"points", {{lo, 0, 0, 0, 0}, {lo + 0.3 * (hi - lo), 0.2, 0.4, 1.0, 0.0},
-                           {lo + 0.6 * (hi - lo), 1.0, 0.8, 0.4, 0.3}, {hi, 1, 1, 1, 0.6}}}};
+    j["tf"] = {{"points",
+                {{lo, 0, 0, 0, 0},
+                 {lo + 0.3 * (hi - lo), 0.2, 0.4, 1.0, 0.0},
+                 {lo + 0.6 * (hi - lo), 1.0, 0.8, 0.4, 0.3},
+                 {hi, 1, 1, 1, 0.6}}}};
     j["render"] = {{"early_termination", 1.0}};
     const ResolvedScene base = resolve_scene(parse_scene(j), *vol);
     const glm::dvec3 c = base.camera.center;
@@ -63,7 +66,9 @@ int run_sampling_bench(const SamplingBenchArgs& a) {
     const double r = glm::length(base.box_max - base.box_min) * 0.5;
     for (const auto& [view, dist, fov] : {std::tuple{"close", 1.05 * r, 60.0}, std::tuple{"far", 3.0 * r, 30.0}}) {
       nlohmann::json cam = {{"eye", {c.x + dist * dir.x, c.y + dist * dir.y, c.z + dist * dir.z}},
-                            {"center", {c.x, c.y, c.z}}, {"up", {0, 1, 0}}, {"fov_y", fov}};
+                            {"center", {c.x, c.y, c.z}},
+                            {"up", {0, 1, 0}},
+                            {"fov_y", fov}};
       nlohmann::json jv = j;
       jv["camera"] = cam;
       const ResolvedScene sv = resolve_scene(parse_scene(jv), *vol);
@@ -76,20 +81,24 @@ int run_sampling_bench(const SamplingBenchArgs& a) {
       for (double step : {2.0, 1.0, 0.5, 0.25})
         methods.push_back({"uniform step " + std::to_string(step).substr(0, 4), {{"step", step * vol->spacing.x}}});
       for (double sk : {8.0, 4.0, 2.0, 1.0, 0.5, 0.25})
-        methods.push_back({"differential s_k " + std::to_string(sk).substr(0, 4), {{"sampling", "differential"}, {"s_k", sk}}});
+        methods.push_back(
+            {"differential s_k " + std::to_string(sk).substr(0, 4), {{"sampling", "differential"}, {"s_k", sk}}});
       methods.push_back({"uniform 0.5 + adaptive", {{"step", 0.5 * vol->spacing.x}, {"adaptive", true}}});
-      methods.push_back({"differential 2 + adaptive", {{"sampling", "differential"}, {"s_k", 2.0}, {"adaptive", true}}});
+      methods.push_back(
+          {"differential 2 + adaptive", {{"sampling", "differential"}, {"s_k", 2.0}, {"adaptive", true}}});
       // Lee Table 1 style: tricubic at step 1 with 0, 3 or 7 virtual samples against step 1/4.
-      for (const auto& [name, step, vs] : {std::tuple{"tricubic x1", 1.0, 0}, std::tuple{"tricubic x4", 0.25, 0},
-                                           std::tuple{"tricubic x1 + vs3", 1.0, 3}, std::tuple{"tricubic x1 + vs7", 1.0, 7}})
+      for (const auto& [name, step, vs] :
+           {std::tuple{"tricubic x1", 1.0, 0}, std::tuple{"tricubic x4", 0.25, 0},
+            std::tuple{"tricubic x1 + vs3", 1.0, 3}, std::tuple{"tricubic x1 + vs7", 1.0, 7}})
         methods.push_back({name, {{"filter", "tricubic"}, {"step", step * vol->spacing.x}, {"virtual_samples", vs}}});
       for (const auto& [name, render] : methods) {
         nlohmann::json jm = jv;
         jm["render"].update(render);
         const ResolvedScene s = resolve_scene(parse_scene(jm), *vol);
         const Timed t = time_render(gv, s);
-        std::printf("%-16s %-5s %-26s %9.2f %8.1f %9.2f\n", vol->name.c_str(), view, name.c_str(), t.ms, t.spr,
-                    reference::compare(t.img, s.scene.render.filter == Filter::Tricubic ? conv_cubic.image : conv.image).psnr);
+        std::printf(
+            "%-16s %-5s %-26s %9.2f %8.1f %9.2f\n", vol->name.c_str(), view, name.c_str(), t.ms, t.spr,
+            reference::compare(t.img, s.scene.render.filter == Filter::Tricubic ? conv_cubic.image : conv.image).psnr);
         std::fflush(stdout);
       }
       // Interactive frames are rendered at half size (quality.interactive_scale): a differential
@@ -97,8 +106,8 @@ int run_sampling_bench(const SamplingBenchArgs& a) {
       // alternative: uniform sampling at the step that costs the same (visited samples matched).
       nlohmann::json jh = jv;
       jh["image"] = {{"width", a.size / 2}, {"height", a.size / 2}};
-      const auto conv_half = reference::render_converged(*vol, resolve_scene(parse_scene(jh), *vol),
-                                                         reference::OpticalModel::Dvr, 1e-4);
+      const auto conv_half =
+          reference::render_converged(*vol, resolve_scene(parse_scene(jh), *vol), reference::OpticalModel::Dvr, 1e-4);
       for (double sk : {4.0, 1.0, 0.25}) {
         nlohmann::json jd = jh;
         jd["render"].update({{"sampling", "differential"}, {"s_k", sk}});
@@ -112,16 +121,18 @@ int run_sampling_bench(const SamplingBenchArgs& a) {
           if (std::abs(u.spr / d.spr - 1.0) < 0.02) break;
           step *= u.spr / d.spr;
         }
-        std::printf("%-16s %-5s interactive %3d^2: differential s_k %.2f %6.2f ms %6.1f spr %6.2f dB | uniform step "
-                    "%.3f %6.2f ms %6.1f spr %6.2f dB\n",
-                    vol->name.c_str(), view, a.size / 2, sk, d.ms, d.spr, reference::compare(d.img, conv_half.image).psnr,
-                    step, u.ms, u.spr, reference::compare(u.img, conv_half.image).psnr);
+        std::printf(
+            "%-16s %-5s interactive %3d^2: differential s_k %.2f %6.2f ms %6.1f spr %6.2f dB | uniform step "
+            "%.3f %6.2f ms %6.1f spr %6.2f dB\n",
+            vol->name.c_str(), view, a.size / 2, sk, d.ms, d.spr, reference::compare(d.img, conv_half.image).psnr, step,
+            u.ms, u.spr, reference::compare(u.img, conv_half.image).psnr);
         std::fflush(stdout);
       }
     }
   }
-  std::printf("spr: samples (filter evaluations) per ray; PSNR against the converged DVR image (CPU, double) of the same "
-              "scene and filter\n");
+  std::printf(
+      "spr: samples (filter evaluations) per ray; PSNR against the converged DVR image (CPU, double) of the same "
+      "scene and filter\n");
   return 0;
 }
 
@@ -129,8 +140,9 @@ int run_sampling_bench(const SamplingBenchArgs& a) {
 
 void add_sampling_command(CLI::App& bench, Runner& run) {
   auto a = std::make_shared<SamplingBenchArgs>();
-  auto* s = bench.add_subcommand("sampling", "Knoll Table 2 style: uniform vs differential (and adaptive) sampling, "
-                                             "frame time and PSNR against the converged image, close and far views");
+  auto* s = bench.add_subcommand("sampling",
+                                 "Knoll Table 2 style: uniform vs differential (and adaptive) sampling, "
+                                 "frame time and PSNR against the converged image, close and far views");
   s->add_option("volumes", a->volumes, "volume files")->required();
   s->add_option("--size", a->size, "square image size");
   s->add_option("--frames", a->frames, "timed frames per case (after one warm-up)");

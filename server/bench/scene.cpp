@@ -115,7 +115,8 @@ int run_scene_bench(const SceneBenchArgs& a) {
                       {"gpu_volume_ms", upload_total_ms},
                       {"first_frame_ms", first_frame_ms},
                       {"load_to_first_frame_ms", load_ms + upload_total_ms + first_frame_ms},
-                      {"renderer", b.description()}, {"backend", render::to_string(b.backend)}};
+                      {"renderer", b.description()},
+                      {"backend", render::to_string(b.backend)}};
   if (!gpu_ms.empty()) j["gpu_ms_median"] = median(gpu_ms);
   if (a.bare) {
     j["bare_ms"] = median(bare_ms);
@@ -127,18 +128,21 @@ int run_scene_bench(const SceneBenchArgs& a) {
   }
   std::printf("renderer: %s\nscene: %s (%dx%d, step %.4g, variant %s)\n", b.description().c_str(), a.scene.c_str(),
               ls.scene.scene.width, ls.scene.scene.height, ls.scene.step, st.variant.c_str());
-  std::printf("load %.0f ms (file, range, histogram), upload %.0f ms, macrocells %.0f ms, first frame %.0f ms "
-              "(shader compile included): load to first frame %.0f ms\n",
-              load_ms, gv.upload_ms(), gv.macrocell_ms(), first_frame_ms, load_ms + upload_total_ms + first_frame_ms);
-  std::printf("%d frames over a %.0f-degree orbit after %d warm-up: frame ms median %.1f min %.1f max %.1f; "
-              "render ms median %.1f%s; samples per ray %.1f, %.2f G samples/s\n",
-              n, a.orbit, a.warmup, median(frame_ms), *mn, *mx, median(render_ms),
-              gpu_ms.empty() ? "" : (", GPU ms median " + std::to_string(median(gpu_ms))).c_str(), samples_per_ray,
-              gsamples_per_s);
+  std::printf(
+      "load %.0f ms (file, range, histogram), upload %.0f ms, macrocells %.0f ms, first frame %.0f ms "
+      "(shader compile included): load to first frame %.0f ms\n",
+      load_ms, gv.upload_ms(), gv.macrocell_ms(), first_frame_ms, load_ms + upload_total_ms + first_frame_ms);
+  std::printf(
+      "%d frames over a %.0f-degree orbit after %d warm-up: frame ms median %.1f min %.1f max %.1f; "
+      "render ms median %.1f%s; samples per ray %.1f, %.2f G samples/s\n",
+      n, a.orbit, a.warmup, median(frame_ms), *mn, *mx, median(render_ms),
+      gpu_ms.empty() ? "" : (", GPU ms median " + std::to_string(median(gpu_ms))).c_str(), samples_per_ray,
+      gsamples_per_s);
   if (a.bare)
-    std::printf("bare sampling loop (same rays and samples, no TF, no compositing, no traversal): %.1f ms against "
-                "%.1f ms for the full ray caster (float output): ratio %.2f\n",
-                median(bare_ms), median(full_ms), median(full_ms) / median(bare_ms));
+    std::printf(
+        "bare sampling loop (same rays and samples, no TF, no compositing, no traversal): %.1f ms against "
+        "%.1f ms for the full ray caster (float output): ratio %.2f\n",
+        median(bare_ms), median(full_ms), median(full_ms) / median(bare_ms));
   return 0;
 }
 

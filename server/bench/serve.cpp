@@ -37,19 +37,24 @@ struct Samples {
 class BenchClient : public std::enable_shared_from_this<BenchClient> {
  public:
   BenchClient(asio::io_context& ioc, uint16_t port, int size, int index, Samples& out, Clock::time_point end)
-      : ws_(asio::make_strand(ioc)), timer_(ws_.get_executor()), port_(port), size_(size), index_(index), out_(out),
+      : ws_(asio::make_strand(ioc)),
+        timer_(ws_.get_executor()),
+        port_(port),
+        size_(size),
+        index_(index),
+        out_(out),
         end_(end) {}
 
   void start() {
     auto self = shared_from_this();
-    beast::get_lowest_layer(ws_).async_connect(tcp::endpoint(asio::ip::make_address("127.0.0.1"), port_),
-                                               [self](beast::error_code ec) {
-                                                 if (ec) return fail(ec, "bench connect");
-                                                 self->ws_.async_handshake("127.0.0.1", "/ws", [self](beast::error_code ec2) {
-                                                   if (ec2) return fail(ec2, "bench handshake");
-                                                   self->hello();
-                                                 });
-                                               });
+    beast::get_lowest_layer(ws_).async_connect(
+        tcp::endpoint(asio::ip::make_address("127.0.0.1"), port_), [self](beast::error_code ec) {
+          if (ec) return fail(ec, "bench connect");
+          self->ws_.async_handshake("127.0.0.1", "/ws", [self](beast::error_code ec2) {
+            if (ec2) return fail(ec2, "bench handshake");
+            self->hello();
+          });
+        });
   }
 
  private:
@@ -81,9 +86,10 @@ class BenchClient : public std::enable_shared_from_this<BenchClient> {
     if (std::fmod(t, 1.5) < 1.0 && center_ready_) {
       angle_ += 2 * M_PI / 90.0;  // a full turn every 3 s of motion
       const glm::dvec3 eye = center_ + radius_ * glm::dvec3(std::sin(angle_), 0.0, std::cos(angle_));
-      send(nlohmann::json{{"type", "camera"},
-                          {"camera", {{"eye", {eye.x, eye.y, eye.z}}, {"center", {center_.x, center_.y, center_.z}},
-                                      {"up", {0, 1, 0}}}}}
+      send(nlohmann::json{
+          {"type", "camera"},
+          {"camera",
+           {{"eye", {eye.x, eye.y, eye.z}}, {"center", {center_.x, center_.y, center_.z}}, {"up", {0, 1, 0}}}}}
                .dump());
       sent_[++version_] = Clock::now();
     }
@@ -158,7 +164,8 @@ struct ServeBenchArgs {
 
 void add_serve_command(CLI::App& bench, Runner& run) {
   auto a = std::make_shared<ServeBenchArgs>();
-  auto* sv = bench.add_subcommand("serve", "Loopback clients orbiting at 30 Hz against an in-process server (blobs 256^3)");
+  auto* sv =
+      bench.add_subcommand("serve", "Loopback clients orbiting at 30 Hz against an in-process server (blobs 256^3)");
   sv->add_option("--clients", a->clients, "client counts to run, one after the other")->delimiter(',');
   sv->add_option("--seconds", a->seconds, "duration per client count");
   sv->add_option("--size", a->size, "square viewport in pixels");
@@ -188,25 +195,30 @@ void add_serve_command(CLI::App& bench, Runner& run) {
         getrusage(RUSAGE_SELF, &before);
         Samples samples;
         asio::io_context ioc;
-        const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(a->seconds));
-        for (int i = 0; i < n; ++i) std::make_shared<BenchClient>(ioc, server.port(), a->size, i, samples, end)->start();
+        const auto end =
+            Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(a->seconds));
+        for (int i = 0; i < n; ++i)
+          std::make_shared<BenchClient>(ioc, server.port(), a->size, i, samples, end)->start();
         ioc.run();
         rusage after{};
         getrusage(RUSAGE_SELF, &after);
-        const double cpu = double(after.ru_utime.tv_sec - before.ru_utime.tv_sec + after.ru_stime.tv_sec -
-                                  before.ru_stime.tv_sec) +
-                           double(after.ru_utime.tv_usec - before.ru_utime.tv_usec + after.ru_stime.tv_usec -
-                                  before.ru_stime.tv_usec) / 1e6;
+        const double cpu =
+            double(after.ru_utime.tv_sec - before.ru_utime.tv_sec + after.ru_stime.tv_sec - before.ru_stime.tv_sec) +
+            double(after.ru_utime.tv_usec - before.ru_utime.tv_usec + after.ru_stime.tv_usec -
+                   before.ru_stime.tv_usec) /
+                1e6;
         std::printf("%7d %9.1f %9.1f %9.1f %9.1f %10.2f %11.0f %11.2f %9.1f %8.0f\n", n,
                     percentile(samples.interactive_ms, 0.5), percentile(samples.interactive_ms, 0.95),
                     percentile(samples.final_ms, 0.5), percentile(samples.final_ms, 0.95),
-                    double(samples.frames) / a->seconds / n, samples.frames ? double(samples.bytes) / samples.frames : 0.0,
+                    double(samples.frames) / a->seconds / n,
+                    samples.frames ? double(samples.bytes) / samples.frames : 0.0,
                     percentile(samples.encode_ms_per_mp, 0.5), cpu, double(after.ru_maxrss) / 1024.0);
         std::fflush(stdout);
         server.stop();
       }
-      std::printf("latency: camera event sent -> frame received (ms), interactive and final (still) frames;\n"
-                  "cpu_s: process CPU seconds (server + clients) during the run; rss: peak of the process\n");
+      std::printf(
+          "latency: camera event sent -> frame received (ms), interactive and final (still) frames;\n"
+          "cpu_s: process CPU seconds (server + clients) during the run; rss: peak of the process\n");
       return 0;
     };
   });

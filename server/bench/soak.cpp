@@ -53,7 +53,8 @@ struct SoakArgs {
 
 int run_soak(const SoakArgs& a) {
   if (a.clients < 4 || a.clients > 24) {
-    std::fprintf(stderr, "bench soak: --clients must be 4..24 (all connect from 127.0.0.1, which may hold %d connections)\n",
+    std::fprintf(stderr,
+                 "bench soak: --clients must be 4..24 (all connect from 127.0.0.1, which may hold %d connections)\n",
                  limits::kMaxConnectionsPerAddress);
     return kExitBadInput;
   }
@@ -79,9 +80,10 @@ int run_soak(const SoakArgs& a) {
   server.start();
   const uint16_t port = server.port();
   const int steady = a.clients - 1;  // viewers + the non-acking client; the vanisher comes and goes
-  std::printf("bench soak: %d clients (%d viewers at 60 Hz, 1 never acks, 1 vanishes and returns, stills in bursts of %zu "
-              "every %.0f s) for %.0f s, windows of %.0f s\n",
-              a.clients + 1, a.clients - 2, cfg.max_queued_stills + 2, a.burst_every, a.seconds, a.window);
+  std::printf(
+      "bench soak: %d clients (%d viewers at 60 Hz, 1 never acks, 1 vanishes and returns, stills in bursts of %zu "
+      "every %.0f s) for %.0f s, windows of %.0f s\n",
+      a.clients + 1, a.clients - 2, cfg.max_queued_stills + 2, a.burst_every, a.seconds, a.window);
   std::fflush(stdout);
 
   SoakStats stats;
@@ -90,7 +92,9 @@ int run_soak(const SoakArgs& a) {
   const auto end = stats.start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(a.seconds));
   asio::io_context ioc;
   for (int i = 0; i < a.clients; ++i) {
-    const SoakClientKind k = i == 0 ? SoakClientKind::NoAck : i == 1 ? SoakClientKind::Vanisher : SoakClientKind::Viewer;
+    const SoakClientKind k = i == 0   ? SoakClientKind::NoAck
+                             : i == 1 ? SoakClientKind::Vanisher
+                                      : SoakClientKind::Viewer;
     start_soak_client(ioc, port, k, a.size, 1234u + unsigned(i), stats, end);
   }
   std::thread clients([&] { ioc.run(); });
@@ -117,12 +121,15 @@ int run_soak(const SoakArgs& a) {
       std::this_thread::sleep_for(std::chrono::milliseconds(250));
     }
   });
-  const std::string scene = json{{"volume", vol.stem().string()}, {"image", {{"width", 384}, {"height", 384}}},
-                                 {"render", {{"step", 0.25}, {"shading", true}}}}.dump();
+  const std::string scene = json{{"volume", vol.stem().string()},
+                                 {"image", {{"width", 384}, {"height", 384}}},
+                                 {"render", {{"step", 0.25}, {"shading", true}}}}
+                                .dump();
   std::vector<double> rss_at_window;
   std::thread stills([&] {
     auto next_burst = Clock::now() + std::chrono::seconds(2);
-    auto next_window = stats.start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(a.window));
+    auto next_window =
+        stats.start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(a.window));
     while (Clock::now() < end) {
       if (Clock::now() >= next_window) {
         rss_at_window.push_back(rss_mib());
@@ -143,11 +150,13 @@ int run_soak(const SoakArgs& a) {
               if (r.ms > 1000) still.slow_refusals++;
             } else {
               still.failed++;
-              if (still.first_failure.empty()) still.first_failure = std::to_string(r.status) + " " + r.body.substr(0, 200);
+              if (still.first_failure.empty())
+                still.first_failure = std::to_string(r.status) + " " + r.body.substr(0, 200);
             }
           });
         for (auto& t : burst) t.join();
-        next_burst = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(a.burst_every));
+        next_burst =
+            Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(a.burst_every));
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
@@ -176,7 +185,8 @@ int run_soak(const SoakArgs& a) {
                 w < rss_at_window.size() ? rss_at_window[w] : rss_end);
   }
   std::printf("messages sent %llu, frames %llu, answers %llu of %llu expected\n", (unsigned long long)stats.sent,
-              (unsigned long long)stats.frames, (unsigned long long)stats.answers, (unsigned long long)stats.expected_answers);
+              (unsigned long long)stats.frames, (unsigned long long)stats.answers,
+              (unsigned long long)stats.expected_answers);
   check(stats.answers == stats.expected_answers && stats.unexpected_errors == 0,
         "every ping and stroke answered; unexpected errors: " + std::to_string(stats.unexpected_errors) +
             (stats.first_unexpected.empty() ? "" : " (" + stats.first_unexpected + ")"));
@@ -184,7 +194,8 @@ int run_soak(const SoakArgs& a) {
         "steady sessions kept: at least " + std::to_string(still.min_sessions) + " live throughout, of " +
             std::to_string(steady) + " (+ the vanisher), lost " + std::to_string(stats.lost_sessions));
   check(sessions_after == 0, "every session released after " + std::to_string(stats.vanished) +
-                                 " vanished connections and the clients' close: " + std::to_string(sessions_after) + " left");
+                                 " vanished connections and the clients' close: " + std::to_string(sessions_after) +
+                                 " left");
   check(stats.noack_frames == uint64_t(limits::kMaxFramesInFlight),
         "the non-acking client got " + std::to_string(stats.noack_frames) + " frames (at most " +
             std::to_string(limits::kMaxFramesInFlight) + " in flight)");
@@ -199,10 +210,11 @@ int run_soak(const SoakArgs& a) {
   std::snprintf(line, sizeof line, "camera -> frame p95: first window %.1f ms, worst later window %.2fx (bound %.2fx)",
                 p95.empty() ? NAN : p95[0], worst, a.max_p95_ratio);
   check(!p95.empty() && stats.latency_ms[0].size() >= 20 && worst <= a.max_p95_ratio, line);
-  std::snprintf(line, sizeof line,
-                "stills: %llu rendered (slowest %.0f ms), %llu refused with 503 (slowest answer %.0f ms), %llu failed%s",
-                (unsigned long long)still.ok, still.max_ok_ms, (unsigned long long)still.refused, still.max_refusal_ms,
-                (unsigned long long)still.failed, still.first_failure.empty() ? "" : (": " + still.first_failure).c_str());
+  std::snprintf(
+      line, sizeof line,
+      "stills: %llu rendered (slowest %.0f ms), %llu refused with 503 (slowest answer %.0f ms), %llu failed%s",
+      (unsigned long long)still.ok, still.max_ok_ms, (unsigned long long)still.refused, still.max_refusal_ms,
+      (unsigned long long)still.failed, still.first_failure.empty() ? "" : (": " + still.first_failure).c_str());
   check(still.failed == 0 && still.slow_refusals == 0 && still.ok > 0 && still.refused > 0, line);
   std::snprintf(line, sizeof line, "still queue: at most %zu waiting or rendering over %llu health checks (bound %zu)",
                 still.max_queued, (unsigned long long)still.checks, cfg.max_queued_stills);
@@ -215,9 +227,11 @@ int run_soak(const SoakArgs& a) {
 
 void add_soak_command(CLI::App& bench, Runner& run) {
   auto a = std::make_shared<SoakArgs>();
-  auto* s = bench.add_subcommand("soak", "Long run of random, careless and hostile clients against an in-process server; "
-                                         "checks answers, sessions, memory, latency and the still queue");
-  s->add_option("--clients", a->clients, "WebSocket clients (4..24): 1 never acks, 1 vanishes and returns, the rest view");
+  auto* s = bench.add_subcommand("soak",
+                                 "Long run of random, careless and hostile clients against an in-process server; "
+                                 "checks answers, sessions, memory, latency and the still queue");
+  s->add_option("--clients", a->clients,
+                "WebSocket clients (4..24): 1 never acks, 1 vanishes and returns, the rest view");
   s->add_option("--seconds", a->seconds, "duration");
   s->add_option("--window", a->window, "length of a latency/RSS window in seconds; the first is the warm-up");
   s->add_option("--size", a->size, "square viewport of each client in pixels");

@@ -18,14 +18,13 @@ using Clock = SoakClock;
 using Kind = SoakClientKind;
 
 void SoakStats::latency(SoakClock::time_point sent_at, SoakClock::time_point now) {
-    const size_t w = size_t(std::chrono::duration<double>(sent_at - start).count() / window_s);
-    std::lock_guard lock(m);
-    if (latency_ms.size() <= w) latency_ms.resize(w + 1);
-    latency_ms[w].push_back(ms_between(sent_at, now));
+  const size_t w = size_t(std::chrono::duration<double>(sent_at - start).count() / window_s);
+  std::lock_guard lock(m);
+  if (latency_ms.size() <= w) latency_ms.resize(w + 1);
+  latency_ms[w].push_back(ms_between(sent_at, now));
 }
 
 namespace {
-
 
 // One WebSocket client. Viewers and the non-acking client run until `end`; the vanisher
 // reconnects after each abrupt close until `end`.
@@ -33,21 +32,28 @@ class SoakClient : public std::enable_shared_from_this<SoakClient> {
  public:
   SoakClient(asio::io_context& ioc, uint16_t port, Kind kind, int size, unsigned seed, SoakStats& out,
              Clock::time_point end)
-      : ioc_(ioc), ws_(std::make_unique<Ws>(asio::make_strand(ioc))), timer_(ioc), port_(port), kind_(kind),
-        size_(size), rng_(seed), out_(out), end_(end) {}
+      : ioc_(ioc),
+        ws_(std::make_unique<Ws>(asio::make_strand(ioc))),
+        timer_(ioc),
+        port_(port),
+        kind_(kind),
+        size_(size),
+        rng_(seed),
+        out_(out),
+        end_(end) {}
 
   void start() {
     auto self = shared_from_this();
-    beast::get_lowest_layer(*ws_).async_connect(tcp::endpoint(asio::ip::make_address("127.0.0.1"), port_),
-                                                [self](beast::error_code ec) {
-                                                  if (ec) return self->lost("connect: " + ec.message());
-                                                  self->ws_->async_handshake("127.0.0.1", "/ws", [self](beast::error_code e) {
-                                                    if (e) return self->lost("handshake: " + e.message());
-                                                    self->send(json{{"type", "hello"}, {"viewport", {{"width", self->size_}, {"height", self->size_}}}}.dump());
-                                                    self->read();
-                                                    self->tick();
-                                                  });
-                                                });
+    beast::get_lowest_layer(*ws_).async_connect(
+        tcp::endpoint(asio::ip::make_address("127.0.0.1"), port_), [self](beast::error_code ec) {
+          if (ec) return self->lost("connect: " + ec.message());
+          self->ws_->async_handshake("127.0.0.1", "/ws", [self](beast::error_code e) {
+            if (e) return self->lost("handshake: " + e.message());
+            self->send(json{{"type", "hello"}, {"viewport", {{"width", self->size_}, {"height", self->size_}}}}.dump());
+            self->read();
+            self->tick();
+          });
+        });
   }
 
  private:
@@ -69,11 +75,12 @@ class SoakClient : public std::enable_shared_from_this<SoakClient> {
   }
   void write() {
     ws_->text(true);
-    ws_->async_write(asio::buffer(queue_.front()), [self = shared_from_this(), gen = gen_](beast::error_code ec, std::size_t) {
-      if (ec || gen != self->gen_) return;
-      self->queue_.pop_front();
-      if (!self->queue_.empty()) self->write();
-    });
+    ws_->async_write(asio::buffer(queue_.front()),
+                     [self = shared_from_this(), gen = gen_](beast::error_code ec, std::size_t) {
+                       if (ec || gen != self->gen_) return;
+                       self->queue_.pop_front();
+                       if (!self->queue_.empty()) self->write();
+                     });
   }
   void tick() {
     const auto now = Clock::now();
@@ -108,7 +115,8 @@ class SoakClient : public std::enable_shared_from_this<SoakClient> {
       self->buffer_.clear();
       self->closing_ = self->welcomed_ = false;
       self->strokes_ = 0;  // a new session has no ray texture
-      self->vanish_at_ = Clock::now() + std::chrono::milliseconds(std::uniform_int_distribution<int>(100, 800)(self->rng_));
+      self->vanish_at_ =
+          Clock::now() + std::chrono::milliseconds(std::uniform_int_distribution<int>(100, 800)(self->rng_));
       self->start();
     });
   }
@@ -119,17 +127,22 @@ class SoakClient : public std::enable_shared_from_this<SoakClient> {
       angle_ += u(rng_) * 0.2 - 0.05;
       const double e[3] = {center_[0] + radius_ * std::sin(angle_), center_[1] + 0.2 * radius_ * std::sin(3 * angle_),
                            center_[2] + radius_ * std::cos(angle_)};
-      send(json{{"type", "camera"},
-                {"camera", {{"eye", {e[0], e[1], e[2]}}, {"center", center_}, {"up", {0, 1, 0}}}}}.dump());
+      send(json{{"type", "camera"}, {"camera", {{"eye", {e[0], e[1], e[2]}}, {"center", center_}, {"up", {0, 1, 0}}}}}
+               .dump());
       sent_[++camera_version_] = now;
     } else if (r < 0.75) {
       const double a = u(rng_);
-      send(json{{"type", "tf"}, {"version", ++tf_version_},
-                {"tf", {{"points", {{lo_, 0, 0, 0, 0}, {lo_ + (hi_ - lo_) * (0.2 + 0.6 * u(rng_)), 1, 0.5, 0.2, a}, {hi_, 1, 1, 1, a}}}}}}
+      send(json{
+          {"type", "tf"},
+          {"version", ++tf_version_},
+          {"tf",
+           {{"points",
+             {{lo_, 0, 0, 0, 0}, {lo_ + (hi_ - lo_) * (0.2 + 0.6 * u(rng_)), 1, 0.5, 0.2, a}, {hi_, 1, 1, 1, a}}}}}}
                .dump());
     } else if (r < 0.85) {
-      static const json patches[] = {{{"shading", true}}, {{"shading", false}}, {{"filter", "tricubic"}},
-                                     {{"filter", "trilinear"}}, {{"classification", "peaks"}}, {{"classification", "post"}}};
+      static const json patches[] = {{{"shading", true}},           {{"shading", false}},
+                                     {{"filter", "tricubic"}},      {{"filter", "trilinear"}},
+                                     {{"classification", "peaks"}}, {{"classification", "post"}}};
       send(json{{"type", "render"}, {"render", patches[std::uniform_int_distribution<size_t>(0, 5)(rng_)]}}.dump());
     } else if (r < 0.95) {
       send(json{{"type", "ping"}, {"id", "p" + std::to_string(++pings_)}}.dump());
@@ -138,11 +151,18 @@ class SoakClient : public std::enable_shared_from_this<SoakClient> {
       // A ray-texture stroke (proto/messages.md), answered by a stroke_ack; the first one sets
       // up a view-aligned texture on this connection.
       if (strokes_ == 0)
-        send(json{{"type", "render"}, {"render", {{"ray_texture", {{"mapping", "view"}, {"size", {128, 128}}}}}}}.dump());
+        send(json{{"type", "render"}, {"render", {{"ray_texture", {{"mapping", "view"}, {"size", {128, 128}}}}}}}
+                 .dump());
       send(json{{"type", "stroke"},
                 {"seq", ++strokes_},
-                {"stroke", {{"channel", "step"}, {"center", {u(rng_), u(rng_)}}, {"radius", 0.05}, {"falloff", 0.5},
-                            {"value", 2.0}, {"mode", "set"}, {"level", strokes_ % 3}}}}
+                {"stroke",
+                 {{"channel", "step"},
+                  {"center", {u(rng_), u(rng_)}},
+                  {"radius", 0.05},
+                  {"falloff", 0.5},
+                  {"value", 2.0},
+                  {"mode", "set"},
+                  {"level", strokes_ % 3}}}}
                .dump());
       expect();
     }
@@ -225,7 +245,7 @@ class SoakClient : public std::enable_shared_from_this<SoakClient> {
   uint32_t camera_version_ = 1, tf_version_ = 1;
   uint64_t pings_ = 0;
   uint32_t strokes_ = 0;  // on this connection's ray texture
-  unsigned gen_ = 0;  // connection number: handlers of a vanished connection do nothing
+  unsigned gen_ = 0;      // connection number: handlers of a vanished connection do nothing
   std::map<uint32_t, Clock::time_point> sent_;
 };
 

@@ -44,7 +44,8 @@ int run_stream(const StreamArgs& a) {
   if (std::sscanf(a.size.c_str(), "%dx%d", &w, &h) != 2 || w < 16 || h < 16 || w % 2 || h % 2)
     throw std::invalid_argument("--size: WxH, even, at least 16x16 (got '" + a.size + "')");
   const auto video = encode::video_codec_from_name(a.codec);
-  if (a.codec != "jpeg" && !video) throw std::invalid_argument("--codec: jpeg, h264, vp9 or av1 (got '" + a.codec + "')");
+  if (a.codec != "jpeg" && !video)
+    throw std::invalid_argument("--codec: jpeg, h264, vp9 or av1 (got '" + a.codec + "')");
   if (video && !encode::codec_available(a.codec))
     throw std::invalid_argument("--codec " + a.codec + ": this build cannot encode it");
   const int frames = std::max(1, int(std::lround(a.fps * a.seconds)));
@@ -115,21 +116,31 @@ int run_stream(const StreamArgs& a) {
   for (double d : db) mean_db += d / double(db.size());
   const double mbps = double(bytes) * 8.0 / (frames / a.fps) / 1e6;
   if (a.json) {
-    nlohmann::json j = {{"codec", a.codec},       {"encoder", encoder},          {"mbps", mbps},
-                        {"psnr_db", mean_db},     {"psnr_db_min", *std::min_element(db.begin(), db.end())},
+    nlohmann::json j = {{"codec", a.codec},
+                        {"encoder", encoder},
+                        {"mbps", mbps},
+                        {"psnr_db", mean_db},
+                        {"psnr_db_min", *std::min_element(db.begin(), db.end())},
                         {"encode_ms", median(encode_ms)},
                         {"encode_ms_max", *std::max_element(encode_ms.begin(), encode_ms.end())},
-                        {"fps", a.fps},           {"frames", frames},            {"width", w},
-                        {"height", h},            {"kbps", video ? a.kbps : 0},  {"quality", a.quality},
-                        {"delay_frames", 0},      {"encoder_options", a.encoder_options},
+                        {"fps", a.fps},
+                        {"frames", frames},
+                        {"width", w},
+                        {"height", h},
+                        {"kbps", video ? a.kbps : 0},
+                        {"quality", a.quality},
+                        {"delay_frames", 0},
+                        {"encoder_options", a.encoder_options},
                         {"passes", a.passes}};
     std::printf("%s\n", j.dump().c_str());
   } else {
     std::printf("%s (%s) %dx%d, %d frames at %.0f frames/s over a %.0f-degree orbit (rendered in %.1f s)\n",
                 a.codec.c_str(), encoder.c_str(), w, h, frames, a.fps, a.orbit_deg_per_s * frames / a.fps, render_s);
-    std::printf("  %.2f Mbit/s, PSNR %.2f dB (min %.2f), encode %.2f ms per frame (median; max %.2f; %d pass%s), delay 0 frames\n",
-                mbps, mean_db, *std::min_element(db.begin(), db.end()), median(encode_ms),
-                *std::max_element(encode_ms.begin(), encode_ms.end()), a.passes, a.passes == 1 ? "" : "es");
+    std::printf(
+        "  %.2f Mbit/s, PSNR %.2f dB (min %.2f), encode %.2f ms per frame (median; max %.2f; %d pass%s), delay 0 "
+        "frames\n",
+        mbps, mean_db, *std::min_element(db.begin(), db.end()), median(encode_ms),
+        *std::max_element(encode_ms.begin(), encode_ms.end()), a.passes, a.passes == 1 ? "" : "es");
   }
   return 0;
 }
@@ -147,8 +158,9 @@ void add_stream_command(CLI::App& bench, Runner& run) {
   c->add_option("--kbps", args->kbps, "video bit-rate ceiling (kbit/s)")->check(CLI::Range(100, 200000));
   c->add_option("--quality", args->quality, "JPEG quality, or the video CRF it maps onto (10..100)")
       ->check(CLI::Range(10, 100));
-  c->add_option("--encoder-options", args->encoder_options,
-                 "the video encoder's own options over peakcast's: \"key=value;key=value\" (preset, crf, x264-params, ...)");
+  c->add_option(
+      "--encoder-options", args->encoder_options,
+      "the video encoder's own options over peakcast's: \"key=value;key=value\" (preset, crf, x264-params, ...)");
   c->add_option("--passes", args->passes, "encode the orbit this many times; encode ms is the median over all")
       ->check(CLI::Range(1, 100));
   c->add_option("--orbit", args->orbit_deg_per_s, "degrees per second the camera turns");

@@ -19,8 +19,7 @@ using Bytes = std::vector<uint8_t>;
 void check_size(size_t got, size_t expected, const std::filesystem::path& file) {
   if (got < expected)
     throw VolumeError(file, "truncated chunk: " + std::to_string(got) + " of " + std::to_string(expected) + " bytes");
-  if (got > expected)
-    throw VolumeError(file, "chunk holds more than its " + std::to_string(expected) + " bytes");
+  if (got > expected) throw VolumeError(file, "chunk holds more than its " + std::to_string(expected) + " bytes");
 }
 
 // zlib or gzip (windowBits 15 + 32 detects either). Once `expected` bytes are out, a one-byte
@@ -115,12 +114,16 @@ CompressorSpec parse_compressor(const nlohmann::json& j) {
   const std::string id = j["id"];
   auto num = [&](const char* key, int fallback) {
     if (!j.contains(key)) return fallback;
-    if (!j[key].is_number_integer()) throw std::invalid_argument(std::string("compressor.") + key + " must be an integer");
+    if (!j[key].is_number_integer())
+      throw std::invalid_argument(std::string("compressor.") + key + " must be an integer");
     return j[key].get<int>();
   };
-  if (id == "zlib") s = {Compressor::Zlib, num("level", 1)};
-  else if (id == "gzip") s = {Compressor::Gzip, num("level", 1)};
-  else if (id == "zstd") s = {Compressor::Zstd, num("level", 1)};
+  if (id == "zlib")
+    s = {Compressor::Zlib, num("level", 1)};
+  else if (id == "gzip")
+    s = {Compressor::Gzip, num("level", 1)};
+  else if (id == "zstd")
+    s = {Compressor::Zstd, num("level", 1)};
   else if (id == "blosc") {
     s.id = Compressor::Blosc;
     s.level = num("clevel", 5);
@@ -160,9 +163,7 @@ CompressorSpec compressor_by_name(const std::string& name) {
 
 Bytes decode_chunk(const CompressorSpec& spec, const Bytes& in, size_t expected, const std::filesystem::path& file) {
   switch (spec.id) {
-    case Compressor::None:
-      check_size(in.size(), expected, file);
-      return in;
+    case Compressor::None: check_size(in.size(), expected, file); return in;
     case Compressor::Zlib:
     case Compressor::Gzip: return inflate_bytes(in, expected, file);
     case Compressor::Zstd: return unzstd(in, expected, file);

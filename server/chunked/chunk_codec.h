@@ -16,7 +16,7 @@ enum class Compressor { None, Zlib, Gzip, Zstd, Blosc };
 
 struct CompressorSpec {
   Compressor id = Compressor::None;
-  int level = 5;             // zlib/gzip 1-9, zstd 1-22, blosc 0-9
+  int level = 5;              // zlib/gzip 1-9, zstd 1-22, blosc 0-9
   std::string cname = "lz4";  // blosc's inner codec: blosclz lz4 lz4hc zlib zstd
   int shuffle = 1;            // blosc: 0 none, 1 byte, 2 bit
 };

@@ -21,11 +21,11 @@ std::optional<std::vector<uint8_t>> read_file_if_there(const fs::path& file, int
   const auto size = fs::file_size(file, ec);
   if (ec) throw VolumeError(file, "cannot read its size: " + ec.message());
   if (int64_t(size) > limit)
-    throw VolumeError(file, std::to_string(size) + " bytes is more than this chunk can hold (" + std::to_string(limit) + ")");
+    throw VolumeError(file,
+                      std::to_string(size) + " bytes is more than this chunk can hold (" + std::to_string(limit) + ")");
   std::vector<uint8_t> bytes(size);
   std::ifstream in(file, std::ios::binary);
-  if (!in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(size)))
-    throw VolumeError(file, "cannot be read");
+  if (!in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(size))) throw VolumeError(file, "cannot be read");
   return bytes;
 }
 
@@ -52,7 +52,8 @@ nlohmann::json read_json_file(const fs::path& file) {
 
 fs::path inside(const fs::path& dir, const std::string& rel, const fs::path& meta) {
   const fs::path p(rel);
-  bool ok = !rel.empty() && p.is_relative() && rel.find('\0') == std::string::npos && rel.find('\\') == std::string::npos;
+  bool ok =
+      !rel.empty() && p.is_relative() && rel.find('\0') == std::string::npos && rel.find('\\') == std::string::npos;
   for (const auto& part : p)
     if (part.empty() || part == ".." || part == ".") ok = false;
   if (!ok) throw VolumeError(meta, "path '" + rel + "' must be a relative path inside the volume's folder");

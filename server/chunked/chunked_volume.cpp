@@ -39,8 +39,8 @@ std::unique_ptr<ChunkedVolume> open_chunked(const fs::path& dir, const ChunkSele
 namespace {
 
 // Copies the chunk box `cb` (voxels in `bytes`, or the fill value) into the region box of `dst`.
-void place_chunk(const std::vector<uint8_t>* bytes, const std::vector<uint8_t>& fill, const Dims& clo,
-                 const Dims& chi, const Dims& rlo, const Dims& rhi, size_t bpv, uint8_t* dst) {
+void place_chunk(const std::vector<uint8_t>* bytes, const std::vector<uint8_t>& fill, const Dims& clo, const Dims& chi,
+                 const Dims& rlo, const Dims& rhi, size_t bpv, uint8_t* dst) {
   Dims a{}, b{};
   for (int i = 0; i < 3; ++i) {
     a[i] = std::max(clo[i], rlo[i]);
@@ -63,7 +63,8 @@ void place_chunk(const std::vector<uint8_t>* bytes, const std::vector<uint8_t>& 
 
 // How many chunks may be decoded at once within options.decode_budget_bytes beside the voxels
 // (all cores when there is no budget). Refused before any chunk is read when not even one fits.
-int decoders_within(const ChunkedVolume& cv, int level, const VolumeHeader& h, double chunks, const LoadOptions& options) {
+int decoders_within(const ChunkedVolume& cv, int level, const VolumeHeader& h, double chunks,
+                    const LoadOptions& options) {
   const int most = int(std::min<double>(hardware_threads(), std::max(chunks, 1.0)));
   if (options.decode_budget_bytes <= 0) return most;
   const int64_t one = cv.decoded_chunk_bytes(level);
@@ -105,7 +106,9 @@ int finest_level_within(const ChunkedVolume& cv, int from, int64_t budget_bytes)
 int finest_level_of_voxels(const ChunkedVolume& cv, int from, int64_t voxels) {
   const auto& levels = cv.levels();
   int k = std::max(from, 0);
-  auto count = [&](int l) { return double(levels[size_t(l)].dims[0]) * double(levels[size_t(l)].dims[1]) * double(levels[size_t(l)].dims[2]); };
+  auto count = [&](int l) {
+    return double(levels[size_t(l)].dims[0]) * double(levels[size_t(l)].dims[1]) * double(levels[size_t(l)].dims[2]);
+  };
   while (k + 1 < int(levels.size()) && count(k) > double(voxels)) ++k;
   return k;
 }
@@ -149,24 +152,28 @@ Volume read_level(const ChunkedVolume& cv, int level, const LoadOptions& options
   if (count > double(kMaxChunksPerRead))
     throw VolumeError(cv.root(), "level " + L.name + ": " + std::to_string(int64_t(count)) + " chunks of " +
                                      std::to_string(L.chunk[0]) + "x" + std::to_string(L.chunk[1]) + "x" +
-                                     std::to_string(L.chunk[2]) + " voxels for one read; chunks this small are refused");
+                                     std::to_string(L.chunk[2]) +
+                                     " voxels for one read; chunks this small are refused");
   const int threads = decoders_within(cv, level, h, count, options);
   detail::LoadProgress progress(options, size_t(h.voxel_count()) * bpv);
-  parallel_for(size_t(count), [&](size_t i) {  // rethrows the first refusal
-    const int64_t k = int64_t(i);
-    const Dims c{c0[0] + k % n[0], c0[1] + k / n[0] % n[1], c0[2] + k / (n[0] * n[1])};
-    Dims clo{}, chi{}, rb{};
-    size_t placed = bpv;
-    for (int a = 0; a < 3; ++a) {
-      clo[a] = c[a] * L.chunk[a];
-      chi[a] = std::min(clo[a] + L.chunk[a], L.dims[a]);
-      rb[a] = std::min(chi[a], rhi[a]) - std::max(clo[a], rlo[a]);
-      placed *= size_t(rb[a]);
-    }
-    const auto bytes = cv.read_chunk(level, c);
-    place_chunk(bytes ? &*bytes : nullptr, cv.fill(level), clo, chi, rlo, rhi, bpv, v.data());
-    progress.add(placed);
-  }, threads);
+  parallel_for(
+      size_t(count),
+      [&](size_t i) {  // rethrows the first refusal
+        const int64_t k = int64_t(i);
+        const Dims c{c0[0] + k % n[0], c0[1] + k / n[0] % n[1], c0[2] + k / (n[0] * n[1])};
+        Dims clo{}, chi{}, rb{};
+        size_t placed = bpv;
+        for (int a = 0; a < 3; ++a) {
+          clo[a] = c[a] * L.chunk[a];
+          chi[a] = std::min(clo[a] + L.chunk[a], L.dims[a]);
+          rb[a] = std::min(chi[a], rhi[a]) - std::max(clo[a], rlo[a]);
+          placed *= size_t(rb[a]);
+        }
+        const auto bytes = cv.read_chunk(level, c);
+        place_chunk(bytes ? &*bytes : nullptr, cv.fill(level), clo, chi, rlo, rhi, bpv, v.data());
+        progress.add(placed);
+      },
+      threads);
   detail::finish_volume(cv.root(), v, h.big_endian, local);
   if (options.region) {
     v.source_dims = L.dims;

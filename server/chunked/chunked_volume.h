@@ -27,7 +27,8 @@ struct ChunkLevel {
   glm::dvec3 origin{0.0, 0.0, 0.0};
   std::string name;  // the level's folder, relative to the root (for messages)
   Dims chunk_grid() const {
-    return {(dims[0] + chunk[0] - 1) / chunk[0], (dims[1] + chunk[1] - 1) / chunk[1], (dims[2] + chunk[2] - 1) / chunk[2]};
+    return {(dims[0] + chunk[0] - 1) / chunk[0], (dims[1] + chunk[1] - 1) / chunk[1],
+            (dims[2] + chunk[2] - 1) / chunk[2]};
   }
 };
 

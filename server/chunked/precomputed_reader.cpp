@@ -36,30 +36,38 @@ class PrecomputedVolume : public ChunkedVolume {
     const fs::path file = dir / "info";
     const json info = read_json_file(file);
     if (info.contains("type") && info["type"] != "image")
-      throw VolumeError(file, "type " + info["type"].dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + " is not an image (segmentations are not volumes to render)");
-    const std::string dt = info.contains("data_type") && info["data_type"].is_string() ? info["data_type"].get<std::string>() : "";
-    static const std::pair<const char*, SourceType> kinds[] = {{"uint8", SourceType::U8},   {"int8", SourceType::I8},
-                                                              {"uint16", SourceType::U16}, {"int16", SourceType::I16},
-                                                              {"float32", SourceType::F32}};
+      throw VolumeError(file, "type " + info["type"].dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) +
+                                  " is not an image (segmentations are not volumes to render)");
+    const std::string dt =
+        info.contains("data_type") && info["data_type"].is_string() ? info["data_type"].get<std::string>() : "";
+    static const std::pair<const char*, SourceType> kinds[] = {{"uint8", SourceType::U8},
+                                                               {"int8", SourceType::I8},
+                                                               {"uint16", SourceType::U16},
+                                                               {"int16", SourceType::I16},
+                                                               {"float32", SourceType::F32}};
     bool known = false;
     for (const auto& [name, type] : kinds)
       if (dt == name) source_ = type, known = true;
-    if (!known) throw VolumeError(file, "data_type '" + dt + "' is not supported (uint8, int8, uint16, int16, float32)");
+    if (!known)
+      throw VolumeError(file, "data_type '" + dt + "' is not supported (uint8, int8, uint16, int16, float32)");
     const json nc = info.value("num_channels", json(1));
     if (!nc.is_number_integer() || nc.get<int64_t>() < 1 || nc.get<int64_t>() > 4096)
       throw VolumeError(file, "num_channels must be an integer from 1 to 4096");
     channels_ = nc.get<int64_t>();
     if (select.time != 0) throw VolumeError(file, "a precomputed volume has no time axis");
     if (channel_ < 0 || channel_ >= channels_)
-      throw VolumeError(file, "channel " + std::to_string(channel_) + " is outside 0.." + std::to_string(channels_ - 1));
+      throw VolumeError(file,
+                        "channel " + std::to_string(channel_) + " is outside 0.." + std::to_string(channels_ - 1));
     if (!info.contains("scales") || !info["scales"].is_array() || info["scales"].empty())
       throw VolumeError(file, "scales must be a non-empty list");
     for (const json& s : info["scales"]) {
-      if (!s.is_object() || !s.contains("key") || !s["key"].is_string()) throw VolumeError(file, "every scale needs a \"key\"");
+      if (!s.is_object() || !s.contains("key") || !s["key"].is_string())
+        throw VolumeError(file, "every scale needs a \"key\"");
       if (s.contains("sharding") && !s["sharding"].is_null())
         throw VolumeError(file, "sharded scales are not supported (write the volume unsharded)");
       const std::string enc = s.value("encoding", std::string("raw"));
-      if (enc != "raw") throw VolumeError(file, "encoding '" + enc + "' is not supported (raw, optionally gzip-compressed)");
+      if (enc != "raw")
+        throw VolumeError(file, "encoding '" + enc + "' is not supported (raw, optionally gzip-compressed)");
       const auto size = triple(s, "size", file, true), res = triple(s, "resolution", file, true);
       const auto off = triple(s, "voxel_offset", file, false);
       if (!s.contains("chunk_sizes") || !s["chunk_sizes"].is_array() || s["chunk_sizes"].empty())
@@ -78,7 +86,8 @@ class PrecomputedVolume : public ChunkedVolume {
         L.dims[a] = whole(size[size_t(a)], "size", true);
         L.chunk[a] = whole(chunk[size_t(a)], "chunk_sizes", true);
         offset[a] = whole(off[size_t(a)], "voxel_offset", false);
-        if (!(res[size_t(a)] > 0) || !std::isfinite(res[size_t(a)])) throw VolumeError(file, "resolution must be finite and > 0");
+        if (!(res[size_t(a)] > 0) || !std::isfinite(res[size_t(a)]))
+          throw VolumeError(file, "resolution must be finite and > 0");
         L.spacing[a] = res[size_t(a)];
         L.origin[a] = (double(offset[a]) + 0.5) * res[size_t(a)];  // voxel i spans [i, i+1): its centre
       }

@@ -23,23 +23,18 @@ struct SlabConvertReport {
 
 // The voxel bytes of `in` from its header alone (a one-voxel read), and that header. Throws
 // RegionNotReadable for a format read only whole (a TIFF stack).
-int64_t source_voxel_bytes(const std::filesystem::path& in, const LoadOptions& select,
-                           VolumeHeader* header = nullptr);
+int64_t source_voxel_bytes(const std::filesystem::path& in, const LoadOptions& select, VolumeHeader* header = nullptr);
 
 // Host memory a whole read and write_ome_zarr take for `voxel_bytes`: the volume, the writer's
 // copy of it and the pyramid's coarser levels (1/7 more), rounded up.
-inline int64_t whole_convert_bytes(int64_t voxel_bytes) {
-  return voxel_bytes / 4 * 9;
-}
+inline int64_t whole_convert_bytes(int64_t voxel_bytes) { return voxel_bytes / 4 * 9; }
 
 // Writes `in` (any format with region reads: raw, NRRD, MetaImage, OME-Zarr, precomputed) as
 // OME-Zarr at `out`, reading at most two slabs at a time whose voxels fit `budget_bytes` together
 // (at least one chunk edge of planes each). Throws VolumeError (unreadable input, `out` exists,
 // a TIFF stack) or std::invalid_argument (options).
-SlabConvertReport convert_to_ome_zarr_by_slabs(const std::filesystem::path& in,
-                                               const std::filesystem::path& out,
-                                               const LoadOptions& select,
-                                               const ZarrWriteOptions& options,
+SlabConvertReport convert_to_ome_zarr_by_slabs(const std::filesystem::path& in, const std::filesystem::path& out,
+                                               const LoadOptions& select, const ZarrWriteOptions& options,
                                                int64_t budget_bytes);
 
 }  // namespace peakcast::chunked

@@ -29,10 +29,14 @@ struct ZarrArray {
 
 // "<u2", "|u1", ">f4", ... (numpy's typestr).
 std::pair<SourceType, bool> parse_dtype(const json& j, const fs::path& file) {
-  if (!j.is_string()) throw VolumeError(file, "dtype must be a string like \"<u2\" (structured dtypes are not volumes)");
+  if (!j.is_string())
+    throw VolumeError(file, "dtype must be a string like \"<u2\" (structured dtypes are not volumes)");
   const std::string d = j;
-  static const std::pair<const char*, SourceType> kinds[] = {
-      {"u1", SourceType::U8}, {"i1", SourceType::I8}, {"u2", SourceType::U16}, {"i2", SourceType::I16}, {"f4", SourceType::F32}};
+  static const std::pair<const char*, SourceType> kinds[] = {{"u1", SourceType::U8},
+                                                             {"i1", SourceType::I8},
+                                                             {"u2", SourceType::U16},
+                                                             {"i2", SourceType::I16},
+                                                             {"f4", SourceType::F32}};
   if (d.size() == 3 && (d[0] == '<' || d[0] == '>' || d[0] == '|'))
     for (const auto& [name, type] : kinds)
       if (d.compare(1, 2, name) == 0) return {type, d[0] == '>'};
@@ -49,14 +53,18 @@ std::vector<uint8_t> bytes_of(T value, bool big_endian) {
 
 std::vector<uint8_t> parse_fill(const json& j, SourceType t, bool big, const fs::path& file) {
   double v = 0.0;
-  if (j.is_null()) v = 0.0;  // undefined in zarr v2: read as 0
-  else if (j.is_number()) v = j.get<double>();
+  if (j.is_null())
+    v = 0.0;  // undefined in zarr v2: read as 0
+  else if (j.is_number())
+    v = j.get<double>();
   else if (j.is_string() && t == SourceType::F32 && (j == "NaN" || j == "Infinity" || j == "-Infinity"))
     v = j == "NaN" ? std::numeric_limits<double>::quiet_NaN() : (j == "Infinity" ? 1.0 : -1.0) * HUGE_VAL;
-  else throw VolumeError(file, "fill_value must be a number or null (NaN, Infinity, -Infinity for floats)");
+  else
+    throw VolumeError(file, "fill_value must be a number or null (NaN, Infinity, -Infinity for floats)");
   auto integer = [&](double lo, double hi) {
     if (!(v >= lo && v <= hi) || v != std::floor(v))
-      throw VolumeError(file, "fill_value " + j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + " is not a " + to_string(t) + " value");
+      throw VolumeError(file, "fill_value " + j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) +
+                                  " is not a " + to_string(t) + " value");
     return v;
   };
   switch (t) {
@@ -91,7 +99,8 @@ ZarrArray open_array(const fs::path& dir) {
   if (a.shape.size() != a.chunks.size()) throw VolumeError(file, "shape and chunks differ in length");
   if (!j.contains("dtype")) throw VolumeError(file, "dtype is missing");
   std::tie(a.source, a.big_endian) = parse_dtype(j["dtype"], file);
-  if (j.value("order", std::string("C")) != "C") throw VolumeError(file, "order must be \"C\" (Fortran order is not supported)");
+  if (j.value("order", std::string("C")) != "C")
+    throw VolumeError(file, "order must be \"C\" (Fortran order is not supported)");
   if (j.contains("filters") && !j["filters"].is_null() && !j["filters"].empty())
     throw VolumeError(file, "filters are not supported");
   try {
@@ -101,7 +110,8 @@ ZarrArray open_array(const fs::path& dir) {
   }
   a.fill = parse_fill(j.contains("fill_value") ? j["fill_value"] : json(nullptr), a.source, a.big_endian, file);
   const std::string sep = j.contains("dimension_separator") && j["dimension_separator"].is_string()
-                              ? j["dimension_separator"].get<std::string>() : ".";
+                              ? j["dimension_separator"].get<std::string>()
+                              : ".";
   if (sep != "." && sep != "/") throw VolumeError(file, "dimension_separator must be \".\" or \"/\"");
   a.separator = sep[0];
   std::vector<int64_t> factors = a.chunks;
@@ -120,24 +130,34 @@ std::string axis_roles(const json& ms, size_t ndim, const fs::path& file) {
   if (!ms["axes"].is_array()) throw VolumeError(file, "multiscales.axes must be a list");
   for (const auto& ax : ms["axes"]) {
     const std::string name = ax.is_string() ? ax.get<std::string>()
-                             : ax.is_object() && ax.contains("name") && ax["name"].is_string() ? ax["name"].get<std::string>() : "";
-    const std::string type = ax.is_object() && ax.contains("type") && ax["type"].is_string() ? ax["type"].get<std::string>() : "";
-    if (name == "x" || name == "y" || name == "z") roles += name;
-    else if (type == "time" || name == "t") roles += 't';
-    else if (type == "channel" || name == "c") roles += 'c';
-    else throw VolumeError(file, "axis '" + name + "' is not a time, channel or x/y/z axis");
+                             : ax.is_object() && ax.contains("name") && ax["name"].is_string()
+                                 ? ax["name"].get<std::string>()
+                                 : "";
+    const std::string type =
+        ax.is_object() && ax.contains("type") && ax["type"].is_string() ? ax["type"].get<std::string>() : "";
+    if (name == "x" || name == "y" || name == "z")
+      roles += name;
+    else if (type == "time" || name == "t")
+      roles += 't';
+    else if (type == "channel" || name == "c")
+      roles += 'c';
+    else
+      throw VolumeError(file, "axis '" + name + "' is not a time, channel or x/y/z axis");
   }
   if (roles.size() != ndim)
-    throw VolumeError(file, std::to_string(roles.size()) + " axes for a " + std::to_string(ndim) + "-dimensional array");
+    throw VolumeError(file,
+                      std::to_string(roles.size()) + " axes for a " + std::to_string(ndim) + "-dimensional array");
   const std::string spatial = roles.size() >= 3 ? roles.substr(roles.size() - 3) : "";
   const std::string lead = roles.size() >= 3 ? roles.substr(0, roles.size() - 3) : roles;
   if (spatial != "zyx" || (lead != "" && lead != "t" && lead != "c" && lead != "tc"))
-    throw VolumeError(file, "axes must be [t,] [c,] z, y, x in that order (got " + roles + "); a 2D image is not a volume");
+    throw VolumeError(file,
+                      "axes must be [t,] [c,] z, y, x in that order (got " + roles + "); a 2D image is not a volume");
   return roles;
 }
 
 // A coordinateTransformations list's scale and translation (1 and 0 where absent).
-void transforms(const json& list, size_t ndim, std::vector<double>& scale, std::vector<double>& shift, const fs::path& file) {
+void transforms(const json& list, size_t ndim, std::vector<double>& scale, std::vector<double>& shift,
+                const fs::path& file) {
   if (!list.is_array()) return;
   for (const auto& t : list) {
     const std::string type = t.is_object() ? t.value("type", std::string()) : "";
@@ -148,8 +168,10 @@ void transforms(const json& list, size_t ndim, std::vector<double>& scale, std::
     for (size_t i = 0; i < ndim; ++i) {
       if (!v[i].is_number()) throw VolumeError(file, std::string(key) + " must have one number per axis");
       const double x = v[i].get<double>();
-      if (type == "scale") scale[i] *= x;
-      else shift[i] = shift[i] * 1.0 + x;
+      if (type == "scale")
+        scale[i] *= x;
+      else
+        shift[i] = shift[i] * 1.0 + x;
     }
   }
 }
@@ -184,7 +206,10 @@ class ZarrVolume : public ChunkedVolume {
     for (size_t i = 0; i < paths.size(); ++i) {
       ZarrArray a = open_array(paths[i].empty() ? dir : inside(dir, paths[i], meta));
       const size_t n = a.shape.size();
-      const std::string roles = ms.is_null() ? (n == 3 ? "zyx" : n == 4 ? "czyx" : n == 5 ? "tczyx" : "")
+      const std::string roles = ms.is_null() ? (n == 3   ? "zyx"
+                                                : n == 4 ? "czyx"
+                                                : n == 5 ? "tczyx"
+                                                         : "")
                                              : axis_roles(ms, n, meta);
       if (roles.empty()) throw VolumeError(a.dir / ".zarray", "a bare zarr array must be 3D (z, y, x), 4D or 5D");
       if (i == 0) {
@@ -231,7 +256,8 @@ class ZarrVolume : public ChunkedVolume {
     int64_t block = a.chunks[n - 1] * a.chunks[n - 2] * a.chunks[n - 3];
     for (size_t k = 0; k < n; ++k) {
       int64_t index = 0;
-      if (k >= n - 3) index = c[n - 1 - k];
+      if (k >= n - 3)
+        index = c[n - 1 - k];
       else {
         const int64_t want = roles_[k] == 't' ? select_.time : select_.channel;
         index = want / a.chunks[k];
@@ -257,8 +283,10 @@ class ZarrVolume : public ChunkedVolume {
  private:
   void check_select(const ZarrArray& a, const fs::path& meta) const {
     const bool has_t = roles_.find('t') != std::string::npos, has_c = roles_.find('c') != std::string::npos;
-    if (!has_t && select_.time != 0) throw VolumeError(meta, "the image has no time axis (time point " + std::to_string(select_.time) + ")");
-    if (!has_c && select_.channel != 0) throw VolumeError(meta, "the image has no channel axis (channel " + std::to_string(select_.channel) + ")");
+    if (!has_t && select_.time != 0)
+      throw VolumeError(meta, "the image has no time axis (time point " + std::to_string(select_.time) + ")");
+    if (!has_c && select_.channel != 0)
+      throw VolumeError(meta, "the image has no channel axis (channel " + std::to_string(select_.channel) + ")");
     for (size_t k = 0; k + 3 < roles_.size(); ++k) {
       const int64_t want = roles_[k] == 't' ? select_.time : select_.channel;
       if (want < 0 || want >= a.shape[k])

@@ -39,7 +39,8 @@ void halve(const Dims& in_dims, const uint8_t* in, Level& out) {
           int n = 0;
           for (int64_t k = 2 * z; k < std::min(2 * z + 2, d[2]); ++k)
             for (int64_t j = 2 * y; j < std::min(2 * y + 2, d[1]); ++j)
-              for (int64_t i = 2 * x; i < std::min(2 * x + 2, d[0]); ++i, ++n) sum += double(src[(k * d[1] + j) * d[0] + i]);
+              for (int64_t i = 2 * x; i < std::min(2 * x + 2, d[0]); ++i, ++n)
+                sum += double(src[(k * d[1] + j) * d[0] + i]);
           const double mean = sum / n;
           dst[(z * o[1] + y) * o[0] + x] = std::is_floating_point_v<T> ? T(mean) : T(std::lround(mean));
         }
@@ -107,10 +108,11 @@ ZarrWriteReport write_levels(const fs::path& out, const fs::path& tmp, const Vol
       std::vector<uint8_t> whole(size_t(e[0] * e[1] * e[2]) * bpv, 0);  // zarr stores full chunks: 0-padded
       for (int64_t z = 0; z < box[2]; ++z)
         for (int64_t y = 0; y < box[1]; ++y)
-          std::memcpy(whole.data() + size_t((z * e[1] + y) * e[0]) * bpv, part.data() + size_t((z * box[1] + y) * box[0]) * bpv,
-                      size_t(box[0]) * bpv);
+          std::memcpy(whole.data() + size_t((z * e[1] + y) * e[0]) * bpv,
+                      part.data() + size_t((z * box[1] + y) * box[0]) * bpv, size_t(box[0]) * bpv);
       const auto packed = encode_chunk(options.compressor, whole.data(), whole.size(), bpv);
-      write_file(dir / std::to_string(c[2]) / std::to_string(c[1]) / std::to_string(c[0]), packed.data(), packed.size());
+      write_file(dir / std::to_string(c[2]) / std::to_string(c[1]) / std::to_string(c[0]), packed.data(),
+                 packed.size());
       ++chunks;
       bytes += int64_t(packed.size());
     });
@@ -127,12 +129,13 @@ ZarrWriteReport write_levels(const fs::path& out, const fs::path& tmp, const Vol
   json axes = json::array();
   for (const char* n : {"z", "y", "x"}) axes.push_back({{"name", n}, {"type", "space"}});
   write_json(tmp / ".zgroup", {{"zarr_format", 2}});
-  write_json(tmp / ".zattrs", {{"multiscales", {{{"version", "0.4"},
-                                                 {"name", name},
-                                                 {"axes", axes},
-                                                 {"datasets", datasets},
-                                                 {"type", "mean"},
-                                                 {"metadata", {{"method", "2x2x2 mean, sizes rounded up"}}}}}}});
+  write_json(tmp / ".zattrs", {{"multiscales",
+                                {{{"version", "0.4"},
+                                  {"name", name},
+                                  {"axes", axes},
+                                  {"datasets", datasets},
+                                  {"type", "mean"},
+                                  {"metadata", {{"method", "2x2x2 mean, sizes rounded up"}}}}}}});
   fs::rename(tmp, out, ec);
   if (ec) throw VolumeError(out, "cannot be put in place: " + ec.message());
   report.chunks = chunks;
@@ -210,16 +213,17 @@ ZarrWriteReport write_ome_zarr(const Volume& volume, const fs::path& out, const 
   h.origin = volume.origin;
   h.source = volume.source_type();
   const size_t bpv = source_bytes(h.source);
-  return write_ome_zarr_levels(out, h, n, volume.name, options, [&](int k, const Dims& lo, const Dims& box, uint8_t* dst) {
-    const Level& L = levels[size_t(k)];
-    for (int64_t z = 0; z < box[2]; ++z)
-      for (int64_t y = 0; y < box[1]; ++y) {
-        uint8_t* row = dst + size_t((z * box[1] + y) * box[0]) * bpv;
-        std::memcpy(row, L.bytes.data() + size_t(((lo[2] + z) * L.dims[1] + lo[1] + y) * L.dims[0] + lo[0]) * bpv,
-                    size_t(box[0]) * bpv);
-        unshift_voxels(row, size_t(box[0]), h.source);
-      }
-  });
+  return write_ome_zarr_levels(
+      out, h, n, volume.name, options, [&](int k, const Dims& lo, const Dims& box, uint8_t* dst) {
+        const Level& L = levels[size_t(k)];
+        for (int64_t z = 0; z < box[2]; ++z)
+          for (int64_t y = 0; y < box[1]; ++y) {
+            uint8_t* row = dst + size_t((z * box[1] + y) * box[0]) * bpv;
+            std::memcpy(row, L.bytes.data() + size_t(((lo[2] + z) * L.dims[1] + lo[1] + y) * L.dims[0] + lo[0]) * bpv,
+                        size_t(box[0]) * bpv);
+            unshift_voxels(row, size_t(box[0]), h.source);
+          }
+      });
 }
 
 }  // namespace peakcast::chunked

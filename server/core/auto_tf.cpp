@@ -30,8 +30,7 @@ double percentile(const std::vector<uint64_t>& h, double lo, double hi, double f
   const double w = (hi - lo) / double(h.size()), target = fraction * total;
   double below = 0;
   for (size_t b = 0; b < h.size(); ++b) {
-    if (below + double(h[b]) >= target && h[b] > 0)
-      return lo + w * (double(b) + (target - below) / double(h[b]));
+    if (below + double(h[b]) >= target && h[b] > 0) return lo + w * (double(b) + (target - below) / double(h[b]));
     below += double(h[b]);
   }
   return hi;

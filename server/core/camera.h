@@ -21,14 +21,14 @@ struct Camera {
 // distance where the bounding sphere fills the vertical view angle), then turned as VTK's
 // Azimuth (about the view up, +y) and Elevation (towards the view up) would turn it, by
 // `azimuth` and `elevation` degrees: a three-quarter view unless both are 0.
-Camera default_camera(const glm::dvec3& box_min, const glm::dvec3& box_max, double fov_y = 30.0,
-                      double azimuth = 30.0, double elevation = 20.0);
+Camera default_camera(const glm::dvec3& box_min, const glm::dvec3& box_max, double fov_y = 30.0, double azimuth = 30.0,
+                      double elevation = 20.0);
 
 // Throws std::invalid_argument for eye == center, up parallel to the view, bad fov or height.
 void validate_camera(const Camera& c);
 
 struct ViewSetup {
-  glm::dvec3 p0;       // view-axis point nearest the box centre, relative to the box centre
+  glm::dvec3 p0;                  // view-axis point nearest the box centre, relative to the box centre
   glm::dvec3 right, up, forward;  // orthonormal; up orthogonalised against forward
   double half_w = 0, half_h = 0;  // image-plane half size per unit depth (ortho: world units)
   double dist = 0;                // eye -> p0 along forward
@@ -39,7 +39,7 @@ struct ViewSetup {
 ViewSetup setup_view(const Camera& c, const glm::dvec3& box_center, int width, int height);
 
 struct Ray {
-  glm::dvec3 o, d;  // box-centred origin, unit direction
+  glm::dvec3 o, d;   // box-centred origin, unit direction
   double t_eye = 0;  // rays start at max(t_eye, box entry)
 };
 

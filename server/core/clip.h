@@ -64,9 +64,12 @@ bool clip_span(const CenteredClip<Vec, T>& k, const Vec& o, const Vec& d, T& t0,
   if (k.plane) {
     const T dn = k.normal[0] * d[0] + k.normal[1] * d[1] + k.normal[2] * d[2];
     const T on = k.normal[0] * o[0] + k.normal[1] * o[1] + k.normal[2] * o[2] - k.offset;  // kept where >= 0
-    if (dn > T(0)) t0 = std::max(t0, -on / dn);
-    else if (dn < T(0)) t1 = std::min(t1, -on / dn);
-    else if (on < T(0)) return false;
+    if (dn > T(0))
+      t0 = std::max(t0, -on / dn);
+    else if (dn < T(0))
+      t1 = std::min(t1, -on / dn);
+    else if (on < T(0))
+      return false;
   }
   return t0 <= t1;
 }

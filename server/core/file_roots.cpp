@@ -78,9 +78,12 @@ void check(const fs::path& path) {
   std::error_code ec;
   const auto st = fs::symlink_status(abs, ec);
   fs::path r;
-  if (fs::is_symlink(st)) r = resolved(abs);
-  else if (abs.filename() == ".." || abs.filename() == ".") r = resolved(abs);
-  else r = last_dir_resolved / abs.filename();
+  if (fs::is_symlink(st))
+    r = resolved(abs);
+  else if (abs.filename() == ".." || abs.filename() == ".")
+    r = resolved(abs);
+  else
+    r = last_dir_resolved / abs.filename();
   if (!inside_any(r)) refuse(path);
 }
 

@@ -31,8 +31,7 @@ std::vector<Blob> make_blobs(uint64_t seed, int count) {
   for (int b = 0; b < count; ++b) {
     double r = 0.08 + 0.14 * hash01(seed, b, 0, 0, 11);
     blobs.push_back({0.15 + 0.7 * hash01(seed, b, 1, 0, 11), 0.15 + 0.7 * hash01(seed, b, 2, 0, 11),
-                     0.15 + 0.7 * hash01(seed, b, 3, 0, 11), 1.0 / (r * r),
-                     0.4 + 0.6 * hash01(seed, b, 4, 0, 11)});
+                     0.15 + 0.7 * hash01(seed, b, 3, 0, 11), 1.0 / (r * r), 0.4 + 0.6 * hash01(seed, b, 4, 0, 11)});
   }
   return blobs;
 }
@@ -50,8 +49,8 @@ double blobs_value(const std::vector<Blob>& blobs, double x, double y, double z)
 // wide) on a wavy surface: the sharp feature peak finding is made for.
 double fire_value(const GeneratorSpec& s, double x, double y, double z, double voxel) {
   const double plume = 0.45 * std::exp(-((x - 0.5) * (x - 0.5) + (y - 0.5) * (y - 0.5)) / 0.05) * (1.0 - 0.6 * z);
-  const double sheet_h = 0.45 + 0.08 * std::sin(2 * kPi * (2 * x + 0.3 * double(s.seed % 7))) *
-                                    std::cos(2 * kPi * 1.5 * y);
+  const double sheet_h =
+      0.45 + 0.08 * std::sin(2 * kPi * (2 * x + 0.3 * double(s.seed % 7))) * std::cos(2 * kPi * 1.5 * y);
   const double d = (z - sheet_h) / voxel;  // in voxels
   const double sheet = 0.5 * std::exp(-d * d / 0.5);
   return std::clamp(0.05 + plume + sheet, 0.0, 1.0);
@@ -182,8 +181,7 @@ double generator_value(const GeneratorSpec& s, int64_t i, int64_t j, int64_t k) 
   switch (s.kind) {
     case GeneratorKind::MarschnerLobb: return marschner_lobb(2 * x - 1, 2 * y - 1, 2 * z - 1);
     case GeneratorKind::Blobs: return blobs_value(make_blobs(s.seed, 12), x, y, z);
-    case GeneratorKind::Fire:
-      return fire_value(s, x, y, z, 1.0 / double(std::max<int64_t>(s.dims[2] - 1, 1)));
+    case GeneratorKind::Fire: return fire_value(s, x, y, z, 1.0 / double(std::max<int64_t>(s.dims[2] - 1, 1)));
     case GeneratorKind::Em: return em_value(s, i, j, k);
     case GeneratorKind::Sphere: {  // 1 at the centre falling linearly to 0 at the inscribed radius
       const double dx = x - 0.5, dy = y - 0.5, dz = z - 0.5;

@@ -30,7 +30,6 @@ Dims default_dims(GeneratorKind kind);
 double generator_value(const GeneratorSpec& spec, int64_t i, int64_t j, int64_t k);
 
 Volume generate_volume(const GeneratorSpec& spec);
-void generate_to_file(const GeneratorSpec& spec, const std::filesystem::path& out,
-                      WriteOptions options = {});
+void generate_to_file(const GeneratorSpec& spec, const std::filesystem::path& out, WriteOptions options = {});
 
 }  // namespace peakcast

@@ -60,7 +60,8 @@ Level parse_level(std::string_view n) {
   if (n == "warn" || n == "warning") return Level::Warn;
   if (n == "error") return Level::Error;
   if (n == "off") return Level::Off;
-  throw std::invalid_argument("log level must be debug, info, warn, error or off, not '" + std::string(n.substr(0, 32)) + "'");
+  throw std::invalid_argument("log level must be debug, info, warn, error or off, not '" +
+                              std::string(n.substr(0, 32)) + "'");
 }
 
 Format parse_format(std::string_view n) {
@@ -88,7 +89,8 @@ std::string format_line(Level level, std::string_view msg, const nlohmann::json&
   std::string line = timestamp + " " + name(level) + " " + std::string(msg);
   if (fields.is_object())
     for (auto& [k, v] : fields.items())
-      line += " " + k + "=" + (v.is_string() ? v.get<std::string>() : v.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+      line += " " + k + "=" +
+              (v.is_string() ? v.get<std::string>() : v.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
   // One event, one line: a newline inside outside text must not forge a second entry.
   for (char& c : line)
     if (c == '\n' || c == '\r') c = ' ';

@@ -14,9 +14,9 @@ enum class Level { Debug, Info, Warn, Error, Off };
 enum class Format { Text, Json };
 
 // Throws std::invalid_argument for an unknown level or format name.
-Level parse_level(std::string_view name);     // debug | info | warn | error | off
-Format parse_format(std::string_view name);   // text | json
-void configure(Level level, Format format);   // before the server starts; default info, text
+Level parse_level(std::string_view name);    // debug | info | warn | error | off
+Format parse_format(std::string_view name);  // text | json
+void configure(Level level, Format format);  // before the server starts; default info, text
 Level level();
 
 void write(Level level, std::string_view msg, const nlohmann::json& fields = nlohmann::json::object());

@@ -23,9 +23,9 @@ using SumOf = std::conditional_t<std::is_integral_v<T>, uint64_t, double>;
 // own voxels [own_lo, own_hi] (which may be empty), the same for both. Added to what the shares
 // hold (a fresh share: +inf, -inf, zeros), as add_share adds.
 template <typename T>
-void add_boxes(const T* data, const Dims& n, const int64_t outer_lo[3], const int64_t outer_hi[3], const int64_t* inner_lo,
-               const int64_t* inner_hi, const int64_t own_lo[3], const int64_t own_hi[3], double offset, size_t idx,
-               MacrocellShare& outer, MacrocellShare* inner) {
+void add_boxes(const T* data, const Dims& n, const int64_t outer_lo[3], const int64_t outer_hi[3],
+               const int64_t* inner_lo, const int64_t* inner_hi, const int64_t own_lo[3], const int64_t own_hi[3],
+               double offset, size_t idx, MacrocellShare& outer, MacrocellShare* inner) {
   using L = std::numeric_limits<T>;
   const T top = L::has_infinity ? L::infinity() : L::max(), bottom = L::has_infinity ? -L::infinity() : L::lowest();
   T mn[2] = {top, top}, mx[2] = {bottom, bottom};  // [0]: outer, [1]: inner
@@ -161,8 +161,9 @@ void add_macrocell_share_at(MacrocellShare& s, const Volume& v, const Dims& regi
   add_shares(s, nullptr, v, region_lo, whole, count_lo, count_hi, support, cell);
 }
 
-void add_macrocell_shares_at(MacrocellShare& trilinear, MacrocellShare& tricubic, const Volume& v, const Dims& region_lo,
-                             const Dims& whole, const Dims& count_lo, const Dims& count_hi, int cell) {
+void add_macrocell_shares_at(MacrocellShare& trilinear, MacrocellShare& tricubic, const Volume& v,
+                             const Dims& region_lo, const Dims& whole, const Dims& count_lo, const Dims& count_hi,
+                             int cell) {
   add_shares(tricubic, &trilinear, v, region_lo, whole, count_lo, count_hi, FilterSupport::Tricubic, cell);
 }
 

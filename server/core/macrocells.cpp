@@ -20,7 +20,6 @@ int default_cell_size(const Dims& dims) {
 
 int64_t cells_along(int64_t n, int cell) { return std::max<int64_t>(1, (n - 1 + cell - 1) / cell); }
 
-
 MacrocellGrid build_macrocells(const Volume& v, int cell, FilterSupport support) {
   const auto t0 = std::chrono::steady_clock::now();
   const Dims n = v.dims();
@@ -51,15 +50,15 @@ void check_macrocells(const MacrocellGrid& g, const Volume& v, FilterSupport sup
   want.support = support;
   if (g.cell != want.cell || g.grid != want.grid || g.support != support ||
       g.size() != size_t(want.grid[0] * want.grid[1] * want.grid[2]))
-    throw std::invalid_argument("macrocells " + g.to_string() + " do not fit the " + std::to_string(dims[0]) +
-                                "x" + std::to_string(dims[1]) + "x" + std::to_string(dims[2]) +
-                                " volume (want " + want.to_string() + ")");
+    throw std::invalid_argument("macrocells " + g.to_string() + " do not fit the " + std::to_string(dims[0]) + "x" +
+                                std::to_string(dims[1]) + "x" + std::to_string(dims[2]) + " volume (want " +
+                                want.to_string() + ")");
 }
 
 std::string MacrocellGrid::to_string() const {
   std::ostringstream s;
-  s << "Macrocells{" << grid[0] << "x" << grid[1] << "x" << grid[2] << " cells of " << cell
-    << " voxels, " << (support == FilterSupport::Tricubic ? "tricubic" : "trilinear") << " support}";
+  s << "Macrocells{" << grid[0] << "x" << grid[1] << "x" << grid[2] << " cells of " << cell << " voxels, "
+    << (support == FilterSupport::Tricubic ? "tricubic" : "trilinear") << " support}";
   return s.str();
 }
 

@@ -17,7 +17,7 @@ namespace peakcast {
 enum class FilterSupport { Trilinear, Tricubic };
 
 struct MacrocellGrid {
-  int cell = 8;       // edge length in voxels (same on every axis)
+  int cell = 8;        // edge length in voxels (same on every axis)
   Dims grid{0, 0, 0};  // cells per axis
   FilterSupport support = FilterSupport::Trilinear;
   std::vector<float> min, max;  // physical values, index a + grid[0] * (b + grid[1] * c)
@@ -33,8 +33,7 @@ struct MacrocellGrid {
 int default_cell_size(const Dims& dims);
 int64_t cells_along(int64_t n, int cell);
 
-MacrocellGrid build_macrocells(const Volume& volume, int cell = 0,
-                               FilterSupport support = FilterSupport::Trilinear);
+MacrocellGrid build_macrocells(const Volume& volume, int cell = 0, FilterSupport support = FilterSupport::Trilinear);
 
 // The grids a volume's renders use (default cell size), built once per volume off the render
 // thread: the server builds them on the loader pool with the volume (VolumeEntry) and hands

@@ -78,8 +78,7 @@ Volume read_metaimage(const fs::path& path, const LoadOptions& options) {
     if (fields.count(key)) h.big_endian = lower(fields[key]) == "true";
 
   PayloadSpec payload;
-  if (fields.count("compresseddata") && lower(fields["compresseddata"]) == "true")
-    payload.encoding = Encoding::Zlib;
+  if (fields.count("compresseddata") && lower(fields["compresseddata"]) == "true") payload.encoding = Encoding::Zlib;
   std::string data_file = need("elementdatafile");
   if (local) {
     payload.files = {path};

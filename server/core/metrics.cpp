@@ -60,7 +60,8 @@ Metrics::Metrics() {
   def("peakcast_gpu_volumes", "gauge", "Volumes resident on the GPU");
   def("peakcast_stills_queued", "gauge", "REST stills waiting or rendering");
   def("peakcast_still_wait_ms", "histogram", "REST still: queued to first band rendered, milliseconds");
-  def("peakcast_stills_total", "counter", "REST stills by outcome (done, refused_queue, refused_cost, cancelled, shutting_down, render_failed)");
+  def("peakcast_stills_total", "counter",
+      "REST stills by outcome (done, refused_queue, refused_cost, cancelled, shutting_down, render_failed)");
   def("peakcast_connections", "gauge", "Open TCP connections (HTTP and WebSocket)");
   def("peakcast_connections_refused_total", "counter", "TCP connections closed at accept: connection caps reached");
   def("peakcast_ws_paced_total", "counter", "WebSocket reads delayed by the per-client message rate");
@@ -113,7 +114,8 @@ std::string Metrics::prometheus_text() const {
       for (const auto& [labels, h] : f.histograms) h->render(out, name, labels);
     } else {
       if (f.values.empty()) out += name + " 0\n";
-      for (const auto& [labels, v] : f.values) out += name + (labels.empty() ? "" : "{" + labels + "}") + " " + fmt(v) + "\n";
+      for (const auto& [labels, v] : f.values)
+        out += name + (labels.empty() ? "" : "{" + labels + "}") + " " + fmt(v) + "\n";
     }
   }
   return out;

@@ -17,8 +17,7 @@ namespace {
 std::vector<double> parse_vector(const fs::path& file, const std::string& text) {
   std::string t = trim(text);
   if (t == "none") return {};
-  if (t.size() < 2 || t.front() != '(' || t.back() != ')')
-    throw VolumeError(file, "malformed vector '" + t + "'");
+  if (t.size() < 2 || t.front() != '(' || t.back() != ')') throw VolumeError(file, "malformed vector '" + t + "'");
   std::vector<double> out;
   std::string item;
   for (char c : t.substr(1, t.size() - 2) + ",") {
@@ -88,13 +87,17 @@ std::string format_name(const fs::path& file, const std::string& pattern, long l
   const bool left = flags.find('-') != std::string::npos;
   const bool zero = !left && flags.find('0') != std::string::npos;
   std::string digits = std::to_string(value < 0 ? -(value + 1) + 1ull : static_cast<unsigned long long>(value));
-  std::string sign = value < 0 ? "-" : flags.find('+') != std::string::npos ? "+" : flags.find(' ') != std::string::npos ? " " : "";
+  std::string sign = value < 0                              ? "-"
+                     : flags.find('+') != std::string::npos ? "+"
+                     : flags.find(' ') != std::string::npos ? " "
+                                                            : "";
   std::string number;
   const size_t len = sign.size() + digits.size();
   if (size_t(width) > len) {
     const size_t pad = size_t(width) - len;
-    number = left ? sign + digits + std::string(pad, ' ')
-                  : zero ? sign + std::string(pad, '0') + digits : std::string(pad, ' ') + sign + digits;
+    number = left   ? sign + digits + std::string(pad, ' ')
+             : zero ? sign + std::string(pad, '0') + digits
+                    : std::string(pad, ' ') + sign + digits;
   } else {
     number = sign + digits;
   }
@@ -137,8 +140,7 @@ Volume read_nrrd(const fs::path& path, const LoadOptions& options) {
       type = value;
     } else if (field == "dimension") {
       dimension = int(parse_int(path, field, value));
-      if (dimension != 3)
-        throw VolumeError(path, "dimension " + value + " is not supported (need a 3D scalar volume)");
+      if (dimension != 3) throw VolumeError(path, "dimension " + value + " is not supported (need a 3D scalar volume)");
     } else if (field == "sizes") {
       auto parts = split_ws(value);
       if (parts.size() != 3) throw VolumeError(path, "sizes must list 3 values");
@@ -147,8 +149,7 @@ Volume read_nrrd(const fs::path& path, const LoadOptions& options) {
     } else if (field == "spacings") {
       auto parts = split_ws(value);
       if (parts.size() != 3) throw VolumeError(path, "spacings must list 3 values");
-      for (int a = 0; a < 3; ++a)
-        h.spacing[a] = lower(parts[a]) == "nan" ? 1.0 : parse_double(path, field, parts[a]);
+      for (int a = 0; a < 3; ++a) h.spacing[a] = lower(parts[a]) == "nan" ? 1.0 : parse_double(path, field, parts[a]);
     } else if (field == "space directions") {
       auto vecs = split_vectors(value);
       if (vecs.size() != 3) throw VolumeError(path, "space directions must list 3 vectors");

@@ -31,8 +31,8 @@ constexpr int kMaxEmptyDistance = 255;
 // samples use 1/8, the most a Catmull-Rom segment overshoots its samples (Lee et al. eq. 8).
 constexpr double kCatmullRomOvershoot = 1.0 / 8.0;
 Occupancy classify_cells(const MacrocellGrid& grid, const TransferFunction& tf, double lo, double hi,
-                         const std::vector<double>& peak_values = {},
-                         int table_size = TransferFunction::kTableSize, double overshoot = 0.0);
+                         const std::vector<double>& peak_values = {}, int table_size = TransferFunction::kTableSize,
+                         double overshoot = 0.0);
 
 // The `distance` field of `occupied` on `grid` (separable: exact Chebyshev distance per axis).
 std::vector<uint8_t> empty_space_distance(const Dims& grid, const std::vector<uint8_t>& occupied);

@@ -98,7 +98,7 @@ PreintegrationTable build_preintegration(const TransferFunction& tf, double lo, 
     const int d = int(dd) + 1, L = d * sub;
     const double h = step / L;
     std::vector<Acc> e(static_cast<size_t>(m)), pre(static_cast<size_t>(m)), suf(static_cast<size_t>(m));
-    for (int dir : {1, -1}) {  // rising field (front bin i, back i + d), then falling
+    for (int dir : {1, -1}) {        // rising field (front bin i, back i + d), then falling
       for (int q = 0; q < m; ++q) {  // element k is the k-th sub-bin in ray order
         const size_t src = size_t(dir > 0 ? q : m - 1 - q);
         const double a = 1.0 - std::exp(-tau[src] * h);
@@ -111,7 +111,10 @@ PreintegrationTable build_preintegration(const TransferFunction& tf, double lo, 
         const int qs = dir > 0 ? i * sub : m - (i + d) * sub;  // first element of the window
         const int qe = qs + L - 1;
         const Acc w = (qs / L == qe / L) ? suf[size_t(qs)] : over(suf[size_t(qs)], pre[size_t(qe)]);
-        if (dir > 0) store(i, i + d, w.c, w.a); else store(i + d, i, w.c, w.a);
+        if (dir > 0)
+          store(i, i + d, w.c, w.a);
+        else
+          store(i + d, i, w.c, w.a);
       }
     }
   });
@@ -129,7 +132,8 @@ glm::dvec4 lookup_preintegration(const PreintegrationTable& t, double sf, double
     const float* p = &t.rgba[(size_t(j) * n + size_t(i)) * 4];
     return glm::dvec4(p[0], p[1], p[2], p[3]);
   };
-  return (at(x0, y0) * (1 - fx) + at(x0 + 1, y0) * fx) * (1 - fy) + (at(x0, y0 + 1) * (1 - fx) + at(x0 + 1, y0 + 1) * fx) * fy;
+  return (at(x0, y0) * (1 - fx) + at(x0 + 1, y0) * fx) * (1 - fy) +
+         (at(x0, y0 + 1) * (1 - fx) + at(x0 + 1, y0 + 1) * fx) * fy;
 }
 
 }  // namespace peakcast

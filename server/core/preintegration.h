@@ -33,8 +33,8 @@ struct PreintegrationTable {
 
 enum class PreintegrationMethod { Integral, Exact };
 
-PreintegrationTable build_preintegration(const TransferFunction& tf, double lo, double hi, double step,
-                                         int size = 256, PreintegrationMethod method = PreintegrationMethod::Exact);
+PreintegrationTable build_preintegration(const TransferFunction& tf, double lo, double hi, double step, int size = 256,
+                                         PreintegrationMethod method = PreintegrationMethod::Exact);
 
 struct RenderSettings;
 PreintegrationMethod preint_method(const RenderSettings& r);

@@ -22,7 +22,9 @@ const std::set<std::string>& root_names() {
   return names;
 }
 
-bool ends_path(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\'' || c == '"' || c == ',' || c == ')' || c == ']'; }
+bool ends_path(char c) {
+  return c == ' ' || c == '\t' || c == '\n' || c == '\'' || c == '"' || c == ',' || c == ')' || c == ']';
+}
 bool starts_token(char c) { return ends_path(c) || c == '(' || c == '[' || c == '=' || c == ':'; }
 
 }  // namespace
@@ -34,10 +36,12 @@ std::string public_text(std::string_view message, size_t max_bytes) {
   for (size_t i = 0; i < s.size();) {
     if (s[i] == '/' && (i == 0 || starts_token(s[i - 1]))) {
       size_t end = i;
-      while (end < s.size() && !ends_path(s[end]) && !(s[end] == ':' && (end + 1 == s.size() || s[end + 1] == ' '))) ++end;
+      while (end < s.size() && !ends_path(s[end]) && !(s[end] == ':' && (end + 1 == s.size() || s[end + 1] == ' ')))
+        ++end;
       const std::string_view path(s.data() + i, end - i);
       size_t first_end = path.find('/', 1);
-      const std::string first(path.substr(1, first_end == std::string_view::npos ? std::string_view::npos : first_end - 1));
+      const std::string first(
+          path.substr(1, first_end == std::string_view::npos ? std::string_view::npos : first_end - 1));
       if (!first.empty() && root_names().count(first)) {
         std::string_view last = path;
         while (!last.empty() && last.back() == '/') last.remove_suffix(1);

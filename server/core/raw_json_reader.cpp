@@ -15,10 +15,13 @@ Volume read_raw_json(const fs::path& path, const LoadOptions& options) {
   if (lower(path.extension().string()) != ".json") {
     std::error_code ec;
     fs::path a = path.string() + ".json", b = fs::path(path).replace_extension(".json");
-    if (fs::exists(a, ec)) sidecar = a;
-    else if (fs::exists(b, ec)) sidecar = b;
-    else throw VolumeError(path, "raw data needs a JSON sidecar (" + a.filename().string() + " or " +
-                                     b.filename().string() + ") with dims and dtype");
+    if (fs::exists(a, ec))
+      sidecar = a;
+    else if (fs::exists(b, ec))
+      sidecar = b;
+    else
+      throw VolumeError(path, "raw data needs a JSON sidecar (" + a.filename().string() + " or " +
+                                  b.filename().string() + ") with dims and dtype");
   }
   nlohmann::json j;
   try {
@@ -35,7 +38,8 @@ Volume read_raw_json(const fs::path& path, const LoadOptions& options) {
       throw VolumeError(sidecar, "unknown key '" + key + "'");
   auto vec3 = [&](const char* key, bool integer) {
     const auto& v = j.at(key);
-    if (!v.is_array() || v.size() != 3) throw VolumeError(sidecar, std::string("'") + key + "' must be an array of 3 numbers");
+    if (!v.is_array() || v.size() != 3)
+      throw VolumeError(sidecar, std::string("'") + key + "' must be an array of 3 numbers");
     for (auto& x : v)
       if (!x.is_number() || (integer && !x.is_number_integer()))
         throw VolumeError(sidecar, std::string("'") + key + "' must hold " + (integer ? "integers" : "numbers"));
@@ -61,8 +65,10 @@ Volume read_raw_json(const fs::path& path, const LoadOptions& options) {
     if (endian != "little" && endian != "big") throw VolumeError(sidecar, "endian must be 'little' or 'big'");
     h.big_endian = endian == "big";
     std::string enc = j.value("encoding", "raw");
-    if (enc == "gzip") payload.encoding = Encoding::Gzip;
-    else if (enc != "raw") throw VolumeError(sidecar, "unsupported encoding '" + enc + "' (raw, gzip)");
+    if (enc == "gzip")
+      payload.encoding = Encoding::Gzip;
+    else if (enc != "raw")
+      throw VolumeError(sidecar, "unsupported encoding '" + enc + "' (raw, gzip)");
     payload.byte_skip = j.value("byte_skip", int64_t(0));
     if (payload.byte_skip < 0) throw VolumeError(sidecar, "byte_skip must be >= 0");
     if (j.contains("data_file")) {

@@ -71,9 +71,9 @@ Stroke parse_stroke(const json& j, const std::string& where) {
   only_keys(j, where, {"channel", "center", "radius", "falloff", "value", "mode", "level"});
   Stroke s;
   if (!j.contains("channel")) fail(where + ".channel", "is required (step, termination or blend)");
-  s.channel = choice<RayChannel>(j["channel"], where + ".channel",
-                                 {{"step", RayChannel::Step}, {"termination", RayChannel::Termination},
-                                  {"blend", RayChannel::Blend}});
+  s.channel = choice<RayChannel>(
+      j["channel"], where + ".channel",
+      {{"step", RayChannel::Step}, {"termination", RayChannel::Termination}, {"blend", RayChannel::Blend}});
   if (!j.contains("center")) fail(where + ".center", "is required ([u, v] in [0, 1])");
   const json& c = j["center"];
   if (!c.is_array() || c.size() != 2) fail(where + ".center", "must be [u, v]");
@@ -88,8 +88,9 @@ Stroke parse_stroke(const json& j, const std::string& where) {
     if (s.falloff < 0 || s.falloff > 1) fail(where + ".falloff", "must be in [0, 1]");
   }
   if (j.contains("mode"))
-    s.mode = choice<StrokeMode>(j["mode"], where + ".mode",
-                                {{"set", StrokeMode::Set}, {"add", StrokeMode::Add}, {"multiply", StrokeMode::Multiply}});
+    s.mode =
+        choice<StrokeMode>(j["mode"], where + ".mode",
+                           {{"set", StrokeMode::Set}, {"add", StrokeMode::Add}, {"multiply", StrokeMode::Multiply}});
   if (!j.contains("value")) fail(where + ".value", "is required");
   s.value = number(j["value"], where + ".value");
   const Range r = channel_range(s.channel);
@@ -127,8 +128,8 @@ RayTextureSpec parse_ray_texture(const json& j, const std::string& where) {
     const json& strokes = j["strokes"];
     if (!strokes.is_array()) fail(where + ".strokes", "must be an array");
     if (strokes.size() > kMaxRayTextureStrokes)
-      fail(where + ".strokes", "holds " + std::to_string(strokes.size()) + " strokes; at most " +
-                                   std::to_string(kMaxRayTextureStrokes));
+      fail(where + ".strokes",
+           "holds " + std::to_string(strokes.size()) + " strokes; at most " + std::to_string(kMaxRayTextureStrokes));
     for (size_t i = 0; i < strokes.size(); ++i)
       spec.strokes.push_back(parse_stroke(strokes[i], where + ".strokes[" + std::to_string(i) + "]"));
   }
@@ -137,8 +138,12 @@ RayTextureSpec parse_ray_texture(const json& j, const std::string& where) {
 }
 
 json to_json(const Stroke& s) {
-  json j = {{"channel", channel_name(s.channel)}, {"center", {s.u, s.v}}, {"radius", s.radius},
-            {"falloff", s.falloff},              {"value", s.value},      {"mode", mode_name(s.mode)}};
+  json j = {{"channel", channel_name(s.channel)},
+            {"center", {s.u, s.v}},
+            {"radius", s.radius},
+            {"falloff", s.falloff},
+            {"value", s.value},
+            {"mode", mode_name(s.mode)}};
   if (s.level) j["level"] = s.level;
   return j;
 }
@@ -177,7 +182,8 @@ std::shared_ptr<const RayTextureSpec> with_stroke(const RayTextureSpec& spec, co
   const uint64_t work = spec.work + stroke_texels(s, spec.width, spec.height);
   if (work > kMaxRayTextureWork)
     throw SceneError("stroke: the ray texture's strokes would touch " + std::to_string(work) +
-                     " texels in all, more than " + std::to_string(kMaxRayTextureWork) + " (clear it, or paint smaller)");
+                     " texels in all, more than " + std::to_string(kMaxRayTextureWork) +
+                     " (clear it, or paint smaller)");
   // The strokes are copied (specs are immutable: frames in flight read the older one); at the
   // stroke cap that is 5.6 MB per stroke, under the message rate limit.
   auto next = std::make_shared<RayTextureSpec>(spec);

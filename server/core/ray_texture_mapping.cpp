@@ -28,7 +28,8 @@ std::array<double, 3> sample_ray_texture(const RayTexture& t, const glm::dvec2& 
   const auto a = t.at(x0, y0), b = t.at(x1, y0), c = t.at(x0, y1), d = t.at(x1, y1);
   std::array<double, 3> out{};
   for (int k = 0; k < 3; ++k)
-    out[size_t(k)] = (1 - ay) * ((1 - ax) * a[size_t(k)] + ax * b[size_t(k)]) + ay * ((1 - ax) * c[size_t(k)] + ax * d[size_t(k)]);
+    out[size_t(k)] =
+        (1 - ay) * ((1 - ax) * a[size_t(k)] + ax * b[size_t(k)]) + ay * ((1 - ax) * c[size_t(k)] + ax * d[size_t(k)]);
   return out;
 }
 

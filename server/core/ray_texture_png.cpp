@@ -21,7 +21,9 @@ namespace {
   throw SceneError(key + ": " + path.string() + ": " + what);
 }
 
-uint32_t be32(const unsigned char* p) { return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3]; }
+uint32_t be32(const unsigned char* p) {
+  return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3];
+}
 
 constexpr std::uintmax_t kMaxPngBytes = 64ull << 20;  // a 2048^2 16-bit RGBA PNG is at most ~32 MiB
 
@@ -42,7 +44,8 @@ PngRows png_rows(uint32_t w, uint32_t h, int bits_per_pixel, bool interlaced) {
     add(w, h);
     return r;
   }
-  static const int pass[7][4] = {{0, 0, 8, 8}, {4, 0, 8, 8}, {0, 4, 4, 8}, {2, 0, 4, 4}, {0, 2, 2, 4}, {1, 0, 2, 2}, {0, 1, 1, 2}};
+  static const int pass[7][4] = {{0, 0, 8, 8}, {4, 0, 8, 8}, {0, 4, 4, 8}, {2, 0, 4, 4},
+                                 {0, 2, 2, 4}, {1, 0, 2, 2}, {0, 1, 1, 2}};
   for (const auto& p : pass) {
     const uint64_t cols = w > uint32_t(p[0]) ? (w - p[0] + p[2] - 1) / p[2] : 0;
     const uint64_t rows = h > uint32_t(p[1]) ? (h - p[1] + p[3] - 1) / p[3] : 0;
@@ -61,7 +64,8 @@ std::vector<unsigned char> checked_png_bytes(const std::string& key, const std::
   std::error_code ec;
   const auto size = std::filesystem::file_size(path, ec);
   if (ec) refuse(key, path, "cannot read: " + ec.message());
-  if (size > kMaxPngBytes) refuse(key, path, "is " + std::to_string(size) + " bytes; a ray-texture PNG is at most 64 MiB");
+  if (size > kMaxPngBytes)
+    refuse(key, path, "is " + std::to_string(size) + " bytes; a ray-texture PNG is at most 64 MiB");
   std::vector<unsigned char> b(size);
   std::ifstream in(path, std::ios::binary);
   if (!in.read(reinterpret_cast<char*>(b.data()), std::streamsize(size))) refuse(key, path, "cannot read");
@@ -82,8 +86,9 @@ std::vector<unsigned char> checked_png_bytes(const std::string& key, const std::
       if (type != "IHDR" || len != 13) refuse(key, path, "is corrupt (it does not start with an IHDR chunk)");
       const uint32_t w = be32(data), h = be32(data + 4);
       if (w < 1 || h < 1 || w > uint32_t(kMaxRayTextureSide) || h > uint32_t(kMaxRayTextureSide))
-        refuse(key, path, std::to_string(w) + "x" + std::to_string(h) + " is the wrong size: each side must be 1.." +
-                              std::to_string(kMaxRayTextureSide));
+        refuse(key, path,
+               std::to_string(w) + "x" + std::to_string(h) + " is the wrong size: each side must be 1.." +
+                   std::to_string(kMaxRayTextureSide));
       const int depth = data[8], colour = data[9];
       const int samples = colour == 0 ? 1 : colour == 2 ? 3 : colour == 3 ? 1 : colour == 4 ? 2 : colour == 6 ? 4 : 0;
       const bool depth_ok = depth == 1 || depth == 2 || depth == 4 || depth == 8 || depth == 16;
@@ -109,8 +114,9 @@ std::vector<unsigned char> checked_png_bytes(const std::string& key, const std::
   const size_t got = raw.size() - z.avail_out;
   inflateEnd(&z);
   if (rc != Z_STREAM_END || got != rows.total)
-    refuse(key, path, "is corrupt (its image data does not inflate to the " + std::to_string(rows.total) +
-                          " bytes its header promises)");
+    refuse(key, path,
+           "is corrupt (its image data does not inflate to the " + std::to_string(rows.total) +
+               " bytes its header promises)");
   size_t row = 0;
   for (size_t len : rows.row_bytes) {
     if (raw[row] > 4) refuse(key, path, "is corrupt (a row has filter type " + std::to_string(raw[row]) + ")");
@@ -151,10 +157,11 @@ std::shared_ptr<const RayTextureImage> read_ray_texture_png(const std::filesyste
   if (spec.width < 1 || spec.height < 1 || spec.width > kMaxRayTextureSide || spec.height > kMaxRayTextureSide ||
       spec.depth != 1)
     refuse(key, path,
-           std::to_string(spec.width) + "x" + std::to_string(spec.height) + " is the wrong size: each side must be 1.." +
-               std::to_string(kMaxRayTextureSide));
+           std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+               " is the wrong size: each side must be 1.." + std::to_string(kMaxRayTextureSide));
   if (spec.nchannels < 3)
-    refuse(key, path, "has " + std::to_string(spec.nchannels) + " channel(s); it needs R, G, B (step, termination, blend)");
+    refuse(key, path,
+           "has " + std::to_string(spec.nchannels) + " channel(s); it needs R, G, B (step, termination, blend)");
   const bool wide = spec.format.size() > 1;
   const size_t n = size_t(spec.width) * size_t(spec.height);
   auto image = std::make_shared<RayTextureImage>();

@@ -15,7 +15,6 @@ namespace {
 using json = nlohmann::json;
 using namespace json_fields;
 
-
 Camera parse_camera(const json& j) {
   only_keys(j, "camera", {"eye", "center", "up", "fov_y", "projection", "height"});
   Camera c;
@@ -25,7 +24,8 @@ Camera parse_camera(const json& j) {
   if (j.contains("up")) c.up = vec3(j["up"], "camera.up");
   if (j.contains("fov_y")) c.fov_y = number(j["fov_y"], "camera.fov_y");
   if (j.contains("projection"))
-    c.orthographic = choice<bool>(j["projection"], "camera.projection", {{"perspective", false}, {"orthographic", true}});
+    c.orthographic =
+        choice<bool>(j["projection"], "camera.projection", {{"perspective", false}, {"orthographic", true}});
   if (j.contains("height")) c.height = number(j["height"], "camera.height");
   if (c.orthographic && !j.contains("height")) fail("camera.height", "required with an orthographic projection");
   try {
@@ -63,18 +63,21 @@ TransferFunction parse_tf(const json& j, double& opacity_unit) {
 }
 
 RenderSettings parse_render(const json& j) {
-  only_keys(j, "render", {"classification", "peak_mode", "max_peaks", "peak_table_bins", "secant_iterations",
-                          "preint_table_size", "preint_method", "sampling", "step", "s_k", "filter", "virtual_samples", "shading",
-                          "early_termination", "space_skipping", "adaptive", "clip", "ray_texture"});
+  only_keys(j, "render",
+            {"classification", "peak_mode", "max_peaks", "peak_table_bins", "secant_iterations", "preint_table_size",
+             "preint_method", "sampling", "step", "s_k", "filter", "virtual_samples", "shading", "early_termination",
+             "space_skipping", "adaptive", "clip", "ray_texture"});
   RenderSettings r;
   if (j.contains("classification"))
-    r.classification = choice<Classification>(j["classification"], "render.classification",
-                                              {{"post", Classification::Post}, {"preint", Classification::Preint},
-                                               {"peaks", Classification::Peaks}});
+    r.classification = choice<Classification>(
+        j["classification"], "render.classification",
+        {{"post", Classification::Post}, {"preint", Classification::Preint}, {"peaks", Classification::Peaks}});
   if (j.contains("peak_mode"))
     r.peak_mode = choice<PeakMode>(j["peak_mode"], "render.peak_mode",
-                                   {{"dvr+peaks", PeakMode::DvrPlusPeaks}, {"xor", PeakMode::Xor},
-                                    {"peaks_only", PeakMode::PeaksOnly}, {"dvr_only", PeakMode::DvrOnly}});
+                                   {{"dvr+peaks", PeakMode::DvrPlusPeaks},
+                                    {"xor", PeakMode::Xor},
+                                    {"peaks_only", PeakMode::PeaksOnly},
+                                    {"dvr_only", PeakMode::DvrOnly}});
   if (j.contains("max_peaks")) r.max_peaks = integer(j["max_peaks"], "render.max_peaks", 1, 4);
   if (j.contains("peak_table_bins"))
     r.peak_table_bins = integer(j["peak_table_bins"], "render.peak_table_bins", 64, 1024);
@@ -97,7 +100,8 @@ RenderSettings parse_render(const json& j) {
     if (!(r.s_k > 0)) fail("render.s_k", "must be > 0");
   }
   if (j.contains("filter"))
-    r.filter = choice<Filter>(j["filter"], "render.filter", {{"trilinear", Filter::Trilinear}, {"tricubic", Filter::Tricubic}});
+    r.filter = choice<Filter>(j["filter"], "render.filter",
+                              {{"trilinear", Filter::Trilinear}, {"tricubic", Filter::Tricubic}});
   if (j.contains("virtual_samples")) {
     r.virtual_samples = integer(j["virtual_samples"], "render.virtual_samples", 0, 7);
     if (r.virtual_samples != 0 && r.virtual_samples != 3 && r.virtual_samples != 7)
@@ -191,13 +195,20 @@ json scene_to_json(const Scene& s) {
   }
   j["background"] = {s.background.x, s.background.y, s.background.z};
   const RenderSettings& r = s.render;
-  j["render"] = {{"classification", to_string(r.classification)}, {"peak_mode", to_string(r.peak_mode)},
-                 {"max_peaks", r.max_peaks}, {"peak_table_bins", r.peak_table_bins},
-                 {"secant_iterations", r.secant_iterations}, {"preint_table_size", r.preint_table_size},
+  j["render"] = {{"classification", to_string(r.classification)},
+                 {"peak_mode", to_string(r.peak_mode)},
+                 {"max_peaks", r.max_peaks},
+                 {"peak_table_bins", r.peak_table_bins},
+                 {"secant_iterations", r.secant_iterations},
+                 {"preint_table_size", r.preint_table_size},
                  {"preint_method", r.preint_method},
-                 {"sampling", to_string(r.sampling)}, {"s_k", r.s_k},
-                 {"filter", to_string(r.filter)}, {"virtual_samples", r.virtual_samples}, {"shading", r.shading},
-                 {"early_termination", r.early_termination}, {"space_skipping", r.space_skipping},
+                 {"sampling", to_string(r.sampling)},
+                 {"s_k", r.s_k},
+                 {"filter", to_string(r.filter)},
+                 {"virtual_samples", r.virtual_samples},
+                 {"shading", r.shading},
+                 {"early_termination", r.early_termination},
+                 {"space_skipping", r.space_skipping},
                  {"adaptive", r.adaptive}};
   if (r.step > 0) j["render"]["step"] = r.step;
   if (r.clip.active()) j["render"]["clip"] = to_json(r.clip);
@@ -205,7 +216,9 @@ json scene_to_json(const Scene& s) {
   return j;
 }
 
-std::string Scene::to_string() const { return "Scene" + scene_to_json(*this).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace); }
+std::string Scene::to_string() const {
+  return "Scene" + scene_to_json(*this).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
 
 namespace {
 

@@ -35,9 +35,9 @@ struct RenderSettings {
   Classification classification = Classification::Post;
   PeakMode peak_mode = PeakMode::DvrPlusPeaks;
   int max_peaks = 4;
-  int peak_table_bins = 128;     // 64..1024
-  int secant_iterations = 3;     // root-solving steps per peak (Knoll §4.2)
-  int preint_table_size = 256;   // 16..1024
+  int peak_table_bins = 128;            // 64..1024
+  int secant_iterations = 3;            // root-solving steps per peak (Knoll §4.2)
+  int preint_table_size = 256;          // 16..1024
   std::string preint_method = "exact";  // exact (composited pieces, O(N^2)) | integral (Engel's approximation)
   Sampling sampling = Sampling::Uniform;
   double step = 0.0;  // world units; 0: the smallest spacing

@@ -55,7 +55,8 @@ std::unique_ptr<ImageInput> open_image(const fs::path& file) {
 }
 
 void check_slice(const fs::path& file, const ImageSpec& spec, const VolumeHeader& h) {
-  if (spec.nchannels != 1) throw VolumeError(file, "TIFF slice has " + std::to_string(spec.nchannels) + " channels; need 1");
+  if (spec.nchannels != 1)
+    throw VolumeError(file, "TIFF slice has " + std::to_string(spec.nchannels) + " channels; need 1");
   if (spec.width != h.dims[0] || spec.height != h.dims[1] || spec.depth != 1)
     throw VolumeError(file, "TIFF slice is " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
                                 ", the first was " + std::to_string(h.dims[0]) + "x" + std::to_string(h.dims[1]));
@@ -73,7 +74,8 @@ void check_slice(const fs::path& file, const ImageSpec& spec, const VolumeHeader
 }
 
 void read_slice(const fs::path& file, ImageInput& in, int subimage, const VolumeHeader& h, uint8_t* dst) {
-  static const TypeDesc formats[] = {TypeDesc::UINT8, TypeDesc::INT8, TypeDesc::UINT16, TypeDesc::INT16, TypeDesc::FLOAT};
+  static const TypeDesc formats[] = {TypeDesc::UINT8, TypeDesc::INT8, TypeDesc::UINT16, TypeDesc::INT16,
+                                     TypeDesc::FLOAT};
   if (!in.read_image(subimage, 0, 0, 1, formats[int(h.source)], dst))
     throw VolumeError(file, "cannot read TIFF data: " + in.geterror());
 }

@@ -47,26 +47,22 @@ VoxelType storage_type(SourceType t) {
   return VoxelType::U8;
 }
 
-double storage_offset(SourceType t) {
-  return t == SourceType::I8 ? -128.0 : t == SourceType::I16 ? -32768.0 : 0.0;
-}
+double storage_offset(SourceType t) { return t == SourceType::I8 ? -128.0 : t == SourceType::I16 ? -32768.0 : 0.0; }
 
 SourceType parse_source_type(const std::string& raw) {
   std::string n;
   for (char c : raw) n += char(std::tolower(static_cast<unsigned char>(c)));
   // NRRD spellings (spec: "Basic type names"), MetaImage MET_* and the short forms.
-  if (n == "uint8" || n == "uchar" || n == "unsigned char" || n == "uint8_t" || n == "met_uchar")
-    return SourceType::U8;
+  if (n == "uint8" || n == "uchar" || n == "unsigned char" || n == "uint8_t" || n == "met_uchar") return SourceType::U8;
   if (n == "int8" || n == "signed char" || n == "int8_t" || n == "met_char") return SourceType::I8;
-  if (n == "uint16" || n == "ushort" || n == "unsigned short" || n == "unsigned short int" ||
-      n == "uint16_t" || n == "met_ushort")
+  if (n == "uint16" || n == "ushort" || n == "unsigned short" || n == "unsigned short int" || n == "uint16_t" ||
+      n == "met_ushort")
     return SourceType::U16;
-  if (n == "int16" || n == "short" || n == "short int" || n == "signed short" ||
-      n == "signed short int" || n == "int16_t" || n == "met_short")
+  if (n == "int16" || n == "short" || n == "short int" || n == "signed short" || n == "signed short int" ||
+      n == "int16_t" || n == "met_short")
     return SourceType::I16;
   if (n == "float32" || n == "float" || n == "met_float") return SourceType::F32;
-  throw std::invalid_argument("unsupported voxel type '" + raw +
-                              "' (supported: uint8, int8, uint16, int16, float32)");
+  throw std::invalid_argument("unsupported voxel type '" + raw + "' (supported: uint8, int8, uint16, int16, float32)");
 }
 
 Volume::Volume(const VolumeHeader& h)
@@ -135,13 +131,17 @@ void Volume::finalize_statistics() {
   struct Timer {  // statistics_ms on every path out
     Volume& v;
     std::chrono::steady_clock::time_point t0;
-    ~Timer() { v.statistics_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count(); }
+    ~Timer() {
+      v.statistics_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    }
   } timer{*this, t0};
   const size_t n = size_t(voxel_count());
   if (type_ != VoxelType::F32) {
     double lo = 0, hi = 0;
-    if (type_ == VoxelType::U8) integer_statistics(data_.get(), n, lo, hi, histogram, kHistogramBins);
-    else integer_statistics(reinterpret_cast<const uint16_t*>(data_.get()), n, lo, hi, histogram, kHistogramBins);
+    if (type_ == VoxelType::U8)
+      integer_statistics(data_.get(), n, lo, hi, histogram, kHistogramBins);
+    else
+      integer_statistics(reinterpret_cast<const uint16_t*>(data_.get()), n, lo, hi, histogram, kHistogramBins);
     min_value = lo + value_offset;
     max_value = hi + value_offset;
     return;
@@ -184,33 +184,39 @@ void Volume::finalize_statistics() {
 
 std::vector<uint64_t> Volume::box_value_counts(const Dims& lo, const Dims& hi) const {
   for (int a = 0; a < 3; ++a)
-    if (lo[a] < 0 || hi[a] > dims_[a] || lo[a] > hi[a]) throw std::invalid_argument("box_value_counts: box outside the volume");
+    if (lo[a] < 0 || hi[a] > dims_[a] || lo[a] > hi[a])
+      throw std::invalid_argument("box_value_counts: box outside the volume");
   if (!has_voxels()) throw std::logic_error("box_value_counts: the voxels were dropped");
   if (type_ == VoxelType::F32) throw std::logic_error("box_value_counts: float voxels have no finite set of values");
   const size_t values = type_ == VoxelType::U8 ? 256 : 65536;
   const size_t tables = size_t(value_count_tables(type_)), planes = size_t(hi[2] - lo[2]);
   const size_t per = (planes + tables - 1) / tables;
   std::vector<std::vector<uint64_t>> parts(tables);
-  parallel_for(tables, [&](size_t worker) {  // contiguous planes per table
-    const size_t begin = std::min(planes, worker * per), end = std::min(planes, begin + per);
-    auto& c = parts[worker];
-    c.assign(values, 0);
-    for (int64_t k = lo[2] + int64_t(begin); k < lo[2] + int64_t(end); ++k)
-      for (int64_t j = lo[1]; j < hi[1]; ++j) {
-        const size_t row = size_t(dims_[0] * (j + dims_[1] * k));
-        if (type_ == VoxelType::U8)
-          for (int64_t i = lo[0]; i < hi[0]; ++i) ++c[data_[row + size_t(i)]];
-        else
-          for (int64_t i = lo[0]; i < hi[0]; ++i) ++c[reinterpret_cast<const uint16_t*>(data_.get())[row + size_t(i)]];
-      }
-  }, int(tables));
+  parallel_for(
+      tables,
+      [&](size_t worker) {  // contiguous planes per table
+        const size_t begin = std::min(planes, worker * per), end = std::min(planes, begin + per);
+        auto& c = parts[worker];
+        c.assign(values, 0);
+        for (int64_t k = lo[2] + int64_t(begin); k < lo[2] + int64_t(end); ++k)
+          for (int64_t j = lo[1]; j < hi[1]; ++j) {
+            const size_t row = size_t(dims_[0] * (j + dims_[1] * k));
+            if (type_ == VoxelType::U8)
+              for (int64_t i = lo[0]; i < hi[0]; ++i) ++c[data_[row + size_t(i)]];
+            else
+              for (int64_t i = lo[0]; i < hi[0]; ++i)
+                ++c[reinterpret_cast<const uint16_t*>(data_.get())[row + size_t(i)]];
+          }
+      },
+      int(tables));
   std::vector<uint64_t> all(values, 0);
   for (const auto& c : parts)
     for (size_t v = 0; v < c.size(); ++v) all[v] += c[v];
   return all;
 }
 
-std::vector<uint64_t> Volume::histogram_of_counts(const std::vector<uint64_t>& counts, double stored_lo, double stored_hi) {
+std::vector<uint64_t> Volume::histogram_of_counts(const std::vector<uint64_t>& counts, double stored_lo,
+                                                  double stored_hi) {
   const double span = stored_hi - stored_lo;
   const double scale = span > 0 ? kHistogramBins / span : 0.0;
   std::vector<uint64_t> h(kHistogramBins, 0);
@@ -221,7 +227,8 @@ std::vector<uint64_t> Volume::histogram_of_counts(const std::vector<uint64_t>& c
 
 std::vector<uint64_t> Volume::box_histogram(const Dims& lo, const Dims& hi, double stored_lo, double stored_hi) const {
   for (int a = 0; a < 3; ++a)
-    if (lo[a] < 0 || hi[a] > dims_[a] || lo[a] > hi[a]) throw std::invalid_argument("box_histogram: box outside the volume");
+    if (lo[a] < 0 || hi[a] > dims_[a] || lo[a] > hi[a])
+      throw std::invalid_argument("box_histogram: box outside the volume");
   if (!has_voxels()) throw std::logic_error("box_histogram: the voxels were dropped");
   const double span = stored_hi - stored_lo;
   const double scale = span > 0 ? kHistogramBins / span : 0.0;
@@ -231,7 +238,8 @@ std::vector<uint64_t> Volume::box_histogram(const Dims& lo, const Dims& hi, doub
     for (int64_t k = lo[2] + int64_t(begin); k < lo[2] + int64_t(end); ++k)
       for (int64_t j = lo[1]; j < hi[1]; ++j) {
         const size_t row = size_t(dims_[0] * (j + dims_[1] * k));
-        for (int64_t i = lo[0]; i < hi[0]; ++i) h[size_t(histogram_bin(stored(row + size_t(i)), stored_lo, scale, kHistogramBins))]++;
+        for (int64_t i = lo[0]; i < hi[0]; ++i)
+          h[size_t(histogram_bin(stored(row + size_t(i)), stored_lo, scale, kHistogramBins))]++;
       }
   });
   std::vector<uint64_t> h(kHistogramBins, 0);
@@ -242,10 +250,9 @@ std::vector<uint64_t> Volume::box_histogram(const Dims& lo, const Dims& hi, doub
 
 std::string Volume::to_string() const {
   std::ostringstream s;
-  s << "Volume{" << (name.empty() ? "" : name + " ") << dims_[0] << "x" << dims_[1] << "x"
-    << dims_[2] << " " << peakcast::to_string(source_) << " spacing (" << spacing.x << ","
-    << spacing.y << "," << spacing.z << ") origin (" << origin.x << "," << origin.y << ","
-    << origin.z << ") range [" << min_value << "," << max_value << "]}";
+  s << "Volume{" << (name.empty() ? "" : name + " ") << dims_[0] << "x" << dims_[1] << "x" << dims_[2] << " "
+    << peakcast::to_string(source_) << " spacing (" << spacing.x << "," << spacing.y << "," << spacing.z << ") origin ("
+    << origin.x << "," << origin.y << "," << origin.z << ") range [" << min_value << "," << max_value << "]}";
   return s.str();
 }
 

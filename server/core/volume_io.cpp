@@ -95,10 +95,9 @@ void check_header(const fs::path& file, const VolumeHeader& h, const LoadOptions
   int64_t count = 1;
   for (int a = 0; a < 3; ++a) {
     if (h.dims[a] <= 0)
-      throw VolumeError(file, "dimension " + std::to_string(a) + " is " +
-                                  std::to_string(h.dims[a]) + "; every size must be >= 1");
-    if (__builtin_mul_overflow(count, h.dims[a], &count))
-      throw VolumeError(file, "sizes overflow 64-bit voxel count");
+      throw VolumeError(
+          file, "dimension " + std::to_string(a) + " is " + std::to_string(h.dims[a]) + "; every size must be >= 1");
+    if (__builtin_mul_overflow(count, h.dims[a], &count)) throw VolumeError(file, "sizes overflow 64-bit voxel count");
   }
   int64_t bytes = 0;
   if (__builtin_mul_overflow(count, int64_t(source_bytes(h.source)), &bytes))
@@ -106,11 +105,9 @@ void check_header(const fs::path& file, const VolumeHeader& h, const LoadOptions
   if (count > options.max_voxels && !options.region)  // a region is checked by its own size
     throw VolumeError(file, std::to_string(h.dims[0]) + "x" + std::to_string(h.dims[1]) + "x" +
                                 std::to_string(h.dims[2]) + " = " + std::to_string(count) +
-                                " voxels exceeds the limit of " +
-                                std::to_string(options.max_voxels));
+                                " voxels exceeds the limit of " + std::to_string(options.max_voxels));
   for (int a = 0; a < 3; ++a)
-    if (!(h.spacing[a] > 0) || !std::isfinite(h.spacing[a]))
-      throw VolumeError(file, "spacing must be finite and > 0");
+    if (!(h.spacing[a] > 0) || !std::isfinite(h.spacing[a])) throw VolumeError(file, "spacing must be finite and > 0");
   const int64_t voxel_mem = count * int64_t(voxel_bytes(storage_type(h.source)));
   if (options.memory_budget_bytes > 0 && !options.region && voxel_mem > options.memory_budget_bytes)
     throw VolumeError(file, std::to_string(voxel_mem >> 20) + " MiB of voxels exceeds the memory budget of " +
@@ -145,8 +142,8 @@ size_t read_raw(const fs::path& path, int64_t skip, uint8_t* dst, size_t want, b
   if (offset > size) throw VolumeError(path, "byte skip beyond the end of the file");
   // Refuse truncated files before touching the data (the only file, or the last of several).
   if (last && size - offset < int64_t(want))
-    throw VolumeError(path, "truncated: header promises " + std::to_string(want) +
-                                " data bytes, file holds " + std::to_string(size - offset));
+    throw VolumeError(path, "truncated: header promises " + std::to_string(want) + " data bytes, file holds " +
+                                std::to_string(size - offset));
   const size_t avail = size_t(std::max<int64_t>(0, size - offset));
   const size_t n = std::min(want, avail);
   constexpr size_t piece = size_t(8) << 20;
@@ -227,7 +224,7 @@ void finish_volume(const fs::path& file, Volume& v, bool big_endian, const LoadO
           return;                    // statistics): none over NaN (its histogram bin is undefined)
         case NonFinitePolicy::Replace:
           replace_nonfinite(v, f.lo <= f.hi ? f.lo : 0.f, f.lo <= f.hi ? f.hi : 0.f);  // nothing finite: 0
-          return;  // statistics done
+          return;                                                                      // statistics done
       }
     }
   }
@@ -245,8 +242,9 @@ void check_payload_files(const fs::path& header_file, const PayloadSpec& payload
       const fs::path n = f.lexically_normal();
       const bool beside = n.parent_path() == self.parent_path() && n.stem() == self.stem();  // id.json -> id.raw
       if (n != self && !beside)
-        throw VolumeError(header_file, "its header names another data file: an upload is one file "
-                                       "(send the voxels attached: .nrrd, .mha with ElementDataFile = LOCAL)");
+        throw VolumeError(header_file,
+                          "its header names another data file: an upload is one file "
+                          "(send the voxels attached: .nrrd, .mha with ElementDataFile = LOCAL)");
     }
   }
   for (const fs::path& f : payload.files) file_roots::check(f);
@@ -269,10 +267,9 @@ Volume read_payload(const fs::path& header_file, const VolumeHeader& h, const Pa
       available += std::max<int64_t>(size, 0);
     }
     if (available < int64_t(total))
-      throw VolumeError(payload.files.back(),
-                        "truncated: header " + header_file.filename().string() + " promises " +
-                            std::to_string(total) + " data bytes, the data holds " +
-                            std::to_string(available));
+      throw VolumeError(payload.files.back(), "truncated: header " + header_file.filename().string() + " promises " +
+                                                  std::to_string(total) + " data bytes, the data holds " +
+                                                  std::to_string(available));
   }
   LoadProgress progress(options, total);
   if (options.region) {  // raw: checked above
@@ -296,8 +293,8 @@ Volume read_payload(const fs::path& header_file, const VolumeHeader& h, const Pa
     }
   }
   if (got < total)
-    throw VolumeError(payload.files.back(), "truncated: expected " + std::to_string(total) +
-                                                " data bytes, got " + std::to_string(got));
+    throw VolumeError(payload.files.back(),
+                      "truncated: expected " + std::to_string(total) + " data bytes, got " + std::to_string(got));
   finish_volume(header_file, v, h.big_endian, options);
   progress.done();
   return v;
@@ -343,7 +340,8 @@ Volume load_volume(const fs::path& path, const LoadOptions& options) {
     v.pyramid_levels = int(cv->levels().size());
     v.full_dims = cv->levels()[0].dims;
   } else if (fs::is_directory(path, ec) || ext == ".tif" || ext == ".tiff") {
-    if (options.region) throw RegionNotReadable(path, "a region of a TIFF stack cannot be read (use NRRD, MetaImage or raw)");
+    if (options.region)
+      throw RegionNotReadable(path, "a region of a TIFF stack cannot be read (use NRRD, MetaImage or raw)");
     v = read_tiff(path, options);
   } else if (ext == ".nrrd" || ext == ".nhdr") {
     v = read_nrrd(path, options);

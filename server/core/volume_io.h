@@ -100,8 +100,8 @@ int64_t count_nonfinite(const Volume& v, const Dims& lo, const Dims& hi);
 // nonfinite_replaced and computes the statistics anew. Nothing for other types.
 void replace_nonfinite(Volume& v, float lo, float hi);
 
-// Resolves `requested` inside one of `roots` (defined in core/file_roots.cpp, beside the confinement) (the server's data directories). Relative paths
-// are tried against each root in order; absolute ones must lie inside a root. Throws
+// Resolves `requested` inside one of `roots` (defined in core/file_roots.cpp, beside the confinement) (the server's
+// data directories). Relative paths are tried against each root in order; absolute ones must lie inside a root. Throws
 // VolumeError on traversal outside every root or when nothing exists.
 std::filesystem::path resolve_in_roots(const std::filesystem::path& requested,
                                        const std::vector<std::filesystem::path>& roots);

@@ -39,14 +39,13 @@ class LoadProgress {
 };
 
 // Checks dims and the voxel limit (overflow-safe); throws VolumeError naming `file`.
-void check_header(const std::filesystem::path& file, const VolumeHeader& h,
-                  const LoadOptions& options);
+void check_header(const std::filesystem::path& file, const VolumeHeader& h, const LoadOptions& options);
 
 // Allocates the volume and streams the payload into it (raw: straight in; compressed: through a
 // 1 MiB buffer), then byte swaps, shifts signed types, applies the non-finite policy and
 // computes the statistics.
-Volume read_payload(const std::filesystem::path& header_file, const VolumeHeader& h,
-                    const PayloadSpec& payload, const LoadOptions& options);
+Volume read_payload(const std::filesystem::path& header_file, const VolumeHeader& h, const PayloadSpec& payload,
+                    const LoadOptions& options);
 
 // Inflates a gzip or zlib file (from `skip`) in 1 MiB chunks into `sink`, which returns false to
 // stop early. Concatenated gzip members are read as one stream. Throws VolumeError when corrupt.
@@ -54,12 +53,11 @@ void inflate_file(const std::filesystem::path& path, int64_t skip, Encoding enc,
                   const std::function<bool(const uint8_t*, size_t)>& sink);
 
 // read_payload's path for options.region (volume_region.cpp): the region's rows only.
-Volume read_payload_region(const std::filesystem::path& header_file, const VolumeHeader& h,
-                           const PayloadSpec& payload, const LoadOptions& options);
+Volume read_payload_region(const std::filesystem::path& header_file, const VolumeHeader& h, const PayloadSpec& payload,
+                           const LoadOptions& options);
 
 // Post-processing shared with the TIFF reader.
-void finish_volume(const std::filesystem::path& file, Volume& v, bool big_endian,
-                   const LoadOptions& options);
+void finish_volume(const std::filesystem::path& file, Volume& v, bool big_endian, const LoadOptions& options);
 
 Volume read_nrrd(const std::filesystem::path& path, const LoadOptions& options);
 Volume read_metaimage(const std::filesystem::path& path, const LoadOptions& options);
@@ -69,9 +67,7 @@ Volume read_tiff(const std::filesystem::path& path, const LoadOptions& options);
 std::string trim(const std::string& s);
 std::string lower(std::string s);
 std::vector<std::string> split_ws(const std::string& s);
-double parse_double(const std::filesystem::path& file, const std::string& field,
-                    const std::string& text);
-int64_t parse_int(const std::filesystem::path& file, const std::string& field,
-                  const std::string& text);
+double parse_double(const std::filesystem::path& file, const std::string& field, const std::string& text);
+int64_t parse_int(const std::filesystem::path& file, const std::string& field, const std::string& text);
 
 }  // namespace peakcast::detail

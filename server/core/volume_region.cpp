@@ -112,10 +112,13 @@ Volume read_payload_region(const fs::path& header_file, const VolumeHeader& h, c
   check_header(header_file, rh, local);  // the region's own voxel limit
   const int64_t bpv = int64_t(source_bytes(h.source));
   const int64_t total = h.voxel_count() * bpv;
-  const Rows rows{h.dims[0], h.dims[1], region.lo[0], region.lo[1], region.lo[2], rh.dims[0], rh.dims[1], rh.dims[2], bpv};
+  const Rows rows{h.dims[0],  h.dims[1],  region.lo[0], region.lo[1], region.lo[2],
+                  rh.dims[0], rh.dims[1], rh.dims[2],   bpv};
   Volume v(rh);
-  if (payload.encoding == Encoding::Raw) read_raw_rows(payload, total, rows, v.data());
-  else read_compressed_rows(payload, rows, v.data());
+  if (payload.encoding == Encoding::Raw)
+    read_raw_rows(payload, total, rows, v.data());
+  else
+    read_compressed_rows(payload, rows, v.data());
   finish_volume(header_file, v, h.big_endian, local);
   v.source_dims = h.dims;
   v.region_lo = region.lo;

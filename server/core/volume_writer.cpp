@@ -49,8 +49,8 @@ std::string met_type(SourceType t) {
 std::string nrrd_header(const VolumeHeader& h, bool gzip, const std::string& data_file) {
   std::ostringstream s;
   s.precision(17);
-  s << "NRRD0004\n# written by peakcast\ntype: " << nrrd_type(h.source) << "\ndimension: 3\nsizes: "
-    << h.dims[0] << " " << h.dims[1] << " " << h.dims[2] << "\nspace: right-anterior-superior\n"
+  s << "NRRD0004\n# written by peakcast\ntype: " << nrrd_type(h.source) << "\ndimension: 3\nsizes: " << h.dims[0] << " "
+    << h.dims[1] << " " << h.dims[2] << "\nspace: right-anterior-superior\n"
     << "space directions: (" << h.spacing.x << ",0,0) (0," << h.spacing.y << ",0) (0,0," << h.spacing.z
     << ")\nspace origin: (" << h.origin.x << "," << h.origin.y << "," << h.origin.z << ")\n"
     << "encoding: " << (gzip ? "gzip" : "raw") << "\nendian: little\n";
@@ -134,7 +134,8 @@ void SlabWriter::write(const void* data, size_t bytes) {
   } else {
     for (size_t off = 0; off < bytes;) {
       unsigned n = unsigned(std::min<size_t>(bytes - off, 1u << 30));
-      if (gzwrite(impl_->gz, p + off, n) != int(n)) throw std::runtime_error(impl_->path.string() + ": gzip write failed");
+      if (gzwrite(impl_->gz, p + off, n) != int(n))
+        throw std::runtime_error(impl_->path.string() + ": gzip write failed");
       off += n;
     }
   }
@@ -149,8 +150,8 @@ void SlabWriter::close() {
   impl_->gz = nullptr;
   if (!ok) throw std::runtime_error(impl_->path.string() + ": write failed on close");
   if (impl_->written != impl_->expected)
-    throw std::runtime_error(impl_->path.string() + ": wrote " + std::to_string(impl_->written) +
-                             " bytes, expected " + std::to_string(impl_->expected));
+    throw std::runtime_error(impl_->path.string() + ": wrote " + std::to_string(impl_->written) + " bytes, expected " +
+                             std::to_string(impl_->expected));
 }
 
 void write_volume(const fs::path& path, const Volume& v, WriteOptions options) {

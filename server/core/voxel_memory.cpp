@@ -28,8 +28,10 @@ void advise_huge_pages(void* p, size_t bytes) {
 
 void VoxelFree::operator()(void* p) const noexcept {
   if (!p) return;
-  if (mapped) munmap(p, mapped);
-  else std::free(p);
+  if (mapped)
+    munmap(p, mapped);
+  else
+    std::free(p);
 }
 
 VoxelArray<unsigned char> allocate_voxel_bytes(size_t bytes) {

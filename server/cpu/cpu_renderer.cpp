@@ -26,7 +26,8 @@ constexpr int kTile = kRayPacket;  // pixels per tile side: neighbouring rays sh
 
 const CpuVolume& cpu_volume(const render::ResidentVolume& v) {
   const auto* cv = dynamic_cast<const CpuVolume*>(&v);
-  if (!cv) throw std::invalid_argument("the CPU renderer draws CPU volumes only (this one was made by another backend)");
+  if (!cv)
+    throw std::invalid_argument("the CPU renderer draws CPU volumes only (this one was made by another backend)");
   return *cv;
 }
 
@@ -118,15 +119,16 @@ void CpuRenderer::cell_tables(CpuFrame& f, const CpuVolume& cv, const MacrocellG
     const std::string mkey = std::to_string(cv.serial()) + " " + cells.to_string();
     CellBytes* m = cache_find(multipliers_, mkey);
     if (!m) {
-      m = &cache_insert(multipliers_, CellBytes{mkey, adaptive_multipliers(cells, volume_stddev(cv.volume()))}, kCacheEntries);
+      m = &cache_insert(multipliers_, CellBytes{mkey, adaptive_multipliers(cells, volume_stddev(cv.volume()))},
+                        kCacheEntries);
       ++seam_.table_builds;
     }
     f.cell_stride = m->bytes.data();
   }
 }
 
-CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, render::RenderPath path, const PixelRect& rect,
-                              const render::Brick* brick, RenderStats* stats) {
+CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, render::RenderPath path,
+                              const PixelRect& rect, const render::Brick* brick, RenderStats* stats) {
   const MacrocellGrid& cells = cv.macrocells(s.scene.render.filter);
   render::SetupOptions o;
   o.leaps = seam_.leaps;

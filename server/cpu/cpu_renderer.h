@@ -40,7 +40,8 @@ class CpuRenderer : public render::Renderer {
 
   using Brick = render::Brick;
   Image render_brick(const render::ResidentVolume& volume, const ResolvedScene& scene, const Brick& brick,
-                     render::RenderStats* stats = nullptr, std::optional<render::PixelRect> rect = std::nullopt) override;
+                     render::RenderStats* stats = nullptr,
+                     std::optional<render::PixelRect> rect = std::nullopt) override;
   // Off: every ray alone (cast_ray), without the packet leaps of cast_rays. Tests show both
   // give the same pixels and sample counts.
   void set_ray_packets(bool on) { packets_ = on; }

@@ -41,8 +41,8 @@ VoxelGrid make_voxel_grid(const Volume& v, const uint8_t* data, VoxelType type, 
 bool CpuVolume::floats_in_place(const Volume& v, double scale, double bias) {
   constexpr double kReach = 64.0;
   const double stored = std::max(std::abs(v.min_value - v.value_offset), std::abs(v.max_value - v.value_offset));
-  return std::isfinite(stored) && std::isnormal(float(scale)) && stored * scale <= kReach &&
-         std::abs(bias) <= kReach && stored <= 1e30;
+  return std::isfinite(stored) && std::isnormal(float(scale)) && stored * scale <= kReach && std::abs(bias) <= kReach &&
+         stored <= 1e30;
 }
 
 CpuVolume::CpuVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells)

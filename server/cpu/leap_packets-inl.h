@@ -64,24 +64,29 @@ void leaps_to_first_occupied(const CpuFrame& f, const LeapInputs* in, int n, int
       for (int a = 0; a < 3; ++a) {
         const auto x = hn::Add(hn::Load(df, xo[a]), hn::Mul(t, hn::Load(df, dv[a])));
         // cell_of: 0 for x <= 0 or NaN (max returns its second operand then), else min(int(x), hi)
-        const auto u = hn::Min(hn::Max(hn::Mul(x, hn::Set(df, inv_edge)), hn::Zero(df)), hn::Set(df, float(grid[a] - 1)));
+        const auto u =
+            hn::Min(hn::Max(hn::Mul(x, hn::Set(df, inv_edge)), hn::Zero(df)), hn::Set(df, float(grid[a] - 1)));
         c[a] = hn::ConvertTo(di, u);
       }
-      const auto index = hn::Add(c[0], hn::Mul(hn::Set(di, grid[0]), hn::Add(c[1], hn::Mul(hn::Set(di, grid[1]), c[2]))));
+      const auto index =
+          hn::Add(c[0], hn::Mul(hn::Set(di, grid[0]), hn::Add(c[1], hn::Mul(hn::Set(di, grid[1]), c[2]))));
       const auto d = hn::And(hn::GatherOffset(di, table, index), hn::Set(di, 0xFF));
       const auto empty = hn::And(active, hn::RebindMask(di, hn::Ne(d, hn::Zero(di))));
       const auto reach = hn::Sub(d, hn::Set(di, 1));
       auto t_leave = hn::Set(df, kFar);
       for (int a = 0; a < 3; ++a) {
-        const auto face = hn::Add(hn::ConvertTo(df, hn::Add(c[a], hn::Mul(hn::Load(di, stp[a]), reach))), hn::Load(df, ahead[a]));
-        const auto ta = hn::Mul(hn::Sub(hn::Mul(face, hn::Set(df, edge)), hn::Load(df, xo[a])), hn::Load(df, inv_dv[a]));
+        const auto face =
+            hn::Add(hn::ConvertTo(df, hn::Add(c[a], hn::Mul(hn::Load(di, stp[a]), reach))), hn::Load(df, ahead[a]));
+        const auto ta =
+            hn::Mul(hn::Sub(hn::Mul(face, hn::Set(df, edge)), hn::Load(df, xo[a])), hn::Load(df, inv_dv[a]));
         const auto moves = hn::Ge(hn::Abs(hn::Load(df, dv[a])), hn::Set(df, 1e-20f));
         t_leave = hn::IfThenElse(moves, hn::Min(t_leave, ta), t_leave);
       }
       // lattice_index(min(t_leave, t_limit)): d / B on a uniform lattice, else the stable form
       const auto dd = hn::Max(hn::Zero(df), hn::Sub(hn::Min(t_leave, hn::Load(df, lim)), vt0));
-      const auto general = hn::Div(hn::Mul(hn::Set(df, 2.f), dd),
-                                   hn::Add(vB, hn::Sqrt(hn::Add(hn::Mul(vB, vB), hn::Mul(hn::Mul(hn::Set(df, 2.f), vA), dd)))));
+      const auto general =
+          hn::Div(hn::Mul(hn::Set(df, 2.f), dd),
+                  hn::Add(vB, hn::Sqrt(hn::Add(hn::Mul(vB, vB), hn::Mul(hn::Mul(hn::Set(df, 2.f), vA), dd)))));
       const auto idx = hn::IfThenElse(hn::Eq(vA, hn::Zero(df)), hn::Div(dd, vB), general);
       const auto next = hn::Ceil(idx);
       const auto cap = hn::Add(vlast, hn::Set(di, 1));
@@ -96,7 +101,6 @@ void leaps_to_first_occupied(const CpuFrame& f, const LeapInputs* in, int n, int
     for (int q = 0; q < N && k0 + q < n; ++q) first[k0 + q] = out[q];
   }
 }
-
 
 }  // namespace
 }  // namespace HWY_NAMESPACE

@@ -46,9 +46,7 @@ class RayCaster {
   // cells, as leaps_to_first_occupied found), then the ray's end.
   RayResult walk(int first);
   RayResult result() const { return {s_.acc, s_.samples}; }
-  LeapInputs leap_inputs() {
-    return {cell_coords(r_.o), r_.d / P.spacing, L_.t0, L_.A, L_.B, span_y_ + P.step, last_};
-  }
+  LeapInputs leap_inputs() { return {cell_coords(r_.o), r_.d / P.spacing, L_.t0, L_.A, L_.B, span_y_ + P.step, last_}; }
 
  private:
   // The frame's uniforms and switches, as the shared code (shaders/ray/) reads them.
@@ -89,7 +87,8 @@ class RayCaster {
   // The peak table's cell (i, j), layer `layer`; peak_cell_any: layer 0 holds a peak there (one
   // bit per cell, so that a segment finding none does not read the table, which misses the cache).
   vec4 peak_slots(int i, int j, int layer) const {
-    const float* p = f_.peak_texels + ((size_t(layer) * size_t(P.peak_bins) + size_t(j)) * size_t(P.peak_bins) + size_t(i)) * 4;
+    const float* p =
+        f_.peak_texels + ((size_t(layer) * size_t(P.peak_bins) + size_t(j)) * size_t(P.peak_bins) + size_t(i)) * 4;
     return vec4(p[0], p[1], p[2], p[3]);
   }
   bool peak_cell_any(int i, int j) const { return test_bit(f_.peak_any, size_t(j) * size_t(P.peak_bins) + size_t(i)); }
@@ -97,7 +96,9 @@ class RayCaster {
   bool preint_lookup(const Ray&, float s_front, float s_back, vec4& out) const;
   // The shared walk of kind kKind (walk_kind()) over this ray's state.
   template <int kKind>
-  HWY_NOINLINE void walk_as(int first) { walk_ray(r_, L_, s_, k_, w_, last_, vec2(span_x_, span_y_), first, kKind); }
+  HWY_NOINLINE void walk_as(int first) {
+    walk_ray(r_, L_, s_, k_, w_, last_, vec2(span_x_, span_y_), first, kKind);
+  }
   // The ray start's hooks (ray/ray_start.glsl): the ray texture's controls at uv (bilinear
   // between texel centres, as GL's sampler) and the opacity of the bricks in front.
   vec3 ray_texture_at(vec2 uv) const {
@@ -106,7 +107,8 @@ class RayCaster {
   }
   float front_opacity(vec2 pixel) const {
     if (!f_.front_opacity) return -1.f;
-    return f_.front_opacity[size_t(int(pixel.y) - P.tile_y) * size_t(P.front_opacity_width) + size_t(int(pixel.x) - P.tile_x)];
+    return f_.front_opacity[size_t(int(pixel.y) - P.tile_y) * size_t(P.front_opacity_width) +
+                            size_t(int(pixel.x) - P.tile_x)];
   }
   // The walks' hooks (ray/walks.glsl): the macrocell tables, one byte per cell in grid order.
   size_t cell_offset(ivec3 c) const {
@@ -127,7 +129,8 @@ class RayCaster {
   bool dense_run(const Ray&, const Lattice& L, RayState& s, RayWalk& k, int& i, int& visited, int last, bool cells,
                  vec3 xo, vec3 dv) {
     if (!dense_) return false;
-    return cells ? dense_loop<true>(L, s, k, i, visited, last, xo, dv) : dense_loop<false>(L, s, k, i, visited, last, xo, dv);
+    return cells ? dense_loop<true>(L, s, k, i, visited, last, xo, dv)
+                 : dense_loop<false>(L, s, k, i, visited, last, xo, dv);
   }
   template <bool kCells>
   bool dense_loop(const Lattice& L, RayState& s, RayWalk& k, int& i, int& visited, int last, vec3 xo, vec3 dv);
@@ -149,7 +152,8 @@ class RayCaster {
   RayState s_{vec4(0.f), 0.f, 1.f, 1.f, 1.f, true, 0.f, 0.f, false, false};
   int last_ = 0;  // the walk's last lattice index (a brick's may end before the ray's)
   RayWalk k_{0, 0, std::numeric_limits<int>::max(), 0, 0.f, 0.f, ivec4(-1, -1, 1, 1)};  // the walk's bookkeeping
-  SampleWindow w_{vec4(0.f), vec4(0.f), vec4(0.f), vec3(0.f), vec3(0.f), vec3(0.f), vec3(0.f), 0, 0u};  // virtual samples
+  SampleWindow w_{vec4(0.f), vec4(0.f), vec4(0.f), vec3(0.f), vec3(0.f),
+                  vec3(0.f), vec3(0.f), 0,         0u};  // virtual samples
   // The current run of samples (sample_run): indices run_first_ + k * run_stride_, k < run_count_.
   float run_[kMaxRun];
   int run_first_ = 0, run_stride_ = 1, run_count_ = 0, run_batch_ = 0;

@@ -67,7 +67,6 @@ HWY_NOINLINE float RayCaster::new_run(int i, int m) {
   return run_[0];
 }
 
-
 bool RayCaster::setup(float px, float py) {
   s_.stop = P.stop;
   vec2 span;
@@ -129,7 +128,9 @@ void CastRays(const CpuFrame& f, const float* px, const float* py, int n, RayRes
     }
   }
 }
-RayResult CastRayBare(const CpuFrame& f, float px, float py, int budget) { return RayCaster(f).cast_bare(px, py, budget); }
+RayResult CastRayBare(const CpuFrame& f, float px, float py, int budget) {
+  return RayCaster(f).cast_bare(px, py, budget);
+}
 
 }  // namespace HWY_NAMESPACE
 }  // namespace peakcast::cpu

@@ -21,7 +21,7 @@ namespace peakcast::cpu {
 struct CpuFrame {
   render::VariantKey key;
   VoxelGrid voxels;
-  int run_lanes = 8;  // sample_run_lanes()
+  int run_lanes = 8;       // sample_run_lanes()
   bool dense_runs = true;  // plain DVR's fast path over runs of points (the walks' dense_run hook)
   // The uniforms and switches the shared ray code reads (shaders/ray/uniforms.glsl, variant.glsl),
   // filled by render/ray_uniforms.cpp as for GL. The CPU's sampler reads the voxels in TF
@@ -37,16 +37,16 @@ struct CpuFrame {
   const uint8_t* cell_distance = nullptr;  // space skipping
   // Space skipping found no occupied cell: no ray samples anything, every pixel is background.
   bool nothing_visible = false;
-  const uint8_t* cell_stride = nullptr;    // adaptive multipliers
+  const uint8_t* cell_stride = nullptr;  // adaptive multipliers
   // Per-TF tables.
-  const float* tf = nullptr;  // TransferFunction::kTableSize RGBA, opacity for `step`
+  const float* tf = nullptr;               // TransferFunction::kTableSize RGBA, opacity for `step`
   const uint64_t* tf_alpha_any = nullptr;  // bit i: texel i or i + 1 has opacity (tf_cell_bits)
-  const float* peak_texels = nullptr;  // [layer][j][i][4], TF coordinates, kNoPeakTexel = none
+  const float* peak_texels = nullptr;      // [layer][j][i][4], TF coordinates, kNoPeakTexel = none
   // Bit j * peak_bins + i: texel (i, j) of layer 0 holds a peak (peak_texel_bits). A segment
   // whose bit is clear finds none without reading the table, which misses the cache.
   const uint64_t* peak_any = nullptr;
   const glm::vec4* tf_points = nullptr;  // tf_point_pairs
-  const float* preint = nullptr;  // [j][i][4]
+  const float* preint = nullptr;         // [j][i][4]
   // Bit j * (preint_size - 1) + i: one of the texels (i..i+1, j..j+1) that a lookup in that cell
   // interpolates is not all zero (preint_cell_bits). A clear bit: the segment adds nothing.
   const uint64_t* preint_any = nullptr;

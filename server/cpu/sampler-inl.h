@@ -42,8 +42,8 @@ HWY_INLINE V Trilinear(const VoxelGrid& g, V x, V y, V z) {
     i[a] = hn::Min(hn::ConvertTo(di, c), hn::Set(di, g.base_max[a]));
     f[a] = hn::Sub(c, hn::ConvertTo(df, i[a]));
   }
-  const VIx o = hn::Add(i[0], hn::Add(hn::Mul(i[1], hn::Set(di, int32_t(g.stride_y))),
-                                      hn::Mul(i[2], hn::Set(di, int32_t(g.stride_z)))));
+  const VIx o = hn::Add(
+      i[0], hn::Add(hn::Mul(i[1], hn::Set(di, int32_t(g.stride_y))), hn::Mul(i[2], hn::Set(di, int32_t(g.stride_z)))));
   const VIx oy = hn::Set(di, int32_t(g.next_y)), oz = hn::Set(di, int32_t(g.next_z));
   const VIx offs[4] = {o, hn::Add(o, oy), hn::Add(o, oz), hn::Add(o, hn::Add(oy, oz))};
   V rows[4];
@@ -115,8 +115,9 @@ void RunT(const VoxelGrid& g, const SampleRun& r, float* HWY_RESTRICT out) {
     const VF j = hn::Add(hn::Set(df, float(r.first)),
                          hn::Mul(hn::Add(hn::Set(df, float(k)), hn::Iota(df, 0.f)), hn::Set(df, float(r.stride))));
     // t = t0 + j * (B + A * j * 0.5), then ((o + t d) + half) * inv_spacing, as shaders/ray/ray_setup.glsl.
-    const VF t = hn::Add(hn::Set(df, r.t0),
-                         hn::Mul(j, hn::Add(hn::Set(df, r.B), hn::Mul(hn::Mul(hn::Set(df, r.A), j), hn::Set(df, 0.5f)))));
+    const VF t =
+        hn::Add(hn::Set(df, r.t0),
+                hn::Mul(j, hn::Add(hn::Set(df, r.B), hn::Mul(hn::Mul(hn::Set(df, r.A), j), hn::Set(df, 0.5f)))));
     VF p[3];
     for (int a = 0; a < 3; ++a)
       p[a] = hn::Mul(hn::Add(hn::Add(hn::Set(df, r.o[a]), hn::Mul(t, hn::Set(df, r.d[a]))), hn::Set(df, r.half[a])),
@@ -158,7 +159,8 @@ HWY_INLINE void Run(const VoxelGrid& g, const SampleRun& r, float* HWY_RESTRICT 
   }
 #endif
   switch (g.type) {
-    case VoxelType::U8: return g.tricubic ? RunT<VoxelType::U8, true>(g, r, out) : RunT<VoxelType::U8, false>(g, r, out);
+    case VoxelType::U8:
+      return g.tricubic ? RunT<VoxelType::U8, true>(g, r, out) : RunT<VoxelType::U8, false>(g, r, out);
     case VoxelType::U16:
       return g.tricubic ? RunT<VoxelType::U16, true>(g, r, out) : RunT<VoxelType::U16, false>(g, r, out);
     case VoxelType::F32:

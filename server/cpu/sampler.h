@@ -18,16 +18,17 @@
 namespace peakcast::cpu {
 
 // The voxels as the sampler reads them: as stored (mapped by scale and bias per sample), or a
-// float volume's copy in TF coordinates (CpuVolume::floats_in_place). At least Volume::kTailPadding readable bytes follow the last voxel.
+// float volume's copy in TF coordinates (CpuVolume::floats_in_place). At least Volume::kTailPadding readable bytes
+// follow the last voxel.
 struct VoxelGrid {
   const uint8_t* data = nullptr;
   VoxelType type = VoxelType::U8;
   int64_t n[3] = {1, 1, 1};
-  int64_t stride_y = 1, stride_z = 1;   // in voxels
-  int64_t next_y = 0, next_z = 0;       // the +1 neighbour's offset (0 on an axis of one voxel)
-  float hi[3] = {0, 0, 0};              // n - 1: positions are clamped to [0, hi]
-  int32_t base_max[3] = {0, 0, 0};      // the lower corner's largest index, max(n - 2, 0)
-  float scale = 1.f, bias = 0.f;        // stored value -> TF coordinate
+  int64_t stride_y = 1, stride_z = 1;  // in voxels
+  int64_t next_y = 0, next_z = 0;      // the +1 neighbour's offset (0 on an axis of one voxel)
+  float hi[3] = {0, 0, 0};             // n - 1: positions are clamped to [0, hi]
+  int32_t base_max[3] = {0, 0, 0};     // the lower corner's largest index, max(n - 2, 0)
+  float scale = 1.f, bias = 0.f;       // stored value -> TF coordinate
   bool tricubic = false;
   bool simd_offsets = true;  // byte offsets fit the SIMD gathers' 32-bit lanes
 

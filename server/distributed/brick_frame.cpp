@@ -71,7 +71,8 @@ render::Brick frame_brick(const Brick& b, const Index3& dims) {
 }
 
 std::vector<float> composite_over(const std::vector<std::vector<float>>& layers, const std::vector<int>& order) {
-  if (layers.empty() || order.size() != layers.size()) throw std::invalid_argument("composite_over: one order entry per layer");
+  if (layers.empty() || order.size() != layers.size())
+    throw std::invalid_argument("composite_over: one order entry per layer");
   std::vector<float> out(layers[0].size(), 0.f);
   for (int k : order) {
     const std::vector<float>& l = layers.at(size_t(k));

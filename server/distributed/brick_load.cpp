@@ -13,7 +13,6 @@
 namespace peakcast::distributed {
 namespace {
 
-
 // The whole volume's macrocell grid of a filter support, reduced from every rank's share
 // (core/macrocell_share.h): each rank then walks the cells one process walks.
 std::shared_ptr<const MacrocellGrid> reduce_grid(const Volume& v, const Brick& mine, const Index3& dims,

@@ -38,7 +38,6 @@ std::shared_ptr<Volume> read_brick_voxels(const std::string& path, const LoadOpt
   return std::make_shared<Volume>(load_volume(path, o));
 }
 
-
 // The brick's voxels with NaN/Inf as one process replaces them (finite extremes of the whole).
 void replace_with(Volume& v, const SequenceStatistics& s) {
   const float lo = float(s.box.min_value - v.value_offset), hi = float(s.box.max_value - v.value_offset);
@@ -102,8 +101,10 @@ int bricks_for_budget(const Index3& dims, int ghost, size_t voxel_bytes, int64_t
   int lo = std::max(int(least), hi / 2 + 1);  // the fewest that fits lies in [lo, hi]
   while (lo < hi) {
     const int mid = (lo + hi) / 2;
-    if (fits(mid)) hi = mid;
-    else lo = mid + 1;
+    if (fits(mid))
+      hi = mid;
+    else
+      lo = mid + 1;
   }
   return hi;
 }

@@ -34,7 +34,7 @@ struct SequenceStatistics {
   VolumeBox box;           // dims, spacing, origin, the whole volume's range and histogram
   VolumeMacrocells cells;  // the whole volume's grids, from the bricks' shares
   SourceType source = SourceType::U8;
-  int64_t nonfinite = 0;   // NaN/Inf voxels, replaced by the finite extremes
+  int64_t nonfinite = 0;  // NaN/Inf voxels, replaced by the finite extremes
   int bricks = 0;
   int64_t bytes_read = 0;  // voxel bytes of both passes
   double ms = 0.0;
@@ -46,16 +46,16 @@ struct SequenceStatistics {
 // The bricks of a sequence take 90% of budget_bytes; the rest is for decoding chunks, the image
 // layers and the grids. Statistics: integer volumes in one pass over the bricks (each stored
 // value counted: range and histogram exactly, and the macrocell shares); float volumes in two,
-// the finite range, then the histogram and the macrocell grids over that range. `base` carries level, time point, channel
-// and the non-finite policy (Refuse throws VolumeError as a whole read would).
-// The same, one brick read at a time (a server's render thread steps it between viewers' frames).
+// the finite range, then the histogram and the macrocell grids over that range. `base` carries level, time point,
+// channel and the non-finite policy (Refuse throws VolumeError as a whole read would). The same, one brick read at a
+// time (a server's render thread steps it between viewers' frames).
 class StatisticsRun {
  public:
   StatisticsRun(std::string path, LoadOptions base, int64_t budget_bytes);  // reads the header
   ~StatisticsRun();
   void step();  // the next brick; throws VolumeError as a whole read would
   bool done() const;
-  double progress() const;  // share of the brick reads done
+  double progress() const;    // share of the brick reads done
   SequenceStatistics take();  // once done
 
  private:

@@ -21,8 +21,10 @@ int main(int argc, char** argv) {
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
   for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--size")) side = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--frames")) frames = std::atoi(argv[i + 1]);
+    if (!std::strcmp(argv[i], "--size"))
+      side = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--frames"))
+      frames = std::atoi(argv[i + 1]);
   }
   if (side < 16 || side > 8192 || frames < 1 || frames > 10000) {
     if (rank == 0) std::fprintf(stderr, "usage: peakcast-composite-bench [--size 16..8192] [--frames 1..10000]\n");
@@ -59,10 +61,11 @@ int main(int argc, char** argv) {
       std::sort(v.begin(), v.end());
       return v[std::min(v.size() - 1, size_t(p * double(v.size())))];
     };
-    std::printf("{\"ranks\": %d, \"size\": %d, \"frames\": %d, \"icet_ms_median\": %.2f, \"icet_ms_p95\": %.2f, "
-                "\"wall_ms_median\": %.2f, \"layer_mib\": %.1f}\n",
-                size, side, frames, pct(icet_ms, 0.5), pct(icet_ms, 0.95), pct(wall_ms, 0.5),
-                double(layer.size() * sizeof(float)) / (1 << 20));
+    std::printf(
+        "{\"ranks\": %d, \"size\": %d, \"frames\": %d, \"icet_ms_median\": %.2f, \"icet_ms_p95\": %.2f, "
+        "\"wall_ms_median\": %.2f, \"layer_mib\": %.1f}\n",
+        size, side, frames, pct(icet_ms, 0.5), pct(icet_ms, 0.95), pct(wall_ms, 0.5),
+        double(layer.size() * sizeof(float)) / (1 << 20));
   }
   MPI_Finalize();
   return 0;

@@ -67,7 +67,8 @@ class Coordinator {
   LoadedVolume load(const std::filesystem::path& path, const LoadOptions& options);
   // Render thread: the brick load() read for `whole`, with its command id; nothing when `whole`
   // did not come from load().
-  std::optional<std::pair<int64_t, BrickRead>> take_loaded(const std::unique_lock<std::mutex>& held, const Volume* whole);
+  std::optional<std::pair<int64_t, BrickRead>> take_loaded(const std::unique_lock<std::mutex>& held,
+                                                           const Volume* whole);
 
  private:
   void prune_locked();  // loaded volumes gone before they were drawn: forget their bricks

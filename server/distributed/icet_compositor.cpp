@@ -25,7 +25,7 @@ IceTCompositor::IceTCompositor(MPI_Comm comm, int display) : impl_(std::make_uni
   icetSetColorFormat(ICET_IMAGE_COLOR_RGBA_FLOAT);
   icetSetDepthFormat(ICET_IMAGE_DEPTH_NONE);
   icetCompositeMode(ICET_COMPOSITE_MODE_BLEND);
-  icetStrategy(ICET_STRATEGY_SEQUENTIAL);                     // one tile: the single-image strategy does the work
+  icetStrategy(ICET_STRATEGY_SEQUENTIAL);                      // one tile: the single-image strategy does the work
   icetSingleImageStrategy(ICET_SINGLE_IMAGE_STRATEGY_RADIXK);  // as ParaView
   icetEnable(ICET_ORDERED_COMPOSITE);
   icetDisable(ICET_CORRECT_COLORED_BACKGROUND);  // the background goes under the result afterwards

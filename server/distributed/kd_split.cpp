@@ -32,8 +32,8 @@ std::unique_ptr<KdNode> split(Index3 lo, Index3 hi, int ranks, int first_rank, s
     if (hi[a] - lo[a] >= 2 && (axis < 0 || hi[a] - lo[a] > hi[axis] - lo[axis])) axis = a;
   if (axis < 0)
     throw std::invalid_argument("cannot split a brick of " + std::to_string(hi[0] - lo[0]) + "x" +
-                                std::to_string(hi[1] - lo[1]) + "x" + std::to_string(hi[2] - lo[2]) +
-                                " cells among " + std::to_string(ranks) + " ranks: too few voxels");
+                                std::to_string(hi[1] - lo[1]) + "x" + std::to_string(hi[2] - lo[2]) + " cells among " +
+                                std::to_string(ranks) + " ranks: too few voxels");
   const int below = ranks / 2, above = ranks - below;
   const int64_t cells = hi[axis] - lo[axis];
   int64_t plane = lo[axis] + (cells * below + ranks / 2) / ranks;

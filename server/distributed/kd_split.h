@@ -23,8 +23,8 @@ using Index3 = std::array<int64_t, 3>;
 
 struct Brick {
   int rank = 0;
-  Index3 lo{}, hi{};             // the owned box in voxel coordinates, lo < hi on every axis
-  Index3 read_lo{}, read_hi{};   // the voxels to read: [read_lo, read_hi), the box plus ghosts
+  Index3 lo{}, hi{};            // the owned box in voxel coordinates, lo < hi on every axis
+  Index3 read_lo{}, read_hi{};  // the voxels to read: [read_lo, read_hi), the box plus ghosts
   int64_t voxels_read() const {
     return (read_hi[0] - read_lo[0]) * (read_hi[1] - read_lo[1]) * (read_hi[2] - read_lo[2]);
   }
@@ -33,8 +33,8 @@ struct Brick {
 
 // The k-d tree: each inner node splits its box at a voxel plane along one axis.
 struct KdNode {
-  int axis = -1;        // -1: a leaf holding `rank`
-  int64_t plane = 0;    // voxel coordinate of the split
+  int axis = -1;      // -1: a leaf holding `rank`
+  int64_t plane = 0;  // voxel coordinate of the split
   int rank = -1;
   std::unique_ptr<KdNode> below, above;  // coordinates < plane, > plane
 };

@@ -102,7 +102,9 @@ std::string render_command(const ResolvedScene& s, const render::PixelRect& rect
   bare.tf = s.tf;
   bare.opacity_unit = s.tf.opacity_unit;
   bare.camera = s.camera;
-  nlohmann::json j = {{"scene", scene_to_json(bare)}, {"step", s.step}, {"rect", {rect.x, rect.y, rect.w, rect.h}},
+  nlohmann::json j = {{"scene", scene_to_json(bare)},
+                      {"step", s.step},
+                      {"rect", {rect.x, rect.y, rect.w, rect.h}},
                       {"samples", samples}};
   if (s.ray_texture) j["ray_texture"] = textures.message(*s.ray_texture);
   const std::vector<uint8_t> cbor = nlohmann::json::to_cbor(j);
@@ -145,7 +147,10 @@ struct MpiRenderer::Impl {
 class MpiRenderer::Resident : public render::ResidentVolume {
  public:
   Resident(std::shared_ptr<Coordinator> coord, int64_t id, std::shared_ptr<const Volume> whole, BrickSet b)
-      : ResidentVolume(std::move(whole), {}, VoxelsElsewhere{}), coord_(std::move(coord)), id_(id), bricks(std::move(b)) {}
+      : ResidentVolume(std::move(whole), {}, VoxelsElsewhere{}),
+        coord_(std::move(coord)),
+        id_(id),
+        bricks(std::move(b)) {}
   ~Resident() override { coord_->forget(id_); }
   size_t resident_bytes() const override { return bricks.brick->volume().byte_size(); }
   bool drop_host_voxels() override {  // the bricks are the copy; the whole volume need not stay
@@ -184,7 +189,8 @@ std::string MpiRenderer::description() const {
 std::unique_ptr<render::ResidentVolume> MpiRenderer::make_resident(std::shared_ptr<const Volume> volume,
                                                                    VolumeMacrocells) {
   if (volume->source_path.empty())
-    throw std::invalid_argument("distributed rendering reads each rank's brick from the volume's file; this volume has none");
+    throw std::invalid_argument(
+        "distributed rendering reads each rank's brick from the volume's file; this volume has none");
   Coordinator& c = *impl_->coord;
   auto held = c.lock();
   if (auto loaded = c.take_loaded(held, volume.get())) {  // the server's volumes: read by Coordinator::load
@@ -203,7 +209,8 @@ std::unique_ptr<render::ResidentVolume> MpiRenderer::make_resident(std::shared_p
   if (head.source_dims != volume->dims())
     throw std::runtime_error(volume->source_path + ": the file changed since it was read (its dims differ)");
   c.check_split(volume->source_path, head.source_dims, default_ghost());
-  const VolumeBox box{volume->dims(), volume->spacing, volume->origin, volume->min_value, volume->max_value, volume->histogram};
+  const VolumeBox box{volume->dims(),    volume->spacing,   volume->origin,
+                      volume->min_value, volume->max_value, volume->histogram};
   const int64_t id = c.new_id();
   BrickRead r = c.read_bricks(held, id, reread(volume->source_path, box, default_ghost()));
   try {
@@ -229,8 +236,8 @@ render::RenderResult MpiRenderer::render(const render::ResidentVolume& v, const 
     // With headroom: a differential step grows as the camera backs away, and a re-read on
     // every frame of a slow zoom-out would cost more than the wider ghosts.
     // A read any rank failed throws: every rank keeps its bricks, this frame fails, the job goes on.
-    BrickRead wider = c.read_bricks(held, res->id(), reread(res->volume().source_path, bricks.box,
-                                                             need + std::max(4, need / 2)));
+    BrickRead wider =
+        c.read_bricks(held, res->id(), reread(res->volume().source_path, bricks.box, need + std::max(4, need / 2)));
     try {
       bricks = make_set(std::move(wider), impl_->renderer);
     } catch (const std::exception& e) {
@@ -304,7 +311,8 @@ void serve_worker(render::Renderer& renderer) {
                                    ": every rank needs the same (pass --backend gl or --backend cpu)");
         continue;
       }
-      const nlohmann::json j = m.cmd == kRender ? nlohmann::json::from_cbor(m.payload) : nlohmann::json::parse(m.payload);
+      const nlohmann::json j =
+          m.cmd == kRender ? nlohmann::json::from_cbor(m.payload) : nlohmann::json::parse(m.payload);
       if (m.cmd == kLoad) {
         BrickRead r = read_brick(BrickLoadRequest::from_json(j));
         if (!r.refused && !r.failed) volumes[m.id] = make_set(std::move(r), renderer);  // else rank 0 says why

@@ -23,7 +23,7 @@ class MpiRenderer : public render::Renderer {
   // volume loader). `local`: what draws this rank's brick (the CPU backend or the GL ray
   // caster, whose context is current on the calling thread).
   MpiRenderer(std::shared_ptr<Coordinator> coord, std::unique_ptr<render::Renderer> local);
-  ~MpiRenderer() override;  // tells the workers to stop
+  ~MpiRenderer() override;               // tells the workers to stop
   const char* backend() const override;  // the local renderer's
   std::string description() const override;
   // A volume from Coordinator::load (the server's): its bricks, read then, made resident. Any

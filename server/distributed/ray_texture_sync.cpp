@@ -37,7 +37,8 @@ nlohmann::json RayTextureSender::message(const RayTextureSpec& spec) {
     if (spec.image) {
       const auto* bytes = reinterpret_cast<const uint8_t*>(spec.image->texels.data());
       j["png"] = spec.png;
-      j["image"] = nlohmann::json::binary(std::vector<uint8_t>(bytes, bytes + spec.image->texels.size() * sizeof(float)));
+      j["image"] =
+          nlohmann::json::binary(std::vector<uint8_t>(bytes, bytes + spec.image->texels.size() * sizeof(float)));
     }
   }
   nlohmann::json strokes = nlohmann::json::array();
@@ -74,9 +75,10 @@ std::shared_ptr<const RayTextureSpec> RayTextureReceiver::apply(const nlohmann::
     }
   } else {
     if (it == specs_.end() || it->second->strokes.size() != from)
-      throw std::runtime_error("ray texture " + std::to_string(lineage) + ": this rank holds " +
-                               (it == specs_.end() ? std::string("none") : std::to_string(it->second->strokes.size()) + " strokes") +
-                               ", rank 0 continues from " + std::to_string(from));
+      throw std::runtime_error(
+          "ray texture " + std::to_string(lineage) + ": this rank holds " +
+          (it == specs_.end() ? std::string("none") : std::to_string(it->second->strokes.size()) + " strokes") +
+          ", rank 0 continues from " + std::to_string(from));
     spec = *it->second;
   }
   const auto& strokes = m.at("strokes");

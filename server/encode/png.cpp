@@ -27,7 +27,8 @@ void write_png(const Image& img, const std::filesystem::path& path) {
   ImageSpec spec(img.width, img.height, 3, TypeDesc::UINT8);
   if (!out->open(path.string(), spec)) throw std::runtime_error(path.string() + ": " + out->geterror());
   const auto bytes = to_rgb8(img);
-  if (!out->write_image(TypeDesc::UINT8, bytes.data())) throw std::runtime_error(path.string() + ": " + out->geterror());
+  if (!out->write_image(TypeDesc::UINT8, bytes.data()))
+    throw std::runtime_error(path.string() + ": " + out->geterror());
   out->close();
 }
 

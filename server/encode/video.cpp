@@ -254,7 +254,8 @@ VideoEncoder::VideoEncoder(const VideoSettings& s) : impl_(std::make_unique<Impl
       impl_->name = name;
       break;
     }
-  if (!impl_->ctx) throw std::runtime_error(std::string("video: no ") + to_string(s.codec) + " encoder opened (" + why + ")");
+  if (!impl_->ctx)
+    throw std::runtime_error(std::string("video: no ") + to_string(s.codec) + " encoder opened (" + why + ")");
   impl_->frame.reset(av_frame_alloc());
   impl_->frame->format = AV_PIX_FMT_YUV420P;
   impl_->frame->width = s.width;
@@ -274,9 +275,10 @@ const char* VideoEncoder::encoder_name() const { return impl_->name; }
 void VideoEncoder::Impl::scale_into_frame_impl(Impl& m, const uint8_t* rgb, int width, int height) {
   if (!m.sws || m.sws_w != width || m.sws_h != height) {
     // RGB (full range) to BT.709 limited-range 4:2:0, scaled to the coded size where it differs.
-    m.sws.reset(sws_getContext(width, height, AV_PIX_FMT_RGB24, m.settings.width, m.settings.height,
-                               AV_PIX_FMT_YUV420P, SWS_BILINEAR, nullptr, nullptr, nullptr));
-    if (!m.sws) throw std::runtime_error("video: no scaler for " + std::to_string(width) + "x" + std::to_string(height));
+    m.sws.reset(sws_getContext(width, height, AV_PIX_FMT_RGB24, m.settings.width, m.settings.height, AV_PIX_FMT_YUV420P,
+                               SWS_BILINEAR, nullptr, nullptr, nullptr));
+    if (!m.sws)
+      throw std::runtime_error("video: no scaler for " + std::to_string(width) + "x" + std::to_string(height));
     const int* bt709 = sws_getCoefficients(SWS_CS_ITU709);
     sws_setColorspaceDetails(m.sws.get(), bt709, 1, bt709, 0, 0, 1 << 16, 1 << 16);
     m.sws_w = width;
@@ -298,7 +300,8 @@ VideoPacket VideoEncoder::encode(const uint8_t* rgb, int width, int height, bool
   if (av_frame_make_writable(m.frame.get()) < 0) throw std::runtime_error("video: frame not writable");
   if (width == m.settings.width && height == m.settings.height) {
     AVFrame* f = m.frame.get();
-    rgb_to_yuv420_bt709(rgb, width, height, {f->data[0], f->data[1], f->data[2], f->linesize[0], f->linesize[1], f->linesize[2]});
+    rgb_to_yuv420_bt709(rgb, width, height,
+                        {f->data[0], f->data[1], f->data[2], f->linesize[0], f->linesize[1], f->linesize[2]});
   } else {
     Impl::scale_into_frame_impl(m, rgb, width, height);
   }

@@ -90,7 +90,8 @@ void ConvertRows(const uint8_t* rgb, int w, int h, const Yuv420Planes& o) {
     hn::StoreU(hn::DemoteTo(d8, hn::ShiftRight<16>(y)), d8, out);
   };
   // The sums of each horizontal pair of pixels: lanes 0..n-1 from the 2n pixels in lo, hi.
-  const auto pairs = [&](V lo, V hi) HWY_ATTR { return hn::Add(hn::ConcatEven(d32, hi, lo), hn::ConcatOdd(d32, hi, lo)); };
+  const auto pairs = [&](V lo, V hi)
+                         HWY_ATTR { return hn::Add(hn::ConcatEven(d32, hi, lo), hn::ConcatOdd(d32, hi, lo)); };
   const auto chroma = [&](V R, V G, V B, int cr, int cg, int cb) HWY_ATTR {
     const V s = hn::Add(hn::Add(hn::Mul(R, hn::Set(d32, cr)), hn::Mul(G, hn::Set(d32, cg))),
                         hn::Add(hn::Mul(B, hn::Set(d32, cb)), hn::Set(d32, kCoff)));

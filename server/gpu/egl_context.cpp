@@ -21,8 +21,9 @@ bool has_extension(const char* list, const char* name) {
   return false;
 }
 
-const EGLint kContextAttribs[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
-                                  EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
+const EGLint kContextAttribs[] = {
+    EGL_CONTEXT_MAJOR_VERSION,           4,       EGL_CONTEXT_MINOR_VERSION, 5, EGL_CONTEXT_OPENGL_PROFILE_MASK,
+    EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
 
 // Initialises `display` and creates a 4.5 core context; returns nullptr (and a reason) on failure.
 EGLContext try_context(EGLDisplay display, std::string& why, EGLConfig& chosen) {
@@ -61,16 +62,15 @@ EGLContext try_context(EGLDisplay display, std::string& why, EGLConfig& chosen) 
 
 std::string GlInfo::to_string() const {
   std::ostringstream s;
-  s << renderer << " (" << vendor << "), OpenGL " << version << ", EGL " << platform
-    << (software ? ", software" : "");
+  s << renderer << " (" << vendor << "), OpenGL " << version << ", EGL " << platform << (software ? ", software" : "");
   return s.str();
 }
 
 // The process's rank on its node under an MPI launcher (Open MPI, Slurm, MPICH/Hydra, MVAPICH2,
 // a PMIx launcher that exports it), or -1 outside one.
 static int launcher_local_rank() {
-  for (const char* name : {"OMPI_COMM_WORLD_LOCAL_RANK", "SLURM_LOCALID", "MPI_LOCALRANKID", "MV2_COMM_WORLD_LOCAL_RANK",
-                           "PMIX_LOCAL_RANK"})
+  for (const char* name : {"OMPI_COMM_WORLD_LOCAL_RANK", "SLURM_LOCALID", "MPI_LOCALRANKID",
+                           "MV2_COMM_WORLD_LOCAL_RANK", "PMIX_LOCAL_RANK"})
     if (const char* v = std::getenv(name); v && *v) return std::atoi(v);
   return -1;
 }
@@ -91,7 +91,8 @@ std::unique_ptr<EglContext> EglContext::create(const std::string& device) {
     std::vector<int> order;
     for (int pass = 0; pass < 2; ++pass)
       for (int i = 0; i < n; ++i) {
-        const bool soft = has_extension(eglQueryDeviceStringEXT(devices[i], EGL_EXTENSIONS), "EGL_MESA_device_software");
+        const bool soft =
+            has_extension(eglQueryDeviceStringEXT(devices[i], EGL_EXTENSIONS), "EGL_MESA_device_software");
         if (soft == (pass == 1)) order.push_back(i);
       }
     // Distributed rendering (docs/distributed.md): with "auto", each rank of a node starts at its

@@ -20,7 +20,7 @@ class GlDevice {
   // The GL ray caster on this device (shaders from `shader_dir`, linked programs kept as driver
   // binaries in `program_cache`, empty: off); the device must outlive it.
   virtual std::unique_ptr<render::Renderer> make_renderer(const std::filesystem::path& shader_dir,
-                                                  const std::filesystem::path& program_cache) = 0;
+                                                          const std::filesystem::path& program_cache) = 0;
 };
 
 // An EGL context on `egl_device` ("auto", "surfaceless", an index; empty: PEAKCAST_EGL_DEVICE,

@@ -30,7 +30,8 @@ std::string GlRenderer::description() const {
   return std::string("OpenGL: ") + (renderer ? renderer : "unknown");
 }
 
-std::unique_ptr<ResidentVolume> GlRenderer::make_resident(std::shared_ptr<const Volume> volume, VolumeMacrocells cells) {
+std::unique_ptr<ResidentVolume> GlRenderer::make_resident(std::shared_ptr<const Volume> volume,
+                                                          VolumeMacrocells cells) {
   return std::make_unique<GlVolume>(std::move(volume), std::move(cells));
 }
 
@@ -77,8 +78,10 @@ void GlRenderer::prefetch_variants() {
   with([](VariantKey& v) { v.peaks = true, v.preintegration = false; });
   with([](VariantKey& v) { v.rgb8 = !v.rgb8; });
   for (const VariantKey& v : next) {
-    if (v.path == RenderPath::Compute) shaders_.prefetch(v.name(), {"raycast.comp"}, v.defines());
-    else shaders_.prefetch(v.name(), {"fullscreen.vert", "raycast.frag"}, v.defines());
+    if (v.path == RenderPath::Compute)
+      shaders_.prefetch(v.name(), {"raycast.comp"}, v.defines());
+    else
+      shaders_.prefetch(v.name(), {"fullscreen.vert", "raycast.frag"}, v.defines());
   }
 }
 
@@ -109,7 +112,7 @@ GlRenderer::Targets& GlRenderer::targets(int w, int h, RenderOutput output) {
 }
 
 RenderResult GlRenderer::render(const ResidentVolume& v, const ResolvedScene& s, const RenderRequest& req,
-                               RenderStats* stats) {
+                                RenderStats* stats) {
   const GlVolume& gv = gpu_volume(v);
   const PixelRect rect = req.tile.value_or(PixelRect{0, 0, s.scene.width, s.scene.height});
   check_rect(rect, s.scene.width, s.scene.height);
@@ -120,7 +123,7 @@ RenderResult GlRenderer::render(const ResidentVolume& v, const ResolvedScene& s,
 }
 
 Image GlRenderer::render_brick(const ResidentVolume& v, const ResolvedScene& s, const Brick& brick, RenderStats* stats,
-                             std::optional<PixelRect> tile) {
+                               std::optional<PixelRect> tile) {
   const GlVolume& gv = gpu_volume(v);
   const PixelRect rect = check_brick_frame(s, brick, gv.volume().spacing, tile);
   if (stats) *stats = RenderStats::for_scene(s);
@@ -162,9 +165,10 @@ VariantKey GlRenderer::prepare(const GlVolume& gv, const ResolvedScene& s, Rende
   if (f.key.space_skipping) {
     DistanceEntry* e = cache_find(distance_cache_, f.occupancy_key);
     if (!e) {
-      e = &cache_insert(distance_cache_,
-                        DistanceEntry{f.occupancy_key, make_cell_buffer(cells, traversal_distances(*f.occupancy, seam_.leaps))},
-                        kCacheEntries);
+      e = &cache_insert(
+          distance_cache_,
+          DistanceEntry{f.occupancy_key, make_cell_buffer(cells, traversal_distances(*f.occupancy, seam_.leaps))},
+          kCacheEntries);
     }
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboCellDistance, e->buffer.id());
   }
@@ -179,7 +183,7 @@ VariantKey GlRenderer::prepare(const GlVolume& gv, const ResolvedScene& s, Rende
 }
 
 Image GlRenderer::render_bare(const ResidentVolume& v, const ResolvedScene& s, RenderPath path, const Image& full,
-                             RenderStats* stats) {
+                              RenderStats* stats) {
   const GlVolume& gv = gpu_volume(v);
   const int w = s.scene.width, h = s.scene.height;
   if (full.width != w || full.height != h) throw std::invalid_argument("render_bare: image size differs");
@@ -199,7 +203,7 @@ Image GlRenderer::render_bare(const ResidentVolume& v, const ResolvedScene& s, R
 }
 
 GlRenderer::Targets& GlRenderer::setup_draw(const GlVolume& gv, const ResolvedScene& s, const VariantKey& key,
-                                           const PixelRect& rect, const Brick* brick, RenderStats* stats) {
+                                            const PixelRect& rect, const Brick* brick, RenderStats* stats) {
   const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
   const auto t_program = Clock::now();
   const bool was_ready = shaders_.ready(key.name());
@@ -243,8 +247,8 @@ void GlRenderer::dispatch(const VariantKey& key, Targets& t, bool read_samples, 
   timer.stop();
 }
 
-RenderResult GlRenderer::draw(const GlVolume& gv, const ResolvedScene& s, const VariantKey& key,
-                           const PixelRect& rect, bool read_samples, RenderStats* stats, const Brick* brick) {
+RenderResult GlRenderer::draw(const GlVolume& gv, const ResolvedScene& s, const VariantKey& key, const PixelRect& rect,
+                              bool read_samples, RenderStats* stats, const Brick* brick) {
   const int w = rect.w, h = rect.h;
   const RenderOutput output = key.rgb8 ? RenderOutput::Rgb8 : RenderOutput::Float;
   const int cap = sample_cap(key);

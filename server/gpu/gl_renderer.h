@@ -40,16 +40,17 @@ class GlRenderer : public render::Renderer {
   std::string description() const override;
   // A GlVolume: the texture upload.
   std::unique_ptr<render::ResidentVolume> make_resident(std::shared_ptr<const Volume> volume,
-                                                VolumeMacrocells cells = {}) override;
+                                                        VolumeMacrocells cells = {}) override;
   using render::Renderer::render;
   // `volume` must be a GlVolume (std::invalid_argument otherwise).
-  render::RenderResult render(const render::ResidentVolume& volume, const ResolvedScene& scene, const render::RenderRequest& request,
-                      render::RenderStats* stats = nullptr) override;
-  Image render_bare(const render::ResidentVolume& volume, const ResolvedScene& scene, render::RenderPath path, const Image& full,
-                    render::RenderStats* stats = nullptr) override;
+  render::RenderResult render(const render::ResidentVolume& volume, const ResolvedScene& scene,
+                              const render::RenderRequest& request, render::RenderStats* stats = nullptr) override;
+  Image render_bare(const render::ResidentVolume& volume, const ResolvedScene& scene, render::RenderPath path,
+                    const Image& full, render::RenderStats* stats = nullptr) override;
   // The fragment path with BRICK: ownership, look-behind and look-ahead as the CPU backend's.
   Image render_brick(const render::ResidentVolume& volume, const ResolvedScene& scene, const render::Brick& brick,
-                     render::RenderStats* stats = nullptr, std::optional<render::PixelRect> rect = std::nullopt) override;
+                     render::RenderStats* stats = nullptr,
+                     std::optional<render::PixelRect> rect = std::nullopt) override;
   int sample_cap(const render::VariantKey& key) const override;
   // For the layout test: the linked program of a variant.
   const gpu::Program& program(const render::VariantKey& key);
@@ -65,18 +66,20 @@ class GlRenderer : public render::Renderer {
   };
   Targets& targets(int w, int h, render::RenderOutput output);
   // Tables, occupancy and the variant for a scene (cached on the TF).
-  render::VariantKey prepare(const GlVolume& volume, const ResolvedScene& scene, render::RenderPath path, render::RenderStats* stats);
+  render::VariantKey prepare(const GlVolume& volume, const ResolvedScene& scene, render::RenderPath path,
+                             render::RenderStats* stats);
   // Builds and binds the peak table + TF points or the preintegration table the scene needs.
   void upload_tables(const GlVolume& volume, const ResolvedScene& scene, const std::vector<Peak>& peaks);
   void bind_tf_table(const GlVolume& volume, const ResolvedScene& scene, const std::string& tf_sig);
   void bind_multipliers(const GlVolume& volume, const MacrocellGrid& cells);
-  render::RenderResult draw(const GlVolume& volume, const ResolvedScene& scene, const render::VariantKey& key, const render::PixelRect& rect,
-                    bool read_samples, render::RenderStats* stats, const render::Brick* brick = nullptr);
+  render::RenderResult draw(const GlVolume& volume, const ResolvedScene& scene, const render::VariantKey& key,
+                            const render::PixelRect& rect, bool read_samples, render::RenderStats* stats,
+                            const render::Brick* brick = nullptr);
   // A draw in parts, shared by draw() and the asynchronous frames: the program (its wait in
   // stats->compile_ms), uniforms and targets; then the draw or dispatch between a timer
   // query's begin and end; then the query's result (waits for it).
-  Targets& setup_draw(const GlVolume& volume, const ResolvedScene& scene, const render::VariantKey& key, const render::PixelRect& rect,
-                      const render::Brick* brick, render::RenderStats* stats);
+  Targets& setup_draw(const GlVolume& volume, const ResolvedScene& scene, const render::VariantKey& key,
+                      const render::PixelRect& rect, const render::Brick* brick, render::RenderStats* stats);
   void dispatch(const render::VariantKey& key, Targets& targets, bool read_samples, const gpu::GpuTimer& timer);
 
   gpu::ShaderCache& shaders_;
@@ -118,7 +121,7 @@ class GlRenderer : public render::Renderer {
   void bind_ray_texture(const ResolvedScene& scene, render::RenderStats* stats);
   RayTables tables_;  // what the current frame's tables hold (for the uniforms and stats)
   bool llvmpipe_ = false;
-  render::VariantKey last_key_;           // the last draw's variant (prefetch_variants starts from it)
+  render::VariantKey last_key_;   // the last draw's variant (prefetch_variants starts from it)
   std::vector<Targets> targets_;  // most recently used first
   gpu::GpuTimer timer_;           // the synchronous draws' timer
 
@@ -126,11 +129,11 @@ class GlRenderer : public render::Renderer {
   // fence after its read-back and its draw's timer query.
   struct InFlight {
     gpu::Buffer pbo;
-    size_t bytes = 0;       // the buffer's size
+    size_t bytes = 0;  // the buffer's size
     gpu::GpuTimer timer;
     gpu::Fence fence;
     int w = 0, h = 0, cap = 0;
-    bool samples = false;   // per-pixel sample counts follow the RGB bytes
+    bool samples = false;  // per-pixel sample counts follow the RGB bytes
     render::RenderStats stats;
     std::chrono::steady_clock::time_point issued;
   };
@@ -138,7 +141,8 @@ class GlRenderer : public render::Renderer {
   size_t ring_head_ = 0, ring_count_ = 0;
 
  public:
-  void submit(const render::ResidentVolume& volume, const ResolvedScene& scene, const render::RenderRequest& request) override;
+  void submit(const render::ResidentVolume& volume, const ResolvedScene& scene,
+              const render::RenderRequest& request) override;
   render::RenderResult collect(render::RenderStats* stats = nullptr) override;
   size_t in_flight() const override { return ring_count_; }
   bool asynchronous() const override { return !llvmpipe_; }

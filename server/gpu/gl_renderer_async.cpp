@@ -75,7 +75,8 @@ RenderResult GlRenderer::collect(RenderStats* stats) {
   res.rgb8 = Rgb8Image(f.w, f.h);
   const size_t rgb = res.rgb8.rgb.size(), rgb_padded = (rgb + 3) / 4 * 4;
   const size_t bytes = rgb_padded + (f.samples ? size_t(f.w) * f.h * 4 : 0);
-  const auto* mapped = static_cast<const uint8_t*>(glMapNamedBufferRange(f.pbo.id(), 0, GLsizeiptr(bytes), GL_MAP_READ_BIT));
+  const auto* mapped =
+      static_cast<const uint8_t*>(glMapNamedBufferRange(f.pbo.id(), 0, GLsizeiptr(bytes), GL_MAP_READ_BIT));
   if (!mapped) throw std::runtime_error("collect: the frame's pixel buffer could not be mapped");
   std::memcpy(res.rgb8.rgb.data(), mapped, rgb);
   if (f.samples) {

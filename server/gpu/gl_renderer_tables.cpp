@@ -42,8 +42,8 @@ void GlRenderer::bind_ray_texture(const ResolvedScene& s, RenderStats* stats) {
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
     glPixelStorei(GL_UNPACK_ROW_LENGTH, w);
     const float* first = e.texels.texels().data() + (size_t(dirty.y0) * size_t(w) + size_t(dirty.x0)) * 3;
-    glTextureSubImage2D(e.extra.id(), 0, dirty.x0, dirty.y0, dirty.x1 - dirty.x0, dirty.y1 - dirty.y0, GL_RGB,
-                        GL_FLOAT, first);
+    glTextureSubImage2D(e.extra.id(), 0, dirty.x0, dirty.y0, dirty.x1 - dirty.x0, dirty.y1 - dirty.y0, GL_RGB, GL_FLOAT,
+                        first);
     glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
   }
   glBindTextureUnit(kUnitRayTexture, e.extra.id());

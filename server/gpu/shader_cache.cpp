@@ -14,8 +14,7 @@ namespace fs = std::filesystem;
 namespace peakcast::gpu {
 namespace {
 
-void expand_into(const fs::path& dir, const std::string& file, ExpandedSource& out,
-                 std::vector<std::string>& stack) {
+void expand_into(const fs::path& dir, const std::string& file, ExpandedSource& out, std::vector<std::string>& stack) {
   for (const auto& f : stack)
     if (f == file) throw ShaderError("shader include cycle at " + file);
   std::ifstream in(dir / file);

@@ -55,10 +55,11 @@ class ShaderCache {
   const Program& get(const std::string& key, const std::vector<std::string>& stages,
                      const std::vector<std::string>& defines);
   // Builds the program in the background unless it is built or queued already.
-  void prefetch(const std::string& key, const std::vector<std::string>& stages, const std::vector<std::string>& defines);
+  void prefetch(const std::string& key, const std::vector<std::string>& stages,
+                const std::vector<std::string>& defines);
   bool ready(const std::string& key) const;  // built, here or in the background
   size_t size() const;
-  size_t compiles() const;          // programs compiled and linked on the calling thread
+  size_t compiles() const;           // programs compiled and linked on the calling thread
   size_t background_builds() const;  // programs built by prefetch (loaded or compiled)
   size_t loads() const;              // programs loaded from the program cache, anywhere
   const std::filesystem::path& dir() const { return dir_; }
@@ -76,7 +77,7 @@ class ShaderCache {
   const EglContext* share_;
   mutable std::mutex m_;
   std::condition_variable cv_;
-  std::map<std::string, Program> programs_;  // built, usable here
+  std::map<std::string, Program> programs_;    // built, usable here
   std::map<std::string, std::string> failed_;  // background builds that failed: their error
   std::deque<Job> queue_;
   std::string building_;  // the key the worker builds now

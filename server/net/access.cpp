@@ -26,7 +26,8 @@ bool printable(const std::string& s) {
 
 }  // namespace
 
-Access::Access(std::string admin_token, std::vector<UserToken> users) : admin_(std::move(admin_token)), users_(std::move(users)) {}
+Access::Access(std::string admin_token, std::vector<UserToken> users)
+    : admin_(std::move(admin_token)), users_(std::move(users)) {}
 
 Principal Access::who(const std::string& token) const {
   if (!required()) return {true, true, ""};
@@ -41,7 +42,8 @@ Principal Access::who(const std::string& token) const {
 std::string read_token_file(const std::filesystem::path& file) {
   std::error_code ec;
   const auto perms = std::filesystem::status(file, ec).permissions();
-  if (!ec && (perms & (std::filesystem::perms::group_read | std::filesystem::perms::others_read)) != std::filesystem::perms::none)
+  if (!ec && (perms & (std::filesystem::perms::group_read | std::filesystem::perms::others_read)) !=
+                 std::filesystem::perms::none)
     log::warn("the token file can be read by other users: chmod 600 it", {{"file", file.string()}});
   std::ifstream in(file);
   if (!in) throw std::invalid_argument("--token-file " + file.string() + " cannot be read");

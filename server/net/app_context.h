@@ -40,7 +40,7 @@ struct ServerConfig {
   double max_fps = limits::kDefaultMaxFps;
   int max_kbps = limits::kDefaultMaxKbps;  // a video session's bit-rate ceiling (docs/streaming.md)
   int64_t gpu_budget_bytes = limits::kDefaultGpuBudgetBytes;
-  int64_t memory_budget_bytes = 0;  // host memory for one volume's voxels (0: none); LoadOptions
+  int64_t memory_budget_bytes = 0;            // host memory for one volume's voxels (0: none); LoadOptions
   int64_t preview_voxels = int64_t(1) << 24;  // a pyramid's first look (VolumeStore::set_preview); 0: off
   size_t max_queued_stills = limits::kDefaultMaxQueuedStills;
   double max_still_samples = limits::kDefaultMaxStillSamples;
@@ -48,8 +48,8 @@ struct ServerConfig {
   int io_threads = 2;
   int encode_threads = 2;
   std::filesystem::path web_dir, shader_dir;
-  std::string egl_device;  // "auto" | "surfaceless" | a device index; empty: PEAKCAST_EGL_DEVICE, else auto
-  std::string backend;     // "auto" | "gl" | "cpu" (render/backend.h); empty: PEAKCAST_BACKEND, else auto
+  std::string egl_device;     // "auto" | "surfaceless" | a device index; empty: PEAKCAST_EGL_DEVICE, else auto
+  std::string backend;        // "auto" | "gl" | "cpu" (render/backend.h); empty: PEAKCAST_BACKEND, else auto
   std::string program_cache;  // GL program binaries: "auto", "off" or a folder (render/backend.h)
   // mpirun peakcast serve: RenderServiceOptions::wrap_renderer and ranks.
   std::function<std::unique_ptr<render::Renderer>(std::unique_ptr<render::Renderer>)> wrap_renderer;

@@ -20,8 +20,7 @@ struct FramePlacement {
 // written. A video frame is never replaced nor dropped (the next one is coded against it); it
 // waits behind a newer frame, which the client draws over it anyway (it draws newer ids only).
 template <typename Queue>
-FramePlacement place_frame(const Queue& queue, size_t first_waiting, uint32_t frame_id,
-                           bool video) {
+FramePlacement place_frame(const Queue& queue, size_t first_waiting, uint32_t frame_id, bool video) {
   FramePlacement p;
   for (size_t k = first_waiting; k < queue.size(); ++k) {
     const auto& waiting = queue[k];

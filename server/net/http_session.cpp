@@ -87,8 +87,8 @@ void HttpSession::watch_for_close(std::shared_ptr<std::atomic<bool>> cancelled) 
     sock.non_blocking(false, ignored);
     if (peek == asio::error::would_block || peek == asio::error::try_again) return self->watch_for_close(cancelled);
     if (!peek && n > 0) return;
-    cancelled->store(true);       // end of stream or a reset
-    self->app_.render.notify();   // the scheduler drops it now, not at its turn
+    cancelled->store(true);      // end of stream or a reset
+    self->app_.render.notify();  // the scheduler drops it now, not at its turn
   });
 }
 
@@ -137,11 +137,12 @@ void HttpSession::upgrade(Request req) {
   // WebSocket session owns the reservation from here on and gives it back when it ends.
   if (app_.stopping.load() || (who.authorized && !app_.ws_sessions.try_reserve())) {
     app_.metrics.add("peakcast_http_requests_total", "route=\"ws\",code=\"503\"", 1);
-    auto res = app_.stopping.load()
-                   ? error_response(req, http::status::service_unavailable, "shutting_down", "the server is shutting down")
-                   : error_response(req, http::status::service_unavailable, "session_limit",
-                                    "the server holds its maximum of " + std::to_string(app_.config.max_sessions) +
-                                        " sessions; try again later");
+    auto res =
+        app_.stopping.load()
+            ? error_response(req, http::status::service_unavailable, "shutting_down", "the server is shutting down")
+            : error_response(req, http::status::service_unavailable, "session_limit",
+                             "the server holds its maximum of " + std::to_string(app_.config.max_sessions) +
+                                 " sessions; try again later");
     res.set(http::field::retry_after, "5");
     return write(std::move(res));
   }

@@ -79,8 +79,10 @@ std::optional<nlohmann::json> raw_header_from_query(const std::string& target) {
         size_t used = 0;
         const double v = std::stod(part, &used);
         if (used != part.size() || !std::isfinite(v)) throw std::invalid_argument(part);
-        if (part.find_first_of(".eE") == std::string::npos && std::fabs(v) < 9e15) out.push_back(int64_t(v));
-        else out.push_back(v);
+        if (part.find_first_of(".eE") == std::string::npos && std::fabs(v) < 9e15)
+          out.push_back(int64_t(v));
+        else
+          out.push_back(v);
       } catch (const std::exception&) {
         out.push_back(part);  // refused by name later, as any wrong header value
       }
@@ -147,8 +149,10 @@ bool is_ip_literal(std::string_view name) {
 
 HostCheck::HostCheck(std::string bind, std::vector<std::string> names) : bind_(lower(bind)) {
   for (auto& n : names) {
-    if (n == "*") any_ = true;
-    else names_.push_back(host_name(n));
+    if (n == "*")
+      any_ = true;
+    else
+      names_.push_back(host_name(n));
   }
   any_ip_ = bind_ == "0.0.0.0" || bind_ == "::" || bind_.empty();
 }

@@ -31,7 +31,8 @@ void HttpSession::start_upload() {
   const Principal who = app_.access.who(token_from(std::string(req[http::field::authorization]), target));
   if (!who.authorized) return refuse_upload(401, "unauthorized", "missing or wrong bearer token");
   if (!origin_allowed(req))
-    return refuse_upload(403, "forbidden_origin", "Origin " + std::string(req[http::field::origin]) + " is not allowed");
+    return refuse_upload(403, "forbidden_origin",
+                         "Origin " + std::string(req[http::field::origin]) + " is not allowed");
   std::optional<int64_t> length;
   if (auto n = parser_->content_length()) length = int64_t(*n);
   if (parser_->is_done() || length == 0) return refuse_upload(400, "bad_upload", "the upload has no body");
@@ -57,7 +58,8 @@ void HttpSession::start_upload() {
   upload_parser_->get().body().open(upload_->file().c_str(), beast::file_mode::write, ec);
   if (ec) return refuse_upload(507, "upload_failed", "the upload could not be stored on the server");
   if (!expects_continue) return read_upload();
-  auto cont = std::make_shared<http::response<http::empty_body>>(http::status::continue_, upload_parser_->get().version());
+  auto cont =
+      std::make_shared<http::response<http::empty_body>>(http::status::continue_, upload_parser_->get().version());
   stream_.expires_after(limits::kHttpWriteTimeout);
   http::async_write(stream_, *cont, [self = shared_from_this(), cont](beast::error_code ec, std::size_t) {
     if (ec) return fail(ec, "upload continue");
@@ -83,17 +85,18 @@ void HttpSession::read_upload() {
     });
   }
   stream_.expires_after(l.idle_timeout);
-  http::async_read_some(stream_, buffer_, *upload_parser_, [self = shared_from_this()](beast::error_code ec, std::size_t n) {
-    self->on_upload_read(ec, n);
-  });
+  http::async_read_some(
+      stream_, buffer_, *upload_parser_,
+      [self = shared_from_this()](beast::error_code ec, std::size_t n) { self->on_upload_read(ec, n); });
 }
 
 void HttpSession::on_upload_read(beast::error_code ec, std::size_t bytes) {
   upload_received_ += bytes;
   const auto& l = app_.uploads.limits();
   if (deadline_passed_)
-    return refuse_upload(408, "upload_too_slow", "an upload must arrive whole within " +
-                                                     std::to_string(l.deadline.count()) + " s (--upload-deadline)");
+    return refuse_upload(
+        408, "upload_too_slow",
+        "an upload must arrive whole within " + std::to_string(l.deadline.count()) + " s (--upload-deadline)");
   if (!ec && !upload_parser_->is_done()) {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - upload_start_).count();
     if (seconds > double(l.idle_timeout.count()) && double(upload_received_) < l.min_bytes_per_second * seconds)
@@ -103,9 +106,9 @@ void HttpSession::on_upload_read(beast::error_code ec, std::size_t bytes) {
                                " (--upload-min-rate-kib)");
   }
   if (ec == http::error::body_limit)
-    return refuse_upload(413, "too_large", "an upload may hold " +
-                                               std::to_string(app_.uploads.limits().max_bytes >> 20) +
-                                               " MiB (--max-upload-mib)");
+    return refuse_upload(
+        413, "too_large",
+        "an upload may hold " + std::to_string(app_.uploads.limits().max_bytes >> 20) + " MiB (--max-upload-mib)");
   if (ec) {  // gone, reset, or stalled past --upload-timeout: the file goes with the ticket
     app_.metrics.add("peakcast_uploads_total",
                      ec == beast::error::timeout ? "outcome=\"timeout\"" : "outcome=\"disconnected\"", 1);

@@ -81,7 +81,8 @@ void probe(AppContext& app, const Request& req, std::function<void(Response)> se
                       "probing needs the volume's voxels; under mpirun they live in the ranks' bricks");
       const auto p = reference::probe_reference(*vol->volume, resolved, x, y);
       count(app, "probe", http::status::ok);
-      send(json_response(req, http::status::ok, json_text(protocol::probe_json(p.hit, p.position, p.value, p.distance, p.opacity))));
+      send(json_response(req, http::status::ok,
+                         json_text(protocol::probe_json(p.hit, p.position, p.value, p.distance, p.opacity))));
     } catch (const SceneError& e) {
       refuse(http::status::bad_request, "bad_scene", e.what());
     } catch (const std::invalid_argument& e) {  // the pixel is outside the image
@@ -179,7 +180,8 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
                     std::shared_ptr<std::atomic<bool>> cancelled) {
   const std::string path = path_of(std::string(req.target()));
   const bool api = path.rfind("/api/", 0) == 0 || path == "/metrics";
-  const Principal who = app.access.who(token_from(std::string(req[http::field::authorization]), std::string(req.target())));
+  const Principal who =
+      app.access.who(token_from(std::string(req[http::field::authorization]), std::string(req.target())));
   if (api && path != "/api/health" && !who.authorized) {
     count(app, "auth", http::status::unauthorized);
     auto res = error_response(req, http::status::unauthorized, "unauthorized", "missing or wrong bearer token");
@@ -198,15 +200,16 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
   }
   if (path == "/api/probe") {
     if (req.method() != http::verb::post)
-      return send(error_response(req, http::status::method_not_allowed, "bad_request", "POST a scene with \"pixel\": [x, y]"));
+      return send(
+          error_response(req, http::status::method_not_allowed, "bad_request", "POST a scene with \"pixel\": [x, y]"));
     return probe(app, req, std::move(send));
   }
   if (req.method() == http::verb::delete_ && path.rfind("/api/volumes/", 0) == 0)
     return delete_upload(app, req, url_decode(path.substr(std::strlen("/api/volumes/"))), who, std::move(send));
   if (req.method() != http::verb::get && req.method() != http::verb::head)
-    return send(error_response(req, http::status::method_not_allowed, "bad_request",
-                               path.rfind("/api/volumes", 0) == 0 ? "GET, POST an upload, or DELETE an upload"
-                                                                   : "GET only"));
+    return send(
+        error_response(req, http::status::method_not_allowed, "bad_request",
+                       path.rfind("/api/volumes", 0) == 0 ? "GET, POST an upload, or DELETE an upload" : "GET only"));
   if (path == "/api/health") return send(health(app, req));
   if (path == "/api/files") return list_files(app, req, std::move(send));
   if (path == "/api/volumes") {

@@ -50,7 +50,8 @@ void submit_still(AppContext& app, const Request& req, const Scene& scene, std::
   }
   job.raw_rgb = format == "rgb";  // packed 8-bit RGB rows from the top: what a script puts in an array
   job.png = !(format == "jpeg" || format == "jpg" ||
-              (format.empty() && accept.find("image/jpeg") != std::string::npos && accept.find("image/png") == std::string::npos));
+              (format.empty() && accept.find("image/jpeg") != std::string::npos &&
+               accept.find("image/png") == std::string::npos));
   const std::string q = query_param(std::string(req.target()), "quality");
   if (!q.empty()) {
     try {
@@ -106,12 +107,12 @@ void submit_still(AppContext& app, const Request& req, const Scene& scene, std::
     const bool stopping = app.stopping.load();
     count(app, "render", http::status::service_unavailable);
     app.metrics.add("peakcast_stills_total", stopping ? "outcome=\"shutting_down\"" : "outcome=\"refused_queue\"", 1);
-    auto res = stopping ? error_response(req, http::status::service_unavailable, "shutting_down",
-                                         "the server is shutting down")
-                        : error_response(req, http::status::service_unavailable, "queue_full",
-                                         "the still queue holds its maximum of " +
-                                             std::to_string(app.config.max_queued_stills) +
-                                             " renders (max_queued_stills); retry later");
+    auto res =
+        stopping
+            ? error_response(req, http::status::service_unavailable, "shutting_down", "the server is shutting down")
+            : error_response(req, http::status::service_unavailable, "queue_full",
+                             "the still queue holds its maximum of " + std::to_string(app.config.max_queued_stills) +
+                                 " renders (max_queued_stills); retry later");
     res.set(http::field::retry_after, std::to_string(limits::kStillRetryAfter.count()));
     send(std::move(res));
   }
@@ -145,7 +146,8 @@ void render_still(AppContext& app, const Request& req, std::function<void(Respon
   }
   const bool finest = resolution != "held";
   if (auto vol = app.volumes.find(scene.volume); vol && !png) {
-    if (!(vol->full && finest)) return submit_still(app, req, scene, std::move(vol), std::move(send), std::move(cancelled));
+    if (!(vol->full && finest))
+      return submit_still(app, req, scene, std::move(vol), std::move(send), std::move(cancelled));
     if (auto known = vol->full->statistics())  // reduced before: no wait
       return submit_still(app, req, scene, std::move(vol), std::move(send), std::move(cancelled), std::move(known));
   }

@@ -12,11 +12,13 @@
 
 namespace peakcast::net {
 
-Server::Server(ServerConfig config) : app_(std::make_unique<AppContext>(std::move(config))), ioc_(app_->config.io_threads) {
+Server::Server(ServerConfig config)
+    : app_(std::make_unique<AppContext>(std::move(config))), ioc_(app_->config.io_threads) {
   for (const auto& v : app_->config.volumes) {
     auto e = app_->volumes.preload(v);
-    log::info("volume loaded", {{"path", v.string()}, {"id", e->id}, {"volume", e->volume->to_string()},
-                                {"load_ms", e->volume->load_ms}});
+    log::info(
+        "volume loaded",
+        {{"path", v.string()}, {"id", e->id}, {"volume", e->volume->to_string()}, {"load_ms", e->volume->load_ms}});
   }
 }
 

@@ -52,8 +52,8 @@ void WsSession::with_png(const nlohmann::json& render, TextureThen then) {
     std::shared_ptr<const RayTextureSpec> texture;
     std::string error;
     try {
-      texture = load_ray_texture_png(std::make_shared<const RayTextureSpec>(parse_ray_texture(j)),
-                                     self->app_.png_locator());
+      texture =
+          load_ray_texture_png(std::make_shared<const RayTextureSpec>(parse_ray_texture(j)), self->app_.png_locator());
     } catch (const std::exception& e) {
       error = e.what();
     }

@@ -30,8 +30,10 @@ void WsSession::probe(const protocol::ProbeMsg& m) {
     asio::post(self->ws_.get_executor(), [self, answer, error] {
       self->probing_ = false;
       if (self->closing_) return;
-      if (!error.empty()) self->send_error("bad_message", error);
-      else self->queue_text(answer);
+      if (!error.empty())
+        self->send_error("bad_message", error);
+      else
+        self->queue_text(answer);
       if (auto next = std::exchange(self->next_probe_, std::nullopt)) self->guarded([&] { self->probe(*next); });
     });
   });

@@ -64,8 +64,8 @@ void WsSession::arm_auth_timer() {
     if (ec) return;
     auto self = weak.lock();
     if (!self || self->authorized_) return;
-    self->send_error("unauthorized", "no hello with a valid token within " +
-                                         std::to_string(limits::kHandshakeTimeout.count()) + " s");
+    self->send_error("unauthorized",
+                     "no hello with a valid token within " + std::to_string(limits::kHandshakeTimeout.count()) + " s");
     self->close(websocket::close_code::policy_error, "unauthorized");
   });
 }
@@ -229,7 +229,8 @@ void WsSession::handle(const std::string& text) {
         if constexpr (std::is_same_v<T, ViewportMsg>) session_->set_viewport(m.viewport);
         if constexpr (std::is_same_v<T, AckMsg>) session_->ack(m.frame);
         if constexpr (std::is_same_v<T, ProbeMsg>) probe(m);
-        if constexpr (std::is_same_v<T, StrokeMsg>) queue_text(stroke_ack_message(m.seq, session_->add_stroke(m.stroke)));
+        if constexpr (std::is_same_v<T, StrokeMsg>)
+          queue_text(stroke_ack_message(m.seq, session_->add_stroke(m.stroke)));
         if constexpr (std::is_same_v<T, VolumeMsg>) {
           with_volume(m.volume, [this](std::shared_ptr<VolumeEntry> entry) {
             session_->set_volume(entry);
@@ -245,8 +246,8 @@ void WsSession::handle(const std::string& text) {
 
 void WsSession::start_session(const protocol::Hello& hello, std::shared_ptr<VolumeEntry> volume,
                               std::optional<std::shared_ptr<const RayTextureSpec>> texture) {
-  auto session = std::make_shared<Session>("s" + std::to_string(app_.next_session++), weak_from_this(),
-                                           app_.png_locator());
+  auto session =
+      std::make_shared<Session>("s" + std::to_string(app_.next_session++), weak_from_this(), app_.png_locator());
   protocol::QualityMsg start_rate;  // a video stream starts at the server's ceiling
   start_rate.kbps = app_.config.max_kbps;
   session->set_quality(start_rate);
@@ -295,13 +296,15 @@ void WsSession::deliver_frame(std::vector<uint8_t> bytes, uint32_t frame_id, boo
   o.frame = std::make_shared<const std::vector<uint8_t>>(std::move(bytes));
   o.frame_id = frame_id;
   o.final = final;
-  asio::post(ws_.get_executor(), [self = shared_from_this(), o = std::move(o)]() mutable { self->enqueue(std::move(o)); });
+  asio::post(ws_.get_executor(),
+             [self = shared_from_this(), o = std::move(o)]() mutable { self->enqueue(std::move(o)); });
 }
 
 void WsSession::deliver_text(std::string text) {
   Outgoing o;
   o.text = std::make_shared<const std::string>(std::move(text));
-  asio::post(ws_.get_executor(), [self = shared_from_this(), o = std::move(o)]() mutable { self->enqueue(std::move(o)); });
+  asio::post(ws_.get_executor(),
+             [self = shared_from_this(), o = std::move(o)]() mutable { self->enqueue(std::move(o)); });
 }
 
 void WsSession::enqueue(Outgoing out) {
@@ -331,9 +334,10 @@ void WsSession::write_next() {
   if (queue_.empty()) {
     if (closing_ && !close_sent_) {  // everything queued before the close has gone out
       close_sent_ = true;
-      ws_.async_close(websocket::close_reason(close_code_, close_reason_), [self = shared_from_this()](beast::error_code ec) {
-        if (ec) fail(ec, "ws close");
-      });
+      ws_.async_close(websocket::close_reason(close_code_, close_reason_),
+                      [self = shared_from_this()](beast::error_code ec) {
+                        if (ec) fail(ec, "ws close");
+                      });
     }
     return;
   }
@@ -355,8 +359,8 @@ void WsSession::write_next() {
       self->app_.metrics.add("peakcast_frames_sent_total", kind, 1);
       self->app_.metrics.add("peakcast_bytes_sent_total", "", double(bytes));
       const auto h = protocol::decode_frame_header(sent.frame->data(), sent.frame->size());
-      const double now_us = double(std::chrono::duration_cast<std::chrono::microseconds>(
-                                       Clock::now().time_since_epoch()).count());
+      const double now_us =
+          double(std::chrono::duration_cast<std::chrono::microseconds>(Clock::now().time_since_epoch()).count());
       self->app_.metrics.observe("peakcast_input_to_sent_ms", kind, (now_us - double(h.t_input_us)) / 1000.0);
     }
     self->write_next();

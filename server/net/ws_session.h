@@ -90,7 +90,7 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   std::deque<Outgoing> queue_;
   asio::steady_timer idle_, pace_, write_timer_, auth_;
   std::shared_ptr<ConnectionSlot> slot_;
-  double tokens_;                     // message-rate bucket (limits::kMessageBurst at most)
+  double tokens_;  // message-rate bucket (limits::kMessageBurst at most)
   Clock::time_point tokens_at_;
 };
 

@@ -63,7 +63,8 @@ ConvergedImage render_converged(const Volume& v, const ResolvedScene& s, Optical
           // `da` per step: inside a Dirac-like tent the field lingers where the TF is steep.
           const double da = 0.02 * step / s.step;
           const double a0 = s.tf.eval(fr.field(r, a)).a, a1 = s.tf.eval(fr.field(r, b)).a;
-          const int pieces = std::min(1 << 16, std::max({1, int(std::ceil((b - a) / step)), int(std::ceil(std::abs(a1 - a0) / da))}));
+          const int pieces =
+              std::min(1 << 16, std::max({1, int(std::ceil((b - a) / step)), int(std::ceil(std::abs(a1 - a0) / da))}));
           const double hstep = (b - a) / pieces;
           for (int q = 0; q < pieces; ++q) {
             const double t = a + (q + 0.5) * hstep;

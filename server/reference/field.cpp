@@ -24,8 +24,7 @@ double trilinear(const Volume& v, const glm::dvec3& x) {
   const int64_t i = int64_t(f0.x), j = int64_t(f0.y), k = int64_t(f0.z);
   double c[2][2];
   for (int b = 0; b < 2; ++b)
-    for (int a = 0; a < 2; ++a)
-      c[b][a] = voxel(v, i, j + a, k + b) * (1 - f.x) + voxel(v, i + 1, j + a, k + b) * f.x;
+    for (int a = 0; a < 2; ++a) c[b][a] = voxel(v, i, j + a, k + b) * (1 - f.x) + voxel(v, i + 1, j + a, k + b) * f.x;
   const double z0 = c[0][0] * (1 - f.y) + c[0][1] * f.y;
   const double z1 = c[1][0] * (1 - f.y) + c[1][1] * f.y;
   return z0 * (1 - f.z) + z1 * f.z;

@@ -32,7 +32,8 @@ ImageError compare(const Image& a, const Image& b) {
 }
 
 std::string ImageError::to_json() const {
-  return nlohmann::json{{"rmse", rmse}, {"psnr", psnr}, {"max_abs", max_abs}, {"share_off_1_255", share_off}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  return nlohmann::json{{"rmse", rmse}, {"psnr", psnr}, {"max_abs", max_abs}, {"share_off_1_255", share_off}}.dump(
+      -1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 }  // namespace peakcast::reference

@@ -29,7 +29,10 @@ double bisect(const F& f, double a, double b, double v) {
   const bool above_a = f(a) >= v;
   for (int k = 0; k < 60 && b - a > 1e-14 * (1 + std::abs(a)); ++k) {
     const double m = 0.5 * (a + b);
-    if ((f(m) >= v) == above_a) a = m; else b = m;
+    if ((f(m) >= v) == above_a)
+      a = m;
+    else
+      b = m;
   }
   return b;  // the first point at the far side: matches "crossed when (min, max]"
 }

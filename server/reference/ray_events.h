@@ -23,8 +23,8 @@ struct PeakHit {
 };
 
 struct RaySplit {
-  std::vector<double> cuts;      // sorted, including t0 and t1 (and the field's extrema, trilinear)
-  std::vector<PeakHit> peaks;    // sorted by t; crossing convention of core/peaks.h
+  std::vector<double> cuts;    // sorted, including t0 and t1 (and the field's extrema, trilinear)
+  std::vector<PeakHit> peaks;  // sorted by t; crossing convention of core/peaks.h
 };
 
 RaySplit split_ray(const Volume& v, Filter filter, const Ray& r, const glm::dvec3& half, double t0, double t1,

@@ -18,7 +18,6 @@
 
 namespace peakcast::reference::detail {
 
-
 // What every pixel of a frame shares.
 struct Frame {
   const Volume& v;

@@ -1,6 +1,5 @@
 #include "reference/reference_renderer.h"
 
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -50,8 +49,6 @@ double solve_root(const Frame& fr, const Ray& r, double t0, double f0, double t1
   return gb == ga ? 0.5 * (ta + tb) : std::clamp(ta - ga * (tb - ta) / (gb - ga), std::min(ta, tb), std::max(ta, tb));
 }
 
-
-
 // The set-up of a reference frame, then `body(pixel)` with the per-ray function
 // pixel(ray, t0, t1, acc, samples, x, y): the whole image, or one pixel for a probe.
 template <typename Body>
@@ -68,10 +65,11 @@ auto run_reference(const Frame& fr, const ReferenceOptions& opt, Body body) {
   const bool dvr_on = !(peaks_on && rs.peak_mode == PeakMode::PeaksOnly);
   // Steps that differ from the table's: preintegrated segments corrected for their length.
   const bool varying_steps = plan.differential || rs.adaptive || rs.virtual_samples;
-  const PeakTable table = build_peak_table(peaks_on ? find_peaks(s.tf) : std::vector<Peak>{}, fr.lo, fr.hi,
-                                           rs.peak_table_bins);
+  const PeakTable table =
+      build_peak_table(peaks_on ? find_peaks(s.tf) : std::vector<Peak>{}, fr.lo, fr.hi, rs.peak_table_bins);
   const PreintegrationTable pre =
-      preint ? build_preintegration(s.tf, fr.lo, fr.hi, dt, rs.preint_table_size, preint_method(rs)) : PreintegrationTable{};
+      preint ? build_preintegration(s.tf, fr.lo, fr.hi, dt, rs.preint_table_size, preint_method(rs))
+             : PreintegrationTable{};
   MacrocellGrid cells;
   std::vector<uint8_t> multiplier;
   if (rs.adaptive) {
@@ -268,10 +266,12 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
 }
 
 ProbeResult probe_reference(const Volume& v, const ResolvedScene& scene, int x, int y) {
-  if (!v.has_voxels()) throw std::invalid_argument("probing needs the volume's voxels, which this process does not hold");
+  if (!v.has_voxels())
+    throw std::invalid_argument("probing needs the volume's voxels, which this process does not hold");
   if (x < 0 || y < 0 || x >= scene.scene.width || y >= scene.scene.height)
     throw std::invalid_argument("pixel [" + std::to_string(x) + ", " + std::to_string(y) + "] is outside the " +
-                                std::to_string(scene.scene.width) + " x " + std::to_string(scene.scene.height) + " image");
+                                std::to_string(scene.scene.width) + " x " + std::to_string(scene.scene.height) +
+                                " image");
   // Adaptive sampling would build the whole volume's macrocells for one ray: the scene's
   // uniform lattice instead (the half-opacity point moves by less than a step).
   ResolvedScene s = scene;

@@ -17,7 +17,7 @@
 namespace peakcast::reference {
 
 struct ReferenceOptions {
-  double step = 0.0;  // 0: the scene's step (uniform sampling only)
+  double step = 0.0;        // 0: the scene's step (uniform sampling only)
   double step_scale = 1.0;  // the plan coarsened like an interactive frame (core/sampling.h)
   bool early_termination = true;
 };

@@ -101,7 +101,8 @@ RenderBackend open_backend(Backend requested, const std::string& egl_device, con
   (void)shader_dir;
   (void)program_cache;
   if (requested == Backend::Gl)
-    throw std::runtime_error("backend gl: this peakcast was built without GL (PEAKCAST_WITH_GL=OFF): use --backend cpu");
+    throw std::runtime_error(
+        "backend gl: this peakcast was built without GL (PEAKCAST_WITH_GL=OFF): use --backend cpu");
   return std::move(on_cpu("auto: built without GL"));
 #endif
 }

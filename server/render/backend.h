@@ -28,7 +28,7 @@ bool gl_built();
 // A renderer and what it needs. The GL device is opened for gl and auto (auto reads it to
 // decide) and kept only for gl; a forced cpu backend opens no EGL display at all.
 struct RenderBackend {
-  Backend backend = Backend::Gl;     // resolved: gl or cpu
+  Backend backend = Backend::Gl;          // resolved: gl or cpu
   std::unique_ptr<gpu::GlDevice> device;  // gl only; outlives the renderer (declared first)
   std::unique_ptr<Renderer> renderer;
   std::string why;  // how auto chose (empty for a forced backend)

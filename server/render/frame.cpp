@@ -25,7 +25,8 @@ std::vector<PixelRect> tile_grid(int width, int height, int tile_w, int tile_h) 
                                 std::to_string(tile_h) + ")");
   std::vector<PixelRect> out;
   for (int y = 0; y < height; y += tile_h)
-    for (int x = 0; x < width; x += tile_w) out.push_back({x, y, std::min(tile_w, width - x), std::min(tile_h, height - y)});
+    for (int x = 0; x < width; x += tile_w)
+      out.push_back({x, y, std::min(tile_w, width - x), std::min(tile_h, height - y)});
   return out;
 }
 

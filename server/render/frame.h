@@ -44,9 +44,9 @@ struct Rgb8Image {
 };
 
 struct RenderResult {
-  PixelRect rect;   // the pixels drawn, in full-image pixels
-  Image image;      // RenderOutput::Float (rect.w x rect.h)
-  Rgb8Image rgb8;   // RenderOutput::Rgb8 (rect.w x rect.h)
+  PixelRect rect;  // the pixels drawn, in full-image pixels
+  Image image;     // RenderOutput::Float (rect.w x rect.h)
+  Rgb8Image rgb8;  // RenderOutput::Rgb8 (rect.w x rect.h)
 };
 
 // Throws std::invalid_argument naming the limit unless `r` is a non-empty rectangle inside a

@@ -25,8 +25,7 @@ std::string tf_signature(const TransferFunction& tf, double lo, double hi) {
   return s.str();
 }
 
-const Occupancy& OccupancyCache::get(const std::string& key, const std::function<Occupancy()>& build,
-                                     size_t& builds) {
+const Occupancy& OccupancyCache::get(const std::string& key, const std::function<Occupancy()>& build, size_t& builds) {
   auto it = std::find_if(entries_.begin(), entries_.end(), [&](const Entry& e) { return e.key == key; });
   if (it != entries_.end()) {
     std::rotate(entries_.begin(), it, it + 1);
@@ -65,8 +64,8 @@ FrameSetup setup_frame(const ResidentVolume& gv, const ResolvedScene& s, RenderP
     f.occupancy = &cache.get(
         f.occupancy_key,
         [&] {
-          return classify_cells(reach ? dilate_ranges(cells, reach) : cells, s.tf, gv.tf_lo(), gv.tf_hi(),
-                                peak_values, TransferFunction::kTableSize, overshoot);
+          return classify_cells(reach ? dilate_ranges(cells, reach) : cells, s.tf, gv.tf_lo(), gv.tf_hi(), peak_values,
+                                TransferFunction::kTableSize, overshoot);
         },
         builds);
   }

@@ -39,15 +39,15 @@ class OccupancyCache {
 
 struct FrameSetup {
   VariantKey key;
-  std::vector<Peak> peaks;          // of the TF (classification peaks), even where the variant finds none
+  std::vector<Peak> peaks;               // of the TF (classification peaks), even where the variant finds none
   const Occupancy* occupancy = nullptr;  // never null; no empty cells without space skipping
-  std::string occupancy_key;        // empty when the frame does not skip space
+  std::string occupancy_key;             // empty when the frame does not skip space
   std::string tf_sig;
-  double table_ms = 0.0;            // peaks and occupancy built for this frame
+  double table_ms = 0.0;  // peaks and occupancy built for this frame
 };
 
 struct SetupOptions {
-  bool leaps = true;          // RendererSeam::set_empty_space_leaps
+  bool leaps = true;           // RendererSeam::set_empty_space_leaps
   double vs_widening = 0.125;  // RendererSeam::set_virtual_sample_widening
   const std::function<void(VariantKey&)>* force_variant = nullptr;
 };

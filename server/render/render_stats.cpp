@@ -15,10 +15,10 @@ RenderStats RenderStats::for_scene(const ResolvedScene& s) {
 }
 
 nlohmann::json RenderStats::to_json() const {
-  nlohmann::json j = {{"render_ms", render_ms}, {"readback_ms", readback_ms}, {"table_ms", table_ms},
-                      {"variant", variant},     {"peaks", peaks},             {"empty_macrocells", empty_cells},
-                      {"tiles", tiles},         {"tf_source", tf_source},     {"warnings", warnings},
-                      {"compile_ms", compile_ms}};
+  nlohmann::json j = {
+      {"render_ms", render_ms}, {"readback_ms", readback_ms},      {"table_ms", table_ms}, {"variant", variant},
+      {"peaks", peaks},         {"empty_macrocells", empty_cells}, {"tiles", tiles},       {"tf_source", tf_source},
+      {"warnings", warnings},   {"compile_ms", compile_ms}};
   if (gpu_ms >= 0) j["gpu_ms"] = gpu_ms;
   if (variant.find("+raytex") != std::string::npos) {
     j["ray_texture_ms"] = ray_texture_ms;
@@ -40,12 +40,14 @@ std::string RenderStats::to_string() const {
   std::ostringstream s;
   s << "RenderStats{";
   bool first = true;
-  for (const char* key : {"variant", "render_ms", "readback_ms", "table_ms", "samples_per_ray", "samples_per_ray_max",
-                          "rays_hit", "rays_at_sample_cap", "sample_cap", "peaks", "empty_macrocells", "tiles",
-                          "ray_texture_ms", "ray_texture_strokes", "ray_texture_texels", "tf_source", "warnings",
-                          "compile_ms", "gpu_ms"}) {
+  for (const char* key :
+       {"variant", "render_ms", "readback_ms", "table_ms", "samples_per_ray", "samples_per_ray_max", "rays_hit",
+        "rays_at_sample_cap", "sample_cap", "peaks", "empty_macrocells", "tiles", "ray_texture_ms",
+        "ray_texture_strokes", "ray_texture_texels", "tf_source", "warnings", "compile_ms", "gpu_ms"}) {
     if (!j.contains(key)) continue;
-    s << (first ? "" : " ") << key << "=" << (j[key].is_string() ? j[key].get<std::string>() : j[key].dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+    s << (first ? "" : " ") << key << "="
+      << (j[key].is_string() ? j[key].get<std::string>()
+                             : j[key].dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
     first = false;
   }
   s << "}";

@@ -16,7 +16,7 @@ struct ResolvedScene;
 namespace peakcast::render {
 
 struct RenderStats {
-  double render_ms = 0.0;    // the draw: GL, issued to finished (wall); CPU, the ray cast
+  double render_ms = 0.0;  // the draw: GL, issued to finished (wall); CPU, the ray cast
   // GL only: the GPU's own time for the draw (a timer query), apart from the frame's waits;
   // < 0 where not measured (the CPU backend, a driver without timer queries).
   double gpu_ms = -1.0;

@@ -49,8 +49,8 @@ class Renderer {
   // premultiplied, no background; samples -1 where the ray owns no lattice point here.
   virtual Image render_brick(const ResidentVolume& volume, const ResolvedScene& scene, const Brick& brick,
                              RenderStats* stats = nullptr, std::optional<PixelRect> rect = std::nullopt) = 0;
-  virtual Image render_bare(const ResidentVolume& volume, const ResolvedScene& scene, RenderPath path, const Image& full,
-                            RenderStats* stats = nullptr) = 0;
+  virtual Image render_bare(const ResidentVolume& volume, const ResolvedScene& scene, RenderPath path,
+                            const Image& full, RenderStats* stats = nullptr) = 0;
   // The most samples a ray of this variant takes (kMaxSamplesPerRay, or less where a driver
   // bounds a shader's loops: llvmpipe); rays that reach it are counted in the stats.
   virtual int sample_cap(const VariantKey& key) const = 0;

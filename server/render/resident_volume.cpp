@@ -16,7 +16,9 @@ ResidentVolume::ResidentVolume(std::shared_ptr<const Volume> volume, VolumeMacro
 }
 
 ResidentVolume::ResidentVolume(std::shared_ptr<const Volume> volume, VolumeMacrocells cells, VoxelsElsewhere)
-    : volume_(std::move(volume)), cells_trilinear_(std::move(cells.trilinear)), cells_tricubic_(std::move(cells.tricubic)) {
+    : volume_(std::move(volume)),
+      cells_trilinear_(std::move(cells.trilinear)),
+      cells_tricubic_(std::move(cells.tricubic)) {
   if (!volume_) throw std::invalid_argument("ResidentVolume: no volume");
   if (cells_trilinear_) check_macrocells(*cells_trilinear_, *volume_, FilterSupport::Trilinear);
   if (cells_tricubic_) check_macrocells(*cells_tricubic_, *volume_, FilterSupport::Tricubic);
@@ -37,8 +39,9 @@ void ResidentVolume::ensure_trilinear_grid() {
 
 void ResidentVolume::no_brick_grid() const {
   if (grid_dims(*volume_) != volume_->dims())
-    throw std::invalid_argument("ResidentVolume: a brick walks the whole volume's macrocell grids, which its voxels "
-                                "cannot build: pass them (core/macrocell_share.h)");
+    throw std::invalid_argument(
+        "ResidentVolume: a brick walks the whole volume's macrocell grids, which its voxels "
+        "cannot build: pass them (core/macrocell_share.h)");
 }
 
 const MacrocellGrid& ResidentVolume::macrocells(Filter filter) const {

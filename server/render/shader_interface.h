@@ -19,8 +19,8 @@ constexpr unsigned kUnitRayTexture = 7;  // sampler2D: ray texture (step, termin
 constexpr unsigned kImageColor = 0;
 constexpr unsigned kImageSamples = 1;
 // Buffer bindings.
-constexpr unsigned kUboRay = 0;          // std140 RayUniforms
-constexpr unsigned kSsboTfPoints = 0;    // TF points for the peak root solve
+constexpr unsigned kUboRay = 0;        // std140 RayUniforms
+constexpr unsigned kSsboTfPoints = 0;  // TF points for the peak root solve
 // One byte per macrocell, four to a uint, grid order (make_cell_buffer). Buffers, not integer
 // 3D textures: on llvmpipe a texelFetch cost ~30 of a 40 ms blobs frame's traversal, a buffer
 // load a fraction of that.

@@ -75,23 +75,24 @@ std::string VariantKey::name() const {
 }
 
 nlohmann::json capabilities() {
-  return {{"classification", {"post", "preint", "peaks"}},
-          {"peak_mode", {"dvr+peaks", "xor", "peaks_only", "dvr_only"}},
-          {"max_peaks", {1, 2, 3, 4}},
-          {"sampling", {"uniform", "differential"}},
-          {"filter", {"trilinear", "tricubic"}},
-          {"virtual_samples", {0, 3, 7}},
-          {"shading", true},
-          {"space_skipping", true},
-          {"adaptive", true},
-          {"ray_texture",
-           {{"mappings", {"view", "volume"}},
-            {"channels", {{"step", {kMinStepMultiplier, kMaxStepMultiplier}}, {"termination", {0, 1}}, {"blend", {-1, 1}}}},
-            {"modes", {"set", "add", "multiply"}},
-            {"max_size", kMaxRayTextureSide},
-            {"max_level", kMaxStrokeLevel},
-            {"max_strokes", kMaxRayTextureStrokes}}},
-          {"still_formats", {"jpeg", "png"}}};
+  return {
+      {"classification", {"post", "preint", "peaks"}},
+      {"peak_mode", {"dvr+peaks", "xor", "peaks_only", "dvr_only"}},
+      {"max_peaks", {1, 2, 3, 4}},
+      {"sampling", {"uniform", "differential"}},
+      {"filter", {"trilinear", "tricubic"}},
+      {"virtual_samples", {0, 3, 7}},
+      {"shading", true},
+      {"space_skipping", true},
+      {"adaptive", true},
+      {"ray_texture",
+       {{"mappings", {"view", "volume"}},
+        {"channels", {{"step", {kMinStepMultiplier, kMaxStepMultiplier}}, {"termination", {0, 1}}, {"blend", {-1, 1}}}},
+        {"modes", {"set", "add", "multiply"}},
+        {"max_size", kMaxRayTextureSide},
+        {"max_level", kMaxStrokeLevel},
+        {"max_strokes", kMaxRayTextureStrokes}}},
+      {"still_formats", {"jpeg", "png"}}};
 }
 
 VariantKey choose_variant(const ResolvedScene& s, int64_t empty_cells, RenderPath path, size_t peak_count) {

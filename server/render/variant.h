@@ -20,14 +20,14 @@ struct VariantKey {
   bool shading = false;
   bool space_skipping = false;  // only when the TF leaves some macrocell empty
   bool orthographic = false;
-  bool differential = false;  // Knoll §5, perspective cameras only (orthographic: uniform at the footprint)
-  bool adaptive = false;      // Knoll §6.2 per-macrocell step multipliers (brings the cell traversal)
-  int virtual_samples = 0;    // Lee 2010: 0, 3 or 7 Catmull-Rom samples between true ones
+  bool differential = false;   // Knoll §5, perspective cameras only (orthographic: uniform at the footprint)
+  bool adaptive = false;       // Knoll §6.2 per-macrocell step multipliers (brings the cell traversal)
+  int virtual_samples = 0;     // Lee 2010: 0, 3 or 7 Catmull-Rom samples between true ones
   bool bare_sampling = false;  // benchmark baseline only
   bool peaks = false;          // peak finding between samples
   PeakMode peak_mode = PeakMode::DvrPlusPeaks;
   bool preintegration = false;
-  bool rgb8 = false;  // output quantised to 8-bit RGB on the GPU (RenderOutput::Rgb8)
+  bool rgb8 = false;                // output quantised to 8-bit RGB on the GPU (RenderOutput::Rgb8)
   bool ray_texture = false;         // Raspe 2008 per-ray controls (any render.ray_texture)
   bool ray_texture_volume = false;  // ... indexed by the entry point (else by the pixel)
   // Tests only: space skipping by the 3D-DDA over macrocells instead of lattice-driven leaps

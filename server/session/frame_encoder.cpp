@@ -28,10 +28,9 @@ void send_viewer_frame(encode::JpegEncoder& enc, const RenderedFrame& f, std::op
   const FrameJob& job = f.job;
   const bool png = job.final && job.quality.final_png;
   const int q = job.final ? job.quality.final_quality : job.quality.interactive_quality;
-  std::vector<uint8_t> bytes =
-      video ? std::move(video->packet.bytes)
-            : encode_image(enc, f.rgb, f.width, f.height, png, q,
-                           job.final ? encode::Subsampling::S444 : encode::Subsampling::S420);
+  std::vector<uint8_t> bytes = video ? std::move(video->packet.bytes)
+                                     : encode_image(enc, f.rgb, f.width, f.height, png, q,
+                                                    job.final ? encode::Subsampling::S444 : encode::Subsampling::S420);
   const auto encoded = Clock::now();
   const char* kind = job.final ? "kind=\"final\"" : video ? "kind=\"video\"" : "kind=\"interactive\"";
   metrics.observe("peakcast_encode_ms", kind, ms_between(t0, encoded));
@@ -57,8 +56,8 @@ void send_viewer_frame(encode::JpegEncoder& enc, const RenderedFrame& f, std::op
   h.t_encode_done_us = micros(encoded);
   const size_t image_bytes = bytes.size();
   sink.deliver_frame(protocol::encode_frame(h, bytes), job.frame_id, job.final, bool(video));
-  sink.deliver_text(protocol::stats_message(job.frame_id, job.final, f.width, f.height, stats,
-                                            ms_between(t0, encoded), image_bytes));
+  sink.deliver_text(
+      protocol::stats_message(job.frame_id, job.final, f.width, f.height, stats, ms_between(t0, encoded), image_bytes));
 }
 
 }  // namespace
@@ -92,8 +91,11 @@ void deliver_refined_frame(FrameSink& sink, uint32_t frame_id, const FrameJob& j
   h.quality = png ? 100u : uint32_t(job.quality.final_quality);
   h.t_input_us = micros(job.input_time);
   h.t_render_done_us = h.t_encode_done_us = micros(Clock::now());
-  const nlohmann::json stats = {{"render_ms", r.render_ms}, {"variant", r.variant}, {"codec", png ? "png" : "jpeg"},
-                                {"level", 0}, {"bricks", r.bricks}};
+  const nlohmann::json stats = {{"render_ms", r.render_ms},
+                                {"variant", r.variant},
+                                {"codec", png ? "png" : "jpeg"},
+                                {"level", 0},
+                                {"bricks", r.bricks}};
   const size_t bytes = r.bytes.size();
   sink.deliver_frame(protocol::encode_frame(h, r.bytes), frame_id, true, false);
   sink.deliver_text(protocol::stats_message(frame_id, true, r.width, r.height, stats, r.encode_ms, bytes));

@@ -24,7 +24,7 @@ struct RenderedFrame {
   FrameJob job;
   std::vector<uint8_t> rgb;  // row 0 at the top
   int width = 0, height = 0;
-  nlohmann::json stats;      // RenderStats' JSON form
+  nlohmann::json stats;  // RenderStats' JSON form
   Clock::time_point rendered;
   uint64_t video_ticket = 0;  // a video frame's place in its stream (VideoChannel::take_ticket)
 };

@@ -157,13 +157,20 @@ ClientMessage parse_client_message(const std::string& text) {
     return RenderMsg{j["render"]};
   }
   if (type == "quality") {
-    only_keys(j, "quality", {"interactive_scale", "interactive_ms", "interactive_quality", "final_quality", "final_format",
-                             "codec", "kbps"});
+    only_keys(j, "quality",
+              {"interactive_scale", "interactive_ms", "interactive_quality", "final_quality", "final_format", "codec",
+               "kbps"});
     QualityMsg q;
-    if (j.contains("interactive_scale")) q.interactive_scale = number_in(j["interactive_scale"], "quality.interactive_scale", 0.1, 1.0);
-    if (j.contains("interactive_ms")) q.interactive_ms = number_in(j["interactive_ms"], "quality.interactive_ms", 0.0, 1000.0);
-    if (j.contains("interactive_quality")) q.interactive_quality = int_in(j["interactive_quality"], "quality.interactive_quality", limits::kMinJpegQuality, limits::kMaxJpegQuality);
-    if (j.contains("final_quality")) q.final_quality = int_in(j["final_quality"], "quality.final_quality", limits::kMinJpegQuality, limits::kMaxJpegQuality);
+    if (j.contains("interactive_scale"))
+      q.interactive_scale = number_in(j["interactive_scale"], "quality.interactive_scale", 0.1, 1.0);
+    if (j.contains("interactive_ms"))
+      q.interactive_ms = number_in(j["interactive_ms"], "quality.interactive_ms", 0.0, 1000.0);
+    if (j.contains("interactive_quality"))
+      q.interactive_quality = int_in(j["interactive_quality"], "quality.interactive_quality", limits::kMinJpegQuality,
+                                     limits::kMaxJpegQuality);
+    if (j.contains("final_quality"))
+      q.final_quality =
+          int_in(j["final_quality"], "quality.final_quality", limits::kMinJpegQuality, limits::kMaxJpegQuality);
     if (j.contains("final_format")) {
       q.final_format = string_of(j["final_format"], "quality.final_format", 8);
       if (*q.final_format != "jpeg" && *q.final_format != "png") bad("quality.final_format: jpeg or png");
@@ -222,21 +229,27 @@ ClientMessage parse_client_message(const std::string& text) {
 }
 
 std::string error_message(const std::string& code, const std::string& message) {
-  return json{{"type", "error"}, {"code", code}, {"message", public_text(message)}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  return json{{"type", "error"}, {"code", code}, {"message", public_text(message)}}.dump(
+      -1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
-std::string pong_message(const std::string& id) { return json{{"type", "pong"}, {"id", id}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace); }
+std::string pong_message(const std::string& id) {
+  return json{{"type", "pong"}, {"id", id}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+}
 
 std::string stroke_ack_message(uint32_t seq, size_t strokes) {
-  return json{{"type", "stroke_ack"}, {"seq", seq}, {"strokes", strokes}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  return json{{"type", "stroke_ack"}, {"seq", seq}, {"strokes", strokes}}.dump(
+      -1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 std::string loading_message(const std::string& volume, double fraction) {
-  return json{{"type", "loading"}, {"volume", volume}, {"fraction", std::clamp(fraction, 0.0, 1.0)}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  return json{{"type", "loading"}, {"volume", volume}, {"fraction", std::clamp(fraction, 0.0, 1.0)}}.dump(
+      -1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 std::string refining_message(double fraction, int bricks) {
-  return json{{"type", "refining"}, {"fraction", std::clamp(fraction, 0.0, 1.0)}, {"bricks", bricks}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  return json{{"type", "refining"}, {"fraction", std::clamp(fraction, 0.0, 1.0)}, {"bricks", bricks}}.dump(
+      -1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 std::pair<int, int> parse_pixel(const json& p, const std::string& where) {
@@ -264,20 +277,20 @@ std::string probe_message(uint32_t id, const json& answer) {
 }
 
 std::string volume_message(const json& volume_info, const json& state) {
-  return json{{"type", "volume"}, {"volume", volume_info}, {"state", state}}.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  return json{{"type", "volume"}, {"volume", volume_info}, {"state", state}}.dump(
+      -1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 std::string welcome_message(const Welcome& w) {
-  return json{{"type", "welcome"},         {"session", w.session},
-              {"volume", w.volume},        {"volumes", w.volumes},
-              {"state", w.state},          {"capabilities", w.capabilities},
-              {"gl_renderer", w.gl_renderer}, {"backend", w.backend},
-              {"limits", w.limits}}
+  return json{
+      {"type", "welcome"}, {"session", w.session},           {"volume", w.volume},           {"volumes", w.volumes},
+      {"state", w.state},  {"capabilities", w.capabilities}, {"gl_renderer", w.gl_renderer}, {"backend", w.backend},
+      {"limits", w.limits}}
       .dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
-std::string stats_message(uint32_t frame, bool final, int width, int height, const json& render_stats,
-                          double encode_ms, size_t bytes) {
+std::string stats_message(uint32_t frame, bool final, int width, int height, const json& render_stats, double encode_ms,
+                          size_t bytes) {
   json m = render_stats;
   m["type"] = "stats";
   m["frame"] = frame;

@@ -26,7 +26,7 @@ class ProtocolError : public std::runtime_error {
 struct Viewport {
   int width = 0, height = 0;  // CSS pixels
   double dpr = 1.0;
-  int pixel_width() const;    // width * dpr, rounded, at least 1
+  int pixel_width() const;  // width * dpr, rounded, at least 1
   int pixel_height() const;
 };
 
@@ -56,12 +56,12 @@ struct RenderMsg {
   nlohmann::json render;
 };
 struct QualityMsg {
-  std::optional<double> interactive_scale;  // 0.1..1
-  std::optional<double> interactive_ms;     // 0..1000; 0: a fixed interactive scale
+  std::optional<double> interactive_scale;                // 0.1..1
+  std::optional<double> interactive_ms;                   // 0..1000; 0: a fixed interactive scale
   std::optional<int> interactive_quality, final_quality;  // 10..100
-  std::optional<std::string> final_format;  // jpeg | png
-  std::optional<std::string> codec;         // interactive frames: jpeg, or a video codec this server encodes
-  std::optional<int> kbps;                  // the stream's bit-rate ceiling (capped by --max-kbps)
+  std::optional<std::string> final_format;                // jpeg | png
+  std::optional<std::string> codec;  // interactive frames: jpeg, or a video codec this server encodes
+  std::optional<int> kbps;           // the stream's bit-rate ceiling (capped by --max-kbps)
 };
 // A video client lost or could not decode a frame: the next interactive frame is a key frame.
 struct KeyframeMsg {};

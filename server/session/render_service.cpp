@@ -198,7 +198,7 @@ void RenderService::queue_refinement(const std::shared_ptr<Session>& session, co
     auto s = weak_sink.lock();
     auto session = weak_session.lock();
     if (!s || !session || cancelled->load()) return;  // stale: the view moved on
-    if (!r.error.empty()) {  // shutting down or cancelled: nothing to say; a failure: say why
+    if (!r.error.empty()) {                           // shutting down or cancelled: nothing to say; a failure: say why
       if (r.error_code == "render_failed" || r.error_code == "encode_failed")
         s->deliver_text(protocol::error_message("render_failed", "the finest level: " + r.error));
       return;
@@ -206,13 +206,15 @@ void RenderService::queue_refinement(const std::shared_ptr<Session>& session, co
     if (const auto id = session->refined_frame_id(*cancelled)) deliver_refined_frame(*s, *id, job, std::move(r));
   };
   // Refused only when shutting down, or while this viewer's last refinement is still live.
-  if (scheduler_.submit_still(std::move(still))) metrics_.set("peakcast_stills_queued", "", double(scheduler_.stills_pending()));
+  if (scheduler_.submit_still(std::move(still)))
+    metrics_.set("peakcast_stills_queued", "", double(scheduler_.stills_pending()));
 }
 
 void RenderService::render_band(Scheduler::Work& w) {
   StillWork& sw = *w.still;
-  if (sw.bands == 0) metrics_.observe("peakcast_still_wait_ms", "", std::chrono::duration<double, std::milli>(
-                                                                          sw.started - sw.queued).count());
+  if (sw.bands == 0)
+    metrics_.observe("peakcast_still_wait_ms", "",
+                     std::chrono::duration<double, std::milli>(sw.started - sw.queued).count());
   if (sw.by_bricks()) return render_brick(w);
   try {
     // Float output, as `peakcast render` does: the assembled still equals the CLI's image.
@@ -259,7 +261,9 @@ void RenderService::render_brick(Scheduler::Work& w) {
       distributed::SequenceResult r = sw.bricks->take();
       if (r.budget_too_small)  // the bricks got half their share: the still held more than the budget
         log::warn("memory budget too small for a full-resolution still's image buffers beside its bricks",
-                  {{"width", r.image.width}, {"height", r.image.height}, {"bricks", r.bricks},
+                  {{"width", r.image.width},
+                   {"height", r.image.height},
+                   {"bricks", r.bricks},
                    {"beside_mib", double(r.beside_bytes) / 1048576.0}});
       sw.image = std::move(r.image);
       sw.variant = "bricks";

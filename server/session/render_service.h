@@ -23,8 +23,8 @@ struct RenderServiceOptions {
   std::filesystem::path shader_dir;
   int encode_threads = 2;
   SchedulerOptions scheduling;
-  std::string egl_device;  // gpu::EglContext::create's choice; empty: PEAKCAST_EGL_DEVICE, else auto
-  std::string backend;     // auto | gl | cpu (render/backend.h); empty: PEAKCAST_BACKEND, else auto
+  std::string egl_device;     // gpu::EglContext::create's choice; empty: PEAKCAST_EGL_DEVICE, else auto
+  std::string backend;        // auto | gl | cpu (render/backend.h); empty: PEAKCAST_BACKEND, else auto
   std::string program_cache;  // auto | off | a folder (render/backend.h); empty: PEAKCAST_PROGRAM_CACHE
   // Distributed rendering (mpirun peakcast serve): the opened backend's renderer handed to this,
   // on the render thread, which returns the renderer frames go through (distributed::MpiRenderer).
@@ -42,7 +42,7 @@ class RenderService {
   // Refuses the queued stills (error "shutting_down"), stops after the band or frame being
   // rendered now, answers that still too, drains the encodes and joins. Idempotent.
   void stop();
-  std::string gl_renderer() const;  // the backend's description (render/backend.h)
+  std::string gl_renderer() const;                  // the backend's description (render/backend.h)
   std::string backend() const { return backend_; }  // "gl" or "cpu"
   int ranks() const { return options_.ranks; }
 
@@ -60,7 +60,7 @@ class RenderService {
   struct Impl;
   void loop();
   bool submit_frame(Scheduler::Work& w);  // false: not submitted (the viewer went away, or it failed)
-  void collect_frame();  // the oldest frame submitted: to the encode pool
+  void collect_frame();                   // the oldest frame submitted: to the encode pool
   void render_band(Scheduler::Work& w);
   // After a final frame of a pyramid held coarser: the same view at the finest level, queued as
   // a still whose progress and image go to the viewer (FrameJob::refine).

@@ -17,7 +17,7 @@ struct VolumeEntry;
 namespace render {
 class Renderer;
 class ResidentVolume;
-}
+}  // namespace render
 
 class Residency {
  public:
@@ -38,9 +38,9 @@ class Residency {
   // texture upload, or the CPU backend's view). Copies of volumes nobody holds any more are
   // freed first. One renderer per residency.
   render::ResidentVolume& acquire(const std::shared_ptr<VolumeEntry>& e, render::Renderer& renderer);
-  int64_t gpu_bytes() const;     // render thread: bytes the backend's copies hold besides the volumes
-  size_t gpu_volumes() const;    // render thread
-  void release_gpu();            // render thread, before its GL context goes
+  int64_t gpu_bytes() const;   // render thread: bytes the backend's copies hold besides the volumes
+  size_t gpu_volumes() const;  // render thread
+  void release_gpu();          // render thread, before its GL context goes
 
  private:
   int64_t count_locked() const;  // prunes expired entries first

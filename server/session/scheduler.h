@@ -85,8 +85,8 @@ struct StillWork {
 };
 
 struct SchedulerOptions {
-  size_t max_queued_stills = 4;          // scripts' stills waiting + in progress; beyond: refused (503)
-  double band_samples = 1.5e7;           // estimated samples per band (~50-100 ms on llvmpipe)
+  size_t max_queued_stills = 4;  // scripts' stills waiting + in progress; beyond: refused (503)
+  double band_samples = 1.5e7;   // estimated samples per band (~50-100 ms on llvmpipe)
   std::chrono::milliseconds still_delay{150};
   double max_fps = 60.0;  // per session; 0: no limit (tests)
 };
@@ -117,7 +117,7 @@ class Scheduler {
     std::optional<FrameJob> frame;
     std::shared_ptr<StillWork> still;  // ...or the next band of a still: rows [y0, y0 + rows)
     int y0 = 0, rows = 0;
-    std::vector<StillJob> cancelled;   // stills whose clients went away: answer them
+    std::vector<StillJob> cancelled;  // stills whose clients went away: answer them
   };
   // wait false: nullopt at once when nothing is ready (the render thread has a frame in flight
   // to finish meanwhile).
@@ -129,7 +129,7 @@ class Scheduler {
 
  private:
   std::optional<FrameJob> take_session_job(Clock::time_point now, std::shared_ptr<Session>& session,
-                                           Clock::time_point& wake);  // lock held
+                                           Clock::time_point& wake);           // lock held
   std::shared_ptr<StillWork> current_still(std::vector<StillJob>& cancelled);  // lock held
 
   SchedulerOptions options_;
@@ -139,8 +139,8 @@ class Scheduler {
   std::deque<std::shared_ptr<StillWork>> stills_;  // front: in progress once started
   std::shared_ptr<StillWork> rendering_;           // handed out by next(), until band_done/still_failed
   uint64_t next_still_ = 1;
-  size_t rr_ = 0;                 // round-robin start among sessions
-  bool last_was_session_ = false; // alternate with stills
+  size_t rr_ = 0;                  // round-robin start among sessions
+  bool last_was_session_ = false;  // alternate with stills
   bool stopping_ = false, wake_ = false;
 };
 

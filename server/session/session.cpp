@@ -162,8 +162,8 @@ void Session::merge_render(const nlohmann::json& patch, std::optional<std::share
 size_t Session::add_stroke(const Stroke& stroke) {
   std::lock_guard lock(m_);
   if (!ray_texture_)
-    throw protocol::ProtocolError("bad_message",
-                                  "stroke: the session has no ray texture; send render.ray_texture {mapping, size} first");
+    throw protocol::ProtocolError(
+        "bad_message", "stroke: the session has no ray texture; send render.ray_texture {mapping, size} first");
   try {
     ray_texture_ = with_stroke(*ray_texture_, stroke);
   } catch (const SceneError& e) {
@@ -316,8 +316,8 @@ std::optional<FrameJob> Session::take_job(Clock::time_point now, std::chrono::mi
     job.video = video_;
     auto& v = job.video_settings;
     v.codec = *encode::video_codec_from_name(quality_.codec);
-    std::tie(v.width, v.height) = video_coded_size(job.scene.scene.width, job.scene.scene.height,
-                                                   quality_.interactive_scale);
+    std::tie(v.width, v.height) =
+        video_coded_size(job.scene.scene.width, job.scene.scene.height, quality_.interactive_scale);
     v.kbps = quality_.kbps;
     v.quality = quality_.interactive_quality;
   }

@@ -47,8 +47,8 @@ struct Quality {
   // to interactive_scale / kMaxInteractiveReduction; 0: always interactive_scale.
   double interactive_ms = 30.0;
   static constexpr double kMaxInteractiveReduction = 2.0;
-  int interactive_quality = 70;    // JPEG, 4:2:0
-  int final_quality = 95;          // JPEG, 4:4:4
+  int interactive_quality = 70;  // JPEG, 4:2:0
+  int final_quality = 95;        // JPEG, 4:4:4
   bool final_png = false;
   std::string codec = "jpeg";  // interactive frames: jpeg, h264, vp9 or av1 (docs/streaming.md)
   int kbps = 8000;             // a video stream's bit-rate ceiling (the server's --max-kbps at the start)
@@ -132,7 +132,7 @@ class Session {
   uint32_t in_flight() const;
 
  private:
-  void touch();  // a state change arrived (lock held)
+  void touch();              // a state change arrived (lock held)
   void cancel_refinement();  // the finest level's frame being drawn is stale (lock held)
   // Takes render.ray_texture out of a render patch: the new texture (its PNG read), or null
   // for none; nullopt when the patch does not name it. Throws ProtocolError.

@@ -89,14 +89,15 @@ UploadFormat sniff_upload(const fs::path& file, bool raw_header_given) {
       const auto colon = line.find(':');
       if (colon == std::string::npos || line.compare(colon, 2, ":=") == 0) continue;  // key/value pairs
       if (squeezed(line.substr(0, colon)) == "datafile")
-        throw unsupported("a detached NRRD header names another file (its 'data file' field): an upload is one "
-                          "file, send the .nrrd with its data attached");
+        throw unsupported(
+            "a detached NRRD header names another file (its 'data file' field): an upload is one "
+            "file, send the .nrrd with its data attached");
     }
     return UploadFormat::Nrrd;
   }
-  if (head.size() >= 4 && (head.compare(0, 4, std::string("II*\0", 4)) == 0 ||
-                           head.compare(0, 4, std::string("MM\0*", 4)) == 0 ||
-                           head.compare(0, 4, std::string("II+\0", 4)) == 0))
+  if (head.size() >= 4 &&
+      (head.compare(0, 4, std::string("II*\0", 4)) == 0 || head.compare(0, 4, std::string("MM\0*", 4)) == 0 ||
+       head.compare(0, 4, std::string("II+\0", 4)) == 0))
     return UploadFormat::Tiff;
   if (is_metaimage(head)) {
     for (const std::string& line : header_lines(head, false)) {
@@ -106,14 +107,16 @@ UploadFormat sniff_upload(const fs::path& file, bool raw_header_given) {
       value.erase(0, value.find_first_not_of(" \t"));
       value.erase(value.find_last_not_of(" \t") + 1);
       if (lower(value) != "local")
-        throw unsupported("a MetaImage header whose data is in another file (ElementDataFile other than LOCAL) is "
-                          "not one file: send an .mha (ElementDataFile = LOCAL)");
+        throw unsupported(
+            "a MetaImage header whose data is in another file (ElementDataFile other than LOCAL) is "
+            "not one file: send an .mha (ElementDataFile = LOCAL)");
       break;  // the last field: the voxels follow
     }
     return UploadFormat::MetaImage;
   }
-  throw unsupported("the body is neither NRRD (data attached), MetaImage (.mha), TIFF, nor raw voxels with their "
-                    "header (dims and dtype as query parameters or a JSON part)");
+  throw unsupported(
+      "the body is neither NRRD (data attached), MetaImage (.mha), TIFF, nor raw voxels with their "
+      "header (dims and dtype as query parameters or a JSON part)");
 }
 
 nlohmann::json raw_sidecar(const nlohmann::json& h, const std::string& data_file) {
@@ -154,7 +157,8 @@ nlohmann::json raw_sidecar(const nlohmann::json& h, const std::string& data_file
 }
 
 void check_raw_body(const nlohmann::json& sidecar, int64_t body_bytes) {
-  static const std::pair<const char*, int64_t> sizes[] = {{"uint8", 1}, {"int8", 1}, {"uint16", 2}, {"int16", 2}, {"float32", 4}};
+  static const std::pair<const char*, int64_t> sizes[] = {
+      {"uint8", 1}, {"int8", 1}, {"uint16", 2}, {"int16", 2}, {"float32", 4}};
   int64_t per = 0;
   for (const auto& [name, n] : sizes)
     if (sidecar.at("dtype") == name) per = n;
@@ -162,13 +166,15 @@ void check_raw_body(const nlohmann::json& sidecar, int64_t body_bytes) {
   std::string dims;
   for (const auto& d : sidecar.at("dims")) {
     const int64_t n = d.get<int64_t>();
-    if (n < 2) throw bad("raw header: every axis of a volume needs at least 2 voxels (dims " + json_text(sidecar.at("dims")) + ")");
+    if (n < 2)
+      throw bad("raw header: every axis of a volume needs at least 2 voxels (dims " + json_text(sidecar.at("dims")) +
+                ")");
     if (__builtin_mul_overflow(need, n, &need)) throw bad("raw header: dims overflow a 64-bit size");
     dims += (dims.empty() ? "" : "x") + std::to_string(n);
   }
   if (need != body_bytes)
-    throw bad("raw voxels: dims " + dims + " of " + sidecar.at("dtype").get<std::string>() + " need " + std::to_string(need) +
-              " bytes; the body holds " + std::to_string(body_bytes));
+    throw bad("raw voxels: dims " + dims + " of " + sidecar.at("dtype").get<std::string>() + " need " +
+              std::to_string(need) + " bytes; the body holds " + std::to_string(body_bytes));
 }
 
 std::string clean_upload_name(const std::string& name) {
@@ -227,7 +233,8 @@ MultipartUpload split_multipart(const fs::path& file, const std::string& content
     in.seekg(std::streamoff(size - tail_n));
     in.read(tail.data(), std::streamsize(tail_n));
     const size_t close = tail.rfind(next);
-    if (close == std::string::npos || size - tail_n + close < content) throw bad("multipart body cut: no closing boundary");
+    if (close == std::string::npos || size - tail_n + close < content)
+      throw bad("multipart body cut: no closing boundary");
     const uintmax_t end = size - tail_n + close;
     if (tail.find(next, close + 1) != std::string::npos || tail.compare(close + next.size(), 2, "--") != 0)
       throw bad("multipart data must be the last part (the JSON 'header' part first)");

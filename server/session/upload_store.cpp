@@ -125,23 +125,26 @@ std::unique_ptr<UploadStore::Ticket> UploadStore::begin(const std::string& clien
   if (rate_.size() > 4096) rate_.clear();  // forget idle clients now and then: a full bucket each
   auto it = rate_.try_emplace(client, Bucket{limits_.burst, now}).first;
   Bucket& b = it->second;
-  b.tokens = std::min(limits_.burst, b.tokens + std::chrono::duration<double>(now - b.last).count() * limits_.per_minute / 60);
+  b.tokens =
+      std::min(limits_.burst, b.tokens + std::chrono::duration<double>(now - b.last).count() * limits_.per_minute / 60);
   b.last = now;
   if (b.tokens < 1)
-    throw UploadRefusal(429, "rate_limited", "too many uploads from this client: a burst of at most " +
-                                                 std::to_string(int(limits_.burst)) + ", then " +
-                                                 std::to_string(int(limits_.per_minute)) + " a minute");
+    throw UploadRefusal(429, "rate_limited",
+                        "too many uploads from this client: a burst of at most " + std::to_string(int(limits_.burst)) +
+                            ", then " + std::to_string(int(limits_.per_minute)) + " a minute");
   if (receiving_ >= limits_.max_concurrent)
-    throw UploadRefusal(503, "uploads_busy", std::to_string(limits_.max_concurrent) +
-                                                 " uploads are being received now; retry later");
+    throw UploadRefusal(503, "uploads_busy",
+                        std::to_string(limits_.max_concurrent) + " uploads are being received now; retry later");
   const int64_t used = used_locked();
   if (length && *length > limits_.max_bytes)
-    throw UploadRefusal(413, "too_large", "an upload may hold " + std::to_string(limits_.max_bytes >> 20) +
-                                              " MiB (--max-upload-mib); this one has " + std::to_string(*length) + " bytes");
+    throw UploadRefusal(413, "too_large",
+                        "an upload may hold " + std::to_string(limits_.max_bytes >> 20) +
+                            " MiB (--max-upload-mib); this one has " + std::to_string(*length) + " bytes");
   if (length && used + *length > limits_.budget_bytes)
-    throw UploadRefusal(507, "upload_budget", "the uploads kept hold " + std::to_string(used >> 20) + " of " +
-                                                  std::to_string(limits_.budget_bytes >> 20) +
-                                                  " MiB (--upload-budget-mib): delete some first");
+    throw UploadRefusal(507, "upload_budget",
+                        "the uploads kept hold " + std::to_string(used >> 20) + " of " +
+                            std::to_string(limits_.budget_bytes >> 20) +
+                            " MiB (--upload-budget-mib): delete some first");
   b.tokens -= 1;
   ++receiving_;
   const std::string id = new_id();
@@ -177,8 +180,9 @@ std::shared_ptr<VolumeEntry> UploadStore::commit(std::unique_ptr<Ticket> t, cons
   {
     std::lock_guard lock(m_);
     if (used_locked() + bytes > limits_.budget_bytes)
-      throw UploadRefusal(507, "upload_budget", "the uploads kept would exceed " +
-                                                    std::to_string(limits_.budget_bytes >> 20) + " MiB (--upload-budget-mib)");
+      throw UploadRefusal(
+          507, "upload_budget",
+          "the uploads kept would exceed " + std::to_string(limits_.budget_bytes >> 20) + " MiB (--upload-budget-mib)");
   }
   fs::rename(body, file, ec);
   if (!ec && format == UploadFormat::Raw) fs::rename(incoming_ / (id + ".json"), open, ec);
@@ -198,8 +202,8 @@ std::shared_ptr<VolumeEntry> UploadStore::commit(std::unique_ptr<Ticket> t, cons
     remove_files(dir_, id);
     // The reader names the file: the client sees the upload's name, never a server path.
     std::string why = e.what();
-    for (const std::string& p : {open.string(), file.string(), dir_.string(), open.filename().string(),
-                                 file.filename().string()})
+    for (const std::string& p :
+         {open.string(), file.string(), dir_.string(), open.filename().string(), file.filename().string()})
       for (size_t at; (at = why.find(p)) != std::string::npos;) why.replace(at, p.size(), name);
     if (dynamic_cast<const VolumeError*>(&e)) throw UploadRefusal(422, "bad_volume", why);
     throw UploadRefusal(500, "upload_failed", why);
@@ -218,16 +222,17 @@ LoadOptions UploadStore::charged_load(int64_t file_bytes, int64_t& charged) {
   options.on_header = [this, file_bytes, &charged](const VolumeHeader& h) {
     for (int a = 0; a < 3; ++a)
       if (h.dims[a] < 2)
-        throw UploadRefusal(400, "bad_upload", "every axis of a volume needs at least 2 voxels (sizes " +
-                                                   std::to_string(h.dims[0]) + "x" + std::to_string(h.dims[1]) + "x" +
-                                                   std::to_string(h.dims[2]) + ")");
+        throw UploadRefusal(400, "bad_upload",
+                            "every axis of a volume needs at least 2 voxels (sizes " + std::to_string(h.dims[0]) + "x" +
+                                std::to_string(h.dims[1]) + "x" + std::to_string(h.dims[2]) + ")");
     const int64_t decoded = h.voxel_count() * int64_t(voxel_bytes(storage_type(h.source)));
     charged = std::max(file_bytes, decoded);
     std::lock_guard lock(m_);
     if (used_locked() + charged > limits_.budget_bytes)
-      throw UploadRefusal(507, "upload_budget", "this upload decodes to " + std::to_string(decoded >> 20) +
-                                                    " MiB; with the uploads kept that exceeds " +
-                                                    std::to_string(limits_.budget_bytes >> 20) + " MiB (--upload-budget-mib)");
+      throw UploadRefusal(507, "upload_budget",
+                          "this upload decodes to " + std::to_string(decoded >> 20) +
+                              " MiB; with the uploads kept that exceeds " + std::to_string(limits_.budget_bytes >> 20) +
+                              " MiB (--upload-budget-mib)");
   };
   return options;
 }
@@ -267,7 +272,9 @@ void UploadStore::remove(const std::string& id, const std::optional<std::string>
       throw UploadRefusal(404, "not_found", "no volume '" + clean_utf8(id, 200) + "'");
     }
     if (as_owner && it->second.owner != *as_owner)
-      throw UploadRefusal(403, "not_owner", "'" + id + "' was uploaded with another token: only its owner or the admin token may delete it");
+      throw UploadRefusal(
+          403, "not_owner",
+          "'" + id + "' was uploaded with another token: only its owner or the admin token may delete it");
     kept_.erase(it);
   }
   volumes_.remove_upload(id);

@@ -50,9 +50,9 @@ struct UploadLimits {
 // header (query parameters, or the JSON part of a multipart body).
 struct UploadParams {
   std::string name;
-  std::string content_type;            // multipart/form-data carries a JSON part and a data part
-  std::optional<nlohmann::json> raw;   // {dims, dtype, spacing?, origin?, endian?}
-  std::string owner;                   // who sent it (net/access.h: a token's name); empty on an open server
+  std::string content_type;           // multipart/form-data carries a JSON part and a data part
+  std::optional<nlohmann::json> raw;  // {dims, dtype, spacing?, origin?, endian?}
+  std::string owner;                  // who sent it (net/access.h: a token's name); empty on an open server
 };
 
 class UploadStore {
@@ -76,7 +76,8 @@ class UploadStore {
 
    private:
     friend class UploadStore;
-    Ticket(UploadStore& store, std::string id, std::filesystem::path file) : store_(store), id_(std::move(id)), file_(std::move(file)) {}
+    Ticket(UploadStore& store, std::string id, std::filesystem::path file)
+        : store_(store), id_(std::move(id)), file_(std::move(file)) {}
     UploadStore& store_;
     std::string id_;
     std::filesystem::path file_;

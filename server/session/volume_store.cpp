@@ -42,7 +42,11 @@ nlohmann::json VolumeEntry::info(bool with_histogram) const {
 }
 
 VolumeStore::VolumeStore(std::vector<fs::path> dirs, Residency& residency, LoadOptions options, VolumeLoader loader)
-    : dirs_(std::move(dirs)), residency_(residency), options_(options), loader_(std::move(loader)), in_process_(!loader_) {
+    : dirs_(std::move(dirs)),
+      residency_(residency),
+      options_(options),
+      loader_(std::move(loader)),
+      in_process_(!loader_) {
   if (!loader_)
     loader_ = [](const fs::path& path, const LoadOptions& o) {
       auto v = std::make_shared<Volume>(load_volume(path, o));
@@ -52,8 +56,8 @@ VolumeStore::VolumeStore(std::vector<fs::path> dirs, Residency& residency, LoadO
 }
 
 std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::path& path, bool preloaded,
-                                             const std::string& upload_name, std::function<void(double)> progress,
-                                             const LoadOptions* given, const std::string& owner) {
+                                              const std::string& upload_name, std::function<void(double)> progress,
+                                              const LoadOptions* given, const std::string& owner) {
   std::lock_guard load(load_m_);
   if (auto e = find(id)) return e;
   auto e = std::make_shared<VolumeEntry>();
@@ -150,7 +154,7 @@ void VolumeEntry::set_newer(std::shared_ptr<VolumeEntry> e) {
 }
 
 std::shared_ptr<const distributed::SequenceStatistics> VolumeStore::full_statistics(VolumeEntry& entry,
-                                                                                   const std::atomic<bool>& stop) {
+                                                                                    const std::atomic<bool>& stop) {
   FullResolution& f = *entry.full;
   std::lock_guard lock(f.reduce);
   if (auto known = f.statistics()) return known;
@@ -226,7 +230,8 @@ std::string VolumeStore::without_paths(std::string message, const fs::path& reso
   if (message.rfind(prefix, 0) == 0) message = message.substr(prefix.size());
   auto replace_all = [&](const std::string& from, const std::string& to) {
     if (from.empty()) return;
-    for (size_t at = 0; (at = message.find(from, at)) != std::string::npos; at += to.size()) message.replace(at, from.size(), to);
+    for (size_t at = 0; (at = message.find(from, at)) != std::string::npos; at += to.size())
+      message.replace(at, from.size(), to);
   };
   replace_all(resolved.string(), asked);
   for (const fs::path& d : dirs_) {

@@ -30,7 +30,7 @@ struct SequenceStatistics;
 // volume's statistics for those bricks are reduced once, at the first such still, and kept.
 struct FullResolution {
   std::filesystem::path path;
-  LoadOptions options;  // level 0, the time point and channel shown
+  LoadOptions options;       // level 0, the time point and channel shown
   int64_t budget_bytes = 0;  // --memory-budget-mib: the level held and level 0's bricks together
   // What level 0's bricks (a still's, the statistics') may read beside the level held: what it
   // leaves of the budget, at least a quarter of the budget.
@@ -57,9 +57,9 @@ struct VolumeEntry {
   // phase, reported with the others in info().
   std::atomic<double> upload_ms{-1.0};
   bool preloaded = false;
-  bool uploaded = false;  // sent by a client (POST /api/volumes); `name` is the one it gave
-  std::string name;       // empty: the file's name
-  std::string owner;      // an upload's owner (net/access.h), shown in its info; empty: none
+  bool uploaded = false;                 // sent by a client (POST /api/volumes); `name` is the one it gave
+  std::string name;                      // empty: the file's name
+  std::string owner;                     // an upload's owner (net/access.h), shown in its info; empty: none
   std::shared_ptr<FullResolution> full;  // set when the level held is not the finest
   // A preview (VolumeStore::set_preview): the entry of the finer level read since, which
   // sessions viewing this one move to (the same world box: camera and TF stay).
@@ -99,7 +99,8 @@ class VolumeStore {
   // copy until they switch).
   // `options`: the store's, as the upload store adjusted them (one file, its budget).
   std::shared_ptr<VolumeEntry> add_upload(const std::string& id, const std::filesystem::path& path,
-                                          const std::string& name, const std::string& owner, const LoadOptions& options);
+                                          const std::string& name, const std::string& owner,
+                                          const LoadOptions& options);
   void register_upload(const std::string& id, const std::filesystem::path& path, const std::string& name,
                        const std::string& owner, nlohmann::json info);
   void remove_upload(const std::string& id);

@@ -40,7 +40,9 @@
 #endif
 #define RAY_LOOP_CHUNK (1 << 20)  // GLSL's is 4096 (llvmpipe's loop limit); here the outer loops run once
 #define RAY_UNIFORMS_BEGIN struct RayUniforms {
-#define RAY_UNIFORMS_END };
+#define RAY_UNIFORMS_END \
+  }                      \
+  ;
 
 namespace peakcast::ray {
 

@@ -47,7 +47,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   (void)url_decode(path);
   (void)query_param(target, "dir");
   (void)token_from(header, target);
-  if (auto raw = raw_header_from_query(target)) (void)raw->dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  if (auto raw = raw_header_from_query(target))
+    (void)raw->dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
   if (tokens_equal(target, header) != (target == header)) std::abort();
   const std::string name = host_name(header);
   for (const char* bind : {"127.0.0.1", "0.0.0.0"}) {

@@ -25,7 +25,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }();
   const std::string in(reinterpret_cast<const char*>(data), size);
   const fs::path body = dir / "body", out = dir / "data";
-  auto put = [&](const std::string& bytes) { std::ofstream(body, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size())); };
+  auto put = [&](const std::string& bytes) {
+    std::ofstream(body, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+  };
   put(in);
   try {
     (void)peakcast::sniff_upload(body, false);

@@ -1,8 +1,8 @@
 // Distributed rendering without MPI: a volume split into k-d bricks (distributed/kd_split), each brick
 // read as a region of the file and rendered by the backend's render_brick (the GL ray caster's
-// BRICK variant, or the CPU backend's, as every test here) on the whole volume's lattice, the layers composited "over" in visibility order, must give the image one process
-// renders of the whole volume (rays run until opaque in both), within 1/255. The MPI
-// tests (label mpi) run the same through mpirun and IceT.
+// BRICK variant, or the CPU backend's, as every test here) on the whole volume's lattice, the layers composited "over"
+// in visibility order, must give the image one process renders of the whole volume (rays run until opaque in both),
+// within 1/255. The MPI tests (label mpi) run the same through mpirun and IceT.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -26,7 +26,7 @@ namespace {
 const std::string kData = test::data_dir().string() + "/";
 
 struct Case {
-  std::string file;  // in tests/data, or generated into the build tree
+  std::string file;    // in tests/data, or generated into the build tree
   std::string render;  // render settings JSON
   std::string tf;      // tf points JSON in the volume's units, or "" (grey ramp)
   std::string camera;  // camera JSON, or "" (the default)
@@ -34,8 +34,8 @@ struct Case {
 
 std::string generated(GeneratorKind kind, const Dims& dims, SourceType type, glm::dvec3 spacing) {
   // gtest's temp directory, a name per process: ctest runs tests of this binary side by side.
-  const std::string path = ::testing::TempDir() + "peakcast-brick-" + std::to_string(::getpid()) + "-" +
-                           to_string(kind) + ".nrrd";
+  const std::string path =
+      ::testing::TempDir() + "peakcast-brick-" + std::to_string(::getpid()) + "-" + to_string(kind) + ".nrrd";
   GeneratorSpec g;
   g.kind = kind;
   g.dims = dims;
@@ -70,7 +70,8 @@ double split_error(const Case& c, int ranks, const std::string& file) {
   const Volume whole = load_volume(file);
   const std::string text = std::string(R"({"volume": "v", "image": {"width": 96, "height": 80}, "render": )") +
                            c.render + (c.tf.empty() ? "" : R"(, "tf": {"points": )" + c.tf + "}") +
-                           (c.camera.empty() ? "" : R"(, "camera": )" + c.camera) + R"(, "background": [0.1, 0.2, 0.3]})";
+                           (c.camera.empty() ? "" : R"(, "camera": )" + c.camera) +
+                           R"(, "background": [0.1, 0.2, 0.3]})";
   Scene scene = parse_scene_text(text);
   scene.render.early_termination = 1.0;  // the ranks run until opaque: so does the one-process image
   const ResolvedScene rs = resolve_scene(scene, whole);
@@ -111,7 +112,8 @@ double split_error(const Case& c, int ranks, const std::string& file) {
     front = std::make_shared<const std::vector<float>>(distributed::opacity_over(front.get(), layer));
   }
   EXPECT_GE(voxels, whole.voxel_count());
-  const Image composed = distributed::finish_composite(distributed::composite_over(layers, order), 96, 80, rs.scene.background);
+  const Image composed =
+      distributed::finish_composite(distributed::composite_over(layers, order), 96, 80, rs.scene.background);
   return max_abs(one, composed);
 }
 
@@ -136,15 +138,17 @@ void check_all_splits(const Case& c, const std::string& file, double bound = kBo
 
 TEST(Bricks, MarschnerLobbEqualsOneProcess) {
   const std::string file = generated(GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32, {1, 1, 1});
-  const std::string tf = R"([[0, 0.2, 0.4, 1, 0], [0.45, 0.2, 0.4, 1, 0], [0.5, 1, 0.8, 0.3, 0.8], [0.55, 0.2, 0.4, 1, 0], [1, 0.2, 0.4, 1, 0.05]])";
+  const std::string tf =
+      R"([[0, 0.2, 0.4, 1, 0], [0.45, 0.2, 0.4, 1, 0], [0.5, 1, 0.8, 0.3, 0.8], [0.55, 0.2, 0.4, 1, 0], [1, 0.2, 0.4, 1, 0.05]])";
   const std::string cam = R"({"eye": [90, 70, 110], "center": [20, 20, 20], "up": [0, 1, 0], "fov_y": 30})";
-  for (const char* r : {R"({"step": 0.7})", R"({"step": 1.5, "classification": "preint"})",
-                        R"({"step": 1, "classification": "peaks"})", R"({"step": 0.5, "filter": "tricubic", "shading": true})",
-                        R"({"step": 2, "classification": "peaks", "peak_mode": "peaks_only", "space_skipping": false})",
-                        R"({"step": 1, "classification": "peaks", "peak_mode": "xor"})",
-                        R"({"step": 1.3, "classification": "peaks", "peak_mode": "xor", "space_skipping": false})",
-                        R"({"sampling": "differential", "s_k": 1.5, "classification": "preint"})",
-                        R"({"sampling": "differential", "s_k": 3, "classification": "peaks"})"})
+  for (const char* r :
+       {R"({"step": 0.7})", R"({"step": 1.5, "classification": "preint"})", R"({"step": 1, "classification": "peaks"})",
+        R"({"step": 0.5, "filter": "tricubic", "shading": true})",
+        R"({"step": 2, "classification": "peaks", "peak_mode": "peaks_only", "space_skipping": false})",
+        R"({"step": 1, "classification": "peaks", "peak_mode": "xor"})",
+        R"({"step": 1.3, "classification": "peaks", "peak_mode": "xor", "space_skipping": false})",
+        R"({"sampling": "differential", "s_k": 1.5, "classification": "preint"})",
+        R"({"sampling": "differential", "s_k": 3, "classification": "peaks"})"})
     check_all_splits({"", r, tf, cam}, file);
   std::filesystem::remove(file);
 }
@@ -153,8 +157,9 @@ TEST(Bricks, AnisotropicBlobsEqualOneProcess) {
   const std::string file = generated(GeneratorKind::Blobs, {48, 40, 36}, SourceType::U8, {0.8, 1.0, 1.7});
   const std::string cam = R"({"eye": [-40, 90, -30], "center": [19, 19, 30], "up": [0, 0, 1], "fov_y": 35})";
   const std::string tf = R"([[0, 0, 0, 0, 0], [60, 0.9, 0.5, 0.2, 0], [120, 0.9, 0.5, 0.2, 0.4], [255, 1, 1, 1, 0.9]])";
-  for (const char* r : {R"({"step": 1})", R"({"step": 1.7, "classification": "preint"})", R"({"step": 1.7, "classification": "preint", "space_skipping": false})", R"({"step": 1, "classification": "preint"})",
-                        R"({"sampling": "differential", "s_k": 2})"})
+  for (const char* r : {R"({"step": 1})", R"({"step": 1.7, "classification": "preint"})",
+                        R"({"step": 1.7, "classification": "preint", "space_skipping": false})",
+                        R"({"step": 1, "classification": "preint"})", R"({"sampling": "differential", "s_k": 2})"})
     check_all_splits({"", r, tf, cam}, file);
   // Differential steps with segment methods: the ghosts hold the longest step (brick_ghost). The
   // GL ray caster on this 8-bit volume: at most 0.011 (measured; llvmpipe's texture unit
@@ -166,21 +171,27 @@ TEST(Bricks, AnisotropicBlobsEqualOneProcess) {
   for (const char* r : {R"({"sampling": "differential", "s_k": 1.5, "classification": "preint"})",
                         R"({"sampling": "differential", "s_k": 3, "classification": "peaks"})"})
     check_all_splits({"", r, tf, cam}, file, gl_8bit_long_steps);
-  check_all_splits({"", R"({"step": 1})", tf, R"({"eye": [19, 19, 200], "center": [19, 19, 30], "up": [0, 1, 0], "projection": "orthographic", "height": 60})"}, file);
+  check_all_splits(
+      {"", R"({"step": 1})", tf,
+       R"({"eye": [19, 19, 200], "center": [19, 19, 30], "up": [0, 1, 0], "projection": "orthographic", "height": 60})"},
+      file);
   std::filesystem::remove(file);
 }
 
 TEST(Bricks, RealSamplesEqualOneProcess) {
   // heptane (a combustion simulation) with a Dirac-like peak for peak finding, and a CT of a
   // nucleon: real data, default cameras.
-  check_all_splits({"", R"({"step": 1, "classification": "peaks"})",
-                    R"([[0, 0, 0, 0, 0], [100, 0, 0, 0, 0], [100.5, 1, 0.6, 0.2, 1], [101, 0, 0, 0, 0], [255, 0, 0, 0, 0]])", ""},
-                   kData + "heptane_151.nrrd");
+  check_all_splits(
+      {"", R"({"step": 1, "classification": "peaks"})",
+       R"([[0, 0, 0, 0, 0], [100, 0, 0, 0, 0], [100.5, 1, 0.6, 0.2, 1], [101, 0, 0, 0, 0], [255, 0, 0, 0, 0]])", ""},
+      kData + "heptane_151.nrrd");
   check_all_splits({"", R"({"step": 1, "classification": "preint"})", "", ""}, kData + "nucleon.nhdr");
   // Axis-parallel rays lying exactly on the split planes (pixel centres on integer voxel
   // coordinates): each plane's rays belong to one brick, not to none.
-  for (const char* axis : {R"({"eye": [20.5, 20, 200], "center": [20.5, 20, 20], "up": [0, 1, 0], "projection": "orthographic", "height": 80})",
-                           R"({"eye": [200, 20.5, 20], "center": [20, 20.5, 20], "up": [0, 0, 1], "projection": "orthographic", "height": 80})"})
+  for (
+      const char* axis :
+      {R"({"eye": [20.5, 20, 200], "center": [20.5, 20, 20], "up": [0, 1, 0], "projection": "orthographic", "height": 80})",
+       R"({"eye": [200, 20.5, 20], "center": [20, 20.5, 20], "up": [0, 0, 1], "projection": "orthographic", "height": 80})"})
     check_all_splits({"", R"({"step": 1, "classification": "preint"})", "", axis}, kData + "nucleon.nhdr");
 }
 
@@ -188,17 +199,21 @@ TEST(Bricks, RealSamplesEqualOneProcess) {
 // then the brick's part of its lattice), so bricks equal one process with a crop box and a
 // plane too; nucleon is 41^3 (box [0, 40]^3).
 TEST(Bricks, ClippedEqualsOneProcess) {
-  const char* clip = R"("clip": {"box": [[4, -1, 6], [41, 33, 41]], "plane": {"point": [20, 20, 20], "normal": [-1, 0.4, 0.3]}})";
-  check_all_splits({"", std::string(R"({"step": 1, "classification": "preint", )") + clip + "}", "", ""}, kData + "nucleon.nhdr");
-  check_all_splits({"", std::string(R"({"step": 1.5, "virtual_samples": 3, )") + clip + "}", "", ""}, kData + "nucleon.nhdr");
+  const char* clip =
+      R"("clip": {"box": [[4, -1, 6], [41, 33, 41]], "plane": {"point": [20, 20, 20], "normal": [-1, 0.4, 0.3]}})";
+  check_all_splits({"", std::string(R"({"step": 1, "classification": "preint", )") + clip + "}", "", ""},
+                   kData + "nucleon.nhdr");
+  check_all_splits({"", std::string(R"({"step": 1.5, "virtual_samples": 3, )") + clip + "}", "", ""},
+                   kData + "nucleon.nhdr");
   // Peak finding on Marschner-Lobb (a narrow peak), the crop box and plane of the mpirun test.
   const std::string file = generated(GeneratorKind::MarschnerLobb, {64, 64, 64}, SourceType::F32, {1, 1, 1});
-  check_all_splits({"", R"({"step": 1, "classification": "peaks", "clip": {"box": [[8, -1, -1], [64, 50, 64]],
+  check_all_splits(
+      {"", R"({"step": 1, "classification": "peaks", "clip": {"box": [[8, -1, -1], [64, 50, 64]],
                        "plane": {"point": [31.5, 31.5, 31.5], "normal": [-1, 0.2, 0.5]}}})",
-                    R"([[0, 0.1, 0.2, 0.8, 0], [0.35, 0.2, 0.5, 1, 0.03], [0.5499, 0.2, 0.5, 1, 0], [0.55, 1, 0.3, 0.1, 0.9],
+       R"([[0, 0.1, 0.2, 0.8, 0], [0.35, 0.2, 0.5, 1, 0.03], [0.5499, 0.2, 0.5, 1, 0], [0.55, 1, 0.3, 0.1, 0.9],
                         [0.5501, 0.2, 0.5, 1, 0], [1, 1, 1, 1, 0]])",
-                    R"({"eye": [150, 120, 180], "center": [31.5, 31.5, 31.5], "up": [0, 1, 0], "fov_y": 30})"},
-                   file);
+       R"({"eye": [150, 120, 180], "center": [31.5, 31.5, 31.5], "up": [0, 1, 0], "fov_y": 30})"},
+      file);
   std::filesystem::remove(file);
 }
 
@@ -209,21 +224,25 @@ TEST(Bricks, ClippedEqualsOneProcess) {
 // samples of the segments it owns. Blobs have empty space, so runs end inside the volume.
 TEST(Bricks, VirtualSamplesEqualOneProcess) {
   const std::string ml = generated(GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32, {1, 1, 1});
-  const std::string ml_tf = R"([[0, 0.2, 0.4, 1, 0], [0.45, 0.2, 0.4, 1, 0], [0.5, 1, 0.8, 0.3, 0.8], [0.55, 0.2, 0.4, 1, 0], [1, 0.2, 0.4, 1, 0.05]])";
+  const std::string ml_tf =
+      R"([[0, 0.2, 0.4, 1, 0], [0.45, 0.2, 0.4, 1, 0], [0.5, 1, 0.8, 0.3, 0.8], [0.55, 0.2, 0.4, 1, 0], [1, 0.2, 0.4, 1, 0.05]])";
   const std::string ml_cam = R"({"eye": [90, 70, 110], "center": [20, 20, 20], "up": [0, 1, 0], "fov_y": 30})";
-  for (const char* r : {R"({"step": 1.5, "virtual_samples": 3})", R"({"step": 2, "virtual_samples": 7, "classification": "preint"})",
-                        R"({"step": 2, "virtual_samples": 3, "classification": "peaks"})",
-                        R"({"step": 2, "virtual_samples": 3, "classification": "peaks", "peak_mode": "xor"})",
-                        R"({"step": 1.5, "virtual_samples": 3, "filter": "tricubic", "shading": true})",
-                        R"({"step": 2, "virtual_samples": 3, "space_skipping": false, "classification": "preint"})",
-                        R"({"sampling": "differential", "s_k": 2, "virtual_samples": 3, "classification": "peaks"})"})
+  for (const char* r :
+       {R"({"step": 1.5, "virtual_samples": 3})", R"({"step": 2, "virtual_samples": 7, "classification": "preint"})",
+        R"({"step": 2, "virtual_samples": 3, "classification": "peaks"})",
+        R"({"step": 2, "virtual_samples": 3, "classification": "peaks", "peak_mode": "xor"})",
+        R"({"step": 1.5, "virtual_samples": 3, "filter": "tricubic", "shading": true})",
+        R"({"step": 2, "virtual_samples": 3, "space_skipping": false, "classification": "preint"})",
+        R"({"sampling": "differential", "s_k": 2, "virtual_samples": 3, "classification": "peaks"})"})
     check_all_splits({"", r, ml_tf, ml_cam}, ml);
   std::filesystem::remove(ml);
   const std::string blobs = generated(GeneratorKind::Blobs, {48, 40, 36}, SourceType::U8, {0.8, 1.0, 1.7});
   const std::string blob_cam = R"({"eye": [-40, 90, -30], "center": [19, 19, 30], "up": [0, 0, 1], "fov_y": 35})";
-  const std::string blob_tf = R"([[0, 0, 0, 0, 0], [60, 0.9, 0.5, 0.2, 0], [120, 0.9, 0.5, 0.2, 0.4], [255, 1, 1, 1, 0.9]])";
-  for (const char* r : {R"({"step": 1, "virtual_samples": 3})", R"({"step": 1.7, "virtual_samples": 3, "classification": "preint"})",
-                        R"({"step": 1, "virtual_samples": 7, "shading": true})"})
+  const std::string blob_tf =
+      R"([[0, 0, 0, 0, 0], [60, 0.9, 0.5, 0.2, 0], [120, 0.9, 0.5, 0.2, 0.4], [255, 1, 1, 1, 0.9]])";
+  for (const char* r :
+       {R"({"step": 1, "virtual_samples": 3})", R"({"step": 1.7, "virtual_samples": 3, "classification": "preint"})",
+        R"({"step": 1, "virtual_samples": 7, "shading": true})"})
     check_all_splits({"", r, blob_tf, blob_cam}, blobs);
   // Without the grid's widening for the spline's overshoot, runs end closer to the surfaces,
   // longer steps put fewer points between a run's end and the next: more runs end near a face.
@@ -233,26 +252,31 @@ TEST(Bricks, VirtualSamplesEqualOneProcess) {
   // GL on these 8-bit blobs with long steps: up to 0.0040 (measured; the texture unit's 8-bit
   // filter weights, as for the differential steps above). CPU: 2.0e-6.
   const double gl_8bit_long_steps = test::gpu().gl ? 0.015 : kBound;
-  for (const char* r : {R"({"step": 1, "virtual_samples": 3})", R"({"step": 3, "virtual_samples": 3})", R"({"step": 4.5, "virtual_samples": 3, "classification": "preint"})"})
+  for (const char* r : {R"({"step": 1, "virtual_samples": 3})", R"({"step": 3, "virtual_samples": 3})",
+                        R"({"step": 4.5, "virtual_samples": 3, "classification": "preint"})"})
     check_all_splits({"", r, blob_tf, blob_cam}, blobs, gl_8bit_long_steps);
   render::RendererSeam::set_virtual_sample_widening(*test::gpu().caster, 0.125);
   std::filesystem::remove(blobs);
-  check_all_splits({"", R"({"step": 1, "virtual_samples": 3, "classification": "peaks"})",
-                    R"([[0, 0, 0, 0, 0], [100, 0, 0, 0, 0], [100.5, 1, 0.6, 0.2, 1], [101, 0, 0, 0, 0], [255, 0, 0, 0, 0]])", ""},
-                   kData + "heptane_151.nrrd");
+  check_all_splits(
+      {"", R"({"step": 1, "virtual_samples": 3, "classification": "peaks"})",
+       R"([[0, 0, 0, 0, 0], [100, 0, 0, 0, 0], [100.5, 1, 0.6, 0.2, 1], [101, 0, 0, 0, 0], [255, 0, 0, 0, 0]])", ""},
+      kData + "heptane_151.nrrd");
 }
 
 TEST(Bricks, AdaptiveSamplingEqualsOneProcess) {
   const std::string blobs = generated(GeneratorKind::Blobs, {48, 40, 36}, SourceType::U8, {0.8, 1.0, 1.7});
   const std::string blob_cam = R"({"eye": [-40, 90, -30], "center": [19, 19, 30], "up": [0, 0, 1], "fov_y": 35})";
-  const std::string blob_tf = R"([[0, 0, 0, 0, 0], [60, 0.9, 0.5, 0.2, 0], [120, 0.9, 0.5, 0.2, 0.4], [255, 1, 1, 1, 0.9]])";
-  for (const char* r : {R"({"step": 0.5, "adaptive": true})", R"({"step": 0.7, "adaptive": true, "classification": "preint"})",
-                        R"({"step": 0.5, "adaptive": true, "classification": "peaks"})",
-                        R"({"step": 0.7, "adaptive": true, "virtual_samples": 3, "shading": true})",
-                        R"({"step": 0.5, "adaptive": true, "space_skipping": false})"})
+  const std::string blob_tf =
+      R"([[0, 0, 0, 0, 0], [60, 0.9, 0.5, 0.2, 0], [120, 0.9, 0.5, 0.2, 0.4], [255, 1, 1, 1, 0.9]])";
+  for (const char* r :
+       {R"({"step": 0.5, "adaptive": true})", R"({"step": 0.7, "adaptive": true, "classification": "preint"})",
+        R"({"step": 0.5, "adaptive": true, "classification": "peaks"})",
+        R"({"step": 0.7, "adaptive": true, "virtual_samples": 3, "shading": true})",
+        R"({"step": 0.5, "adaptive": true, "space_skipping": false})"})
     check_all_splits({"", r, blob_tf, blob_cam}, blobs);
   std::filesystem::remove(blobs);
-  check_all_splits({"", R"({"step": 0.5, "adaptive": true, "classification": "preint"})", "", ""}, kData + "nucleon.nhdr");
+  check_all_splits({"", R"({"step": 0.5, "adaptive": true, "classification": "preint"})", "", ""},
+                   kData + "nucleon.nhdr");
 }
 
 // Ray textures (Raspe & Müller): a ray's termination is of the opacity over the bricks in front
@@ -282,20 +306,24 @@ TEST(Bricks, RayTexturesEqualOneProcess) {
   // sample and the termination test after them are one rank's, so a ray stopping on a peak at a
   // face draws that sample as one process does. A termination of 0 stops after the first consume.
   const std::string ml = generated(GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32, {1, 1, 1});
-  const std::string ml_tf = R"([[0, 0.2, 0.4, 1, 0], [0.45, 0.2, 0.4, 1, 0.2], [0.5, 1, 0.8, 0.3, 0.9], [0.55, 0.2, 0.4, 1, 0.2], [1, 0.2, 0.4, 1, 0.3]])";
+  const std::string ml_tf =
+      R"([[0, 0.2, 0.4, 1, 0], [0.45, 0.2, 0.4, 1, 0.2], [0.5, 1, 0.8, 0.3, 0.9], [0.55, 0.2, 0.4, 1, 0.2], [1, 0.2, 0.4, 1, 0.3]])";
   const std::string ml_cam = R"({"eye": [90, 70, 110], "center": [20, 20, 20], "up": [0, 1, 0], "fov_y": 30})";
   const std::string zero = R"({"channel": "termination", "center": [0.7, 0.7], "radius": 0.1, "value": 0})";
   for (const char* mode : {"dvr+peaks", "xor"})
-    check_all_splits({"", std::string(R"({"step": 1, "classification": "peaks", "peak_mode": ")") + mode +
-                              R"(", "ray_texture": {"mapping": "view", "size": [32, 32], "strokes": [)" + terminate + ", " +
-                              zero + "]}}",
+    check_all_splits({"",
+                      std::string(R"({"step": 1, "classification": "peaks", "peak_mode": ")") + mode +
+                          R"(", "ray_texture": {"mapping": "view", "size": [32, 32], "strokes": [)" + terminate + ", " +
+                          zero + "]}}",
                       ml_tf, ml_cam},
                      ml);
   std::filesystem::remove(ml);
-  check_all_splits({"", R"({"step": 1, "classification": "peaks", "ray_texture": {"mapping": "view", "size": [16, 16], "strokes": [)" +
-                            terminate + ", " + blend + "]}}",
-                    R"([[0, 0, 0, 0, 0], [100, 0, 0, 0, 0], [100.5, 1, 0.6, 0.2, 1], [101, 0, 0, 0, 0], [255, 0, 0, 0, 0.3]])", ""},
-                   kData + "heptane_151.nrrd");
+  check_all_splits(
+      {"",
+       R"({"step": 1, "classification": "peaks", "ray_texture": {"mapping": "view", "size": [16, 16], "strokes": [)" +
+           terminate + ", " + blend + "]}}",
+       R"([[0, 0, 0, 0, 0], [100, 0, 0, 0, 0], [100.5, 1, 0.6, 0.2, 1], [101, 0, 0, 0, 0], [255, 0, 0, 0, 0.3]])", ""},
+      kData + "heptane_151.nrrd");
 }
 
 TEST(Bricks, RefuseWhatBricksCannotDraw) {

@@ -15,14 +15,21 @@ using nlohmann::json;
 
 namespace {
 
-std::shared_ptr<Volume> blobs() { return test::make_volume(GeneratorKind::Blobs, {48, 40, 44}, SourceType::U8, {1, 1.25, 1}); }
+std::shared_ptr<Volume> blobs() {
+  return test::make_volume(GeneratorKind::Blobs, {48, 40, 44}, SourceType::U8, {1, 1.25, 1});
+}
 
 // A TF over the blobs' range with a band (DVR) and an opacity peak at 0.6 (peak finding).
 json tf_for(const Volume& v) {
   auto at = [&](double f) { return v.min_value + f * (v.max_value - v.min_value); };
-  return {{"points", {{at(0.0), 0, 0, 0, 0}, {at(0.2), 0.9, 0.5, 0.2, 0.0}, {at(0.45), 0.9, 0.7, 0.4, 0.25},
-                      {at(0.55), 0.3, 0.6, 1.0, 0.05}, {at(0.6), 1.0, 1.0, 0.8, 0.9}, {at(0.65), 0.3, 0.6, 1.0, 0.05},
-                      {at(1.0), 1, 1, 1, 0.6}}}};
+  return {{"points",
+           {{at(0.0), 0, 0, 0, 0},
+            {at(0.2), 0.9, 0.5, 0.2, 0.0},
+            {at(0.45), 0.9, 0.7, 0.4, 0.25},
+            {at(0.55), 0.3, 0.6, 1.0, 0.05},
+            {at(0.6), 1.0, 1.0, 0.8, 0.9},
+            {at(0.65), 0.3, 0.6, 1.0, 0.05},
+            {at(1.0), 1, 1, 1, 0.6}}}};
 }
 
 json camera_for(const Volume& v) {
@@ -65,9 +72,11 @@ TEST(Clip, EveryMethodMatchesTheReference) {
   for (const Method& m : methods()) {
     json render = m.render;
     render["clip"] = clip_for(*v);
-    const ResolvedScene clipped = test::make_scene(*v, {{"tf", tf_for(*v)}, {"camera", camera_for(*v)}, {"render", render}});
+    const ResolvedScene clipped =
+        test::make_scene(*v, {{"tf", tf_for(*v)}, {"camera", camera_for(*v)}, {"render", render}});
     render.erase("clip");
-    const ResolvedScene whole = test::make_scene(*v, {{"tf", tf_for(*v)}, {"camera", camera_for(*v)}, {"render", render}});
+    const ResolvedScene whole =
+        test::make_scene(*v, {{"tf", tf_for(*v)}, {"camera", camera_for(*v)}, {"render", render}});
     const Image g = test::render_gpu(gv, clipped, render::RenderPath::Fragment);
     const Image ref = reference::render_reference(*v, clipped);
     const Image unclipped = test::render_gpu(gv, whole, render::RenderPath::Fragment);
@@ -87,10 +96,12 @@ TEST(Clip, ABoxCoveringTheVolumeChangesNoPixel) {
   const glm::dvec3 lo = v->origin, hi = v->origin + v->extent();
   for (const Method& m : methods()) {
     json render = m.render;
-    const ResolvedScene plain = test::make_scene(*v, {{"tf", tf_for(*v)}, {"camera", camera_for(*v)}, {"render", render}});
+    const ResolvedScene plain =
+        test::make_scene(*v, {{"tf", tf_for(*v)}, {"camera", camera_for(*v)}, {"render", render}});
     render["clip"] = {{"box", {{lo.x - 2, lo.y - 2, lo.z - 2}, {hi.x + 2, hi.y + 2, hi.z + 2}}},
                       {"plane", {{"point", {lo.x - 1, 0, 0}}, {"normal", {1, 0, 0}}}}};  // keeps all of it
-    const ResolvedScene covered = test::make_scene(*v, {{"tf", tf_for(*v)}, {"camera", camera_for(*v)}, {"render", render}});
+    const ResolvedScene covered =
+        test::make_scene(*v, {{"tf", tf_for(*v)}, {"camera", camera_for(*v)}, {"render", render}});
     for (auto path : {render::RenderPath::Fragment, render::RenderPath::Compute}) {
       const auto e = reference::compare(test::render_gpu(gv, covered, path), test::render_gpu(gv, plain, path));
       EXPECT_EQ(e.max_abs, 0.0) << m.name;
@@ -103,7 +114,8 @@ TEST(Clip, ClippedSpaceContributesNothing) {
   // (values >= 0.5): nothing is left to draw, whichever method; without the plane, plenty.
   auto v = test::make_volume(GeneratorKind::Ramp, {33, 17, 17}, SourceType::F32);
   test::TestVolume gv(v);
-  const json tf = {{"points", {{0.0, 1, 0.5, 0.2, 0.8}, {0.45, 1, 0.5, 0.2, 0.8}, {0.46, 0, 0, 0, 0}, {1.0, 0, 0, 0, 0}}}};
+  const json tf = {
+      {"points", {{0.0, 1, 0.5, 0.2, 0.8}, {0.45, 1, 0.5, 0.2, 0.8}, {0.46, 0, 0, 0, 0}, {1.0, 0, 0, 0, 0}}}};
   const json camera = {{"eye", {-30, -40, 50}}, {"center", {16, 8, 8}}, {"up", {0, 0, 1}}, {"fov_y", 40}};
   for (const Method& m : methods()) {
     json render = m.render;

@@ -37,25 +37,56 @@ json tf_points(const Volume& v, const json& pts) {
 }
 
 const json kCore = {{0.0, 0, 0, 0, 0}, {0.72, 0, 0, 0, 0}, {0.8, 1.0, 0.6, 0.2, 0.6}, {1.0, 1, 1, 1, 0.9}};
-const json kPeak = {{0.0, 0, 0, 0, 0}, {0.7 - 1e-4, 0, 0, 0, 0}, {0.7, 1, 0.3, 0.1, 0.9}, {0.7 + 1e-4, 0, 0, 0, 0},
-                    {1.0, 0, 0, 0, 0}};
+const json kPeak = {
+    {0.0, 0, 0, 0, 0}, {0.7 - 1e-4, 0, 0, 0, 0}, {0.7, 1, 0.3, 0.1, 0.9}, {0.7 + 1e-4, 0, 0, 0, 0}, {1.0, 0, 0, 0, 0}};
 
 const LeapCase kCases[] = {
-    {"blobs_oblique", GeneratorKind::Blobs, {128, 128, 128}, kCore,
-     {{"eye", {300, 240, 380}}, {"center", {64, 64, 64}}, {"up", {0, 1, 0}}}, {}},
-    {"blobs_axis_parallel", GeneratorKind::Blobs, {128, 128, 128}, kCore,
-     {{"eye", {63.5, 63.5, 500}}, {"center", {63.5, 63.5, 63.5}}, {"up", {0, 1, 0}}}, {}},
-    {"blobs_eye_inside", GeneratorKind::Blobs, {128, 128, 128}, kCore,
-     {{"eye", {20, 30, 100}}, {"center", {70, 64, 40}}, {"up", {0, 1, 0}}, {"fov_y", 60}}, {}},
-    {"sphere_ortho", GeneratorKind::Sphere, {96, 80, 112}, kCore,
-     {{"eye", {200, 150, 250}}, {"center", {48, 40, 56}}, {"up", {0, 1, 0}}, {"projection", "orthographic"},
-      {"height", 150}}, {}},
-    {"vessels_tricubic", GeneratorKind::Vessels, {96, 96, 96}, kCore,
-     {{"eye", {-150, 200, 260}}, {"center", {48, 48, 48}}, {"up", {0, 1, 0}}}, {{"filter", "tricubic"}}},
-    {"blobs_peaks", GeneratorKind::Blobs, {128, 128, 128}, kPeak,
-     {{"eye", {300, -200, 380}}, {"center", {64, 64, 64}}, {"up", {0, 1, 0}}}, {{"classification", "peaks"}}},
-    {"blobs_preint", GeneratorKind::Blobs, {128, 128, 128}, kCore,
-     {{"eye", {-260, 240, -300}}, {"center", {64, 64, 64}}, {"up", {0, 1, 0}}}, {{"classification", "preint"}}},
+    {"blobs_oblique",
+     GeneratorKind::Blobs,
+     {128, 128, 128},
+     kCore,
+     {{"eye", {300, 240, 380}}, {"center", {64, 64, 64}}, {"up", {0, 1, 0}}},
+     {}},
+    {"blobs_axis_parallel",
+     GeneratorKind::Blobs,
+     {128, 128, 128},
+     kCore,
+     {{"eye", {63.5, 63.5, 500}}, {"center", {63.5, 63.5, 63.5}}, {"up", {0, 1, 0}}},
+     {}},
+    {"blobs_eye_inside",
+     GeneratorKind::Blobs,
+     {128, 128, 128},
+     kCore,
+     {{"eye", {20, 30, 100}}, {"center", {70, 64, 40}}, {"up", {0, 1, 0}}, {"fov_y", 60}},
+     {}},
+    {"sphere_ortho",
+     GeneratorKind::Sphere,
+     {96, 80, 112},
+     kCore,
+     {{"eye", {200, 150, 250}},
+      {"center", {48, 40, 56}},
+      {"up", {0, 1, 0}},
+      {"projection", "orthographic"},
+      {"height", 150}},
+     {}},
+    {"vessels_tricubic",
+     GeneratorKind::Vessels,
+     {96, 96, 96},
+     kCore,
+     {{"eye", {-150, 200, 260}}, {"center", {48, 48, 48}}, {"up", {0, 1, 0}}},
+     {{"filter", "tricubic"}}},
+    {"blobs_peaks",
+     GeneratorKind::Blobs,
+     {128, 128, 128},
+     kPeak,
+     {{"eye", {300, -200, 380}}, {"center", {64, 64, 64}}, {"up", {0, 1, 0}}},
+     {{"classification", "peaks"}}},
+    {"blobs_preint",
+     GeneratorKind::Blobs,
+     {128, 128, 128},
+     kCore,
+     {{"eye", {-260, 240, -300}}, {"center", {64, 64, 64}}, {"up", {0, 1, 0}}},
+     {{"classification", "preint"}}},
 };
 
 class Leaps : public ::testing::TestWithParam<LeapCase> {};
@@ -67,7 +98,9 @@ TEST_P(Leaps, SkipExactlyWhatSteppingThroughEmptyCellsSkips) {
   const LeapCase& c = GetParam();
   auto v = test::make_volume(c.kind, c.dims, default_type(c.kind));
   test::TestVolume gv(v);
-  json j = {{"image", {{"width", 96}, {"height", 96}}}, {"tf", tf_points(*v, c.tf)}, {"camera", c.camera},
+  json j = {{"image", {{"width", 96}, {"height", 96}}},
+            {"tf", tf_points(*v, c.tf)},
+            {"camera", c.camera},
             {"render", c.render}};
   const ResolvedScene s = test::make_scene(*v, j);
   // The scene must leave room to leap: some cell at least two cells from anything visible.
@@ -86,10 +119,10 @@ TEST_P(Leaps, SkipExactlyWhatSteppingThroughEmptyCellsSkips) {
   ASSERT_NE(st_lattice.variant.find("+skip"), std::string::npos) << st_lattice.variant;
   ASSERT_NE(st_leap.variant.find("+dda"), std::string::npos) << st_leap.variant;
   EXPECT_GT(st_step.samples_mean, 0.0) << "nothing visible: the test would prove nothing";
-  const bool segments = st_lattice.variant.find("+peaks") != std::string::npos ||
-                        st_lattice.variant.find("+preint") != std::string::npos;
-  for (const auto& [name, img, st] : {std::tuple{"lattice leaps", &lattice, &st_lattice},
-                                      std::tuple{"dda leaps", &leap, &st_leap}}) {
+  const bool segments =
+      st_lattice.variant.find("+peaks") != std::string::npos || st_lattice.variant.find("+preint") != std::string::npos;
+  for (const auto& [name, img, st] :
+       {std::tuple{"lattice leaps", &lattice, &st_lattice}, std::tuple{"dda leaps", &leap, &st_leap}}) {
     const auto e = reference::compare(*img, step);
     const size_t differ = size_t(std::count_if(img->samples.begin(), img->samples.end(),
                                                [&, i = size_t(0)](float x) mutable { return x != step.samples[i++]; }));
@@ -118,7 +151,9 @@ TEST_P(Leaps, CpuRayPacketsEqualSingleRays) {
   const LeapCase& c = GetParam();
   auto v = test::make_volume(c.kind, c.dims, default_type(c.kind));
   test::TestVolume gv(v);
-  json j = {{"image", {{"width", 93}, {"height", 77}}}, {"tf", tf_points(*v, c.tf)}, {"camera", c.camera},
+  json j = {{"image", {{"width", 93}, {"height", 77}}},
+            {"tf", tf_points(*v, c.tf)},
+            {"camera", c.camera},
             {"render", c.render}};
   const ResolvedScene s = test::make_scene(*v, j);
   render::RenderStats st_packets, st_single;
@@ -149,7 +184,9 @@ TEST_P(Leaps, CpuDenseRunsEqualTheSharedWalks) {
     render["sampling"] = "uniform";  // (the fast path takes uniform steps, unshaded)
     render["shading"] = false;
     render["space_skipping"] = skip;
-    json j = {{"image", {{"width", 61}, {"height", 53}}}, {"tf", tf_points(*v, c.tf)}, {"camera", c.camera},
+    json j = {{"image", {{"width", 61}, {"height", 53}}},
+              {"tf", tf_points(*v, c.tf)},
+              {"camera", c.camera},
               {"render", render}};
     const ResolvedScene s = test::make_scene(*v, j);
     render::RenderStats st_dense, st_shared;
@@ -177,7 +214,8 @@ TEST(NothingVisible, EveryMethodGivesExactlyTheBackground) {
   const double lo = vol->min_value, hi = vol->max_value;
   // Opacity zero everywhere; the peak-finding scene's peak lies beyond the data's range.
   const json zero = {{"points", {{lo, 1, 0.5, 0.2, 0.0}, {hi, 0.2, 0.5, 1, 0.0}}}};
-  const json beyond = {{"points", {{lo, 0, 0, 0, 0}, {hi + 10, 0, 0, 0, 0}, {hi + 11, 1, 0, 0, 0.9}, {hi + 12, 0, 0, 0, 0}}}};
+  const json beyond = {
+      {"points", {{lo, 0, 0, 0, 0}, {hi + 10, 0, 0, 0, 0}, {hi + 11, 1, 0, 0, 0.9}, {hi + 12, 0, 0, 0, 0}}}};
   const std::vector<json> renders = {
       {{"classification", "post"}},
       {{"classification", "preint"}},
@@ -187,8 +225,8 @@ TEST(NothingVisible, EveryMethodGivesExactlyTheBackground) {
   };
   for (const json& r : renders) {
     const json tf = r.value("classification", "") == "peaks" ? beyond : zero;
-    ResolvedScene s = test::make_scene(*vol, {{"tf", tf}, {"render", r}, {"background", {0.1, 0.4, 0.7}},
-                                             {"image", {{"width", 61}, {"height", 47}}}});
+    ResolvedScene s = test::make_scene(
+        *vol, {{"tf", tf}, {"render", r}, {"background", {0.1, 0.4, 0.7}}, {"image", {{"width", 61}, {"height", 47}}}});
     render::RenderRequest req;
     req.output = render::RenderOutput::Rgb8;
     render::RenderStats st8;

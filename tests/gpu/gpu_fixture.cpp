@@ -50,7 +50,8 @@ std::shared_ptr<Volume> make_volume(GeneratorKind kind, Dims dims, SourceType ty
   return std::make_shared<Volume>(generate_volume(s));
 }
 
-Image render_gpu(const render::ResidentVolume& gv, const ResolvedScene& s, render::RenderPath path, render::RenderStats* st) {
+Image render_gpu(const render::ResidentVolume& gv, const ResolvedScene& s, render::RenderPath path,
+                 render::RenderStats* st) {
   return gpu().caster->render(gv, s, path, st);
 }
 

@@ -27,14 +27,14 @@ struct Gpu {
   std::unique_ptr<gpu::EglContext> context;  // GL backend only
   std::unique_ptr<gpu::ShaderCache> shaders;
   std::unique_ptr<render::Renderer> caster;  // the backend under test
-  gpu::GlRenderer* gl = nullptr;           // the same renderer when it is the GL one
+  gpu::GlRenderer* gl = nullptr;             // the same renderer when it is the GL one
 };
-Gpu& gpu();  // created on first use
+Gpu& gpu();          // created on first use
 bool cpu_backend();  // PEAKCAST_TEST_BACKEND=cpu
 // Skips the current test under a backend it does not apply to (GL shader programs, llvmpipe's
 // loop limit).
-#define PEAKCAST_GL_ONLY()                                           \
-  do {                                                               \
+#define PEAKCAST_GL_ONLY()                                                  \
+  do {                                                                      \
     if (::peakcast::test::cpu_backend()) GTEST_SKIP() << "GL backend only"; \
   } while (0)
 
@@ -55,8 +55,7 @@ class TestVolume {
 
 // A scene resolved for `v`, with optional JSON overrides merged over the defaults.
 ResolvedScene make_scene(const Volume& v, const nlohmann::json& overrides = {});
-std::shared_ptr<Volume> make_volume(GeneratorKind kind, Dims dims, SourceType type,
-                                    glm::dvec3 spacing = {1, 1, 1});
+std::shared_ptr<Volume> make_volume(GeneratorKind kind, Dims dims, SourceType type, glm::dvec3 spacing = {1, 1, 1});
 
 Image render_gpu(const render::ResidentVolume& gv, const ResolvedScene& s, render::RenderPath path,
                  render::RenderStats* stats = nullptr);

@@ -72,9 +72,10 @@ const int64_t kBudget = 216 << 10;
 
 double sequence_error(const Case& c, const fs::path& path, int64_t budget = kBudget) {
   const Volume whole = load_volume(path);
-  const std::string text = std::string(R"({"volume": "v", "image": {"width": 96, "height": 80}, "render": )") + c.render +
-                           (c.tf.empty() ? "" : R"(, "tf": {"points": )" + c.tf + "}") +
-                           (c.camera.empty() ? "" : R"(, "camera": )" + c.camera) + R"(, "background": [0.1, 0.2, 0.3]})";
+  const std::string text = std::string(R"({"volume": "v", "image": {"width": 96, "height": 80}, "render": )") +
+                           c.render + (c.tf.empty() ? "" : R"(, "tf": {"points": )" + c.tf + "}") +
+                           (c.camera.empty() ? "" : R"(, "camera": )" + c.camera) +
+                           R"(, "background": [0.1, 0.2, 0.3]})";
   Scene scene = parse_scene_text(text);
   scene.render.early_termination = 1.0;  // bricks run until opaque: so does the one-process image
   render::Renderer& renderer = *test::gpu().caster;
@@ -103,20 +104,23 @@ constexpr double kBound = 1.0 / 255.0;
 TEST(OutOfCore, EveryMethodEqualsTheInCoreStill) {
   test::TempDir tmp;
   const fs::path ml = zarr_of(tmp, GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32, {1, 1, 1});
-  const std::string ml_tf = R"([[0, 0.2, 0.4, 1, 0], [0.45, 0.2, 0.4, 1, 0], [0.5, 1, 0.8, 0.3, 0.8], [0.55, 0.2, 0.4, 1, 0], [1, 0.2, 0.4, 1, 0.05]])";
+  const std::string ml_tf =
+      R"([[0, 0.2, 0.4, 1, 0], [0.45, 0.2, 0.4, 1, 0], [0.5, 1, 0.8, 0.3, 0.8], [0.55, 0.2, 0.4, 1, 0], [1, 0.2, 0.4, 1, 0.05]])";
   const std::string ml_cam = R"({"eye": [90, 70, 110], "center": [20, 20, 20], "up": [0, 1, 0], "fov_y": 30})";
-  for (const char* r : {R"({"step": 0.7})", R"({"step": 1.5, "classification": "preint"})",
-                        R"({"step": 1, "classification": "peaks"})", R"({"step": 1, "classification": "peaks", "peak_mode": "xor"})",
-                        R"({"step": 0.5, "filter": "tricubic", "shading": true})",
-                        R"({"sampling": "differential", "s_k": 1.5, "classification": "preint"})",
-                        R"({"sampling": "differential", "s_k": 3, "classification": "peaks"})",
-                        R"({"step": 2, "virtual_samples": 3, "classification": "peaks"})",
-                        R"({"step": 2, "virtual_samples": 7, "classification": "preint"})"})
+  for (const char* r :
+       {R"({"step": 0.7})", R"({"step": 1.5, "classification": "preint"})", R"({"step": 1, "classification": "peaks"})",
+        R"({"step": 1, "classification": "peaks", "peak_mode": "xor"})",
+        R"({"step": 0.5, "filter": "tricubic", "shading": true})",
+        R"({"sampling": "differential", "s_k": 1.5, "classification": "preint"})",
+        R"({"sampling": "differential", "s_k": 3, "classification": "peaks"})",
+        R"({"step": 2, "virtual_samples": 3, "classification": "peaks"})",
+        R"({"step": 2, "virtual_samples": 7, "classification": "preint"})"})
     EXPECT_LE(sequence_error({r, ml_tf, ml_cam}, ml), kBound) << r;
 
   const fs::path blobs = zarr_of(tmp, GeneratorKind::Blobs, {64, 56, 48}, SourceType::U16, {0.8, 1.0, 1.7});
   const std::string cam = R"({"eye": [-40, 90, -30], "center": [19, 19, 30], "up": [0, 0, 1], "fov_y": 35})";
-  const std::string tf = R"([[0, 0, 0, 0, 0], [15000, 0.9, 0.5, 0.2, 0], [30000, 0.9, 0.5, 0.2, 0.4], [65535, 1, 1, 1, 0.9]])";
+  const std::string tf =
+      R"([[0, 0, 0, 0, 0], [15000, 0.9, 0.5, 0.2, 0], [30000, 0.9, 0.5, 0.2, 0.4], [65535, 1, 1, 1, 0.9]])";
   const std::string terminate =
       R"({"channel": "termination", "center": [0.45, 0.5], "radius": 0.3, "falloff": 0.5, "value": 0.25})";
   const std::string step = R"({"channel": "step", "center": [0.6, 0.4], "radius": 0.25, "value": 2.5})";
@@ -128,8 +132,8 @@ TEST(OutOfCore, EveryMethodEqualsTheInCoreStill) {
             terminate + ", " + step + "]}}"})
     EXPECT_LE(sequence_error({r, tf, cam}, blobs, 400 << 10), bound) << r;
   // Adaptive steps with virtual samples and shading need 16 ghost voxels: a budget for 2 bricks.
-  EXPECT_LE(sequence_error({R"({"step": 0.7, "adaptive": true, "virtual_samples": 3, "shading": true})", tf, cam}, blobs,
-                           1200 << 10),
+  EXPECT_LE(sequence_error({R"({"step": 0.7, "adaptive": true, "virtual_samples": 3, "shading": true})", tf, cam},
+                           blobs, 1200 << 10),
             bound);  // GL: brick_test's 8-bit bound
 }
 
@@ -137,10 +141,13 @@ TEST(OutOfCore, EveryMethodEqualsTheInCoreStill) {
 // and camera (derived from the statistics the bricks reduce).
 TEST(OutOfCore, RealVolumeFromRowsWithDerivedTfAndCamera) {
   const fs::path heptane = test::data_dir() / "heptane_151.nrrd";
-  EXPECT_LE(sequence_error({R"({"step": 1, "classification": "peaks"})",
-                            R"([[0, 0, 0, 0, 0], [100, 0, 0, 0, 0], [100.5, 1, 0.6, 0.2, 1], [101, 0, 0, 0, 0], [255, 0, 0, 0, 0]])", ""},
-                           heptane, 2 << 20),
-            kBound);
+  EXPECT_LE(
+      sequence_error(
+          {R"({"step": 1, "classification": "peaks"})",
+           R"([[0, 0, 0, 0, 0], [100, 0, 0, 0, 0], [100.5, 1, 0.6, 0.2, 1], [101, 0, 0, 0, 0], [255, 0, 0, 0, 0]])",
+           ""},
+          heptane, 2 << 20),
+      kBound);
   EXPECT_LE(sequence_error({R"({"step": 1})", "", ""}, heptane, 2 << 20), kBound);
 }
 
@@ -165,8 +172,10 @@ double status_mib(const std::string& key) {
   std::ifstream f("/proc/self/status");
   std::string k;
   for (double kib; f >> k;)
-    if (k == key + ":" && f >> kib) return kib / 1024.0;
-    else f.ignore(1 << 10, '\n');
+    if (k == key + ":" && f >> kib)
+      return kib / 1024.0;
+    else
+      f.ignore(1 << 10, '\n');
   return -1.0;
 }
 
@@ -195,12 +204,14 @@ TEST(OutOfCore, PeakMemoryStaysWithinTheBudget) {
   ASSERT_GT(before, 0.0);
   const auto stats = distributed::sequence_statistics(zarr.string(), {}, budget);
   const double statistics_peak = status_mib("VmHWM") - before;
-  const auto r = distributed::render_sequence(renderer, zarr.string(), {}, stats, resolve_scene(scene, stats.box), budget);
+  const auto r =
+      distributed::render_sequence(renderer, zarr.string(), {}, stats, resolve_scene(scene, stats.box), budget);
   const double peak = status_mib("VmHWM") - before;
-  std::printf("  %d statistics bricks, %d bricks (largest %.2f MiB): peak %.2f MiB over %.1f MiB before "
-              "(statistics %.2f); budget %.0f MiB\n",
-              stats.bricks, r.bricks, double(r.largest_brick_bytes) / 1048576.0, peak, before, statistics_peak,
-              double(budget) / 1048576.0);
+  std::printf(
+      "  %d statistics bricks, %d bricks (largest %.2f MiB): peak %.2f MiB over %.1f MiB before "
+      "(statistics %.2f); budget %.0f MiB\n",
+      stats.bricks, r.bricks, double(r.largest_brick_bytes) / 1048576.0, peak, before, statistics_peak,
+      double(budget) / 1048576.0);
   EXPECT_GE(r.bricks, 8);
   EXPECT_FALSE(stats.budget_too_small);
   EXPECT_FALSE(r.budget_too_small);

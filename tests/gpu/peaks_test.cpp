@@ -59,13 +59,15 @@ TEST_P(SameAlgorithm, GpuMatchesTheCpuTwin) {
   for (auto vol : {marschner_lobb(), heptane()}) {
     test::TestVolume gv(vol);
     for (const char* filter : {"trilinear", "tricubic"}) {
-      ResolvedScene s = test::make_scene(
-          *vol, {{"tf", fig3_tf(*vol, 0.62, 1e-4)},
-                 {"camera", view_of(*vol, {1.0, -0.8, 0.6})},
-                 {"image", {{"width", 80}, {"height", 64}}},
-                 {"render",
-                  {{"classification", m.classification}, {"peak_mode", m.mode}, {"max_peaks", m.max_peaks},
-                   {"filter", filter}, {"shading", true}}}});
+      ResolvedScene s = test::make_scene(*vol, {{"tf", fig3_tf(*vol, 0.62, 1e-4)},
+                                                {"camera", view_of(*vol, {1.0, -0.8, 0.6})},
+                                                {"image", {{"width", 80}, {"height", 64}}},
+                                                {"render",
+                                                 {{"classification", m.classification},
+                                                  {"peak_mode", m.mode},
+                                                  {"max_peaks", m.max_peaks},
+                                                  {"filter", filter},
+                                                  {"shading", true}}}});
       render::RenderStats st;
       Image g = test::render_gpu(gv, s, render::RenderPath::Fragment, &st);
       Image c = reference::render_reference(*vol, s);
@@ -123,9 +125,10 @@ TEST_P(DiracPeak, PeakFindingMatchesThePeakModelWherePostclassificationFails) {
   Image pf = test::render_gpu(gv, peaks, render::RenderPath::Fragment, &st);
   Image pc = test::render_gpu(gv, post, render::RenderPath::Fragment);
   const auto e_pf = reference::compare(pf, ref.image), e_pc = reference::compare(pc, ref.image);
-  std::printf("%s width %.0e: reference step %.4f (change %.1e); peak finding %.1f dB (%.1f samples/ray), "
-              "postclassification %.1f dB\n",
-              d.volume, d.width, ref.step, ref.last_change, e_pf.psnr, st.samples_mean, e_pc.psnr);
+  std::printf(
+      "%s width %.0e: reference step %.4f (change %.1e); peak finding %.1f dB (%.1f samples/ray), "
+      "postclassification %.1f dB\n",
+      d.volume, d.width, ref.step, ref.last_change, e_pf.psnr, st.samples_mean, e_pc.psnr);
   EXPECT_GE(e_pf.psnr, d.min_psnr);
   EXPECT_LE(e_pc.psnr, e_pf.psnr - 10.0) << "postclassification should miss the peak";
   if (e_pf.psnr < d.min_psnr) test::save_artifacts(pf, ref.image, "peaks_vs_model");
@@ -163,8 +166,12 @@ TEST(PeakOrder, SeveralPeaksInOneSegmentComeOutInRayOrder) {
     const double ex = from < 0 ? -40.0 : 72.0;
     json over = {{"tf", {{"points", pts}}},
                  {"image", {{"width", 8}, {"height", 8}}},
-                 {"camera", {{"eye", {ex, 4, 4}}, {"center", {16, 4, 4}}, {"up", {0, 0, 1}},
-                             {"projection", "orthographic"}, {"height", 6}}},
+                 {"camera",
+                  {{"eye", {ex, 4, 4}},
+                   {"center", {16, 4, 4}},
+                   {"up", {0, 0, 1}},
+                   {"projection", "orthographic"},
+                   {"height", 6}}},
                  {"render", {{"classification", "peaks"}, {"step", 8.0}, {"peak_mode", "peaks_only"}}}};
     ResolvedScene s = test::make_scene(*vol, over);
     Image g = test::render_gpu(gv, s, render::RenderPath::Fragment);
@@ -183,16 +190,26 @@ TEST(PeakOrder, SeveralPeaksInOneSegmentComeOutInRayOrder) {
 
 // A plateau of the field exactly at the peak value: both samples of a segment equal the isovalue.
 TEST(PeakEdgeCases, NoNanWhenBothSamplesEqualTheIsovalue) {
-  auto vol = test::float_volume({17, 9, 9}, [](int64_t i, int64_t, int64_t) { return i < 4 ? 0.0f : i > 12 ? 1.0f : 0.5f; });
+  auto vol = test::float_volume({17, 9, 9}, [](int64_t i, int64_t, int64_t) {
+    return i < 4 ? 0.0f : i > 12 ? 1.0f : 0.5f;
+  });
   test::TestVolume gv(vol);
-  json tf = {{"points", {{0.0, 0, 0, 0, 0}, {0.5 - 1e-6, 1, 0, 0, 0}, {0.5, 1, 0, 0, 0.7}, {0.5 + 1e-6, 1, 0, 0, 0},
-                         {1.0, 0, 0, 0, 0}}}};
+  json tf = {{"points",
+              {{0.0, 0, 0, 0, 0},
+               {0.5 - 1e-6, 1, 0, 0, 0},
+               {0.5, 1, 0, 0, 0.7},
+               {0.5 + 1e-6, 1, 0, 0, 0},
+               {1.0, 0, 0, 0, 0}}}};
   for (const char* filter : {"trilinear", "tricubic"}) {
     ResolvedScene s = test::make_scene(
         *vol, {{"tf", tf},
                {"image", {{"width", 8}, {"height", 8}}},
-               {"camera", {{"eye", {-30, 4, 4}}, {"center", {8, 4, 4}}, {"up", {0, 0, 1}},
-                           {"projection", "orthographic"}, {"height", 6}}},
+               {"camera",
+                {{"eye", {-30, 4, 4}},
+                 {"center", {8, 4, 4}},
+                 {"up", {0, 0, 1}},
+                 {"projection", "orthographic"},
+                 {"height", 6}}},
                {"render", {{"classification", "peaks"}, {"peak_mode", "peaks_only"}, {"filter", filter}}}});
     Image g = test::render_gpu(gv, s, render::RenderPath::Fragment);
     ASSERT_TRUE(test::all_finite(g));
@@ -214,7 +231,8 @@ TEST(PeakModes, PeaksOnlyAddsNoDvrAndDvrOnlyIsPostclassification) {
                   {0.62 + 1e-4, 0.2, 0.5, 1.0, 0.62 * ramp},
                   {1.0, 0.2, 0.5, 1.0, ramp}}}};
   };
-  json over = {{"tf", tf_with_ramp(0.1)}, {"camera", view_of(*vol, {1.0, -0.8, 0.6})},
+  json over = {{"tf", tf_with_ramp(0.1)},
+               {"camera", view_of(*vol, {1.0, -0.8, 0.6})},
                {"render", {{"classification", "peaks"}, {"peak_mode", "peaks_only"}}}};
   ResolvedScene only = test::make_scene(*vol, over);
   over["tf"] = tf_with_ramp(0.0);  // the same spike without the ramp
@@ -263,9 +281,13 @@ TEST(Preintegration, AgreesWithTheConvergedDvrReferenceOnASmoothTf) {
     test::TestVolume gv(vol);
     const double lo = vol->min_value, span = vol->max_value - vol->min_value;
     json tf = {{"points",
-                {{lo, 0.1, 0.2, 0.9, 0.0}, {lo + 0.35 * span, 0.2, 0.6, 0.9, 0.08}, {lo + 0.6 * span, 1.0, 0.6, 0.2, 0.25},
+                {{lo, 0.1, 0.2, 0.9, 0.0},
+                 {lo + 0.35 * span, 0.2, 0.6, 0.9, 0.08},
+                 {lo + 0.6 * span, 1.0, 0.6, 0.2, 0.25},
                  {lo + span, 1.0, 1.0, 1.0, 0.0}}}};
-    json over = {{"tf", tf}, {"camera", view_of(*vol, {0.7, -1.0, 0.5})}, {"image", {{"width", 80}, {"height", 64}}},
+    json over = {{"tf", tf},
+                 {"camera", view_of(*vol, {0.7, -1.0, 0.5})},
+                 {"image", {{"width", 80}, {"height", 64}}},
                  {"render", {{"classification", "preint"}, {"step", 2.0}, {"early_termination", 1.0}}}};
     ResolvedScene pre = test::make_scene(*vol, over);
     over["render"]["classification"] = "post";
@@ -297,7 +319,9 @@ TEST(PeakModes, UnshadedPeaksCountTheRootStepsTheyNoLongerTake) {
                      {"camera", view_of(*vol, {1.0, -0.8, 0.6})},
                      {"image", {{"width", 64}, {"height", 48}}},
                      {"render",
-                      {{"classification", "peaks"}, {"peak_mode", mode}, {"secant_iterations", secant},
+                      {{"classification", "peaks"},
+                       {"peak_mode", mode},
+                       {"secant_iterations", secant},
                        {"space_skipping", false}}}};
         render::RenderStats flat_st, shaded_st;
         Image flat = test::render_gpu(gv, test::make_scene(*vol, over), render::RenderPath::Fragment, &flat_st);

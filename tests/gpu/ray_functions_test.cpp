@@ -147,8 +147,8 @@ std::vector<float> table(Config config) {
   Probe p{u, variant(config)};
   std::mt19937 rng(45);
   std::uniform_real_distribution<float> u01(0.0f, 1.0f);
-  const float pixels[][2] = {{0.5f, 0.5f}, {63.5f, 0.5f}, {0.5f, 47.5f}, {63.5f, 47.5f}, {32.0f, 24.0f},
-                             {31.5f, 23.5f}, {-20.0f, 24.0f}, {32.0f, 90.0f}};
+  const float pixels[][2] = {{0.5f, 0.5f},   {63.5f, 0.5f},  {0.5f, 47.5f},   {63.5f, 47.5f},
+                             {32.0f, 24.0f}, {31.5f, 23.5f}, {-20.0f, 24.0f}, {32.0f, 90.0f}};
   const float edges[] = {0.0f, 1.0f, 1e-7f, 0.9999999f};
   std::vector<float> rows;
   for (int kind = 0; kind < Probe::kKinds; ++kind)
@@ -169,20 +169,29 @@ std::vector<float> table(Config config) {
           k = vec4(float(kind), std::floor(g * float(last + 1)), 1.0f + std::floor(8.0f * h), box.x);
           c.w = t_in;
           break;
-        case Probe::kChord: k = vec4(float(kind), float(last), std::floor(g * float(last + 1)), 1.0f + std::floor(8.0f * h)); break;
+        case Probe::kChord:
+          k = vec4(float(kind), float(last), std::floor(g * float(last + 1)), 1.0f + std::floor(8.0f * h));
+          break;
         case Probe::kOpacity:
           a = vec4(n % 3 == 0 ? e : f, 0.5f * (0.25f + 3.0f * g), h, n % 2 ? 0.5f : 0.01f + 2.0f * f);
           c = vec4(0.3f * h, 0.2f * h, 0.1f * h, std::max(h, 1e-6f));
           break;
-        case Probe::kComposite: a = vec4(e, f, g, 1.0f - e); c = vec4(h, edges[(n + 1) % 4], g * h, 0.5f); break;
+        case Probe::kComposite:
+          a = vec4(e, f, g, 1.0f - e);
+          c = vec4(h, edges[(n + 1) % 4], g * h, 0.5f);
+          break;
         case Probe::kShade:
           c = vec4(f, g, h, 0.0f);
           a = n % 5 == 0 ? vec4(0.0f) : vec4(f - 0.5f, g - 0.5f, h - 0.5f, 0.0f) * (n % 7 == 0 ? 1e-6f : 1.0f);
           break;
-        case Probe::kCatmullRom: k = vec4(float(kind), n % 8 == 0 ? 0.0f : (n % 8 == 1 ? 1.0f : f), g, 0.0f); c = vec4(g, h, f, e); break;
+        case Probe::kCatmullRom:
+          k = vec4(float(kind), n % 8 == 0 ? 0.0f : (n % 8 == 1 ? 1.0f : f), g, 0.0f);
+          c = vec4(g, h, f, e);
+          break;
         case Probe::kPeakRoot:
           k = vec4(float(kind), box.x + f * (box.y - box.x), box.x + g * (box.y - box.x), 0.0f);
-          c = vec4(h, n % 4 == 0 ? 0.0f : (n % 4 == 1 ? 1e-6f : (n % 4 == 2 ? -1e-6f : 0.0f)), 1.2f * f - 0.1f, 1.2f * g - 0.1f);
+          c = vec4(h, n % 4 == 0 ? 0.0f : (n % 4 == 1 ? 1e-6f : (n % 4 == 2 ? -1e-6f : 0.0f)), 1.2f * f - 0.1f,
+                   1.2f * g - 0.1f);
           break;
         case Probe::kFindPeaks:
           k = vec4(float(kind), box.x + f * (box.y - box.x), box.x + g * (box.y - box.x), 0.0f);
@@ -253,10 +262,11 @@ std::vector<float> run_gl(Config config, const std::vector<float>& rows, const s
 
 struct KindDiff {
   int rows = 0, unequal = 0, answered = 0;  // answered: rows with a non-zero result (the case is not idle)
-  double worst = 0;  // |a - b| / max(1, |b|)
+  double worst = 0;                         // |a - b| / max(1, |b|)
 };
 
-std::vector<KindDiff> compare(const std::vector<float>& rows, const std::vector<float>& gl, const std::vector<float>& cpu) {
+std::vector<KindDiff> compare(const std::vector<float>& rows, const std::vector<float>& gl,
+                              const std::vector<float>& cpu) {
   std::vector<KindDiff> d(Probe::kKinds);
   for (size_t r = 0; r < rows.size() / 16; ++r) {
     KindDiff& k = d[size_t(rows[r * 16])];
@@ -268,7 +278,8 @@ std::vector<KindDiff> compare(const std::vector<float>& rows, const std::vector<
       const float a = gl[r * 8 + c], b = cpu[r * 8 + c];
       if (a == b || (std::isnan(a) && std::isnan(b))) continue;
       unequal = true;
-      const double e = std::isfinite(a) && std::isfinite(b) ? std::abs(double(a) - b) / std::max(1.0, std::abs(double(b))) : 1e30;
+      const double e =
+          std::isfinite(a) && std::isfinite(b) ? std::abs(double(a) - b) / std::max(1.0, std::abs(double(b))) : 1e30;
       k.worst = std::max(k.worst, e);
     }
     k.unequal += unequal ? 1 : 0;
@@ -286,13 +297,13 @@ std::vector<KindDiff> compare(const std::vector<float>& rows, const std::vector<
 // a brick's points). One or two roundings apart: what divides, takes a square root or a power,
 // which llvmpipe computes otherwise than libm (a / b as a * (1 / b), pow as exp2(y log2 x)):
 // make_ray (1.9e-7), spans (8.1e-7), lattice (1.2e-7), opacity (1.8e-7), shade (3.9e-7), consume
-// over six samples (8.3e-7), the virtual-sample window over a run (4.2e-7). A peak's root (2.0e-5) is regula falsi on a field that is nearly flat
-// near a tangency, where a value one rounding apart moves the root by its error over the slope;
-// find_peaks (7.5e-8) solves roots too, so it is held to the same bound.
+// over six samples (8.3e-7), the virtual-sample window over a run (4.2e-7). A peak's root (2.0e-5) is regula falsi on a
+// field that is nearly flat near a tangency, where a value one rounding apart moves the root by its error over the
+// slope; find_peaks (7.5e-8) solves roots too, so it is held to the same bound.
 const double kBound[] = {1e-6, 2e-6, 1e-6, 0.0, 1e-6, 0.0, 1e-6, 0.0, 1e-4, 0.0, 1e-4, 2e-6, 2e-6};
 
-const char* const kNames[] = {"make_ray", "spans",    "lattice", "chord",      "opacity", "composite",
-                              "shade",    "catmull_rom", "peak_root", "brick", "find_peaks", "consume", "window"};
+const char* const kNames[] = {"make_ray",    "spans",     "lattice", "chord",      "opacity", "composite", "shade",
+                              "catmull_rom", "peak_root", "brick",   "find_peaks", "consume", "window"};
 
 TEST(RayFunctions, GlslAndCxxAgreeRowByRow) {
   PEAKCAST_GL_ONLY();
@@ -329,7 +340,8 @@ TEST(RayFunctions, BreakingOneTargetFails) {
   const fs::path broken = probe_dir() / "broken_lattice.glsl";
   std::ofstream(broken) << s;
   const std::vector<float> rows = table(Config::Persp);
-  const auto d = compare(rows, run_gl(Config::Persp, rows, "ray-functions-broken", broken), run_cpu(Config::Persp, rows));
+  const auto d =
+      compare(rows, run_gl(Config::Persp, rows, "ray-functions-broken", broken), run_cpu(Config::Persp, rows));
   EXPECT_GT(d[Probe::kLattice].worst, kBound[Probe::kLattice]);
   EXPECT_GT(d[Probe::kChord].unequal, 0);  // the chord ends use the step too
   EXPECT_GT(d[Probe::kLattice].unequal, 0);

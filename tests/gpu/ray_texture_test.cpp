@@ -16,7 +16,9 @@ const json& kTf = test::kRayTextureTf;
 
 json camera(double azimuth_deg) {
   const double a = azimuth_deg * 3.14159265358979 / 180.0;
-  return {{"eye", {20 + 90 * std::sin(a), 50, 20 + 90 * std::cos(a)}}, {"center", {20, 20, 20}}, {"up", {0, 1, 0}},
+  return {{"eye", {20 + 90 * std::sin(a), 50, 20 + 90 * std::cos(a)}},
+          {"center", {20, 20, 20}},
+          {"up", {0, 1, 0}},
           {"fov_y", 30}};
 }
 
@@ -85,8 +87,9 @@ TEST(ray_texture, StepStrokeChangesTheErrorInsideItsDiskOnly) {
   const Image base = test::render_gpu(gv, plain, render::RenderPath::Fragment);
   const double u = 0.5, vv = 0.45, radius = 0.2;
   for (double value : {0.25, 8.0}) {
-    const Image img = test::render_gpu(gv, test::make_scene(*v, scene(texture("view", {stroke("step", u, vv, radius, value)}))),
-                                       render::RenderPath::Fragment);
+    const Image img =
+        test::render_gpu(gv, test::make_scene(*v, scene(texture("view", {stroke("step", u, vv, radius, value)}))),
+                         render::RenderPath::Fragment);
     double err_in = 0, err_base_in = 0;
     int in = 0, outside_changed = 0;
     for (int y = 0; y < 96; ++y)
@@ -138,7 +141,7 @@ TEST(ray_texture, VolumeAlignedEditsFollowTheCameraViewAlignedOnesDoNot) {
   ASSERT_GT(nv0, 50);
   ASSERT_GT(no0, 20);
   ASSERT_GT(no1, 20);
-  EXPECT_NEAR(xv1, xv0, 3.0);        // the view-aligned region stays put
+  EXPECT_NEAR(xv1, xv0, 3.0);           // the view-aligned region stays put
   EXPECT_GT(std::abs(xo1 - xo0), 6.0);  // the volume-aligned one moves with the volume
 }
 
@@ -149,8 +152,9 @@ TEST(ray_texture, TerminationAndBlendChangeOnlyTheirDisk) {
   const Image base = test::render_gpu(gv, test::make_scene(*v, scene(nullptr)), render::RenderPath::Fragment);
   const double u = 0.45, vv = 0.55, radius = 0.18;
   for (const auto& [channel, value] : {std::pair{"termination", 0.05}, std::pair{"blend", 1.0}}) {
-    const Image img = test::render_gpu(
-        gv, test::make_scene(*v, scene(texture("view", {stroke(channel, u, vv, radius, value)}))), render::RenderPath::Fragment);
+    const Image img =
+        test::render_gpu(gv, test::make_scene(*v, scene(texture("view", {stroke(channel, u, vv, radius, value)}))),
+                         render::RenderPath::Fragment);
     int inside_changed = 0, outside_changed = 0;
     for (int y = 0; y < 96; ++y)
       for (int x = 0; x < 96; ++x) {

@@ -28,8 +28,8 @@ ResolvedScene scene_of(const Volume& v, std::shared_ptr<const RayTextureSpec> sp
 }
 
 Stroke stroke(const char* channel, double u, double v, double radius, double value, int level = 0) {
-  return parse_stroke({{"channel", channel}, {"center", {u, v}}, {"radius", radius}, {"value", value}, {"level", level}},
-                      "stroke");
+  return parse_stroke(
+      {{"channel", channel}, {"center", {u, v}}, {"radius", radius}, {"value", value}, {"level", level}}, "stroke");
 }
 
 size_t differing(const Image& a, const Image& b) {
@@ -78,7 +78,8 @@ TEST(ray_texture, PaintedStrokesUploadOnlyTheirRegionAndMatchAFreshBuild) {
 TEST(ray_texture, AnOlderSpecOfTheLineageIsRebuilt) {
   auto v = ml();
   test::TestVolume gv(v);
-  const auto base = std::make_shared<const RayTextureSpec>(parse_ray_texture({{"mapping", "view"}, {"size", {64, 64}}}));
+  const auto base =
+      std::make_shared<const RayTextureSpec>(parse_ray_texture({{"mapping", "view"}, {"size", {64, 64}}}));
   const auto one = with_stroke(*base, stroke("termination", 0.5, 0.5, 0.2, 0.05));
   const Image first = test::render_gpu(gv, scene_of(*v, one), render::RenderPath::Fragment);
   const auto two = with_stroke(*one, stroke("termination", 0.2, 0.2, 0.2, 0.05));

@@ -53,17 +53,27 @@ INSTANTIATE_TEST_SUITE_P(
         CameraCase{"inside", {{"eye", {16, 18, 16}}, {"center", {40, 20, 18}}, {"up", {0, 0, 1}}, {"fov_y", 70}}, 50},
         // 1e6 away with a narrow view: float t would lose ~0.06 units; the box-centred ray
         // start keeps it exact (measured ~75 dB).
-        CameraCase{"far_1e6", {{"eye", {16, 18, 1e6}}, {"center", {16, 18, 16}}, {"up", {0, 1, 0}}, {"fov_y", 0.003}}, 50},
+        CameraCase{
+            "far_1e6", {{"eye", {16, 18, 1e6}}, {"center", {16, 18, 16}}, {"up", {0, 1, 0}}, {"fov_y", 0.003}}, 50},
         // Exactly along +x through voxel planes: rays hit faces and cell boundaries exactly.
-        CameraCase{"axis_aligned", {{"eye", {100, 18, 16}}, {"center", {16, 18, 16}}, {"up", {0, 0, 1}}, {"fov_y", 30}}, 50},
+        CameraCase{
+            "axis_aligned", {{"eye", {100, 18, 16}}, {"center", {16, 18, 16}}, {"up", {0, 0, 1}}, {"fov_y", 30}}, 50},
         // Orthographic, its image plane exactly the box's yz face: edge rays graze the faces.
         CameraCase{"grazing_ortho",
-                   {{"eye", {-50, 18, 16}}, {"center", {16, 18, 16}}, {"up", {0, 0, 1}},
-                    {"projection", "orthographic"}, {"height", 32}}, 50},
+                   {{"eye", {-50, 18, 16}},
+                    {"center", {16, 18, 16}},
+                    {"up", {0, 0, 1}},
+                    {"projection", "orthographic"},
+                    {"height", 32}},
+                   50},
         // Orthographic at an angle.
         CameraCase{"ortho_oblique",
-                   {{"eye", {60, -40, 50}}, {"center", {16, 18, 16}}, {"up", {0, 0, 1}},
-                    {"projection", "orthographic"}, {"height", 60}}, 50}),
+                   {{"eye", {60, -40, 50}},
+                    {"center", {16, 18, 16}},
+                    {"up", {0, 0, 1}},
+                    {"projection", "orthographic"},
+                    {"height", 60}},
+                   50}),
     [](const auto& info) { return std::string(info.param.name); });
 
 TEST(Orientation, RowZeroIsTheTop) {
@@ -73,7 +83,8 @@ TEST(Orientation, RowZeroIsTheTop) {
   test::TestVolume gv(v);
   json tf = {{"points", {{0.0, 1, 1, 1, 0.0}, {1.0, 1, 1, 1, 1.0}}}};
   ResolvedScene s = test::make_scene(
-      *v, {{"tf", tf}, {"image", {{"width", 32}, {"height", 64}}},
+      *v, {{"tf", tf},
+           {"image", {{"width", 32}, {"height", 64}}},
            {"camera", {{"eye", {7.5, 7.5, 60}}, {"center", {7.5, 7.5, 7.5}}, {"up", {1, 0, 0}}, {"fov_y", 30}}}});
   for (auto path : {render::RenderPath::Fragment, render::RenderPath::Compute}) {
     Image g = test::render_gpu(gv, s, path);

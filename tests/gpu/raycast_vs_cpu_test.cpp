@@ -35,21 +35,34 @@ json camera_for(const Volume& v, glm::dvec3 dir, glm::dvec3 up) {
   return {{"eye", {eye.x, eye.y, eye.z}}, {"center", {c.x, c.y, c.z}}, {"up", {up.x, up.y, up.z}}, {"fov_y", 30}};
 }
 
-const std::vector<std::array<double, 5>> kBands = {
-    {0.0, 0, 0, 0, 0}, {0.3, 0.1, 0.3, 1.0, 0.0}, {0.45, 0.2, 0.6, 1.0, 0.15},
-    {0.55, 1.0, 0.7, 0.2, 0.6}, {0.7, 1.0, 1.0, 1.0, 0.0}, {1.0, 1, 1, 1, 0.0}};
+const std::vector<std::array<double, 5>> kBands = {{0.0, 0, 0, 0, 0},           {0.3, 0.1, 0.3, 1.0, 0.0},
+                                                   {0.45, 0.2, 0.6, 1.0, 0.15}, {0.55, 1.0, 0.7, 0.2, 0.6},
+                                                   {0.7, 1.0, 1.0, 1.0, 0.0},   {1.0, 1, 1, 1, 0.0}};
 
 std::vector<SceneCase> cases() {
   return {
-      {"marschner_lobb_41", [] { return test::make_volume(GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32); },
+      {"marschner_lobb_41",
+       [] {
+         return test::make_volume(GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32);
+       },
        kBands, nullptr},
-      {"blobs_64_u8", [] { return test::make_volume(GeneratorKind::Blobs, {64, 64, 64}, SourceType::U8); },
-       {{0.0, 0, 0, 0, 0}, {0.2, 0.9, 0.5, 0.2, 0.0}, {0.6, 0.9, 0.8, 0.6, 0.3}, {1.0, 1, 1, 1, 0.8}}, nullptr},
-      {"nucleon_real", [] { return std::make_shared<Volume>(load_volume(test::data_dir() / "nucleon.nhdr")); },
-       {{0.0, 0, 0, 0, 0}, {0.1, 0.2, 0.4, 1.0, 0.0}, {0.4, 1.0, 0.8, 0.3, 0.2}, {1.0, 1, 1, 1, 0.9}}, nullptr},
+      {"blobs_64_u8",
+       [] {
+         return test::make_volume(GeneratorKind::Blobs, {64, 64, 64}, SourceType::U8);
+       },
+       {{0.0, 0, 0, 0, 0}, {0.2, 0.9, 0.5, 0.2, 0.0}, {0.6, 0.9, 0.8, 0.6, 0.3}, {1.0, 1, 1, 1, 0.8}},
+       nullptr},
+      {"nucleon_real",
+       [] { return std::make_shared<Volume>(load_volume(test::data_dir() / "nucleon.nhdr")); },
+       {{0.0, 0, 0, 0, 0}, {0.1, 0.2, 0.4, 1.0, 0.0}, {0.4, 1.0, 0.8, 0.3, 0.2}, {1.0, 1, 1, 1, 0.9}},
+       nullptr},
       {"headsq_real_int16_aniso",
        [] { return std::make_shared<Volume>(load_volume(test::data_dir() / "headsq/quarter.nhdr")); },
-       {{0.0, 0, 0, 0, 0}, {0.15, 0.8, 0.5, 0.4, 0.0}, {0.3, 0.9, 0.7, 0.6, 0.05}, {0.5, 1, 1, 1, 0.6}, {1.0, 1, 1, 1, 0.9}},
+       {{0.0, 0, 0, 0, 0},
+        {0.15, 0.8, 0.5, 0.4, 0.0},
+        {0.3, 0.9, 0.7, 0.6, 0.05},
+        {0.5, 1, 1, 1, 0.6},
+        {1.0, 1, 1, 1, 0.9}},
        nullptr},
   };
 }
@@ -83,8 +96,8 @@ TEST_P(GpuVsCpu, SameStepMatchesTheReference) {
   Image c = reference::render_reference(*v, s);
   const auto e = reference::compare(g, c);
   std::printf("%-26s %-9s %-4s shade=%d: PSNR %.1f dB, max %.4f, samples/ray %.1f [%s]\n", sc.name.c_str(),
-              to_string(p.filter), p.path == render::RenderPath::Compute ? "comp" : "frag", p.shading, e.psnr, e.max_abs,
-              st.samples_mean, st.variant.c_str());
+              to_string(p.filter), p.path == render::RenderPath::Compute ? "comp" : "frag", p.shading, e.psnr,
+              e.max_abs, st.samples_mean, st.variant.c_str());
   EXPECT_GE(e.psnr, kMinPsnr);
   EXPECT_GT(st.samples_mean, 5.0);
   // The image is not trivially empty: some pixels are far from the background.
@@ -98,7 +111,8 @@ std::vector<Param> params() {
   std::vector<Param> out;
   for (int s = 0; s < int(cases().size()); ++s)
     for (auto f : {Filter::Trilinear, Filter::Tricubic})
-      for (auto path : {render::RenderPath::Fragment, render::RenderPath::Compute}) out.push_back({s, f, path, s % 2 == 1});
+      for (auto path : {render::RenderPath::Fragment, render::RenderPath::Compute})
+        out.push_back({s, f, path, s % 2 == 1});
   return out;
 }
 

@@ -28,27 +28,34 @@ std::shared_ptr<Volume> blobs() {
 // specular term goes above 1 and gets clamped), orthographic, a coloured background.
 // 97x61 pixels: not a multiple of the compute path's 8x8 groups.
 std::vector<std::pair<std::string, json>> scenes(const Volume& v) {
-  const json tf = tf_over_range(v, {{0.0, 0, 0, 0, 0}, {0.25, 0.1, 0.3, 1.0, 0.0}, {0.5, 1.0, 0.7, 0.2, 0.5},
-                                    {0.7, 1.0, 1.0, 1.0, 0.0}, {1.0, 1, 1, 1, 0.9}});
+  const json tf = tf_over_range(v, {{0.0, 0, 0, 0, 0},
+                                    {0.25, 0.1, 0.3, 1.0, 0.0},
+                                    {0.5, 1.0, 0.7, 0.2, 0.5},
+                                    {0.7, 1.0, 1.0, 1.0, 0.0},
+                                    {1.0, 1, 1, 1, 0.9}});
   const json img = {{"width", 97}, {"height", 61}};
   return {
       {"post", {{"tf", tf}, {"image", img}, {"background", {0.1, 0.2, 0.3}}}},
-      {"tricubic_shaded",
-       {{"tf", tf}, {"image", img}, {"render", {{"filter", "tricubic"}, {"shading", true}}}}},
+      {"tricubic_shaded", {{"tf", tf}, {"image", img}, {"render", {{"filter", "tricubic"}, {"shading", true}}}}},
       {"peaks", {{"tf", tf}, {"image", img}, {"render", {{"classification", "peaks"}, {"shading", true}}}}},
       {"preint", {{"tf", tf}, {"image", img}, {"render", {{"classification", "preint"}}}}},
       {"ortho",
-       {{"tf", tf}, {"image", img}, {"camera",
-         {{"eye", {80, -20, 70}}, {"center", {23.5, 24.375, 26.25}}, {"up", {0, 0, 1}},
-          {"projection", "orthographic"}, {"height", 60}}}}},
+       {{"tf", tf},
+        {"image", img},
+        {"camera",
+         {{"eye", {80, -20, 70}},
+          {"center", {23.5, 24.375, 26.25}},
+          {"up", {0, 0, 1}},
+          {"projection", "orthographic"},
+          {"height", 60}}}}},
   };
 }
 
 const char* name(render::RenderPath p) { return p == render::RenderPath::Compute ? "comp" : "frag"; }
 
 render::RenderResult draw(const render::ResidentVolume& gv, const ResolvedScene& s, render::RenderPath path,
-                            render::RenderOutput out, std::optional<render::PixelRect> tile = std::nullopt,
-                            render::RenderStats* st = nullptr, bool sample_stats = false) {
+                          render::RenderOutput out, std::optional<render::PixelRect> tile = std::nullopt,
+                          render::RenderStats* st = nullptr, bool sample_stats = false) {
   render::RenderRequest r;
   r.path = path;
   r.output = out;
@@ -111,8 +118,10 @@ TEST(Tiles, EqualTheFullRenderExactly) {
           render::RenderStats st;
           render::place_tile(asm_f, r, draw(gv, s, path, render::RenderOutput::Float, r, &st).image);
           render::place_tile(asm_8, r, draw(gv, s, path, render::RenderOutput::Rgb8, r).rgb8);
-          if (k == 0) total = st;
-          else total.merge(st);
+          if (k == 0)
+            total = st;
+          else
+            total.merge(st);
         }
         SCOPED_TRACE(label + " " + name(path) + " layout " + std::to_string(li));
         EXPECT_EQ(asm_f.rgba, full.rgba);
@@ -168,10 +177,10 @@ TEST(Tiles, RefusesRectanglesOutsideTheImage) {
   auto v = blobs();
   test::TestVolume gv(v);
   const ResolvedScene s = test::make_scene(*v, {{"image", {{"width", 40}, {"height", 30}}}});
-  for (render::PixelRect r : {render::PixelRect{0, 0, 0, 5}, render::PixelRect{0, 0, 5, 0},
-                              render::PixelRect{-1, 0, 5, 5}, render::PixelRect{0, -1, 5, 5},
-                              render::PixelRect{36, 0, 5, 5}, render::PixelRect{0, 26, 5, 5},
-                              render::PixelRect{1, 1, 2147483647, 1}}) {
+  for (render::PixelRect r :
+       {render::PixelRect{0, 0, 0, 5}, render::PixelRect{0, 0, 5, 0}, render::PixelRect{-1, 0, 5, 5},
+        render::PixelRect{0, -1, 5, 5}, render::PixelRect{36, 0, 5, 5}, render::PixelRect{0, 26, 5, 5},
+        render::PixelRect{1, 1, 2147483647, 1}}) {
     try {
       draw(gv, s, render::RenderPath::Fragment, render::RenderOutput::Rgb8, r);
       ADD_FAILURE() << r.to_string() << " was accepted";
@@ -184,7 +193,7 @@ TEST(Tiles, RefusesRectanglesOutsideTheImage) {
   EXPECT_THROW(render::tile_grid(40, 30, 0, 8), std::invalid_argument);
   EXPECT_THROW(render::tile_grid(0, 30, 8, 8), std::invalid_argument);
   Image full(40, 30), tile(8, 8);
-  EXPECT_THROW(render::place_tile(full, {0, 0, 8, 7}, tile), std::invalid_argument);  // size differs
+  EXPECT_THROW(render::place_tile(full, {0, 0, 8, 7}, tile), std::invalid_argument);   // size differs
   EXPECT_THROW(render::place_tile(full, {36, 0, 8, 8}, tile), std::invalid_argument);  // outside
 }
 
@@ -218,9 +227,10 @@ TEST(RenderStats, JsonUsesTheStreamKeysAndToStringMatches) {
   render::RenderStats st;
   draw(gv, s, render::RenderPath::Fragment, render::RenderOutput::Float, std::nullopt, &st);
   const json j = st.to_json();
-  std::set<std::string> want = {"render_ms", "readback_ms", "table_ms", "samples_per_ray",
-                                      "samples_per_ray_max", "rays_hit", "rays_at_sample_cap", "sample_cap", "variant", "peaks",
-                                      "empty_macrocells", "tiles", "tf_source", "warnings"};
+  std::set<std::string> want = {
+      "render_ms",          "readback_ms", "table_ms", "samples_per_ray", "samples_per_ray_max", "rays_hit",
+      "rays_at_sample_cap", "sample_cap",  "variant",  "peaks",           "empty_macrocells",    "tiles",
+      "tf_source",          "warnings"};
   std::set<std::string> got;
   for (auto& [k, _] : j.items()) got.insert(k);
   want.insert("compile_ms");
@@ -231,7 +241,8 @@ TEST(RenderStats, JsonUsesTheStreamKeysAndToStringMatches) {
   EXPECT_GT(j["peaks"].get<int>(), 0);
   // Every key is declared in the stream's stats message with a matching type (the schema has
   // additionalProperties: false, so a key missing there breaks the net tests' validation).
-  const json schema = json::parse(std::ifstream(std::string(PEAKCAST_SOURCE_DIR) + "/proto/server_messages.schema.json"));
+  const json schema =
+      json::parse(std::ifstream(std::string(PEAKCAST_SOURCE_DIR) + "/proto/server_messages.schema.json"));
   const json& props = schema["$defs"]["stats"]["properties"];
   for (auto& [k, val] : j.items()) {
     ASSERT_TRUE(props.contains(k)) << k << " is not in $defs/stats";

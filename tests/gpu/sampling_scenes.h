@@ -14,18 +14,23 @@ namespace peakcast::sampling_scenes {
 
 using nlohmann::json;
 
-inline std::shared_ptr<Volume> ml() { return test::make_volume(GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32); }
+inline std::shared_ptr<Volume> ml() {
+  return test::make_volume(GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32);
+}
 
 // A smooth band TF over the Marschner-Lobb range [0, 1].
-inline const json kBandTf = {{"points", {{0.0, 0.1, 0.2, 0.8, 0.0}, {0.45, 0.3, 0.6, 0.9, 0.05}, {0.6, 0.9, 0.6, 0.3, 0.35},
-                                  {1.0, 1.0, 1.0, 1.0, 0.0}}}};
+inline const json kBandTf = {
+    {"points",
+     {{0.0, 0.1, 0.2, 0.8, 0.0}, {0.45, 0.3, 0.6, 0.9, 0.05}, {0.6, 0.9, 0.6, 0.3, 0.35}, {1.0, 1.0, 1.0, 1.0, 0.0}}}};
 
 // Close-up (Knoll Fig. 6 style): the eye just outside a corner of the box, wide angle, so the
 // near samples cover many pixels and the far ones few.
 inline json close_camera() {
   return {{"eye", {46, 43, 47}}, {"center", {20, 20, 20}}, {"up", {0, 1, 0}}, {"fov_y", 50}};
 }
-inline json far_camera() { return {{"eye", {110, 85, 140}}, {"center", {20, 20, 20}}, {"up", {0, 1, 0}}, {"fov_y", 30}}; }
+inline json far_camera() {
+  return {{"eye", {110, 85, 140}}, {"center", {20, 20, 20}}, {"up", {0, 1, 0}}, {"fov_y", 30}};
+}
 
 inline json scene_json(json camera, json render, int size = 64) {
   render["early_termination"] = 1.0;
@@ -51,7 +56,8 @@ constexpr double kMinTwinPsnr = 50.0;
 
 // Each case rendered by the GL ray caster and by its CPU twin at the same settings; the variant
 // must contain `marker`.
-inline void check_twins(const Volume& v, const render::ResidentVolume& gv, const std::vector<Twin>& twins, const std::string& marker) {
+inline void check_twins(const Volume& v, const render::ResidentVolume& gv, const std::vector<Twin>& twins,
+                        const std::string& marker) {
   for (const auto& t : twins) {
     const ResolvedScene s = test::make_scene(v, scene_json(t.camera, t.render));
     render::RenderStats st;

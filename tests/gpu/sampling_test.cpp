@@ -28,7 +28,8 @@ TEST(Differential, GpuMatchesTheCpuTwin) {
       {"close post tricubic", close_camera(), {{"sampling", "differential"}, {"s_k", 2}, {"filter", "tricubic"}}},
       {"close peaks", close_camera(), {{"sampling", "differential"}, {"s_k", 2}, {"classification", "peaks"}}},
       {"close preint", close_camera(), {{"sampling", "differential"}, {"s_k", 2}, {"classification", "preint"}}},
-      {"close shading, no skipping", close_camera(),
+      {"close shading, no skipping",
+       close_camera(),
        {{"sampling", "differential"}, {"s_k", 1}, {"shading", true}, {"space_skipping", false}}},
   };
   check_twins(*v, gv, twins, "+diff");
@@ -50,7 +51,7 @@ TEST(Differential, StepGrowsAlongTheRayAndEntersCellsWithoutResampling) {
     const double step = l.t(j + 1) - l.t(j);
     EXPECT_NEAR(step, l.step(j, 1), 1e-9);
     EXPECT_NEAR(step - prev_step, j ? l.A : step, 1e-9);  // grows by a per sample (eq. 17)
-    EXPECT_NEAR(l.index_at(l.t(j)), j, 1e-6);            // eq. 18 inverts the lattice
+    EXPECT_NEAR(l.index_at(l.t(j)), j, 1e-6);             // eq. 18 inverts the lattice
     prev_step = step;
   }
   // A cell entered at any t restarts at the first lattice index at or after it: never one
@@ -69,7 +70,8 @@ struct EqualCost {
   double samples, psnr_diff, psnr_uniform, uniform_step;
 };
 
-EqualCost differential_vs_uniform(const Volume& v, const render::ResidentVolume& gv, json tf, double sk, bool early_termination) {
+EqualCost differential_vs_uniform(const Volume& v, const render::ResidentVolume& gv, json tf, double sk,
+                                  bool early_termination) {
   json dj = scene_json(close_camera(), {{"sampling", "differential"}, {"s_k", sk}}, 96);
   dj["tf"] = tf;
   if (early_termination) dj["render"].erase("early_termination");
@@ -94,10 +96,12 @@ EqualCost differential_vs_uniform(const Volume& v, const render::ResidentVolume&
 TEST(Differential, AgainstUniformOnACloseUpAtEqualSamples) {
   auto v = ml();
   test::TestVolume gv(v);
-  const json opaque = {{"points", {{0.0, 0.1, 0.2, 0.8, 0.0}, {0.45, 0.3, 0.6, 0.9, 0.15}, {0.6, 0.9, 0.6, 0.3, 1.0},
-                                   {1.0, 1.0, 1.0, 1.0, 0.0}}}};
+  const json opaque = {
+      {"points",
+       {{0.0, 0.1, 0.2, 0.8, 0.0}, {0.45, 0.3, 0.6, 0.9, 0.15}, {0.6, 0.9, 0.6, 0.3, 1.0}, {1.0, 1.0, 1.0, 1.0, 0.0}}}};
   std::printf("%-22s %5s %9s %12s %12s %10s\n", "scene", "s_k", "samples", "diff_dB", "uniform_dB", "step_u");
-  for (const auto& [name, tf, et] : {std::tuple{"band", kBandTf, false}, std::tuple{"opaque, early stop", opaque, true}})
+  for (const auto& [name, tf, et] :
+       {std::tuple{"band", kBandTf, false}, std::tuple{"opaque, early stop", opaque, true}})
     // s_k 1.5 and 4 put the step at the focal plane at 1.5 and 4 pixel footprints: about the
     // sample budgets (75 and 18 per ray) at which the bound below was measured.
     for (double sk : {1.5, 4.0}) {
@@ -125,11 +129,16 @@ TEST(Differential, AgainstUniformAtEqualCostOnAVesselCloseUp) {
   const glm::dvec3 c(47.5), eye = c + 1.05 * r * glm::normalize(glm::dvec3(0.55, 0.45, 0.7));
   std::printf("%-8s %5s %9s %12s %12s %10s\n", "lumen", "s_k", "samples", "diff_dB", "uniform_dB", "step_u");
   for (const auto& [name, mid, top] : {std::tuple{"0.3-0.6", 0.3, 0.6}, std::tuple{"0.8-1.0", 0.8, 1.0}}) {
-    json base = {{"image", {{"width", 128}, {"height", 128}}},
-                 {"camera", {{"eye", {eye.x, eye.y, eye.z}}, {"center", {c.x, c.y, c.z}}, {"up", {0, 1, 0}}, {"fov_y", 60}}},
-                 {"tf", {{"points", {{lo, 0, 0, 0, 0}, {lo + 0.3 * (hi - lo), 0.2, 0.4, 1.0, 0.0},
-                                     {lo + 0.6 * (hi - lo), 1.0, 0.8, 0.4, mid}, {hi, 1, 1, 1, top}}}}},
-                 {"render", {{"early_termination", 1.0}}}};
+    json base = {
+        {"image", {{"width", 128}, {"height", 128}}},
+        {"camera", {{"eye", {eye.x, eye.y, eye.z}}, {"center", {c.x, c.y, c.z}}, {"up", {0, 1, 0}}, {"fov_y", 60}}},
+        {"tf",
+         {{"points",
+           {{lo, 0, 0, 0, 0},
+            {lo + 0.3 * (hi - lo), 0.2, 0.4, 1.0, 0.0},
+            {lo + 0.6 * (hi - lo), 1.0, 0.8, 0.4, mid},
+            {hi, 1, 1, 1, top}}}}},
+        {"render", {{"early_termination", 1.0}}}};
     const auto conv = reference::render_converged(*v, test::make_scene(*v, base), reference::OpticalModel::Dvr, 1e-4);
     ASSERT_TRUE(conv.converged);
     for (double sk : {2.0, 1.0, 0.5, 0.25}) {
@@ -174,7 +183,8 @@ TEST(Differential, SkSweepIsStableAndConverges) {
   std::vector<double> rmse;
   const std::vector<double> sks = {1e3, 1e2, 10, 1, 0.1, 1e-2, 1e-3};
   for (double sk : sks) {
-    const ResolvedScene s = test::make_scene(*v, scene_json(close_camera(), {{"sampling", "differential"}, {"s_k", sk}}, 48));
+    const ResolvedScene s =
+        test::make_scene(*v, scene_json(close_camera(), {{"sampling", "differential"}, {"s_k", sk}}, 48));
     render::RenderStats st;
     const Image g = test::render_gpu(gv, s, render::RenderPath::Fragment, &st);
     ASSERT_TRUE(test::all_finite(g)) << "s_k " << sk;
@@ -190,8 +200,10 @@ TEST(Differential, SkSweepIsStableAndConverges) {
   // arithmetic's and the converged reference's (tolerance 1e-4), where it only has to stay.
   const double floor = 2e-4;
   for (size_t i = 1; i < rmse.size(); ++i) {
-    if (rmse[i - 1] > floor) EXPECT_LT(rmse[i], rmse[i - 1] * 1.05) << "s_k " << sks[i];
-    else EXPECT_LT(rmse[i], floor) << "s_k " << sks[i];
+    if (rmse[i - 1] > floor)
+      EXPECT_LT(rmse[i], rmse[i - 1] * 1.05) << "s_k " << sks[i];
+    else
+      EXPECT_LT(rmse[i], floor) << "s_k " << sks[i];
   }
   EXPECT_LT(rmse.back(), rmse.front() * 0.01);
 }
@@ -207,8 +219,9 @@ TEST(Sampling, PerRayCapIsReportedWhenHit) {
              {"camera", {{"eye", {0.5, 0.5, -5.0}}, {"center", {0.5, 0.5, 600.0}}, {"up", {0, 1, 0}}, {"fov_y", 0.01}}},
              {"tf", {{"points", {{0.0, 1, 1, 1, 0.0}, {1.0, 1, 1, 1, 0.0}}}}},  // clear: no ray turns opaque
              {"render", {{"step", 1e-3}, {"early_termination", 1.0}, {"space_skipping", false}}}};
-  const json peak_tf = {{"points", {{0.0, 1, 1, 1, 0}, {0.499, 1, 1, 1, 0}, {0.5, 1, 1, 1, 0.001}, {0.501, 1, 1, 1, 0},
-                                     {1.0, 1, 1, 1, 0}}}};
+  const json peak_tf = {
+      {"points",
+       {{0.0, 1, 1, 1, 0}, {0.499, 1, 1, 1, 0}, {0.5, 1, 1, 1, 0.001}, {0.501, 1, 1, 1, 0}, {1.0, 1, 1, 1, 0}}}};
   for (const auto& [vs, peaks] : {std::pair{0, false}, std::pair{7, false}, std::pair{0, true}, std::pair{3, true}}) {
     sj["render"]["virtual_samples"] = vs;
     sj["render"]["step"] = 1e-3;
@@ -235,7 +248,10 @@ TEST(Sampling, PerRayCapIsReportedWhenHit) {
 TEST(Differential, OrthographicIsUniformAtTheFootprint) {
   auto v = ml();
   test::TestVolume gv(v);
-  const json cam = {{"eye", {20, 20, 120}}, {"center", {20, 20, 20}}, {"up", {0, 1, 0}}, {"projection", "orthographic"},
+  const json cam = {{"eye", {20, 20, 120}},
+                    {"center", {20, 20, 20}},
+                    {"up", {0, 1, 0}},
+                    {"projection", "orthographic"},
                     {"height", 60}};
   const ResolvedScene sd = test::make_scene(*v, scene_json(cam, {{"sampling", "differential"}, {"s_k", 3}}));
   const SamplingPlan plan = plan_sampling(sd);
@@ -244,7 +260,8 @@ TEST(Differential, OrthographicIsUniformAtTheFootprint) {
   render::RenderStats st;
   const Image d = test::render_gpu(gv, sd, render::RenderPath::Fragment, &st);
   EXPECT_EQ(st.variant.find("+diff"), std::string::npos) << st.variant;
-  const Image u = test::render_gpu(gv, test::make_scene(*v, scene_json(cam, {{"step", plan.step}})), render::RenderPath::Fragment);
+  const Image u =
+      test::render_gpu(gv, test::make_scene(*v, scene_json(cam, {{"step", plan.step}})), render::RenderPath::Fragment);
   EXPECT_GE(reference::compare(d, u).psnr, 100.0);
 }
 
@@ -258,7 +275,9 @@ TEST(Adaptive, ConstantVolumeSameImageEighthOfTheSamples) {
   v->finalize_statistics();
   test::TestVolume gv(v);
   const json tf = {{"points", {{0, 0, 0, 0, 0}, {255, 1, 0.8, 0.5, 0.5}}}};
-  json over = {{"image", {{"width", 64}, {"height", 64}}}, {"tf", tf}, {"camera", far_camera()},
+  json over = {{"image", {{"width", 64}, {"height", 64}}},
+               {"tf", tf},
+               {"camera", far_camera()},
                {"render", {{"step", 0.5}, {"early_termination", 1.0}}}};
   render::RenderStats su, sa;
   const Image u = test::render_gpu(gv, test::make_scene(*v, over), render::RenderPath::Fragment, &su);
@@ -294,21 +313,21 @@ TEST(Adaptive, MultipliersFollowTheCellsDeviation) {
 TEST(Adaptive, GpuMatchesTheCpuTwinAndTheReference) {
   auto v = ml();
   test::TestVolume gv(v);
-  for (const json& render : {json{{"adaptive", true}, {"step", 0.25}, {"space_skipping", false}},
-                             json{{"adaptive", true}, {"step", 0.25}},
-                             json{{"adaptive", true}, {"sampling", "differential"}, {"s_k", 1}},
-                             // Segment methods: a run of occupied cells is walked as the reference
-                             // walks the ray, each cell from its first point with its multiplier.
-                             json{{"adaptive", true}, {"step", 0.5}, {"classification", "preint"}, {"space_skipping", false}},
-                             json{{"adaptive", true}, {"step", 1}, {"classification", "preint"}},
-                             json{{"adaptive", true}, {"step", 0.5}, {"classification", "peaks"}}}) {
+  for (const json& render :
+       {json{{"adaptive", true}, {"step", 0.25}, {"space_skipping", false}}, json{{"adaptive", true}, {"step", 0.25}},
+        json{{"adaptive", true}, {"sampling", "differential"}, {"s_k", 1}},
+        // Segment methods: a run of occupied cells is walked as the reference
+        // walks the ray, each cell from its first point with its multiplier.
+        json{{"adaptive", true}, {"step", 0.5}, {"classification", "preint"}, {"space_skipping", false}},
+        json{{"adaptive", true}, {"step", 1}, {"classification", "preint"}},
+        json{{"adaptive", true}, {"step", 0.5}, {"classification", "peaks"}}}) {
     const ResolvedScene s = test::make_scene(*v, scene_json(far_camera(), render));
     render::RenderStats st;
     const Image g = test::render_gpu(gv, s, render::RenderPath::Fragment, &st);
     const Image c = reference::render_reference(*v, s);
     const auto e = reference::compare(g, c);
-    std::printf("%-70s %-40s PSNR %.1f dB, samples/ray %.1f vs %.1f\n", render.dump().c_str(), st.variant.c_str(), e.psnr,
-                mean_samples(g), mean_samples(c));
+    std::printf("%-70s %-40s PSNR %.1f dB, samples/ray %.1f vs %.1f\n", render.dump().c_str(), st.variant.c_str(),
+                e.psnr, mean_samples(g), mean_samples(c));
     EXPECT_GE(e.psnr, kMinTwinPsnr) << render.dump();
   }
 }

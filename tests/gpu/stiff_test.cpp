@@ -31,16 +31,18 @@ enum class Check { Twin, Unscaled, Refused, SampleCap, Blank };
 struct StiffCase {
   const char* name;
   VolumeMaker volume;
-  json scene;           // merged over a 32x32 view of the volume
+  json scene;  // merged over a 32x32 view of the volume
   Check check;
-  double min_psnr = 0;  // Twin / Unscaled: the bound (dB)
+  double min_psnr = 0;            // Twin / Unscaled: the bound (dB)
   const char* refusal = nullptr;  // Refused: words the message must hold
-  double scale = 1.0;   // Unscaled: the factor the field and TF carry
+  double scale = 1.0;             // Unscaled: the factor the field and TF carry
 };
 
 void PrintTo(const StiffCase& c, std::ostream* os) { *os << c.name; }
 
-std::shared_ptr<Volume> ml41() { return test::make_volume(GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32); }
+std::shared_ptr<Volume> ml41() {
+  return test::make_volume(GeneratorKind::MarschnerLobb, {41, 41, 41}, SourceType::F32);
+}
 
 // Marschner-Lobb at 21^3 times `s` (float32): the scale cases' field.
 VolumeMaker ml_scaled(double s, bool negative_zeros = false) {
@@ -56,7 +58,9 @@ VolumeMaker ml_scaled(double s, bool negative_zeros = false) {
 }
 
 VolumeMaker sized(Dims d) {
-  return [d] { return test::float_volume(d, [](int64_t i, int64_t j, int64_t k) { return float((i + 2 * j + 3 * k) % 7) / 6.0f; }); };
+  return [d] {
+    return test::float_volume(d, [](int64_t i, int64_t j, int64_t k) { return float((i + 2 * j + 3 * k) % 7) / 6.0f; });
+  };
 }
 
 VolumeMaker constant() {
@@ -74,7 +78,8 @@ VolumeMaker with_nonfinite() {
         for (int i = 0; i < n; ++i) {
           float v = float(std::sin(0.5 * i) * std::cos(0.4 * j) + 0.1 * k);
           if ((i * 7 + j * 3 + k) % 23 == 0) v = std::numeric_limits<float>::quiet_NaN();
-          if ((i + j * 5 + k * 11) % 41 == 0) v = (i % 2) ? std::numeric_limits<float>::infinity() : -std::numeric_limits<float>::infinity();
+          if ((i + j * 5 + k * 11) % 41 == 0)
+            v = (i % 2) ? std::numeric_limits<float>::infinity() : -std::numeric_limits<float>::infinity();
           bytes.append(reinterpret_cast<const char*>(&v), 4);
         }
     test::write_file(dir / "nonfinite.nrrd", bytes);
@@ -88,8 +93,12 @@ json ramp_tf(double lo, double hi, double a = 0.3) {
 
 // A near-Dirac peak of width w (of ML's [0, 1] range) at 0.5 over a faint ramp.
 json peak_tf(double w, double alpha = 0.8) {
-  return {{"points", {{0.0, 0.1, 0.2, 0.8, 0.0}, {0.5 - w, 0.9, 0.3, 0.1, 0.01}, {0.5, 0.9, 0.3, 0.1, alpha},
-                      {0.5 + w, 0.9, 0.3, 0.1, 0.01}, {1.0, 0.3, 0.3, 0.3, 0.02}}}};
+  return {{"points",
+           {{0.0, 0.1, 0.2, 0.8, 0.0},
+            {0.5 - w, 0.9, 0.3, 0.1, 0.01},
+            {0.5, 0.9, 0.3, 0.1, alpha},
+            {0.5 + w, 0.9, 0.3, 0.1, 0.01},
+            {1.0, 0.3, 0.3, 0.3, 0.02}}}};
 }
 
 json peaks(json extra = json::object()) {
@@ -120,75 +129,116 @@ json extreme_ray_texture() {
   strokes.push_back({{"channel", "termination"}, {"center", {0.5, 0.8}}, {"radius", 0.2}, {"value", 1.0}});
   strokes.push_back({{"channel", "blend"}, {"center", {0.2, 0.2}}, {"radius", 1.0}, {"value", -1.0}, {"level", 8}});
   strokes.push_back({{"channel", "blend"}, {"center", {0.8, 0.8}}, {"radius", 0.1}, {"value", 1.0}, {"falloff", 1.0}});
-  strokes.push_back({{"channel", "step"}, {"center", {1.0, 1.0}}, {"radius", 1e-6}, {"value", 64.0}, {"mode", "multiply"}});
+  strokes.push_back(
+      {{"channel", "step"}, {"center", {1.0, 1.0}}, {"radius", 1e-6}, {"value", 64.0}, {"mode", "multiply"}});
   return {{"mapping", "volume"}, {"size", {2048, 1}}, {"strokes", strokes}};
 }
 
 // The table. Bounds: measured on llvmpipe (the value in the comment), asserted with a margin.
 const StiffCase kCases[] = {
     // TF peaks of width 1e-2 .. 1e-7 of the range, peak finding.
-    {"peak_width_1e-2", ml41, {{"tf", peak_tf(1e-2)}, {"render", peaks()}}, Check::Twin, 80},  // 99.6 dB
-    {"peak_width_1e-3", ml41, {{"tf", peak_tf(1e-3)}, {"render", peaks()}}, Check::Twin, 65},  // 80.6 dB
-    {"peak_width_1e-4", ml41, {{"tf", peak_tf(1e-4)}, {"render", peaks()}}, Check::Twin, 50},  // 60.5 dB
-    {"peak_width_1e-5", ml41, {{"tf", peak_tf(1e-5)}, {"render", peaks()}}, Check::Twin, 65},  // 82.9 dB
+    {"peak_width_1e-2", ml41, {{"tf", peak_tf(1e-2)}, {"render", peaks()}}, Check::Twin, 80},   // 99.6 dB
+    {"peak_width_1e-3", ml41, {{"tf", peak_tf(1e-3)}, {"render", peaks()}}, Check::Twin, 65},   // 80.6 dB
+    {"peak_width_1e-4", ml41, {{"tf", peak_tf(1e-4)}, {"render", peaks()}}, Check::Twin, 50},   // 60.5 dB
+    {"peak_width_1e-5", ml41, {{"tf", peak_tf(1e-5)}, {"render", peaks()}}, Check::Twin, 65},   // 82.9 dB
     {"peak_width_1e-6", ml41, {{"tf", peak_tf(1e-6)}, {"render", peaks()}}, Check::Twin, 100},  // 136.5 dB
     {"peak_width_1e-7", ml41, {{"tf", peak_tf(1e-7)}, {"render", peaks()}}, Check::Twin, 100},  // 136.4 dB
-    {"peak_width_1e-7_post", ml41, {{"tf", peak_tf(1e-7)}}, Check::Twin, 100},  // 135.5 dB
-    {"peak_opacity_1", ml41, {{"tf", peak_tf(1e-3, 1.0)}, {"render", peaks({{"max_peaks", 4}})}}, Check::Twin, 100},  // 136.4 dB
-    {"vertical_tf_steps", ml41,
-     {{"tf", {{"points", {{0.0, 0, 0, 0, 0}, {0.4, 0, 0, 0, 0}, {0.4, 0.9, 0.4, 0.1, 0.6}, {0.6, 0.9, 0.4, 0.1, 0.6},
-                          {0.6, 0.1, 0.4, 0.9, 0.1}, {1.0, 0.1, 0.4, 0.9, 0.1}}}}},
+    {"peak_width_1e-7_post", ml41, {{"tf", peak_tf(1e-7)}}, Check::Twin, 100},                  // 135.5 dB
+    {"peak_opacity_1",
+     ml41,
+     {{"tf", peak_tf(1e-3, 1.0)}, {"render", peaks({{"max_peaks", 4}})}},
+     Check::Twin,
+     100},  // 136.4 dB
+    {"vertical_tf_steps",
+     ml41,
+     {{"tf",
+       {{"points",
+         {{0.0, 0, 0, 0, 0},
+          {0.4, 0, 0, 0, 0},
+          {0.4, 0.9, 0.4, 0.1, 0.6},
+          {0.6, 0.9, 0.4, 0.1, 0.6},
+          {0.6, 0.1, 0.4, 0.9, 0.1},
+          {1.0, 0.1, 0.4, 0.9, 0.1}}}}},
       {"render", peaks()}},
-     Check::Twin, 40},
+     Check::Twin,
+     40},
     {"tf_1024_points", ml41, {{"tf", tf_with_points(1024)}}, Check::Twin, 100},  // 127.7 dB
     {"tf_8192_points", ml41, {{"tf", tf_with_points(8192)}}, Check::Refused, 0, "more than 1024 points"},
     {"all_zero_tf", ml41, {{"tf", {{"points", {{0.0, 0, 0, 0, 0}, {1.0, 0, 0, 0, 0}}}}}}, Check::Blank},
-    {"single_point_tf", ml41, {{"tf", {{"points", {{0.5, 0.9, 0.5, 0.1, 0.05}}}}}}, Check::Twin, 100},  // 134.8 dB
-    {"constant_volume", constant(), {{"tf", ramp_tf(0.0, 1.0)}}, Check::Twin, 100},  // 146.1 dB
+    {"single_point_tf", ml41, {{"tf", {{"points", {{0.5, 0.9, 0.5, 0.1, 0.05}}}}}}, Check::Twin, 100},      // 134.8 dB
+    {"constant_volume", constant(), {{"tf", ramp_tf(0.0, 1.0)}}, Check::Twin, 100},                         // 146.1 dB
     {"constant_volume_peaks", constant(), {{"tf", peak_tf(1e-4)}, {"render", peaks()}}, Check::Twin, 100},  // 152.5 dB
     // Degenerate grids: a single voxel, slice or line has no box to ray cast; 2^3 is the least.
     {"volume_1x1x1", sized({1, 1, 1}), {}, Check::Refused, 0, "every dimension must be >= 2"},
     {"volume_2x2x2", sized({2, 2, 2}), {{"tf", ramp_tf(0.0, 1.0, 0.9)}}, Check::Twin, 100},  // 150.5 dB
     {"volume_1xNxM", sized({1, 17, 9}), {}, Check::Refused, 0, "every dimension must be >= 2"},
     {"volume_Nx1x1", sized({33, 1, 1}), {}, Check::Refused, 0, "every dimension must be >= 2"},
-    {"volume_2x33x2", sized({2, 33, 2}),
-     {{"tf", ramp_tf(0.0, 1.0, 0.9)}, {"camera", cam({30, 16, 20}, {0.5, 16, 0.5}, {0, 1, 0}, 60)}}, Check::Twin, 100},  // 136.0 dB
+    {"volume_2x33x2",
+     sized({2, 33, 2}),
+     {{"tf", ramp_tf(0.0, 1.0, 0.9)}, {"camera", cam({30, 16, 20}, {0.5, 16, 0.5}, {0, 1, 0}, 60)}},
+     Check::Twin,
+     100},  // 136.0 dB
     // Float volumes far from 1: the image must not change with the scale.
-    {"float_range_1e-30", ml_scaled(1e-30), {}, Check::Unscaled, 100, nullptr, 1e-30},  // 153.5 dB
-    {"float_range_1e30", ml_scaled(1e30), {}, Check::Unscaled, 100, nullptr, 1e30},  // 152.8 dB
+    {"float_range_1e-30", ml_scaled(1e-30), {}, Check::Unscaled, 100, nullptr, 1e-30},     // 153.5 dB
+    {"float_range_1e30", ml_scaled(1e30), {}, Check::Unscaled, 100, nullptr, 1e30},        // 152.8 dB
     {"float_denormal_1e-40", ml_scaled(1e-40), {}, Check::Unscaled, 100, nullptr, 1e-40},  // 124.6 dB
-    {"float_signed_zeros", ml_scaled(1.0, true), {}, Check::Twin, 100},  // 143.4 dB
-    {"float_nan_inf_replaced", with_nonfinite(), {}, Check::Twin, 100},  // 131.8 dB
+    {"float_signed_zeros", ml_scaled(1.0, true), {}, Check::Twin, 100},                    // 143.4 dB
+    {"float_nan_inf_replaced", with_nonfinite(), {}, Check::Twin, 100},                    // 131.8 dB
     // Cameras.
-    {"camera_inside", ml41, {{"camera", cam({20, 20, 20}, {40, 25, 22}, {0, 1, 0}, 70)}}, Check::Twin, 100},  // 138.2 dB
-    {"camera_1e6_away", ml41, {{"camera", cam({20, 20, 1e6}, {20, 20, 20}, {0, 1, 0}, 0.003)}}, Check::Twin, 100},  // 139.2 dB
+    {"camera_inside",
+     ml41,
+     {{"camera", cam({20, 20, 20}, {40, 25, 22}, {0, 1, 0}, 70)}},
+     Check::Twin,
+     100},  // 138.2 dB
+    {"camera_1e6_away",
+     ml41,
+     {{"camera", cam({20, 20, 1e6}, {20, 20, 20}, {0, 1, 0}, 0.003)}},
+     Check::Twin,
+     100},                                                                                                 // 139.2 dB
     {"camera_axis_x", ml41, {{"camera", cam({120, 20, 20}, {20, 20, 20}, {0, 0, 1})}}, Check::Twin, 100},  // 138.8 dB
     {"camera_axis_y", ml41, {{"camera", cam({20, 120, 20}, {20, 20, 20}, {0, 0, 1})}}, Check::Twin, 100},  // 138.8 dB
-    {"camera_axis_z", ml41, {{"camera", cam({20, 20, -100}, {20, 20, 20})}}, Check::Twin, 100},  // 140.2 dB
-    {"camera_grazing_face", ml41, {{"camera", cam({20, 40, 150}, {20, 40, 0})}}, Check::Twin, 100},  // 141.5 dB
-    {"fov_1e-3_deg", ml41, {{"camera", cam({75, 60, 110}, {20, 20, 20}, {0, 1, 0}, 1e-3)}}, Check::Twin, 100},  // 137.1 dB
+    {"camera_axis_z", ml41, {{"camera", cam({20, 20, -100}, {20, 20, 20})}}, Check::Twin, 100},            // 140.2 dB
+    {"camera_grazing_face", ml41, {{"camera", cam({20, 40, 150}, {20, 40, 0})}}, Check::Twin, 100},        // 141.5 dB
+    {"fov_1e-3_deg",
+     ml41,
+     {{"camera", cam({75, 60, 110}, {20, 20, 20}, {0, 1, 0}, 1e-3)}},
+     Check::Twin,
+     100},                                                                                                   // 137.1 dB
     {"fov_179_deg", ml41, {{"camera", cam({20, 20, 45}, {20, 20, 20}, {0, 1, 0}, 179)}}, Check::Twin, 100},  // 151.9 dB
     // s_k over six decades (differential sampling, perspective).
     {"s_k_1e-3", ml41, {{"render", {{"sampling", "differential"}, {"s_k", 1e-3}}}}, Check::Twin, 100},  // 131.1 dB
     {"s_k_1e-1", ml41, {{"render", {{"sampling", "differential"}, {"s_k", 1e-1}}}}, Check::Twin, 100},  // 137.8 dB
-    {"s_k_1", ml41, {{"render", {{"sampling", "differential"}, {"s_k", 1.0}}}}, Check::Twin, 100},  // 136.2 dB
-    {"s_k_1e2", ml41, {{"render", {{"sampling", "differential"}, {"s_k", 1e2}}}}, Check::Twin, 100},  // 127.3 dB
-    {"s_k_1e3", ml41, {{"render", {{"sampling", "differential"}, {"s_k", 1e3}}}}, Check::Twin, 100},  // 132.8 dB
+    {"s_k_1", ml41, {{"render", {{"sampling", "differential"}, {"s_k", 1.0}}}}, Check::Twin, 100},      // 136.2 dB
+    {"s_k_1e2", ml41, {{"render", {{"sampling", "differential"}, {"s_k", 1e2}}}}, Check::Twin, 100},    // 127.3 dB
+    {"s_k_1e3", ml41, {{"render", {{"sampling", "differential"}, {"s_k", 1e3}}}}, Check::Twin, 100},    // 132.8 dB
     // Steps: below the floor (refused), at the floor with peaks (the per-ray cap is hit and
     // reported), 100 voxels (about one sample per ray).
     {"step_1e-4_voxel", ml41, {{"render", {{"step", 1e-4}}}}, Check::Refused, 0, "below 0.001"},
     {"step_1e-3_voxel_peaks_cap", ml41, {{"tf", peak_tf(1e-3)}, {"render", peaks({{"step", 1e-3}})}}, Check::SampleCap},
     {"step_100_voxels", ml41, {{"render", {{"step", 100.0}}}}, Check::Twin, 100},  // 126.3 dB
-    {"virtual_samples_thin_volume", sized({24, 24, 2}),
-     {{"tf", ramp_tf(0.0, 1.0, 0.9)}, {"render", {{"virtual_samples", 7}, {"filter", "tricubic"}}}}, Check::Twin, 100},  // 132.4 dB
-    {"ray_texture_extremes", ml41, {{"render", peaks({{"ray_texture", extreme_ray_texture()}})}, {"tf", peak_tf(1e-3)}},
-     Check::Twin, 60},  // 72.3 dB
+    {"virtual_samples_thin_volume",
+     sized({24, 24, 2}),
+     {{"tf", ramp_tf(0.0, 1.0, 0.9)}, {"render", {{"virtual_samples", 7}, {"filter", "tricubic"}}}},
+     Check::Twin,
+     100},  // 132.4 dB
+    {"ray_texture_extremes",
+     ml41,
+     {{"render", peaks({{"ray_texture", extreme_ray_texture()}})}, {"tf", peak_tf(1e-3)}},
+     Check::Twin,
+     60},                                                                               // 72.3 dB
     {"image_1x1", ml41, {{"image", {{"width", 1}, {"height", 1}}}}, Check::Twin, 100},  // 135.1 dB
     // The largest image (4096^2 pixels) of a volume far away (few rays hit: the reference stays cheap).
-    {"image_max_4096x4096", ml41,
+    {"image_max_4096x4096",
+     ml41,
      {{"image", {{"width", 4096}, {"height", 4096}}}, {"camera", cam({20, 20, 2000}, {20, 20, 20}, {0, 1, 0}, 30)}},
-     Check::Twin, 100},  // 165.0 dB
-    {"image_over_max", ml41, {{"image", {{"width", 8192}, {"height", 8192}}}}, Check::Refused, 0, "more than 16777216 pixels"},
+     Check::Twin,
+     100},  // 165.0 dB
+    {"image_over_max",
+     ml41,
+     {{"image", {{"width", 8192}, {"height", 8192}}}},
+     Check::Refused,
+     0,
+     "more than 16777216 pixels"},
 };
 
 class Stiff : public ::testing::TestWithParam<StiffCase> {};
@@ -287,13 +337,12 @@ TEST_P(Stiff, BoundedFiniteAndRightOrRefused) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Cases, Stiff, ::testing::ValuesIn(kCases),
-                         [](const ::testing::TestParamInfo<StiffCase>& i) {
-                           std::string n = i.param.name;
-                           for (char& ch : n)
-                             if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
-                           return n;
-                         });
+INSTANTIATE_TEST_SUITE_P(Cases, Stiff, ::testing::ValuesIn(kCases), [](const ::testing::TestParamInfo<StiffCase>& i) {
+  std::string n = i.param.name;
+  for (char& ch : n)
+    if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+  return n;
+});
 
 // The CPU reference itself on cases with exact answers.
 
@@ -312,10 +361,17 @@ TEST(stiff_reference, LinearRampThroughAStepTfIsExact) {
   const json scene = {
       {"volume", "x"},
       {"image", {{"width", 8}, {"height", 8}}},
-      {"camera", {{"eye", {100, 8, 8}}, {"center", {16, 8, 8}}, {"up", {0, 0, 1}}, {"projection", "orthographic"}, {"height", 8}}},
-      {"tf", {{"points", {{0.0, 0, 0, 0, 0}, {0.5, 0, 0, 0, 0}, {0.5, 1.0, 0.5, 0.25, 0.1}, {1.0, 1.0, 0.5, 0.25, 0.1}}}}},
+      {"camera",
+       {{"eye", {100, 8, 8}},
+        {"center", {16, 8, 8}},
+        {"up", {0, 0, 1}},
+        {"projection", "orthographic"},
+        {"height", 8}}},
+      {"tf",
+       {{"points", {{0.0, 0, 0, 0, 0}, {0.5, 0, 0, 0, 0}, {0.5, 1.0, 0.5, 0.25, 0.1}, {1.0, 1.0, 0.5, 0.25, 0.1}}}}},
       {"render", {{"early_termination", 1.0}}}};
-  const auto c = reference::render_converged(v, resolve_scene(parse_scene(scene), v), reference::OpticalModel::Dvr, 1e-7);
+  const auto c =
+      reference::render_converged(v, resolve_scene(parse_scene(scene), v), reference::OpticalModel::Dvr, 1e-7);
   const double a = 1.0 - std::pow(0.9, 16.0);
   for (int y : {0, 3, 7})
     for (int x : {0, 4, 7}) {
@@ -333,8 +389,15 @@ TEST(stiff_reference, LinearRampThroughAStepTfIsExact) {
 TEST(stiff_reference, SphereWithDiracPeaksHasExactHitsAndColours) {
   const Volume v = generated(GeneratorKind::Sphere, {33, 33, 33});
   const double w = 1e-7;
-  const json tf = {{"points", {{0.0, 0, 0, 0, 0}, {0.5 - w, 0, 0, 0, 0}, {0.5, 1, 0, 0, 0.5}, {0.5 + w, 0, 0, 0, 0},
-                               {0.75 - w, 0, 0, 0, 0}, {0.75, 0, 0, 1, 0.5}, {0.75 + w, 0, 0, 0, 0}, {1.0, 0, 0, 0, 0}}}};
+  const json tf = {{"points",
+                    {{0.0, 0, 0, 0, 0},
+                     {0.5 - w, 0, 0, 0, 0},
+                     {0.5, 1, 0, 0, 0.5},
+                     {0.5 + w, 0, 0, 0, 0},
+                     {0.75 - w, 0, 0, 0, 0},
+                     {0.75, 0, 0, 1, 0.5},
+                     {0.75 + w, 0, 0, 0, 0},
+                     {1.0, 0, 0, 0, 0}}}};
   // Exact crossings along the central line y = z = 16, entering at x = 32: 0.5 at x = 24 and 8,
   // 0.75 at x = 20 and 12 (box-centred: +8, -8, +4, -4). Each lies on a voxel (a cell face): the
   // rising 0.75 was lost between two cells until the reference kept the sampled value there.
@@ -352,13 +415,18 @@ TEST(stiff_reference, SphereWithDiracPeaksHasExactHitsAndColours) {
     EXPECT_EQ(split.peaks[i].value, expect_v[i]) << i;
   }
   // The image: pixel p's ray runs along the grid line y = 16 + (p - 16) (pixels of 1 unit).
-  const json scene = {
-      {"volume", "x"},
-      {"image", {{"width", 33}, {"height", 33}}},
-      {"camera", {{"eye", {100, 16, 16}}, {"center", {16, 16, 16}}, {"up", {0, 0, 1}}, {"projection", "orthographic"}, {"height", 33}}},
-      {"tf", tf},
-      {"render", {{"classification", "peaks"}, {"early_termination", 1.0}}}};
-  const auto c = reference::render_converged(v, resolve_scene(parse_scene(scene), v), reference::OpticalModel::Peaks, 1e-6);
+  const json scene = {{"volume", "x"},
+                      {"image", {{"width", 33}, {"height", 33}}},
+                      {"camera",
+                       {{"eye", {100, 16, 16}},
+                        {"center", {16, 16, 16}},
+                        {"up", {0, 0, 1}},
+                        {"projection", "orthographic"},
+                        {"height", 33}}},
+                      {"tf", tf},
+                      {"render", {{"classification", "peaks"}, {"early_termination", 1.0}}}};
+  const auto c =
+      reference::render_converged(v, resolve_scene(parse_scene(scene), v), reference::OpticalModel::Peaks, 1e-6);
   for (int p = 0; p < 33; ++p) {
     const int d = std::abs(p - 16);
     const float* px = c.image.pixel(p, 16);

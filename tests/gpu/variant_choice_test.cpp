@@ -16,18 +16,26 @@ using json = nlohmann::json;
 
 struct VariantCase {
   const char* name;
-  json scene;                           // merged over a 48x48 view of Marschner-Lobb 41^3
-  std::vector<const char*> has, lacks;  // parts of the variant's name
+  json scene;                                         // merged over a 48x48 view of Marschner-Lobb 41^3
+  std::vector<const char*> has, lacks;                // parts of the variant's name
   std::function<void(render::VariantKey&)> put_back;  // the omitted code, forced in (or null)
 };
 
 void PrintTo(const VariantCase& c, std::ostream* os) { *os << c.name; }
 
 const json kSmooth = {{"points", {{0.0, 0.1, 0.2, 0.8, 0.02}, {0.5, 0.9, 0.6, 0.2, 0.2}, {1.0, 1.0, 1.0, 1.0, 0.4}}}};
-const json kSparse = {{"points", {{0.0, 0, 0, 0, 0}, {0.6, 0, 0, 0, 0}, {0.8, 0.9, 0.6, 0.2, 0.5}, {1.0, 1, 1, 1, 0.5}}}};
-const json kPeak = {{"points", {{0.0, 0.1, 0.2, 0.8, 0.02}, {0.5 - 1e-4, 0.1, 0.2, 0.8, 0.02}, {0.5, 1, 0.3, 0.1, 0.9},
-                                {0.5 + 1e-4, 0.1, 0.2, 0.8, 0.02}, {1.0, 0.1, 0.2, 0.8, 0.02}}}};
-const json kOrtho = {{"eye", {100, 60, 80}}, {"center", {20, 20, 20}}, {"up", {0, 1, 0}}, {"projection", "orthographic"},
+const json kSparse = {
+    {"points", {{0.0, 0, 0, 0, 0}, {0.6, 0, 0, 0, 0}, {0.8, 0.9, 0.6, 0.2, 0.5}, {1.0, 1, 1, 1, 0.5}}}};
+const json kPeak = {{"points",
+                     {{0.0, 0.1, 0.2, 0.8, 0.02},
+                      {0.5 - 1e-4, 0.1, 0.2, 0.8, 0.02},
+                      {0.5, 1, 0.3, 0.1, 0.9},
+                      {0.5 + 1e-4, 0.1, 0.2, 0.8, 0.02},
+                      {1.0, 0.1, 0.2, 0.8, 0.02}}}};
+const json kOrtho = {{"eye", {100, 60, 80}},
+                     {"center", {20, 20, 20}},
+                     {"up", {0, 1, 0}},
+                     {"projection", "orthographic"},
                      {"height", 60}};
 const json kTexture = {{"mapping", "view"},
                        {"size", {32, 32}},
@@ -35,16 +43,28 @@ const json kTexture = {{"mapping", "view"},
 
 const VariantCase kCases[] = {
     // A smooth TF seen whole: nothing to skip, no peaks, plain trilinear postclassification.
-    {"smooth_tf_dense", {{"tf", kSmooth}}, {"+trilinear"},
+    {"smooth_tf_dense",
+     {{"tf", kSmooth}},
+     {"+trilinear"},
      {"+peaks", "+skip", "+diff", "+shade", "+tricubic", "+vs", "+raytex", "+preint", "+adaptive"},
      [](render::VariantKey& k) { k.space_skipping = true; }},
     // Peak classification of a TF without peaks: the peak code is left out.
-    {"peaks_asked_tf_without_peaks", {{"tf", kSmooth}, {"render", {{"classification", "peaks"}}}}, {}, {"+peaks"},
+    {"peaks_asked_tf_without_peaks",
+     {{"tf", kSmooth}, {"render", {{"classification", "peaks"}}}},
+     {},
+     {"+peaks"},
      [](render::VariantKey& k) { k.peaks = true; }},
     // dvr_only never compiles peak finding, even with peaks in the TF.
-    {"peaks_dvr_only", {{"tf", kPeak}, {"render", {{"classification", "peaks"}, {"peak_mode", "dvr_only"}}}}, {}, {"+peaks"},
+    {"peaks_dvr_only",
+     {{"tf", kPeak}, {"render", {{"classification", "peaks"}, {"peak_mode", "dvr_only"}}}},
+     {},
+     {"+peaks"},
      nullptr},
-    {"peaks_used", {{"tf", kPeak}, {"render", {{"classification", "peaks"}}}}, {"+peaks:dvr+peaks"}, {"+preint"}, nullptr},
+    {"peaks_used",
+     {{"tf", kPeak}, {"render", {{"classification", "peaks"}}}},
+     {"+peaks:dvr+peaks"},
+     {"+preint"},
+     nullptr},
     {"preintegration", {{"tf", kSmooth}, {"render", {{"classification", "preint"}}}}, {"+preint"}, {"+peaks"}, nullptr},
     // A TF that hides most cells: the macrocell loop is in.
     {"sparse_tf_skips", {{"tf", kSparse}}, {"+skip"}, {"+peaks"}, nullptr},
@@ -52,9 +72,16 @@ const VariantCase kCases[] = {
     // Orthographic: "differential" is uniform at the footprint, with no differential code (that
     // code grows the step with the perspective footprint, which an orthographic view has not:
     // forced in, it renders a different lattice, so it has no put_back here).
-    {"ortho_differential", {{"tf", kSmooth}, {"camera", kOrtho}, {"render", {{"sampling", "differential"}}}}, {"+ortho"},
-     {"+diff"}, nullptr},
-    {"perspective_differential", {{"tf", kSmooth}, {"render", {{"sampling", "differential"}}}}, {"+diff"}, {"+ortho"}, nullptr},
+    {"ortho_differential",
+     {{"tf", kSmooth}, {"camera", kOrtho}, {"render", {{"sampling", "differential"}}}},
+     {"+ortho"},
+     {"+diff"},
+     nullptr},
+    {"perspective_differential",
+     {{"tf", kSmooth}, {"render", {{"sampling", "differential"}}}},
+     {"+diff"},
+     {"+ortho"},
+     nullptr},
     {"shading_on", {{"tf", kSmooth}, {"render", {{"shading", true}}}}, {"+shade"}, {}, nullptr},
     {"tricubic_on", {{"tf", kSmooth}, {"render", {{"filter", "tricubic"}}}}, {"+tricubic"}, {"+trilinear"}, nullptr},
     {"virtual_samples_3", {{"tf", kSmooth}, {"render", {{"virtual_samples", 3}}}}, {"+vs3"}, {}, nullptr},
@@ -74,7 +101,8 @@ TEST_P(Variants, HoldOnlyWhatTheSceneUsesAndOmissionsChangeNoPixel) {
   const ResolvedScene s = test::make_scene(*v, j);
   render::RenderStats st;
   const Image chosen = test::render_gpu(gv, s, render::RenderPath::Fragment, &st);
-  EXPECT_EQ(st.variant.rfind(test::cpu_backend() ? "cpu+" : "frag+", 0), 0u) << st.variant << ": the backend's name first";
+  EXPECT_EQ(st.variant.rfind(test::cpu_backend() ? "cpu+" : "frag+", 0), 0u)
+      << st.variant << ": the backend's name first";
   for (const char* part : c.has) EXPECT_NE(st.variant.find(part), std::string::npos) << st.variant << " lacks " << part;
   for (const char* part : c.lacks) EXPECT_EQ(st.variant.find(part), std::string::npos) << st.variant << " has " << part;
   if (!c.put_back) return;

@@ -23,7 +23,8 @@ TEST(VirtualSamples, GpuMatchesTheCpuTwin) {
       {"close vs7 tricubic", close_camera(), {{"virtual_samples", 7}, {"step", 1.0}, {"filter", "tricubic"}}},
       {"far vs3 peaks", far_camera(), {{"virtual_samples", 3}, {"step", 1.0}, {"classification", "peaks"}}},
       {"far vs3 preint", far_camera(), {{"virtual_samples", 3}, {"step", 1.0}, {"classification", "preint"}}},
-      {"far vs3 shading, no skipping", far_camera(),
+      {"far vs3 shading, no skipping",
+       far_camera(),
        {{"virtual_samples", 3}, {"step", 1.0}, {"shading", true}, {"space_skipping", false}}},
       {"close vs3 differential", close_camera(), {{"virtual_samples", 3}, {"sampling", "differential"}, {"s_k", 1}}},
   };
@@ -80,15 +81,16 @@ TEST(VirtualSamples, StepOnePlusThreeAgainstStepQuarter) {
 // ray (checked over all pixels of a differential close-up), and the ring follows from it.
 TEST(VirtualSamples, WindowReachBoundsEveryStep) {
   auto v = ml();  // 41^3, spacing 1, 8-voxel cells
-  for (const auto& [render, ring] : {std::pair{json{{"step", 2.0}}, 1}, std::pair{json{{"step", 8.0}}, 2},
-                                     std::pair{json{{"step", 12.0}}, 3}, std::pair{json{{"step", 13.0}}, -1},
-                                     std::pair{json{{"step", 1.0}, {"adaptive", true}}, 2},
-                                     std::pair{json{{"step", 2.0}, {"adaptive", true}}, -1}}) {
+  for (const auto& [render, ring] :
+       {std::pair{json{{"step", 2.0}}, 1}, std::pair{json{{"step", 8.0}}, 2}, std::pair{json{{"step", 12.0}}, 3},
+        std::pair{json{{"step", 13.0}}, -1}, std::pair{json{{"step", 1.0}, {"adaptive", true}}, 2},
+        std::pair{json{{"step", 2.0}, {"adaptive", true}}, -1}}) {
     const ResolvedScene s = test::make_scene(*v, scene_json(far_camera(), render));
     EXPECT_EQ(virtual_sample_ring(plan_sampling(s), s, 8), ring) << render.dump();
   }
   for (double sk : {0.5, 4.0, 64.0}) {
-    const ResolvedScene s = test::make_scene(*v, scene_json(close_camera(), {{"sampling", "differential"}, {"s_k", sk}}));
+    const ResolvedScene s =
+        test::make_scene(*v, scene_json(close_camera(), {{"sampling", "differential"}, {"s_k", sk}}));
     const SamplingPlan plan = plan_sampling(s);
     const double bound = longest_step(plan, s);
     const ViewSetup view = setup_view(s.camera, (s.box_min + s.box_max) * 0.5, s.scene.width, s.scene.height);
@@ -155,10 +157,11 @@ TEST(VirtualSamples, WideningKeepsTheCellsSkippingWouldStreak) {
   EXPECT_GT(st_wide.empty_cells, 0);                   // and skipping still skips
   const int visible = differing(dense, Image(dense.width, dense.height));
   const int streaks = differing(raw, dense), kept = differing(wide, dense);
-  std::printf("empty cells raw %lld widened %lld; pixels showing the slabs %d; off by > 2/255: raw %d, widened %d; "
-              "PSNR raw %.1f dB, widened %.1f dB\n",
-              (long long)st_raw.empty_cells, (long long)st_wide.empty_cells, visible, streaks, kept,
-              reference::compare(raw, dense).psnr, reference::compare(wide, dense).psnr);
+  std::printf(
+      "empty cells raw %lld widened %lld; pixels showing the slabs %d; off by > 2/255: raw %d, widened %d; "
+      "PSNR raw %.1f dB, widened %.1f dB\n",
+      (long long)st_raw.empty_cells, (long long)st_wide.empty_cells, visible, streaks, kept,
+      reference::compare(raw, dense).psnr, reference::compare(wide, dense).psnr);
   test::save_artifacts(raw, dense, "streaks");  // look at them: build/test-artifacts/
   EXPECT_GT(visible, 1000);
   EXPECT_GT(streaks, visible / 4);  // the 0.8 parts, seen through the overshoot only, are lost

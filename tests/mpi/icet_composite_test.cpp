@@ -23,7 +23,7 @@ std::vector<float> layer(int rank) {
   std::vector<float> px(size_t(kWidth) * kHeight * 4);
   for (size_t i = 0; i < px.size(); i += 4) {
     const float a = (i / 4) % 5 == size_t(rank) % 5 ? 0.0f : u(rng);  // some pixels empty
-    for (int c = 0; c < 3; ++c) px[i + size_t(c)] = u(rng) * a;      // premultiplied
+    for (int c = 0; c < 3; ++c) px[i + size_t(c)] = u(rng) * a;       // premultiplied
     px[i + 3] = a;
   }
   return px;

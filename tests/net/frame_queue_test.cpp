@@ -17,12 +17,8 @@ struct Entry {
   uint32_t frame_id = 0;
 };
 
-Entry frame(uint32_t id, bool video = false) {
-  return {true, video, id};
-}
-Entry text() {
-  return {false, false, 0};
-}
+Entry frame(uint32_t id, bool video = false) { return {true, video, id}; }
+Entry text() { return {false, false, 0}; }
 
 }  // namespace
 
@@ -47,8 +43,7 @@ TEST(FrameQueue, TheFrameBeingWrittenIsNeverReplaced) {
   const FramePlacement written = place_frame(q, 1, 5, false);
   EXPECT_FALSE(written.replace);
   EXPECT_FALSE(written.drop);
-  const FramePlacement late =
-      place_frame(q, 1, 3, false);  // older than the one written: still sent
+  const FramePlacement late = place_frame(q, 1, 3, false);  // older than the one written: still sent
   EXPECT_FALSE(late.replace);
   EXPECT_FALSE(late.drop);
 }

@@ -18,8 +18,10 @@ TEST(Protocol, ParsesEachMessageType) {
   EXPECT_EQ(h.viewport.pixel_width(), 200);
   EXPECT_EQ(h.token, "t");
   ASSERT_TRUE(h.state.camera);
-  EXPECT_TRUE(std::holds_alternative<CameraMsg>(parse_client_message(R"({"type":"camera","camera":{"eye":[0,0,5],"center":[0,0,0]}})")));
-  auto tf = std::get<TfMsg>(parse_client_message(R"({"type":"tf","version":7,"tf":{"points":[[0,0,0,0,0],[1,1,1,1,1]]}})"));
+  EXPECT_TRUE(std::holds_alternative<CameraMsg>(
+      parse_client_message(R"({"type":"camera","camera":{"eye":[0,0,5],"center":[0,0,0]}})")));
+  auto tf =
+      std::get<TfMsg>(parse_client_message(R"({"type":"tf","version":7,"tf":{"points":[[0,0,0,0,0],[1,1,1,1,1]]}})"));
   EXPECT_EQ(tf.version, 7u);
   EXPECT_EQ(std::get<AckMsg>(parse_client_message(R"({"type":"ack","frame":3})")).frame, 3u);
   EXPECT_TRUE(std::holds_alternative<PingMsg>(parse_client_message(R"({"type":"ping"})")));
@@ -199,8 +201,9 @@ TEST(SessionFlow, InteractiveBudgetKeepsTheFixedPartApart) {
 TEST(Protocol, QualityInteractiveMsIsANumberOfMilliseconds) {
   auto q = std::get<QualityMsg>(parse_client_message(R"({"type":"quality","interactive_ms":45})"));
   EXPECT_EQ(q.interactive_ms, 45.0);
-  for (const char* bad : {R"({"type":"quality","interactive_ms":-1})", R"({"type":"quality","interactive_ms":1001})",
-                          R"({"type":"quality","interactive_ms":"fast"})", R"({"type":"quality","interactive_ms":null})"}) {
+  for (const char* bad :
+       {R"({"type":"quality","interactive_ms":-1})", R"({"type":"quality","interactive_ms":1001})",
+        R"({"type":"quality","interactive_ms":"fast"})", R"({"type":"quality","interactive_ms":null})"}) {
     try {
       parse_client_message(bad);
       ADD_FAILURE() << bad << " was accepted";

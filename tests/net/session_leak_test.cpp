@@ -65,7 +65,8 @@ TEST(SessionLeaks, ThousandSessionsOpenAndCloseWithoutGl) {
       welcomed += welcome["type"] == "welcome";
       ws.write(asio::buffer(json{{"type", "camera"}, {"camera", welcome["state"]["camera"]}}.dump()));
       ws.write(asio::buffer(
-          json{{"type", "tf"}, {"version", 2 + i}, {"tf", {{"points", {{0, 0, 0, 0, 0}, {255, 1, 1, 1, 0.5}}}}}}.dump()));
+          json{{"type", "tf"}, {"version", 2 + i}, {"tf", {{"points", {{0, 0, 0, 0, 0}, {255, 1, 1, 1, 0.5}}}}}}
+              .dump()));
       ws.write(asio::buffer(json{{"type", "render"}, {"render", {{"shading", i % 2 == 0}}}}.dump()));
       ws.write(asio::buffer(json{{"type", "ping"}, {"id", std::to_string(i)}}.dump()));
       for (;;) {

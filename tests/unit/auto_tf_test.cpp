@@ -81,8 +81,8 @@ TEST(AutoTf, OpacityScalesWithHowMuchStructureARayCrosses) {
   const double a_dense = derive_transfer_function(in).eval(1024).a;
   in.ray_length = 2000;
   const double a_dense_long = derive_transfer_function(in).eval(1024).a;
-  EXPECT_GT(a_sparse, a_dense);       // little structure: more opaque, or nothing shows
-  EXPECT_GT(a_dense, a_dense_long);   // long rays: less opaque, or only the first voxels show
+  EXPECT_GT(a_sparse, a_dense);      // little structure: more opaque, or nothing shows
+  EXPECT_GT(a_dense, a_dense_long);  // long rays: less opaque, or only the first voxels show
 }
 
 TEST(AutoTf, PeakClassificationGetsAPeakAtTheSplit) {
@@ -136,7 +136,8 @@ TEST(FirstView, ResolvedSceneSaysWhereItsTfCameFrom) {
       resolve_scene(parse_scene_text(R"({"volume": "v", "tf": {"points": [[0,0,0,0,0],[1,1,1,1,1]]}})"), v);
   EXPECT_FALSE(given.tf_derived);
   // Peaks without a TF: the derived TF has a peak, so there is nothing to warn about.
-  const ResolvedScene peaks = resolve_scene(parse_scene_text(R"({"volume": "v", "render": {"classification": "peaks"}})"), v);
+  const ResolvedScene peaks =
+      resolve_scene(parse_scene_text(R"({"volume": "v", "render": {"classification": "peaks"}})"), v);
   EXPECT_EQ(find_peaks(peaks.tf).size(), 1u);
   EXPECT_TRUE(peaks.warnings.empty());
 }
@@ -163,6 +164,7 @@ TEST(FirstView, PeaksWithATfWithoutAPeakWarn) {
   EXPECT_TRUE(has_warning(out, "outside the data's range")) << (out.warnings.empty() ? "" : out.warnings[0]);
   // A peak inside the range: no warning.
   const std::string inside = R"("tf": {"points": [[0,0,0,0,0],[100,1,1,1,1],[120,0,0,0,0]]})";
-  EXPECT_TRUE(resolve_scene(parse_scene_text(R"({"volume": "v", )" + inside + R"(, "render": {"classification": "peaks"}})"), v)
-                  .warnings.empty());
+  EXPECT_TRUE(
+      resolve_scene(parse_scene_text(R"({"volume": "v", )" + inside + R"(, "render": {"classification": "peaks"}})"), v)
+          .warnings.empty());
 }

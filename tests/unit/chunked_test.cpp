@@ -94,7 +94,7 @@ TEST(Zarr, RegionsReadOnlyTheirChunks) {
   for (int64_t z = 0; z < 13; ++z)
     for (int64_t y = 0; y < 21; ++y)
       for (int64_t x = 0; x < 27; ++x)
-        wrong += part.stored(size_t((z * 21 + y) * 27 + x)) != src.stored(size_t(((z) * 30 + y + 5) * 40 + x + 3));
+        wrong += part.stored(size_t((z * 21 + y) * 27 + x)) != src.stored(size_t(((z)*30 + y + 5) * 40 + x + 3));
   EXPECT_EQ(wrong, 0);
   EXPECT_NE(refusal(tmp / "v.zarr").find("0/2/4/5"), std::string::npos) << "the whole read names the bad chunk";
 }
@@ -104,18 +104,27 @@ TEST(Zarr, TimeAndChannelAxesAndMissingChunks) {
   test::TempDir tmp;
   const fs::path root = tmp / "tc.zarr";
   fs::create_directories(root / "0");
-  write_json(root / ".zattrs",
-             {{"multiscales",
-               {{{"version", "0.4"},
-                 {"axes", {{{"name", "t"}, {"type", "time"}}, {{"name", "c"}, {"type", "channel"}},
-                           {{"name", "z"}, {"type", "space"}}, {{"name", "y"}, {"type", "space"}},
-                           {{"name", "x"}, {"type", "space"}}}},
-                 {"datasets", {{{"path", "0"}, {"coordinateTransformations",
-                                                {{{"type", "scale"}, {"scale", {1, 1, 0.5, 0.25, 0.125}}},
-                                                 {{"type", "translation"}, {"translation", {0, 0, 3, 2, 1}}}}}}}}}}}});
+  write_json(root / ".zattrs", {{"multiscales",
+                                 {{{"version", "0.4"},
+                                   {"axes",
+                                    {{{"name", "t"}, {"type", "time"}},
+                                     {{"name", "c"}, {"type", "channel"}},
+                                     {{"name", "z"}, {"type", "space"}},
+                                     {{"name", "y"}, {"type", "space"}},
+                                     {{"name", "x"}, {"type", "space"}}}},
+                                   {"datasets",
+                                    {{{"path", "0"},
+                                      {"coordinateTransformations",
+                                       {{{"type", "scale"}, {"scale", {1, 1, 0.5, 0.25, 0.125}}},
+                                        {{"type", "translation"}, {"translation", {0, 0, 3, 2, 1}}}}}}}}}}}});
   // shape t2 c3 z4 y3 x5; chunks t1 c2 z4 y3 x3: x splits in two chunks, c in two.
-  write_json(root / "0/.zarray", {{"zarr_format", 2}, {"shape", {2, 3, 4, 3, 5}}, {"chunks", {1, 2, 4, 3, 3}},
-                                  {"dtype", ">u2"}, {"compressor", nullptr}, {"fill_value", 7}, {"order", "C"},
+  write_json(root / "0/.zarray", {{"zarr_format", 2},
+                                  {"shape", {2, 3, 4, 3, 5}},
+                                  {"chunks", {1, 2, 4, 3, 3}},
+                                  {"dtype", ">u2"},
+                                  {"compressor", nullptr},
+                                  {"fill_value", 7},
+                                  {"order", "C"},
                                   {"filters", nullptr}});
   auto value = [](int t, int c, int z, int y, int x) { return uint16_t(1000 * t + 100 * c + 20 * z + 5 * y + x); };
   for (int t = 0; t < 2; ++t)
@@ -131,7 +140,8 @@ TEST(Zarr, TimeAndChannelAxesAndMissingChunks) {
                 bytes += char(v >> 8);
                 bytes += char(v & 0xff);
               }
-        test::write_file(root / ("0/" + std::to_string(t) + "." + std::to_string(cc) + ".0.0." + std::to_string(cx)), bytes);
+        test::write_file(root / ("0/" + std::to_string(t) + "." + std::to_string(cc) + ".0.0." + std::to_string(cx)),
+                         bytes);
       }
   for (auto [t, c] : {std::pair{0, 0}, {1, 2}, {1, 1}}) {
     LoadOptions o;
@@ -196,55 +206,100 @@ TEST(Zarr, Refusals) {
     fs::resize_file(f, n - 3);
   };
   EXPECT_NE(variant("trunc", [&](const fs::path& p) { cut(p / "0/1/1/1"); }).find("0/1/1/1"), std::string::npos);
-  EXPECT_NE(variant("long", [&](const fs::path& p) {
-              const auto full = encode_chunk(compressor_by_name("zstd"), std::vector<uint8_t>(65, 1).data(), 65, 1);
-              test::write_file(p / "0/0/0/0", bytes_str(full));
-            }).find("more than its 64 bytes"), std::string::npos);
-  EXPECT_NE(variant("short", [&](const fs::path& p) {
-              const auto part = encode_chunk(compressor_by_name("zstd"), std::vector<uint8_t>(63, 1).data(), 63, 1);
-              test::write_file(p / "0/0/0/0", bytes_str(part));
-            }).find("truncated chunk: 63 of 64"), std::string::npos);
+  EXPECT_NE(variant("long",
+                    [&](const fs::path& p) {
+                      const auto full =
+                          encode_chunk(compressor_by_name("zstd"), std::vector<uint8_t>(65, 1).data(), 65, 1);
+                      test::write_file(p / "0/0/0/0", bytes_str(full));
+                    })
+                .find("more than its 64 bytes"),
+            std::string::npos);
+  EXPECT_NE(variant("short",
+                    [&](const fs::path& p) {
+                      const auto part =
+                          encode_chunk(compressor_by_name("zstd"), std::vector<uint8_t>(63, 1).data(), 63, 1);
+                      test::write_file(p / "0/0/0/0", bytes_str(part));
+                    })
+                .find("truncated chunk: 63 of 64"),
+            std::string::npos);
   EXPECT_NE(variant("dtype", [&](const fs::path& p) { edit_zarray(p, [](json& j) { j["dtype"] = "<u8"; }); })
-                .find("dtype '<u8' is not supported"), std::string::npos);
+                .find("dtype '<u8' is not supported"),
+            std::string::npos);
   EXPECT_NE(variant("forder", [&](const fs::path& p) { edit_zarray(p, [](json& j) { j["order"] = "F"; }); })
-                .find("order must be \"C\""), std::string::npos);
-  EXPECT_NE(variant("filters", [&](const fs::path& p) {
-              edit_zarray(p, [](json& j) { j["filters"] = json::array({{{"id", "delta"}}}); });
-            }).find("filters are not supported"), std::string::npos);
-  EXPECT_NE(variant("codec", [&](const fs::path& p) {
-              edit_zarray(p, [](json& j) { j["compressor"] = {{"id", "lzma"}}; });
-            }).find("compressor 'lzma' is not supported"), std::string::npos);
-  EXPECT_NE(variant("huge", [&](const fs::path& p) {
-              edit_zarray(p, [](json& j) { j["chunks"] = {int64_t(1) << 40, int64_t(1) << 40, 4}; });
-            }).find("a chunk is larger than"), std::string::npos);
+                .find("order must be \"C\""),
+            std::string::npos);
+  EXPECT_NE(variant("filters",
+                    [&](const fs::path& p) {
+                      edit_zarray(p, [](json& j) { j["filters"] = json::array({{{"id", "delta"}}}); });
+                    })
+                .find("filters are not supported"),
+            std::string::npos);
+  EXPECT_NE(
+      variant("codec", [&](const fs::path& p) { edit_zarray(p, [](json& j) {
+                                                  j["compressor"] = {{"id", "lzma"}};
+                                                }); })
+          .find("compressor 'lzma' is not supported"),
+      std::string::npos);
+  EXPECT_NE(variant("huge",
+                    [&](const fs::path& p) {
+                      edit_zarray(p, [](json& j) { j["chunks"] = {int64_t(1) << 40, int64_t(1) << 40, 4}; });
+                    })
+                .find("a chunk is larger than"),
+            std::string::npos);
   EXPECT_NE(variant("v3", [&](const fs::path& p) { edit_zarray(p, [](json& j) { j["zarr_format"] = 3; }); })
-                .find("zarr_format must be 2"), std::string::npos);
+                .find("zarr_format must be 2"),
+            std::string::npos);
   EXPECT_NE(variant("fill", [&](const fs::path& p) { edit_zarray(p, [](json& j) { j["fill_value"] = 300; }); })
-                .find("fill_value 300 is not a uint8 value"), std::string::npos);
-  EXPECT_NE(variant("escape", [&](const fs::path& p) {
-              edit_zattrs(p, [](json& j) { j["multiscales"][0]["datasets"][0]["path"] = "../ok.zarr/0"; });
-            }).find("must be a relative path inside"), std::string::npos);
-  EXPECT_NE(variant("absolute", [&](const fs::path& p) {
-              edit_zattrs(p, [](json& j) { j["multiscales"][0]["datasets"][0]["path"] = "/etc"; });
-            }).find("must be a relative path inside"), std::string::npos);
-  EXPECT_NE(variant("axes2d", [&](const fs::path& p) {
-              edit_zattrs(p, [](json& j) { j["multiscales"][0]["axes"].erase(0); });
-            }).find("2 axes for a 3-dimensional array"), std::string::npos);
-  EXPECT_NE(variant("xyz", [&](const fs::path& p) {
-              edit_zattrs(p, [](json& j) { std::swap(j["multiscales"][0]["axes"][0], j["multiscales"][0]["axes"][2]); });
-            }).find("axes must be [t,] [c,] z, y, x"), std::string::npos);
+                .find("fill_value 300 is not a uint8 value"),
+            std::string::npos);
+  EXPECT_NE(variant("escape",
+                    [&](const fs::path& p) {
+                      edit_zattrs(p, [](json& j) { j["multiscales"][0]["datasets"][0]["path"] = "../ok.zarr/0"; });
+                    })
+                .find("must be a relative path inside"),
+            std::string::npos);
+  EXPECT_NE(variant("absolute",
+                    [&](const fs::path& p) {
+                      edit_zattrs(p, [](json& j) { j["multiscales"][0]["datasets"][0]["path"] = "/etc"; });
+                    })
+                .find("must be a relative path inside"),
+            std::string::npos);
+  EXPECT_NE(variant("axes2d",
+                    [&](const fs::path& p) { edit_zattrs(p, [](json& j) { j["multiscales"][0]["axes"].erase(0); }); })
+                .find("2 axes for a 3-dimensional array"),
+            std::string::npos);
+  EXPECT_NE(variant("xyz",
+                    [&](const fs::path& p) {
+                      edit_zattrs(p, [](json& j) {
+                        std::swap(j["multiscales"][0]["axes"][0], j["multiscales"][0]["axes"][2]);
+                      });
+                    })
+                .find("axes must be [t,] [c,] z, y, x"),
+            std::string::npos);
   EXPECT_NE(variant("nojson", [&](const fs::path& p) { test::write_file(p / ".zattrs", "{not json"); })
-                .find("not valid JSON"), std::string::npos);
+                .find("not valid JSON"),
+            std::string::npos);
   EXPECT_NE(variant("jsontype", [&](const fs::path& p) { edit_zarray(p, [](json& j) { j["zarr_format"] = "2"; }); })
-                .find("metadata: "), std::string::npos);
-  EXPECT_NE(variant("tiny", [&](const fs::path& p) {
-              edit_zarray(p, [](json& j) { j["shape"] = {1600, 1600, 1600}; j["chunks"] = {1, 1, 1}; });
-            }).find("chunks this small are refused"), std::string::npos);
-  EXPECT_NE(variant("origin", [&](const fs::path& p) {
-              edit_zattrs(p, [](json& j) {
-                j["multiscales"][0]["coordinateTransformations"] = {{{"type", "scale"}, {"scale", {1e308, 1e308, 1e308}}}};  // times 2: inf
-              });
-            }).find("finite"), std::string::npos);
+                .find("metadata: "),
+            std::string::npos);
+  EXPECT_NE(variant("tiny",
+                    [&](const fs::path& p) {
+                      edit_zarray(p, [](json& j) {
+                        j["shape"] = {1600, 1600, 1600};
+                        j["chunks"] = {1, 1, 1};
+                      });
+                    })
+                .find("chunks this small are refused"),
+            std::string::npos);
+  EXPECT_NE(variant("origin",
+                    [&](const fs::path& p) {
+                      edit_zattrs(p, [](json& j) {
+                        j["multiscales"][0]["coordinateTransformations"] = {
+                            {{"type", "scale"}, {"scale", {1e308, 1e308, 1e308}}}};  // times 2: inf
+                      });
+                    })
+                .find("finite"),
+            std::string::npos);
   LoadOptions small;
   small.max_voxels = 100;
   EXPECT_NE(refusal(tmp / "ok.zarr", small).find("exceeds the limit"), std::string::npos);
@@ -254,9 +309,15 @@ TEST(Zarr, BareArrayWithDotKeys) {
   test::TempDir tmp;
   const fs::path root = tmp / "bare.zarr";
   fs::create_directories(root);
-  write_json(root / ".zarray", {{"zarr_format", 2}, {"shape", {2, 2, 3}}, {"chunks", {2, 2, 3}}, {"dtype", "<f4"},
-                                {"compressor", {{"id", "zlib"}, {"level", 1}}}, {"fill_value", "NaN"}, {"order", "C"},
-                                {"filters", nullptr}, {"dimension_separator", "."}});
+  write_json(root / ".zarray", {{"zarr_format", 2},
+                                {"shape", {2, 2, 3}},
+                                {"chunks", {2, 2, 3}},
+                                {"dtype", "<f4"},
+                                {"compressor", {{"id", "zlib"}, {"level", 1}}},
+                                {"fill_value", "NaN"},
+                                {"order", "C"},
+                                {"filters", nullptr},
+                                {"dimension_separator", "."}});
   std::vector<float> v(12);
   for (int i = 0; i < 12; ++i) v[size_t(i)] = 0.5f * float(i);
   const auto z = encode_chunk(compressor_by_name("zlib"), reinterpret_cast<const uint8_t*>(v.data()), 48, 4);

@@ -69,7 +69,9 @@ TEST(CpuSampler, TrilinearIsGlClampToEdge) {
   auto v = blobs(SourceType::U16, {5, 4, 3});
   cpu::CpuVolume cv(v);
   const cpu::VoxelGrid g = cv.grid(Filter::Trilinear);
-  auto at = [&](int i, int j, int k) { return float(v->value(i, j, k) - v->min_value) / float(v->max_value - v->min_value); };
+  auto at = [&](int i, int j, int k) {
+    return float(v->value(i, j, k) - v->min_value) / float(v->max_value - v->min_value);
+  };
   // Voxel centres are exact; beyond the box the edge voxel repeats.
   EXPECT_NEAR(cpu::sample_field(g, {2, 1, 1}), at(2, 1, 1), 1e-6);
   EXPECT_NEAR(cpu::sample_field(g, {-3, -1, -0.5f}), at(0, 0, 0), 1e-6);
@@ -146,8 +148,8 @@ TEST(CpuSampler, FloatVoxelsFarFromZeroAreHeldInTfCoordinates) {
   EXPECT_LT(worst, 2e-6) << "the copy keeps the TF coordinate to float precision";
   const double span = v->max_value - v->min_value;
   EXPECT_FALSE(cpu::CpuVolume::floats_in_place(*v, 1.0 / span, -v->min_value / span));
-  const cpu::VoxelGrid in_place = cpu::make_voxel_grid(*v, v->data(), VoxelType::F32, float(1.0 / span),
-                                                       float(-v->min_value / span), false);
+  const cpu::VoxelGrid in_place =
+      cpu::make_voxel_grid(*v, v->data(), VoxelType::F32, float(1.0 / span), float(-v->min_value / span), false);
   double in_place_worst = 0.0;
   for (int k = 0; k < 15; ++k)
     in_place_worst = std::max(in_place_worst, std::abs(cpu::sample_field(in_place, {3.3f, 7.6f, k + 0.45f}) -

@@ -20,8 +20,14 @@ namespace {
 // Narrow: two thin peaks, zero elsewhere. Wide: opacity almost everywhere.
 std::vector<TransferFunction> test_tfs() {
   const std::vector<std::vector<TfPoint>> points = {
-      {{0, 0, 0, 1, 0}, {0.49, 0, 0, 1, 0}, {0.5, 1, 0.8, 0.3, 0.8}, {0.51, 0, 0, 1, 0}, {0.8, 0, 0, 0, 0},
-       {0.81, 0, 1, 0, 0.5}, {0.82, 0, 0, 0, 0}, {1, 0, 0, 0, 0}},
+      {{0, 0, 0, 1, 0},
+       {0.49, 0, 0, 1, 0},
+       {0.5, 1, 0.8, 0.3, 0.8},
+       {0.51, 0, 0, 1, 0},
+       {0.8, 0, 0, 0, 0},
+       {0.81, 0, 1, 0, 0.5},
+       {0.82, 0, 0, 0, 0},
+       {1, 0, 0, 0, 0}},
       {{0, 0, 0, 0, 0}, {0.1, 1, 0, 0, 0.2}, {0.6, 0, 1, 0, 0.9}, {1, 0, 0, 1, 0.4}}};
   std::vector<TransferFunction> tfs(points.size());
   for (size_t k = 0; k < points.size(); ++k) {

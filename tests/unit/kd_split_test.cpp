@@ -34,8 +34,9 @@ TEST(KdSplit, BricksTileTheVolumeOnceForAnyRankCount) {
     for (int64_t z = 0; z + 1 < dims[2]; ++z)
       for (int64_t y = 0; y + 1 < dims[1]; ++y)
         for (int64_t x = 0; x + 1 < dims[0]; ++x) {
-          const int owners = int(std::count_if(s.bricks.begin(), s.bricks.end(),
-                                               [&](const Brick& b) { return owns_cell(b, {x, y, z}); }));
+          const int owners = int(std::count_if(s.bricks.begin(), s.bricks.end(), [&](const Brick& b) {
+            return owns_cell(b, {x, y, z});
+          }));
           ASSERT_EQ(owners, 1) << "cell " << x << "," << y << "," << z << " with " << ranks << " ranks";
         }
     for (int r = 0; r < ranks; ++r) EXPECT_EQ(s.bricks[r].rank, r);
@@ -60,7 +61,8 @@ TEST(KdSplit, CountedBoxesTileTheVoxelsOnceForAnyRankCount) {
           for (int64_t x = lo[0]; x < hi[0]; ++x)
             ++counted[size_t((x + b.read_lo[0]) + dims[0] * ((y + b.read_lo[1]) + dims[1] * (z + b.read_lo[2])))];
     }
-    for (size_t i = 0; i < counted.size(); ++i) ASSERT_EQ(counted[i], 1) << "voxel " << i << " with " << ranks << " ranks";
+    for (size_t i = 0; i < counted.size(); ++i)
+      ASSERT_EQ(counted[i], 1) << "voxel " << i << " with " << ranks << " ranks";
   }
 }
 
@@ -75,11 +77,14 @@ TEST(KdSplit, BrickHistogramsSumToTheWholeVolumesHistogram) {
     peakcast::Volume v(h);
     std::uniform_real_distribution<float> pick(-3.f, 7.f);
     for (size_t i = 0; i < size_t(v.voxel_count()); ++i) {
-      if (t == peakcast::SourceType::F32) reinterpret_cast<float*>(v.data())[i] = pick(rng);
-      else reinterpret_cast<uint16_t*>(v.data())[i] = uint16_t(30000 + 1000 * pick(rng));
+      if (t == peakcast::SourceType::F32)
+        reinterpret_cast<float*>(v.data())[i] = pick(rng);
+      else
+        reinterpret_cast<uint16_t*>(v.data())[i] = uint16_t(30000 + 1000 * pick(rng));
     }
     v.finalize_statistics();
-    EXPECT_EQ(v.box_histogram({0, 0, 0}, v.dims(), v.min_value - v.value_offset, v.max_value - v.value_offset), v.histogram);
+    EXPECT_EQ(v.box_histogram({0, 0, 0}, v.dims(), v.min_value - v.value_offset, v.max_value - v.value_offset),
+              v.histogram);
     for (int ranks = 2; ranks <= 5; ++ranks) {
       const KdSplit s = kd_split(v.dims(), ranks, 3);
       std::vector<uint64_t> sum(v.histogram.size(), 0);
@@ -134,9 +139,12 @@ TEST(KdSplit, BrickMacrocellSharesAddUpToTheWholeVolumesGrid) {
     peakcast::Volume v(h);
     std::uniform_real_distribution<float> pick(-3.f, 7.f);
     for (size_t i = 0; i < size_t(v.voxel_count()); ++i) {
-      if (t == peakcast::SourceType::F32) reinterpret_cast<float*>(v.data())[i] = pick(rng);
-      else if (t == peakcast::SourceType::U8) v.data()[i] = uint8_t(20 * pick(rng) + 60);
-      else reinterpret_cast<uint16_t*>(v.data())[i] = uint16_t(30000 + 1000 * pick(rng));
+      if (t == peakcast::SourceType::F32)
+        reinterpret_cast<float*>(v.data())[i] = pick(rng);
+      else if (t == peakcast::SourceType::U8)
+        v.data()[i] = uint8_t(20 * pick(rng) + 60);
+      else
+        reinterpret_cast<uint16_t*>(v.data())[i] = uint16_t(30000 + 1000 * pick(rng));
     }
     v.finalize_statistics();
     for (peakcast::FilterSupport support : {peakcast::FilterSupport::Trilinear, peakcast::FilterSupport::Tricubic}) {
@@ -149,8 +157,10 @@ TEST(KdSplit, BrickMacrocellSharesAddUpToTheWholeVolumesGrid) {
           const peakcast::Volume brick = crop(v, b, t);
           const auto [lo, hi] = counted_box(b, dims);
           const peakcast::MacrocellShare part = peakcast::macrocell_share(brick, dims, lo, hi, support);
-          if (b.rank == 0) sum = part;
-          else peakcast::add_share(sum, part);
+          if (b.rank == 0)
+            sum = part;
+          else
+            peakcast::add_share(sum, part);
           peakcast::add_macrocell_share_at(direct, brick, brick.region_lo, dims, lo, hi, support);
           peakcast::add_macrocell_shares_at(both[0], both[1], brick, brick.region_lo, dims, lo, hi);
         }
@@ -181,12 +191,15 @@ TEST(KdSplit, BrickMacrocellSharesAddUpToTheWholeVolumesGrid) {
     auto [lo, hi] = counted_box(two.bricks[0], dims);
     Index3 past = hi;
     past[0] = brick.dims()[0] + 1;
-    EXPECT_THROW(peakcast::macrocell_share(brick, dims, lo, past, peakcast::FilterSupport::Trilinear), std::invalid_argument);
-    const peakcast::MacrocellShare a = peakcast::macrocell_share(brick, dims, lo, hi, peakcast::FilterSupport::Trilinear);
+    EXPECT_THROW(peakcast::macrocell_share(brick, dims, lo, past, peakcast::FilterSupport::Trilinear),
+                 std::invalid_argument);
+    const peakcast::MacrocellShare a =
+        peakcast::macrocell_share(brick, dims, lo, hi, peakcast::FilterSupport::Trilinear);
     peakcast::MacrocellShare b = peakcast::macrocell_share(brick, dims, lo, hi, peakcast::FilterSupport::Tricubic);
     EXPECT_THROW(peakcast::add_share(b, a), std::invalid_argument);
-    EXPECT_THROW(peakcast::add_macrocell_share_at(b, brick, brick.region_lo, dims, lo, hi, peakcast::FilterSupport::Trilinear),
-                 std::invalid_argument);
+    EXPECT_THROW(
+        peakcast::add_macrocell_share_at(b, brick, brick.region_lo, dims, lo, hi, peakcast::FilterSupport::Trilinear),
+        std::invalid_argument);
     EXPECT_THROW(peakcast::grid_from_share(a), std::invalid_argument);  // the other brick's cells are missing
   }
 }
@@ -234,13 +247,13 @@ TEST(KdSplit, VisibilityOrderIsTheOrderRaysMeetTheBricks) {
     for (int trial = 0; trial < 40; ++trial) {
       const bool ortho = trial % 2 == 1;
       const glm::dvec3 eye(u(rng), u(rng), u(rng));
-      const glm::dvec3 dir = glm::normalize(glm::dvec3(in(rng) - 0.5, in(rng) - 0.5, in(rng) - 0.5));
+      const glm::dvec3 dir = glm::normalize(glm::dvec3(in(rng)-0.5, in(rng)-0.5, in(rng)-0.5));
       const std::vector<int> order = visibility_order(s, eye, dir, ortho);
       ASSERT_EQ(int(order.size()), ranks);
       std::vector<int> position(static_cast<size_t>(ranks), 0);
       for (int i = 0; i < ranks; ++i) position[size_t(order[size_t(i)])] = i;
       for (int ray = 0; ray < 30; ++ray) {
-        const glm::dvec3 target(in(rng) * 29, in(rng) * 19, in(rng) * 24);
+        const glm::dvec3 target(in(rng)*29, in(rng)*19, in(rng)*24);
         const glm::dvec3 origin = ortho ? target - dir * 100.0 : eye;
         const glm::dvec3 d = ortho ? dir : glm::normalize(target - eye);
         int last = -1;

@@ -86,8 +86,10 @@ TEST(Macrocells, MinMaxEqualBruteForceForEveryVoxelType) {
     Volume v(h);
     std::uniform_int_distribution<int> u(0, t == SourceType::U8 || t == SourceType::I8 ? 255 : 65535);
     for (int64_t i = 0; i < v.voxel_count(); ++i) {
-      if (v.type() == VoxelType::U8) v.data()[i] = uint8_t(u(rng));
-      else reinterpret_cast<uint16_t*>(v.data())[i] = uint16_t(u(rng));
+      if (v.type() == VoxelType::U8)
+        v.data()[i] = uint8_t(u(rng));
+      else
+        reinterpret_cast<uint16_t*>(v.data())[i] = uint16_t(u(rng));
     }
     v.finalize_statistics();
     for (auto support : {FilterSupport::Trilinear, FilterSupport::Tricubic}) {
@@ -161,7 +163,8 @@ TEST(Occupancy, CatmullRomOvershootWidensTheCellsRange) {
   TransferFunction dark;
   dark.points = {{0.0, 0, 0, 0, 0}, {1.0, 0, 0, 0, 0}};
   EXPECT_EQ(classify_cells(g, dark, 0.0, 1.0, {0.88}).occupied[0], 0);
-  EXPECT_EQ(classify_cells(g, dark, 0.0, 1.0, {0.88}, TransferFunction::kTableSize, kCatmullRomOvershoot).occupied[0], 1);
+  EXPECT_EQ(classify_cells(g, dark, 0.0, 1.0, {0.88}, TransferFunction::kTableSize, kCatmullRomOvershoot).occupied[0],
+            1);
 }
 
 // A virtual sample's window reaches neighbouring cells: dilate_ranges joins each cell's range
@@ -218,7 +221,8 @@ TEST(Occupancy, EmptySpaceDistanceIsTheChebyshevDistanceToTheNearestOccupiedCell
                 for (int64_t a = 0; a < n[0]; ++a)
                   if (occ[size_t(a + n[0] * (b + n[1] * c))])
                     want = std::min(want, std::max({std::abs(a - x), std::abs(b - y), std::abs(c - z)}));
-            ASSERT_EQ(d[size_t(x + n[0] * (y + n[1] * z))], want) << x << " " << y << " " << z << " density " << density;
+            ASSERT_EQ(d[size_t(x + n[0] * (y + n[1] * z))], want)
+                << x << " " << y << " " << z << " density " << density;
           }
     }
   EXPECT_THROW(empty_space_distance({2, 2, 2}, std::vector<uint8_t>(7)), std::invalid_argument);

@@ -49,11 +49,12 @@ TEST(NrrdPattern, AcceptsIntegerConversionsWithFlagsAndWidth) {
 }
 
 TEST(NrrdPattern, RefusesAnythingButOneIntegerConversion) {
-  for (std::string spec : {"q.%s 1 9 1", "q.%n 1 9 1", "q.%x 1 9 1", "q.%d%d 1 9 1", "q.%ld 1 9 1", "q.%.3d 1 9 1",
-                           "q.%*d 1 9 1", "q.%99d 1 9 1", "q.%p 1 9 1", "q.% 1 9 1", "q. 1 9 1", "q.%d% 1 9 1",
-                           "q.%lld 1 9 1", "q.%1$d 1 9 1"}) {
+  for (std::string spec :
+       {"q.%s 1 9 1", "q.%n 1 9 1", "q.%x 1 9 1", "q.%d%d 1 9 1", "q.%ld 1 9 1", "q.%.3d 1 9 1", "q.%*d 1 9 1",
+        "q.%99d 1 9 1", "q.%p 1 9 1", "q.% 1 9 1", "q. 1 9 1", "q.%d% 1 9 1", "q.%lld 1 9 1", "q.%1$d 1 9 1"}) {
     test::TempDir d;
-    test::write_file(d / "h.nhdr", "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 9\nencoding: raw\ndata file: " + spec + "\n");
+    test::write_file(d / "h.nhdr",
+                     "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 9\nencoding: raw\ndata file: " + spec + "\n");
     const std::string why = refusal(d / "h.nhdr");
     EXPECT_NE(why.find("data file pattern"), std::string::npos) << spec << ": " << why;
     EXPECT_NE(why.find("h.nhdr"), std::string::npos) << "names the file: " << why;

@@ -20,9 +20,17 @@ TransferFunction tf_of(std::vector<TfPoint> pts) {
 TEST(FindPeaks, PointsPlateausStepsAndEnds) {
   // A single-point peak, a plateau of three points (counts once, at its middle), a step pair
   // rising into a plateau, and a maximum at the TF's end (not a peak: constant beyond).
-  auto tf = tf_of({{0, 0, 0, 0, 0},   {10, 1, 0, 0, 0.9}, {11, 0, 0, 0, 0.1},
-                   {20, 0, 1, 0, 0.5}, {22, 0, 1, 0, 0.5}, {24, 0, 1, 0, 0.5}, {30, 0, 0, 0, 0.0},
-                   {40, 0, 0, 0, 0.1}, {40, 0, 0, 1, 0.7}, {44, 0, 0, 1, 0.7}, {44, 0, 0, 0, 0.0},
+  auto tf = tf_of({{0, 0, 0, 0, 0},
+                   {10, 1, 0, 0, 0.9},
+                   {11, 0, 0, 0, 0.1},
+                   {20, 0, 1, 0, 0.5},
+                   {22, 0, 1, 0, 0.5},
+                   {24, 0, 1, 0, 0.5},
+                   {30, 0, 0, 0, 0.0},
+                   {40, 0, 0, 0, 0.1},
+                   {40, 0, 0, 1, 0.7},
+                   {44, 0, 0, 1, 0.7},
+                   {44, 0, 0, 0, 0.0},
                    {60, 1, 1, 1, 1.0}});
   auto p = find_peaks(tf);
   ASSERT_EQ(p.size(), 3u);
@@ -68,8 +76,8 @@ TEST(PeakTable, CompleteOrderedAndNothingInvented) {
       PeakTable t = build_peak_table(peaks, lo, hi, bins);
       for (int q = 0; q < 400; ++q) {
         double f0 = lo + (hi - lo) * u(rng), f1 = lo + (hi - lo) * u(rng);
-        if (q % 7 == 0) f1 = f0 + (f1 - f0) * 0.01;                     // short segments
-        if (q % 11 == 0) f0 = lo + (hi - lo) * std::floor(u(rng) * bins) / bins;  // on a bin edge
+        if (q % 7 == 0) f1 = f0 + (f1 - f0) * 0.01;                                     // short segments
+        if (q % 11 == 0) f0 = lo + (hi - lo) * std::floor(u(rng) * bins) / bins;        // on a bin edge
         if (q % 13 == 0 && !peaks.empty()) f1 = peaks[size_t(q) % peaks.size()].value;  // ends on a peak
         for (int maxp : {1, 4}) {
           const auto got = peaks_crossed(t, f0, f1, maxp);
@@ -87,17 +95,23 @@ TEST(PeakTable, CompleteOrderedAndNothingInvented) {
 }
 
 TEST(PeakTable, AscendingDescendingAndEqualSamples) {
-  auto tf = tf_of({{0, 0, 0, 0, 0}, {0.3, 1, 0, 0, 1}, {0.31, 0, 0, 0, 0}, {0.5, 0, 1, 0, 1}, {0.52, 0, 0, 0, 0},
-                   {0.7, 0, 0, 1, 1}, {0.71, 0, 0, 0, 0}, {1, 0, 0, 0, 0}});
+  auto tf = tf_of({{0, 0, 0, 0, 0},
+                   {0.3, 1, 0, 0, 1},
+                   {0.31, 0, 0, 0, 0},
+                   {0.5, 0, 1, 0, 1},
+                   {0.52, 0, 0, 0, 0},
+                   {0.7, 0, 0, 1, 1},
+                   {0.71, 0, 0, 0, 0},
+                   {1, 0, 0, 0, 0}});
   auto peaks = find_peaks(tf);
   ASSERT_EQ(peaks.size(), 3u);
   PeakTable t = build_peak_table(peaks, 0, 1, 128);
   EXPECT_EQ(peaks_crossed(t, 0.1, 0.9), (std::vector<double>{0.3, 0.5, 0.7}));
   EXPECT_EQ(peaks_crossed(t, 0.9, 0.1), (std::vector<double>{0.7, 0.5, 0.3}));
   EXPECT_EQ(peaks_crossed(t, 0.9, 0.1, 1), (std::vector<double>{0.7}));
-  EXPECT_TRUE(peaks_crossed(t, 0.5, 0.5).empty());       // both samples at the isovalue: no crossing
+  EXPECT_TRUE(peaks_crossed(t, 0.5, 0.5).empty());                     // both samples at the isovalue: no crossing
   EXPECT_EQ(peaks_crossed(t, 0.45, 0.5), (std::vector<double>{0.5}));  // (f0, f1]: ends on it
-  EXPECT_TRUE(peaks_crossed(t, 0.5, 0.55).empty());      // starts on it: counted by the previous segment
+  EXPECT_TRUE(peaks_crossed(t, 0.5, 0.55).empty());                    // starts on it: counted by the previous segment
   // Falling: a sample exactly at v is still "at or above" v, so the crossing belongs to the next
   // segment, which starts there: each crossing is found exactly once.
   EXPECT_TRUE(peaks_crossed(t, 0.55, 0.5).empty());

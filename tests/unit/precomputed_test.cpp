@@ -22,10 +22,16 @@ namespace {
 // A precomputed image: 10x7x5 uint16, 2 channels, chunks 4x4x4, voxel_offset (100, 0, 50).
 fs::path make_precomputed(const fs::path& root, bool gzip_files) {
   fs::create_directories(root / "1_1_2");
-  write_json(root / "info", {{"type", "image"}, {"data_type", "uint16"}, {"num_channels", 2},
-                             {"scales", {{{"key", "1_1_2"}, {"size", {10, 7, 5}}, {"resolution", {1, 1, 2}},
-                                          {"voxel_offset", {100, 0, 50}}, {"chunk_sizes", {{4, 4, 4}}},
-                                          {"encoding", "raw"}}}}});
+  write_json(root / "info", {{"type", "image"},
+                             {"data_type", "uint16"},
+                             {"num_channels", 2},
+                             {"scales",
+                              {{{"key", "1_1_2"},
+                                {"size", {10, 7, 5}},
+                                {"resolution", {1, 1, 2}},
+                                {"voxel_offset", {100, 0, 50}},
+                                {"chunk_sizes", {{4, 4, 4}}},
+                                {"encoding", "raw"}}}}});
   for (int cz = 0; cz < 2; ++cz)
     for (int cy = 0; cy < 2; ++cy)
       for (int cx = 0; cx < 3; ++cx) {
@@ -38,7 +44,8 @@ fs::path make_precomputed(const fs::path& root, bool gzip_files) {
             for (int y = y0; y < y1; ++y)
               for (int x = x0; x < x1; ++x) d.push_back(uint16_t(1000 * c + 100 * z + 10 * y + x));
         const std::string name = std::to_string(100 + x0) + "-" + std::to_string(100 + x1) + "_" + std::to_string(y0) +
-                                 "-" + std::to_string(y1) + "_" + std::to_string(50 + z0) + "-" + std::to_string(50 + z1);
+                                 "-" + std::to_string(y1) + "_" + std::to_string(50 + z0) + "-" +
+                                 std::to_string(50 + z1);
         const auto* b = reinterpret_cast<const uint8_t*>(d.data());
         const bool gz = gzip_files && (cx + cy + cz) % 2 == 0;
         const auto bytes = gz ? encode_chunk(compressor_by_name("gzip"), b, d.size() * 2, 2)
@@ -87,16 +94,34 @@ TEST(Precomputed, Refusals) {
   EXPECT_NE(with_info("seg", [](json& j) { j["type"] = "segmentation"; }).find("is not an image"), std::string::npos);
   EXPECT_NE(with_info("u64", [](json& j) { j["data_type"] = "uint64"; }).find("data_type 'uint64' is not supported"),
             std::string::npos);
-  EXPECT_NE(with_info("jpeg", [](json& j) { j["scales"][0]["encoding"] = "jpeg"; }).find("encoding 'jpeg' is not supported"),
+  EXPECT_NE(
+      with_info("jpeg", [](json& j) { j["scales"][0]["encoding"] = "jpeg"; }).find("encoding 'jpeg' is not supported"),
+      std::string::npos);
+  EXPECT_NE(with_info("shard",
+                      [](json& j) {
+                        j["scales"][0]["sharding"] = {{"@type", "neuroglancer_uint64_sharded_v1"}};
+                      })
+                .find("sharded scales are not supported"),
             std::string::npos);
-  EXPECT_NE(with_info("shard", [](json& j) { j["scales"][0]["sharding"] = {{"@type", "neuroglancer_uint64_sharded_v1"}}; })
-                .find("sharded scales are not supported"), std::string::npos);
-  EXPECT_NE(with_info("key", [](json& j) { j["scales"][0]["key"] = "../x"; }).find("relative path inside"), std::string::npos);
-  EXPECT_NE(with_info("size", [](json& j) { j["scales"][0]["size"] = {10, 7}; }).find("size must be 3 numbers"),
+  EXPECT_NE(with_info("key", [](json& j) { j["scales"][0]["key"] = "../x"; }).find("relative path inside"),
             std::string::npos);
-  EXPECT_NE(with_info("frac", [](json& j) { j["scales"][0]["chunk_sizes"] = {{4.5, 4, 4}}; }).find("whole numbers"),
+  EXPECT_NE(with_info("size",
+                      [](json& j) {
+                        j["scales"][0]["size"] = {10, 7};
+                      })
+                .find("size must be 3 numbers"),
             std::string::npos);
-  EXPECT_NE(with_info("res", [](json& j) { j["scales"][0]["resolution"] = {1, 0, 1}; }).find("resolution must be finite"),
+  EXPECT_NE(with_info("frac",
+                      [](json& j) {
+                        j["scales"][0]["chunk_sizes"] = {{4.5, 4, 4}};
+                      })
+                .find("whole numbers"),
+            std::string::npos);
+  EXPECT_NE(with_info("res",
+                      [](json& j) {
+                        j["scales"][0]["resolution"] = {1, 0, 1};
+                      })
+                .find("resolution must be finite"),
             std::string::npos);
   const fs::path root = make_precomputed(tmp / "trunc", false);
   fs::resize_file(root / "1_1_2/100-104_0-4_50-54", 100);
@@ -127,4 +152,3 @@ TEST(ChunkCodec, CorruptStreamsAreRefused) {
     }
   }
 }
-

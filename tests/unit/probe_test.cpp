@@ -20,17 +20,21 @@ Volume ramp() {  // value x / 32 on the box [0,32] x [0,16] x [0,16]
 // Seen orthographically along +x from x < 0: 9 x 9 pixels over an 8 x 8 window around y = z = 8,
 // or a 40 x 40 one that reaches past the box.
 ResolvedScene scene(const Volume& v, const nlohmann::json& tf, const nlohmann::json& render, double window = 8) {
-  nlohmann::json j = {
-      {"volume", "x"},
-      {"image", {{"width", 9}, {"height", 9}}},
-      {"camera", {{"eye", {-100, 8, 8}}, {"center", {16, 8, 8}}, {"up", {0, 0, 1}}, {"projection", "orthographic"},
-                  {"height", window}}},
-      {"tf", tf},
-      {"render", render}};
+  nlohmann::json j = {{"volume", "x"},
+                      {"image", {{"width", 9}, {"height", 9}}},
+                      {"camera",
+                       {{"eye", {-100, 8, 8}},
+                        {"center", {16, 8, 8}},
+                        {"up", {0, 0, 1}},
+                        {"projection", "orthographic"},
+                        {"height", window}}},
+                      {"tf", tf},
+                      {"render", render}};
   return resolve_scene(parse_scene(j), v);
 }
 
-const nlohmann::json kOpaqueFromHalf = {{"points", {{0.0, 1, 1, 1, 0}, {0.49, 1, 1, 1, 0}, {0.5, 1, 1, 1, 1}, {1.0, 1, 1, 1, 1}}}};
+const nlohmann::json kOpaqueFromHalf = {
+    {"points", {{0.0, 1, 1, 1, 0}, {0.49, 1, 1, 1, 0}, {0.5, 1, 1, 1, 1}, {1.0, 1, 1, 1, 1}}}};
 
 TEST(Probe, PostClassificationFindsTheOpaqueSide) {
   Volume v = ramp();

@@ -43,10 +43,10 @@ TEST(ray_texture_png, MidpointsAreTheDefaultsExactly8And16Bit) {
   write_image<uint8_t>(d.path / "a.png", 2, 1, 3, OIIO::TypeDesc::UINT8, {128, 254, 128, 0, 255, 0});
   const auto a = read_ray_texture_png(d.path / "a.png");
   ASSERT_EQ(a->width, 2);
-  EXPECT_EQ(a->texels[0], 1.0f);                                 // step x1
-  EXPECT_EQ(a->texels[1], float(1.0 - 1.0 / 255.0));             // the default termination
-  EXPECT_EQ(a->texels[2], 0.0f);                                 // no blend
-  EXPECT_FLOAT_EQ(a->texels[3], float(kMinStepMultiplier));      // x1/8
+  EXPECT_EQ(a->texels[0], 1.0f);                             // step x1
+  EXPECT_EQ(a->texels[1], float(1.0 - 1.0 / 255.0));         // the default termination
+  EXPECT_EQ(a->texels[2], 0.0f);                             // no blend
+  EXPECT_FLOAT_EQ(a->texels[3], float(kMinStepMultiplier));  // x1/8
   EXPECT_EQ(a->texels[4], 1.0f);
   EXPECT_EQ(a->texels[5], -1.0f);
   write_image<uint16_t>(d.path / "b.png", 1, 2, 4, OIIO::TypeDesc::UINT16, {32768, 65535, 32768, 7, 65535, 0, 0, 7});
@@ -64,7 +64,8 @@ TEST(ray_texture_png, MidpointsAreTheDefaultsExactly8And16Bit) {
 TEST(ray_texture_png, PaintedTexturesRoundTripThroughAPng) {
   TempDir d;
   RayTexture t(40, 30, 1.0 - 1.0 / 255.0);
-  t.apply(parse_stroke({{"channel", "step"}, {"center", {0.3, 0.4}}, {"radius", 0.3}, {"value", 0.25}, {"falloff", 0.5}}, "s"));
+  t.apply(parse_stroke(
+      {{"channel", "step"}, {"center", {0.3, 0.4}}, {"radius", 0.3}, {"value", 0.25}, {"falloff", 0.5}}, "s"));
   t.apply(parse_stroke({{"channel", "termination"}, {"center", {0.7, 0.5}}, {"radius", 0.2}, {"value", 0.3}}, "s"));
   t.apply(parse_stroke({{"channel", "blend"}, {"center", {0.5, 0.8}}, {"radius", 0.25}, {"value", -0.6}}, "s"));
   write_ray_texture_png(t, d.path / "t.png");
@@ -84,17 +85,18 @@ TEST(ray_texture_png, PaintedTexturesRoundTripThroughAPng) {
 TEST(ray_texture_png, StrokesApplyOverThePng) {
   TempDir d;
   write_image<uint8_t>(d.path / "p.png", 4, 4, 3, OIIO::TypeDesc::UINT8, std::vector<uint8_t>(48, 128));
-  const json j = {{"mapping", "volume"},
-                  {"png", "p.png"},
-                  {"strokes", {{{"channel", "step"}, {"center", {0.5, 0.5}}, {"radius", 1.0}, {"value", 2.0},
-                                {"mode", "multiply"}}}}};
+  const json j = {
+      {"mapping", "volume"},
+      {"png", "p.png"},
+      {"strokes",
+       {{{"channel", "step"}, {"center", {0.5, 0.5}}, {"radius", 1.0}, {"value", 2.0}, {"mode", "multiply"}}}}};
   auto spec = std::make_shared<const RayTextureSpec>(parse_ray_texture(j));
   EXPECT_THROW(build_ray_texture(*spec, 0.9), SceneError);  // not read yet
   const auto loaded = load_ray_texture_png(spec, [&](const std::string& p) { return d.path / p; });
   EXPECT_EQ(loaded->width, 4);
   EXPECT_EQ(loaded->lineage, spec->lineage);
   const RayTexture t = build_ray_texture(*loaded, 0.9);
-  EXPECT_FLOAT_EQ(t.at(2, 2)[0], 2.0f);  // x1 from the PNG, then x2
+  EXPECT_FLOAT_EQ(t.at(2, 2)[0], 2.0f);             // x1 from the PNG, then x2
   EXPECT_FLOAT_EQ(t.at(2, 2)[1], 128.0f / 255.0f);  // the PNG's termination, not the scene's
   EXPECT_EQ(to_json(*loaded)["png"], "p.png");
   EXPECT_EQ(to_json(*loaded)["strokes"].size(), 1u);
@@ -136,7 +138,8 @@ TEST(ray_texture_png, FilesThatAreNotAThreeChannelPngOfAllowedSizeAreRefused) {
   // Image data that inflates to the wrong length, with every CRC right: refused before decoding.
   {
     std::string wrong = bytes;
-    const uint32_t len = uint32_t((unsigned char)wrong[idat - 4]) << 24 | uint32_t((unsigned char)wrong[idat - 3]) << 16 |
+    const uint32_t len = uint32_t((unsigned char)wrong[idat - 4]) << 24 |
+                         uint32_t((unsigned char)wrong[idat - 3]) << 16 |
                          uint32_t((unsigned char)wrong[idat - 2]) << 8 | (unsigned char)wrong[idat - 1];
     const std::string other("\x78\x9c\x63\x00\x00\x00\x01\x00\x01", 9);  // zlib of one zero byte
     std::string chunk = "IDAT" + other;
@@ -167,7 +170,8 @@ TEST(ray_texture_png, TheLocatorRefusesPathsOutsideTheRoots) {
   fs::create_symlink(d.path / "outside.png", d.path / "data" / "link.png");
   const std::vector<fs::path> roots = {d.path / "data"};
   const PngLocator in_roots = [&](const std::string& p) { return resolve_in_roots(p, roots); };
-  for (const std::string& p : {std::string("../outside.png"), (d.path / "outside.png").string(), std::string("link.png")}) {
+  for (const std::string& p :
+       {std::string("../outside.png"), (d.path / "outside.png").string(), std::string("link.png")}) {
     auto spec = std::make_shared<const RayTextureSpec>(parse_ray_texture({{"mapping", "view"}, {"png", p}}));
     try {
       load_ray_texture_png(spec, in_roots);

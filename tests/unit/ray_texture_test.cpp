@@ -15,7 +15,7 @@ using json = nlohmann::json;
 
 json stroke(const char* channel, double u, double v, double radius, double value, const char* mode = "set",
             double falloff = 0.0, int level = 0) {
-  return {{"channel", channel}, {"center", {u, v}}, {"radius", radius}, {"value", value},
+  return {{"channel", channel}, {"center", {u, v}},   {"radius", radius}, {"value", value},
           {"mode", mode},       {"falloff", falloff}, {"level", level}};
 }
 
@@ -71,7 +71,7 @@ TEST(ray_texture, ModesFalloffAndClamping) {
   EXPECT_NEAR(centre, 0.5f, 0.01f);  // full weight at the centre, falling off smoothly
   EXPECT_GT(halfway, centre);
   EXPECT_LT(halfway, 0.9f);
-  EXPECT_NEAR(edge, 0.9f, 1e-3f);  // at 0.98 of the radius
+  EXPECT_NEAR(edge, 0.9f, 1e-3f);        // at 0.98 of the radius
   EXPECT_FLOAT_EQ(t.at(0, 0)[1], 0.9f);  // outside the disk
 }
 
@@ -94,9 +94,10 @@ TEST(ray_texture, HierarchicalStrokesEditSquareBlocks) {
 }
 
 TEST(ray_texture, SpecRoundTripsThroughJson) {
-  const json j = {{"mapping", "volume"},
-                  {"size", {32, 16}},
-                  {"strokes", {stroke("step", 0.1, 0.2, 0.3, 0.5), stroke("blend", 0.4, 0.5, 0.6, 0.5, "add", 0.5, 2)}}};
+  const json j = {
+      {"mapping", "volume"},
+      {"size", {32, 16}},
+      {"strokes", {stroke("step", 0.1, 0.2, 0.3, 0.5), stroke("blend", 0.4, 0.5, 0.6, 0.5, "add", 0.5, 2)}}};
   const RayTextureSpec s = parse_ray_texture(j);
   EXPECT_EQ(s.mapping, RayTextureMapping::Volume);
   EXPECT_EQ(to_json(parse_ray_texture(to_json(s))), to_json(s));
@@ -152,7 +153,8 @@ TEST(ray_texture, AnUnreadPngIsRefusedWhenResolved) {
   g.kind = GeneratorKind::Ramp;
   g.dims = {4, 4, 4};
   const Volume v = generate_volume(g);
-  const Scene s = parse_scene({{"volume", "v"}, {"render", {{"ray_texture", {{"mapping", "view"}, {"png", "paint.png"}}}}}});
+  const Scene s =
+      parse_scene({{"volume", "v"}, {"render", {{"ray_texture", {{"mapping", "view"}, {"png", "paint.png"}}}}}});
   try {
     resolve_scene(s, v);
     ADD_FAILURE() << "a png ray texture was accepted unread";

@@ -16,12 +16,16 @@ using namespace peakcast;
 namespace {
 
 ResolvedScene constant_tf_scene(const Volume& v, double step) {
-  nlohmann::json j = {
-      {"volume", "x"},
-      {"image", {{"width", 8}, {"height", 8}}},
-      {"camera", {{"eye", {100, 8, 8}}, {"center", {16, 8, 8}}, {"up", {0, 0, 1}}, {"projection", "orthographic"}, {"height", 8}}},
-      {"tf", {{"points", {{0.0, 1.0, 0.5, 0.25, 0.05}}}}},
-      {"render", {{"step", step}, {"early_termination", 1.0}}}};
+  nlohmann::json j = {{"volume", "x"},
+                      {"image", {{"width", 8}, {"height", 8}}},
+                      {"camera",
+                       {{"eye", {100, 8, 8}},
+                        {"center", {16, 8, 8}},
+                        {"up", {0, 0, 1}},
+                        {"projection", "orthographic"},
+                        {"height", 8}}},
+                      {"tf", {{"points", {{0.0, 1.0, 0.5, 0.25, 0.05}}}}},
+                      {"render", {{"step", step}, {"early_termination", 1.0}}}};
   return resolve_scene(parse_scene(j), v);
 }
 
@@ -51,7 +55,8 @@ TEST(Reference, LatticeSamplesIncludeEntryAndExit) {
 TEST(Reference, ClipKeepsTheSpanItLeavesAndStartsTheLatticeThere) {
   Volume v = ramp();
   ResolvedScene s = constant_tf_scene(v, 1.0);  // eye on +x looking to -x: rays run x = 32 -> 0
-  s.scene.render.clip = parse_clip(nlohmann::json::parse(R"({"plane": {"point": [10.5, 0, 0], "normal": [-1, 0, 0]}})"));
+  s.scene.render.clip =
+      parse_clip(nlohmann::json::parse(R"({"plane": {"point": [10.5, 0, 0], "normal": [-1, 0, 0]}})"));
   Image img = reference::render_reference(v, s);
   // Kept: x <= 10.5, entered at x = 10.5: samples at 10.5, 9.5, ..., 0.5 (11 of them), standing
   // for the 10.5 units kept (the last for 0.5 before it and 0.5 after it).

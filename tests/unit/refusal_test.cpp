@@ -36,7 +36,8 @@ TEST(Refusal, MissingFile) {
 
 TEST(Refusal, TruncatedData) {
   test::TempDir d;
-  test::write_file(d / "t.nrrd", nrrd("type: uint16\ndimension: 3\nsizes: 4 4 4\nencoding: raw") + std::string(100, 'x'));
+  test::write_file(d / "t.nrrd",
+                   nrrd("type: uint16\ndimension: 3\nsizes: 4 4 4\nencoding: raw") + std::string(100, 'x'));
   expect_refused(d / "t.nrrd", "truncated");
   test::write_file(d / "t.raw", std::string(7, 'x'));
   test::write_file(d / "t.raw.json", R"({"dims":[2,2,2],"dtype":"uint8"})");
@@ -50,23 +51,28 @@ TEST(Refusal, TruncatedGzip) {
   std::string payload(1000, 'a');
   uLongf len = compressBound(uLong(payload.size()));
   std::string z(len, '\0');
-  compress2(reinterpret_cast<Bytef*>(z.data()), &len, reinterpret_cast<const Bytef*>(payload.data()), uLong(payload.size()), 6);
+  compress2(reinterpret_cast<Bytef*>(z.data()), &len, reinterpret_cast<const Bytef*>(payload.data()),
+            uLong(payload.size()), 6);
   z.resize(len);
   // A valid zlib stream of 1000 bytes where the header promises 8000.
-  test::write_file(d / "short.mha", "NDims = 3\nDimSize = 20 20 20\nElementType = MET_UCHAR\nCompressedData = True\nElementDataFile = LOCAL\n" + z);
+  test::write_file(
+      d / "short.mha",
+      "NDims = 3\nDimSize = 20 20 20\nElementType = MET_UCHAR\nCompressedData = True\nElementDataFile = LOCAL\n" + z);
   expect_refused(d / "short.mha", "truncated");
 }
 
 TEST(Refusal, HugeOrOverflowingSizesRefusedBeforeAllocation) {
   test::TempDir d;
-  test::write_file(d / "o.nrrd", nrrd("type: float\ndimension: 3\nsizes: 4294967296 4294967296 4294967296\nencoding: raw"));
+  test::write_file(d / "o.nrrd",
+                   nrrd("type: float\ndimension: 3\nsizes: 4294967296 4294967296 4294967296\nencoding: raw"));
   expect_refused(d / "o.nrrd", "overflow");
   // 2^33 voxels: over the default limit of 2^32; a small file, so nothing may be allocated.
   test::write_file(d / "big.nrrd", nrrd("type: uint8\ndimension: 3\nsizes: 2048 2048 2048\nencoding: raw") + "xx");
   expect_refused(d / "big.nrrd", "exceeds the limit");
   LoadOptions small;
   small.max_voxels = 1000;
-  test::write_file(d / "s.nrrd", nrrd("type: uint8\ndimension: 3\nsizes: 11 10 10\nencoding: raw") + std::string(1100, 'x'));
+  test::write_file(d / "s.nrrd",
+                   nrrd("type: uint8\ndimension: 3\nsizes: 11 10 10\nencoding: raw") + std::string(1100, 'x'));
   expect_refused(d / "s.nrrd", "exceeds the limit of 1000", small);
   // Within the limit but the file is short: refused as truncated, not allocated.
   test::write_file(d / "p.raw", "xx");
@@ -100,7 +106,8 @@ TEST(Refusal, ZeroDims) {
 
 TEST(Refusal, CorruptGzip) {
   test::TempDir d;
-  test::write_file(d / "nomagic.nrrd", nrrd("type: uint8\ndimension: 3\nsizes: 2 2 2\nencoding: gzip") + "not gzip at all");
+  test::write_file(d / "nomagic.nrrd",
+                   nrrd("type: uint8\ndimension: 3\nsizes: 2 2 2\nencoding: gzip") + "not gzip at all");
   expect_refused(d / "nomagic.nrrd", "gzip stream corrupt");
   std::string garbage = "\x1f\x8b\x08\x00\x00\x00\x00\x00\x00\x03" + std::string(64, '\xff');
   test::write_file(d / "bad.nrrd", nrrd("type: uint8\ndimension: 3\nsizes: 2 2 2\nencoding: gzip") + garbage);
@@ -123,7 +130,10 @@ TEST(Refusal, MalformedHeaders) {
   expect_refused(d / "magic.nrrd", "not a NRRD file");
   test::write_file(d / "dim.nrrd", nrrd("type: uint8\ndimension: 2\nsizes: 2 2\nencoding: raw"));
   expect_refused(d / "dim.nrrd", "dimension 2 is not supported");
-  test::write_file(d / "obl.nrrd", nrrd("type: uint8\ndimension: 3\nsizes: 2 2 2\nspace directions: (1,1,0) (0,1,0) (0,0,1)\nencoding: raw") + "12345678");
+  test::write_file(
+      d / "obl.nrrd",
+      nrrd("type: uint8\ndimension: 3\nsizes: 2 2 2\nspace directions: (1,1,0) (0,1,0) (0,0,1)\nencoding: raw") +
+          "12345678");
   expect_refused(d / "obl.nrrd", "not axis-aligned");
   test::write_file(d / "nosizes.nrrd", nrrd("type: uint8\ndimension: 3\nencoding: raw"));
   expect_refused(d / "nosizes.nrrd", "missing field 'sizes'");
@@ -135,7 +145,8 @@ TEST(Refusal, MalformedHeaders) {
   expect_refused(d / "k.raw", "unknown key 'spacings'");
   test::write_file(d / "nosidecar.raw", "12345678");
   expect_refused(d / "nosidecar.raw", "needs a JSON sidecar");
-  test::write_file(d / "sp.nrrd", nrrd("type: uint8\ndimension: 3\nsizes: 2 2 2\nspacings: 1 0 1\nencoding: raw") + "12345678");
+  test::write_file(d / "sp.nrrd",
+                   nrrd("type: uint8\ndimension: 3\nsizes: 2 2 2\nspacings: 1 0 1\nencoding: raw") + "12345678");
   expect_refused(d / "sp.nrrd", "spacing must be finite and > 0");
 }
 

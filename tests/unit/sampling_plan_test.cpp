@@ -34,7 +34,8 @@ Volume cube() {
 ResolvedScene close_up(const Volume& v, double s_k, double distance, double fov) {
   const glm::dvec3 c(31.5), eye = c + distance * glm::normalize(glm::dvec3(0.6, 0.5, 0.62));
   const std::string text = R"({"volume": "v", "image": {"width": 64, "height": 64},
-    "camera": {"eye": [)" + std::to_string(eye.x) + "," + std::to_string(eye.y) + "," + std::to_string(eye.z) +
+    "camera": {"eye": [)" + std::to_string(eye.x) +
+                           "," + std::to_string(eye.y) + "," + std::to_string(eye.z) +
                            R"(], "center": [31.5, 31.5, 31.5], "up": [0, 0, 1], "fov_y": )" + std::to_string(fov) +
                            R"(}, "render": {"sampling": "differential", "s_k": )" + std::to_string(s_k) + "}}";
   return resolve_scene(parse_scene_text(text), v);

@@ -117,7 +117,7 @@ TEST(TransferFunction, StepsAndPlateaus) {
   EXPECT_NEAR(tf.eval(5).a, 0.1, 1e-12);
   EXPECT_NEAR(tf.eval(10).a, 0.8, 1e-12);  // at a step the later point holds
   EXPECT_NEAR(tf.eval(9.999999).a, 0.2, 1e-6);
-  EXPECT_NEAR(tf.eval(-5).a, 0.0, 1e-12);   // constant outside
+  EXPECT_NEAR(tf.eval(-5).a, 0.0, 1e-12);  // constant outside
   EXPECT_NEAR(tf.eval(100).b, 1.0, 1e-12);
   EXPECT_NEAR(tf.max_opacity(0, 9), 0.18, 1e-12);
   EXPECT_NEAR(tf.max_opacity(0, 10), 0.8, 1e-12);

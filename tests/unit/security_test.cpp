@@ -34,8 +34,11 @@ TEST(Utf8, CleanCutsAtCharactersAndReplacesBadBytes) {
   EXPECT_FALSE(valid_utf8("\xc3"));          // cut in the middle of é
   EXPECT_FALSE(valid_utf8("\xed\xa0\x80"));  // a surrogate
   EXPECT_FALSE(valid_utf8("\xc0\xaf"));      // an overlong '/'
-  EXPECT_EQ(clean_utf8("a\xff" "b"), "a\xEF\xBF\xBD" "b");
-  const std::string e = "\xc3\xa9";  // é, two bytes
+  EXPECT_EQ(clean_utf8("a\xff"
+                       "b"),
+            "a\xEF\xBF\xBD"
+            "b");
+  const std::string e = "\xc3\xa9";                                           // é, two bytes
   EXPECT_EQ(clean_utf8(std::string(63, 'a') + e, 64), std::string(63, 'a'));  // not half of é
   std::string name;
   for (int i = 0; i < 23; ++i) name += "データ";  // 9 bytes each: 207 bytes
@@ -80,8 +83,9 @@ class Confined : public ::testing::Test {
 TEST_F(Confined, DetachedDataFileOutsideIsRefused) {
   write_file(outside() / "secret.raw", std::string(8, 'x'));
   write_file(data() / "abs.nhdr", "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: raw\ndata file: " +
-                                       (outside() / "secret.raw").string() + "\n\n");
-  write_file(data() / "up.nhdr", "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: raw\ndata file: ../outside/secret.raw\n\n");
+                                      (outside() / "secret.raw").string() + "\n\n");
+  write_file(data() / "up.nhdr",
+             "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: raw\ndata file: ../outside/secret.raw\n\n");
   EXPECT_EQ(test::refusal(data() / "abs.nhdr"), "");  // not confined: a command-line tool reads what it is told
   file_roots::Scope scope({data()});
   EXPECT_NE(test::refusal(data() / "abs.nhdr").find("outside the data directories"), std::string::npos);
@@ -91,8 +95,14 @@ TEST_F(Confined, DetachedDataFileOutsideIsRefused) {
 TEST_F(Confined, ChunkOrLevelLinkedOutIsRefused) {
   const fs::path z = data() / "v.zarr";
   fs::create_directories(z);
-  write_json(z / ".zarray", {{"zarr_format", 2}, {"shape", {2, 2, 2}}, {"chunks", {2, 2, 2}}, {"dtype", "|u1"},
-                             {"compressor", nullptr}, {"fill_value", 0}, {"order", "C"}, {"filters", nullptr}});
+  write_json(z / ".zarray", {{"zarr_format", 2},
+                             {"shape", {2, 2, 2}},
+                             {"chunks", {2, 2, 2}},
+                             {"dtype", "|u1"},
+                             {"compressor", nullptr},
+                             {"fill_value", 0},
+                             {"order", "C"},
+                             {"filters", nullptr}});
   write_file(outside() / "chunk", std::string(8, '\x07'));
   fs::create_symlink(outside() / "chunk", z / "0.0.0");
   EXPECT_EQ(test::refusal(z), "");
@@ -103,10 +113,13 @@ TEST_F(Confined, ChunkOrLevelLinkedOutIsRefused) {
   // A whole level folder linked out.
   const fs::path p = data() / "p.zarr";
   fs::create_directories(p);
-  write_json(p / ".zattrs", {{"multiscales", {{{"version", "0.4"},
-                                               {"axes", {{{"name", "z"}, {"type", "space"}}, {{"name", "y"}, {"type", "space"}},
-                                                         {{"name", "x"}, {"type", "space"}}}},
-                                               {"datasets", {{{"path", "0"}}}}}}}});
+  write_json(p / ".zattrs", {{"multiscales",
+                              {{{"version", "0.4"},
+                                {"axes",
+                                 {{{"name", "z"}, {"type", "space"}},
+                                  {{"name", "y"}, {"type", "space"}},
+                                  {{"name", "x"}, {"type", "space"}}}},
+                                {"datasets", {{{"path", "0"}}}}}}}});
   fs::copy(z, outside() / "level0", fs::copy_options::recursive | fs::copy_options::copy_symlinks);
   fs::remove(outside() / "level0/0.0.0");
   write_file(outside() / "level0/0.0.0", std::string(8, '\x07'));
@@ -117,9 +130,11 @@ TEST_F(Confined, ChunkOrLevelLinkedOutIsRefused) {
 }
 
 TEST_F(Confined, SingleFileRefusesAnotherDataFileUnseen) {
-  write_file(data() / "u.nrrd", "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n data file: /etc/passwd\n\n");
-  write_file(data() / "u.mha", "ObjectType = Image\nComment = x\n\nNDims = 3\nDimSize = 2 2 2\nElementType = MET_UCHAR\n"
-                               "ElementDataFile\t= /nonexistent/file\n");
+  write_file(data() / "u.nrrd",
+             "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n data file: /etc/passwd\n\n");
+  write_file(data() / "u.mha",
+             "ObjectType = Image\nComment = x\n\nNDims = 3\nDimSize = 2 2 2\nElementType = MET_UCHAR\n"
+             "ElementDataFile\t= /nonexistent/file\n");
   LoadOptions o;
   o.single_file = true;
   for (const char* f : {"u.nrrd", "u.mha"}) {
@@ -128,7 +143,8 @@ TEST_F(Confined, SingleFileRefusesAnotherDataFileUnseen) {
     EXPECT_EQ(why.find("no such file"), std::string::npos) << why;  // nothing said of that path
   }
   // Its own data, attached: read.
-  write_file(data() / "ok.nrrd", "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n\n" + std::string(8, 'x'));
+  write_file(data() / "ok.nrrd",
+             "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n\n" + std::string(8, 'x'));
   EXPECT_EQ(test::refusal(data() / "ok.nrrd", o), "");
 }
 
@@ -171,8 +187,14 @@ TEST(ChunkBudget, ChunksDecodingPastTheBudgetAreRefusedBeforeDecoding) {
   const fs::path z = tmp / "bomb.zarr";
   fs::create_directories(z);
   // 8x64x64 voxels in chunks of 2x16384x16384: one chunk decodes to 512 MiB.
-  write_json(z / ".zarray", {{"zarr_format", 2}, {"shape", {8, 64, 64}}, {"chunks", {2, 16384, 16384}}, {"dtype", "|u1"},
-                             {"compressor", nullptr}, {"fill_value", 0}, {"order", "C"}, {"filters", nullptr}});
+  write_json(z / ".zarray", {{"zarr_format", 2},
+                             {"shape", {8, 64, 64}},
+                             {"chunks", {2, 16384, 16384}},
+                             {"dtype", "|u1"},
+                             {"compressor", nullptr},
+                             {"fill_value", 0},
+                             {"order", "C"},
+                             {"filters", nullptr}});
   write_file(z / "0.0.0", "x");  // never read: refused from the metadata
   LoadOptions o;
   o.decode_budget_bytes = int64_t(64) << 20;
@@ -181,9 +203,16 @@ TEST(ChunkBudget, ChunksDecodingPastTheBudgetAreRefusedBeforeDecoding) {
   // A level cut into more chunks than a read may visit: refused at once.
   const fs::path p = tmp / "tiny";
   fs::create_directories(p);
-  write_json(p / "info", {{"type", "image"}, {"data_type", "uint8"}, {"num_channels", 1},
-                          {"scales", {{{"key", "1_1_1"}, {"size", {4096, 4096, 1}}, {"resolution", {1, 1, 1}},
-                                       {"chunk_sizes", {{1, 1, 1}}}, {"encoding", "raw"}, {"voxel_offset", {0, 0, 0}}}}}});
+  write_json(p / "info", {{"type", "image"},
+                          {"data_type", "uint8"},
+                          {"num_channels", 1},
+                          {"scales",
+                           {{{"key", "1_1_1"},
+                             {"size", {4096, 4096, 1}},
+                             {"resolution", {1, 1, 1}},
+                             {"chunk_sizes", {{1, 1, 1}}},
+                             {"encoding", "raw"},
+                             {"voxel_offset", {0, 0, 0}}}}}});
   const auto t0 = std::chrono::steady_clock::now();
   EXPECT_NE(test::refusal(p).find("chunks"), std::string::npos);
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 2.0);
@@ -196,8 +225,14 @@ TEST(ChunkBudget, MissingChunksCostOneListing) {
   test::TempDir tmp;
   const fs::path z = tmp / "sparse.zarr";
   fs::create_directories(z);
-  write_json(z / ".zarray", {{"zarr_format", 2}, {"shape", {2, 1024, 512}}, {"chunks", {1, 1, 1}}, {"dtype", "|u1"},
-                             {"compressor", nullptr}, {"fill_value", 3}, {"order", "C"}, {"filters", nullptr}});
+  write_json(z / ".zarray", {{"zarr_format", 2},
+                             {"shape", {2, 1024, 512}},
+                             {"chunks", {1, 1, 1}},
+                             {"dtype", "|u1"},
+                             {"compressor", nullptr},
+                             {"fill_value", 3},
+                             {"order", "C"},
+                             {"filters", nullptr}});
   write_file(z / "1.1023.511", "\x09");  // the one chunk stored
   const auto t0 = std::chrono::steady_clock::now();
   const Volume v = load_volume(z);
@@ -241,9 +276,11 @@ TEST(Listing, FolderNameWithNulIsRefused) {
 TEST(HttpText, HostAllowList) {
   using net::HostCheck;
   const HostCheck local("127.0.0.1", {"viewer.example.org"});
-  for (const char* ok : {"127.0.0.1:8080", "localhost:8080", "LOCALHOST", "[::1]:8080", "viewer.example.org", "", "localhost."})
+  for (const char* ok :
+       {"127.0.0.1:8080", "localhost:8080", "LOCALHOST", "[::1]:8080", "viewer.example.org", "", "localhost."})
     EXPECT_TRUE(local.allowed(ok)) << ok;
-  for (const char* no : {"evil.example:8080", "10.0.0.1:8080", "localhost:80:80", "local\xffhost", "viewer.example.org.evil", "[::1"})
+  for (const char* no :
+       {"evil.example:8080", "10.0.0.1:8080", "localhost:80:80", "local\xffhost", "viewer.example.org.evil", "[::1"})
     EXPECT_FALSE(local.allowed(no)) << no;
   const HostCheck all("0.0.0.0", {});
   EXPECT_TRUE(all.allowed("10.1.2.3:8080"));
@@ -280,8 +317,9 @@ TEST(StaticFiles, OnlyListedRegularFilesInsideTheRoot) {
   files.add_root(tmp / "web", "/");
   EXPECT_TRUE(files.find("/"));
   EXPECT_TRUE(files.find("/src/main.js"));
-  for (const std::string& p : std::vector<std::string>{"//etc/passwd", "//proc/self/cmdline", "/linked", "/fifo", "/../secret", "/src/../index.html",
-                              "//dev/zero", "/" + (tmp / "secret").string()})
+  for (const std::string& p :
+       std::vector<std::string>{"//etc/passwd", "//proc/self/cmdline", "/linked", "/fifo", "/../secret",
+                                "/src/../index.html", "//dev/zero", "/" + (tmp / "secret").string()})
     EXPECT_FALSE(files.find(p)) << p;
   EXPECT_EQ(*net::StaticFiles::read(*files.find("/index.html")), "<html>");
   EXPECT_FALSE(net::StaticFiles::read("/dev/zero"));

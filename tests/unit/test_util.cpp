@@ -49,8 +49,8 @@ void write_file(const fs::path& p, const std::string& bytes) {
     for (int64_t j = 0; j < d[1]; ++j)
       for (int64_t i = 0; i < d[0]; ++i)
         if (a.value(i, j, k) != b.value(i, j, k))
-          return ::testing::AssertionFailure() << "voxel (" << i << "," << j << "," << k << "): " << a.value(i, j, k)
-                                               << " vs " << b.value(i, j, k);
+          return ::testing::AssertionFailure()
+                 << "voxel (" << i << "," << j << "," << k << "): " << a.value(i, j, k) << " vs " << b.value(i, j, k);
   return ::testing::AssertionSuccess();
 }
 

@@ -52,7 +52,8 @@ std::vector<Case> all_cases() {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllFormats, RoundTrip, ::testing::ValuesIn(all_cases()), [](const auto& info) {
-  std::string n = std::string(to_string(info.param.type)) + "_" + info.param.ext.substr(1) + (info.param.gzip ? "_gz" : "");
+  std::string n =
+      std::string(to_string(info.param.type)) + "_" + info.param.ext.substr(1) + (info.param.gzip ? "_gz" : "");
   return n;
 });
 
@@ -122,8 +123,10 @@ TEST(VolumeIo, TiffStacks) {
     s.dims = {9, 6, 12};
     s.type = type;
     Volume v = generate_volume(s);
-    const TypeDesc td = type == SourceType::U8 ? TypeDesc::UINT8 : type == SourceType::U16 ? TypeDesc::UINT16
-                        : type == SourceType::I16 ? TypeDesc::INT16 : TypeDesc::FLOAT;
+    const TypeDesc td = type == SourceType::U8    ? TypeDesc::UINT8
+                        : type == SourceType::U16 ? TypeDesc::UINT16
+                        : type == SourceType::I16 ? TypeDesc::INT16
+                                                  : TypeDesc::FLOAT;
     const size_t slice = size_t(9 * 6) * voxel_bytes(v.type());
     // Signed voxels were shifted on generation; shift back to int16 for the file.
     std::vector<uint8_t> file_bytes(v.data(), v.data() + v.byte_size());
@@ -201,8 +204,10 @@ TEST(VolumeIo, IntegerStatisticsMatchTheirDefinition) {
         const int fixed = pick(rng);
         for (size_t i = 0; i < size_t(v.voxel_count()); ++i) {
           const int x = constant ? fixed : pick(rng);
-          if (wide) reinterpret_cast<uint16_t*>(v.data())[i] = uint16_t(x);
-          else v.data()[i] = uint8_t(x);
+          if (wide)
+            reinterpret_cast<uint16_t*>(v.data())[i] = uint16_t(x);
+          else
+            v.data()[i] = uint8_t(x);
         }
         v.finalize_statistics();
         double lo = 1e300, hi = -1e300;

@@ -28,8 +28,8 @@ void expect_crop(const Volume& whole, const Volume& part, const VoxelRegion& r) 
   for (int64_t z = r.lo[2]; z < r.hi[2]; ++z)
     for (int64_t y = r.lo[1]; y < r.hi[1]; ++y) {
       const uint8_t* src = whole.data() + size_t(((z * d[1] + y) * d[0] + r.lo[0])) * bpv;
-      const uint8_t* dst = part.data() +
-                           size_t((((z - r.lo[2]) * part.dims()[1] + (y - r.lo[1])) * part.dims()[0])) * bpv;
+      const uint8_t* dst =
+          part.data() + size_t((((z - r.lo[2]) * part.dims()[1] + (y - r.lo[1])) * part.dims()[0])) * bpv;
       mismatched += std::memcmp(src, dst, size_t(r.hi[0] - r.lo[0]) * bpv) != 0;
     }
   EXPECT_EQ(mismatched, 0) << "rows differing from the crop of the whole volume";
@@ -51,9 +51,9 @@ TEST_P(Region, EqualsTheCropOfTheWholeVolume) {
   const fs::path file = dir / ("v" + c.ext);
   write_volume(file, v, WriteOptions{c.gzip});
   const Volume whole = load_volume(file);
-  for (VoxelRegion r : {VoxelRegion{{0, 0, 0}, {23, 11, 9}}, VoxelRegion{{3, 2, 1}, {17, 9, 8}},
-                        VoxelRegion{{22, 10, 8}, {23, 11, 9}}, VoxelRegion{{0, 5, 0}, {23, 6, 9}},
-                        VoxelRegion{{5, 0, 4}, {6, 11, 5}}}) {
+  for (VoxelRegion r :
+       {VoxelRegion{{0, 0, 0}, {23, 11, 9}}, VoxelRegion{{3, 2, 1}, {17, 9, 8}}, VoxelRegion{{22, 10, 8}, {23, 11, 9}},
+        VoxelRegion{{0, 5, 0}, {23, 6, 9}}, VoxelRegion{{5, 0, 4}, {6, 11, 5}}}) {
     LoadOptions o;
     o.region = r;
     expect_crop(whole, load_volume(file, o), r);
@@ -76,8 +76,7 @@ TEST(Region, CompressedRowsAcrossInflateChunks) {
   // Rows of 340 bytes, slices of 32980: byte 1 MiB = 1048576 lies in the row y = 77 of slice
   // z = 31 (it starts at 1048560), which the first two regions read across the boundary.
   for (VoxelRegion r : {VoxelRegion{{1, 70, 31}, {169, 85, 32}}, VoxelRegion{{0, 0, 0}, {170, 97, 41}},
-                        VoxelRegion{{100, 0, 0}, {101, 97, 41}},
-                        VoxelRegion{{0, 0, 0}, {170, 97, 2}}}) {
+                        VoxelRegion{{100, 0, 0}, {101, 97, 41}}, VoxelRegion{{0, 0, 0}, {170, 97, 2}}}) {
     LoadOptions o;
     o.region = r;
     expect_crop(whole, load_volume(dir / "big.nrrd", o), r);
@@ -91,8 +90,9 @@ TEST(Region, SpreadOverSeveralDataFiles) {
   write_volume(dir / "whole.nhdr", v);
   const Volume whole = load_volume(dir / "whole.nhdr");
   const size_t slice = size_t(23 * 11) * 2;
-  std::string header = "NRRD0004\ntype: uint16\ndimension: 3\nsizes: 23 11 9\nencoding: raw\nendian: little\n"
-                       "spacings: 0.5 1.25 2\nspace origin: (-3,4.5,0.25)\ndata file: LIST\n";
+  std::string header =
+      "NRRD0004\ntype: uint16\ndimension: 3\nsizes: 23 11 9\nencoding: raw\nendian: little\n"
+      "spacings: 0.5 1.25 2\nspace origin: (-3,4.5,0.25)\ndata file: LIST\n";
   for (int z = 0; z < 9; ++z) {
     const std::string name = "s" + std::to_string(z) + ".raw";
     test::write_file(dir / name, std::string(reinterpret_cast<const char*>(whole.data()) + z * slice, slice));

@@ -37,7 +37,8 @@ TEST(Yuv420, SimdEqualsScalarOnEveryTarget) {
   ASSERT_FALSE(targets.empty());
   for (const int64_t target : targets) {
     hwy::SetSupportedTargetsForTest(target);
-    for (const auto& [w, h, pad] : {std::tuple{2, 2, 0}, {30, 4, 0}, {64, 8, 3}, {130, 6, 0}, {1024, 16, 32}, {998, 10, 1}}) {
+    for (const auto& [w, h, pad] :
+         {std::tuple{2, 2, 0}, {30, 4, 0}, {64, 8, 3}, {130, 6, 0}, {1024, 16, 32}, {998, 10, 1}}) {
       std::vector<uint8_t> rgb(size_t(w) * h * 3);
       for (auto& c : rgb) c = uint8_t(rng());
       for (size_t i = 0; i < rgb.size() && w > 8; i += 97) rgb[i] = (i / 97) % 2 ? 255 : 0;  // the extremes
@@ -59,8 +60,8 @@ TEST(Yuv420, ScalarIsBt709LimitedRange) {
   const struct {
     uint8_t r, g, b;
     int y, u, v;
-  } cases[] = {{0, 0, 0, 16, 128, 128},     {255, 255, 255, 235, 128, 128}, {255, 0, 0, 63, 102, 240},
-               {0, 255, 0, 173, 42, 26},    {0, 0, 255, 32, 240, 118},      {128, 128, 128, 126, 128, 128}};
+  } cases[] = {{0, 0, 0, 16, 128, 128},  {255, 255, 255, 235, 128, 128}, {255, 0, 0, 63, 102, 240},
+               {0, 255, 0, 173, 42, 26}, {0, 0, 255, 32, 240, 118},      {128, 128, 128, 126, 128, 128}};
   for (const auto& c : cases) {
     std::vector<uint8_t> rgb(2 * 2 * 3);
     for (int i = 0; i < 4; ++i) {

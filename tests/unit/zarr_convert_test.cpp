@@ -52,8 +52,7 @@ TEST(ZarrConvert, SlabsWriteTheSamePyramidAsTheWholeVolume) {
   };
   // Odd edges at every level; a volume thinner than a chunk in y and z (its chunks are thin too).
   for (const Case c : {Case{{37, 21, 45}, 4}, Case{{9, 5, 6}, 2}})
-    for (SourceType type :
-         {SourceType::U8, SourceType::I8, SourceType::U16, SourceType::I16, SourceType::F32}) {
+    for (SourceType type : {SourceType::U8, SourceType::I8, SourceType::U16, SourceType::I16, SourceType::F32}) {
       Volume src = test::anisotropic_blobs(type, c.dims);
       if (type == SourceType::F32) {  // non-finite voxels: replaced by the finite range, as a whole
                                       // read does
@@ -63,8 +62,8 @@ TEST(ZarrConvert, SlabsWriteTheSamePyramidAsTheWholeVolume) {
         f[src.voxel_count() - 7] = -std::numeric_limits<float>::infinity();
       }
       for (bool gzip : {false, true}) {
-        const fs::path in = tmp / (std::string(to_string(type)) + std::to_string(c.dims[0]) +
-                                   (gzip ? "_gz" : "") + ".nrrd");
+        const fs::path in =
+            tmp / (std::string(to_string(type)) + std::to_string(c.dims[0]) + (gzip ? "_gz" : "") + ".nrrd");
         write_volume(in, src, {gzip});
         ZarrWriteOptions o;
         o.chunk = 8;
@@ -73,8 +72,7 @@ TEST(ZarrConvert, SlabsWriteTheSamePyramidAsTheWholeVolume) {
         write_ome_zarr(load_volume(in), whole, o);
         const int64_t plane = c.dims[0] * c.dims[1] * int64_t(voxel_bytes(storage_type(type)));
         const int64_t edge = std::min<int64_t>(8, c.dims[2]);
-        for (int64_t budget :
-             {int64_t(1), 2 * 24 * plane}) {  // slabs of one chunk edge of planes; of 24
+        for (int64_t budget : {int64_t(1), 2 * 24 * plane}) {  // slabs of one chunk edge of planes; of 24
           SCOPED_TRACE(in.filename().string() + " budget " + std::to_string(budget));
           const fs::path out = tmp / (in.stem().string() + "_" + std::to_string(budget) + ".zarr");
           const auto r = convert_to_ome_zarr_by_slabs(in, out, {}, o, budget);
@@ -107,14 +105,11 @@ TEST(ZarrConvert, Refusals) {
   };
   convert_to_ome_zarr_by_slabs(in, tmp / "a.zarr", {}, o, 1);
   refused([&] { convert_to_ome_zarr_by_slabs(in, tmp / "a.zarr", {}, o, 1); }, "already exists");
-  refused([&] { convert_to_ome_zarr_by_slabs(tmp / "none.nrrd", tmp / "b.zarr", {}, o, 1); },
-          "none.nrrd");
-  refused([&] { convert_to_ome_zarr_by_slabs(in, tmp / "c.zarr", {}, o, 0); },
-          "memory budget must be positive");
+  refused([&] { convert_to_ome_zarr_by_slabs(tmp / "none.nrrd", tmp / "b.zarr", {}, o, 1); }, "none.nrrd");
+  refused([&] { convert_to_ome_zarr_by_slabs(in, tmp / "c.zarr", {}, o, 0); }, "memory budget must be positive");
   o.chunk = 0;
   refused([&] { convert_to_ome_zarr_by_slabs(in, tmp / "d.zarr", {}, o, 1); }, "chunk edge");
-  for (const char* name : {"b.zarr", "c.zarr", "d.zarr"})
-    EXPECT_FALSE(fs::exists(tmp / name)) << name;
+  for (const char* name : {"b.zarr", "c.zarr", "d.zarr"}) EXPECT_FALSE(fs::exists(tmp / name)) << name;
   // A float input with NaN and nonfinite: refuse says how many, and writes nothing.
   Volume f = test::anisotropic_blobs(SourceType::F32, {16, 12, 10});
   reinterpret_cast<float*>(f.data())[9] = std::numeric_limits<float>::quiet_NaN();
