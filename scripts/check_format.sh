@@ -14,5 +14,8 @@ elif git rev-parse --is-inside-work-tree >/dev/null 2>&1; then
 else
   mapfile -t files < <(find server tests shaders client-python -name node_modules -prune -o \( -name '*.h' -o -name '*.cpp' \) -print)
 fi
-clang-format --style="file:$root/.clang-format" --dry-run --Werror "${files[@]}"
+if ! clang-format --style="file:$root/.clang-format" --dry-run --Werror "${files[@]}"; then
+  echo "check_format: fix with: git ls-files '*.h' '*.cpp' | xargs clang-format -i" >&2
+  exit 1
+fi
 echo "check_format: ${#files[@]} files follow .clang-format"
