@@ -31,58 +31,52 @@ glm::dvec4 preintegrate_segment(const TransferFunction& tf, double sf, double sb
   return {c, alpha};
 }
 
-PreintegrationTable build_preintegration(const TransferFunction& tf, double lo, double hi, double step, int n,
-                                         PreintegrationMethod method) {
-  const auto t0 = std::chrono::steady_clock::now();
-  PreintegrationTable t;
-  t.size = n;
-  t.lo = lo;
-  t.hi = table_range(lo, hi).hi;
-  t.step = step;
-  t.rgba.assign(size_t(n) * n * 4, 0.f);
-  const double ds = (t.hi - lo) / (n - 1);
-  // The TF sampled at the centres of `sub` sub-bins per bin: extinction and colour.
-  const int sub = 8;
-  std::vector<double> tau(size_t(n - 1) * sub);
-  std::vector<glm::dvec3> col(tau.size());
+namespace {
+
+// The TF sampled at the centres of `sub` sub-bins per bin of the table: extinction and colour.
+struct SubBins {
+  int sub = 8;
+  double ds = 0;  // a bin's width in field values
+  std::vector<double> tau;
+  std::vector<glm::dvec3> col;
+};
+
+void store(PreintegrationTable& t, int i, int j, const glm::dvec3& c, double a) {
+  float* out = &t.rgba[(size_t(j) * t.size + size_t(i)) * 4];
+  out[0] = float(c.r), out[1] = float(c.g), out[2] = float(c.b), out[3] = float(a);
+}
+
+// The integral method: prefix integrals over the field value, in units of one sub-bin.
+void fill_integral(PreintegrationTable& t, const SubBins& b, double step) {
+  const int n = t.size, sub = b.sub;
+  const double ds = b.ds;
+  const std::vector<double>& tau = b.tau;
+  const std::vector<glm::dvec3>& col = b.col;
+  std::vector<double> T(tau.size() + 1, 0.0);
+  std::vector<glm::dvec3> K(tau.size() + 1, glm::dvec3(0.0));
+  const double dsub = ds / sub;
   for (size_t q = 0; q < tau.size(); ++q) {
-    const glm::dvec4 e = tf.eval(lo + ds * (double(q) + 0.5) / sub);
-    tau[q] = extinction(e.a, tf.opacity_unit);
-    col[q] = glm::dvec3(e);
+    T[q + 1] = T[q] + tau[q] * dsub;
+    K[q + 1] = K[q] + tau[q] * col[q] * dsub;
   }
-  auto store = [&](int i, int j, const glm::dvec3& c, double a) {
-    float* out = &t.rgba[(size_t(j) * n + size_t(i)) * 4];
-    out[0] = float(c.r), out[1] = float(c.g), out[2] = float(c.b), out[3] = float(a);
-  };
-  for (int i = 0; i < n; ++i) {  // guard: no field change, the 1D TF at the value
-    const glm::dvec4 e = tf.eval(lo + ds * i);
-    const double a = correct_opacity(e.a, step, tf.opacity_unit);
-    store(i, i, glm::dvec3(e) * a, a);
-  }
-  if (method == PreintegrationMethod::Integral) {
-    // Prefix integrals over the field value, in units of one sub-bin.
-    std::vector<double> T(tau.size() + 1, 0.0);
-    std::vector<glm::dvec3> K(tau.size() + 1, glm::dvec3(0.0));
-    const double dsub = ds / sub;
-    for (size_t q = 0; q < tau.size(); ++q) {
-      T[q + 1] = T[q] + tau[q] * dsub;
-      K[q + 1] = K[q] + tau[q] * col[q] * dsub;
+  parallel_for(size_t(n), [&](size_t jj) {
+    const int j = int(jj);
+    for (int i = 0; i < n; ++i) {
+      if (i == j) continue;
+      const size_t qf = size_t(i) * sub, qb = size_t(j) * sub;
+      const double k = step / ((j - i) * ds);  // world length per unit of field value (signed)
+      const double a = 1.0 - std::exp(-std::abs(k * (T[qb] - T[qf])));
+      glm::dvec3 c = k * (K[qb] - K[qf]);
+      for (int ch = 0; ch < 3; ++ch) c[ch] = std::clamp(c[ch], 0.0, a);
+      store(t, i, j, c, a);
     }
-    parallel_for(size_t(n), [&](size_t jj) {
-      const int j = int(jj);
-      for (int i = 0; i < n; ++i) {
-        if (i == j) continue;
-        const size_t qf = size_t(i) * sub, qb = size_t(j) * sub;
-        const double k = step / ((j - i) * ds);  // world length per unit of field value (signed)
-        const double a = 1.0 - std::exp(-std::abs(k * (T[qb] - T[qf])));
-        glm::dvec3 c = k * (K[qb] - K[qf]);
-        for (int ch = 0; ch < 3; ++ch) c[ch] = std::clamp(c[ch], 0.0, a);
-        store(i, j, c, a);
-      }
-    });
-    t.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    return t;
-  }
+  });
+}
+
+void fill_exact(PreintegrationTable& t, const SubBins& b, double step) {
+  const int n = t.size, sub = b.sub;
+  const std::vector<double>& tau = b.tau;
+  const std::vector<glm::dvec3>& col = b.col;
   // Exact: for |j - i| = d the segment crosses L = d * sub sub-bins of length step / L, so the
   // sub-bin opacities depend on d only. Every window of L consecutive sub-bins is composited
   // front to back with the sliding-window trick for an associative operator: cut the sub-bins
@@ -112,12 +106,43 @@ PreintegrationTable build_preintegration(const TransferFunction& tf, double lo, 
         const int qe = qs + L - 1;
         const Acc w = (qs / L == qe / L) ? suf[size_t(qs)] : over(suf[size_t(qs)], pre[size_t(qe)]);
         if (dir > 0)
-          store(i, i + d, w.c, w.a);
+          store(t, i, i + d, w.c, w.a);
         else
-          store(i + d, i, w.c, w.a);
+          store(t, i + d, i, w.c, w.a);
       }
     }
   });
+}
+
+}  // namespace
+
+PreintegrationTable build_preintegration(const TransferFunction& tf, double lo, double hi, double step, int n,
+                                         PreintegrationMethod method) {
+  const auto t0 = std::chrono::steady_clock::now();
+  PreintegrationTable t;
+  t.size = n;
+  t.lo = lo;
+  t.hi = table_range(lo, hi).hi;
+  t.step = step;
+  t.rgba.assign(size_t(n) * n * 4, 0.f);
+  SubBins b;
+  b.ds = (t.hi - lo) / (n - 1);
+  b.tau.resize(size_t(n - 1) * b.sub);
+  b.col.resize(b.tau.size());
+  for (size_t q = 0; q < b.tau.size(); ++q) {
+    const glm::dvec4 e = tf.eval(lo + b.ds * (double(q) + 0.5) / b.sub);
+    b.tau[q] = extinction(e.a, tf.opacity_unit);
+    b.col[q] = glm::dvec3(e);
+  }
+  for (int i = 0; i < n; ++i) {  // guard: no field change, the 1D TF at the value
+    const glm::dvec4 e = tf.eval(lo + b.ds * i);
+    const double a = correct_opacity(e.a, step, tf.opacity_unit);
+    store(t, i, i, glm::dvec3(e) * a, a);
+  }
+  if (method == PreintegrationMethod::Integral)
+    fill_integral(t, b, step);
+  else
+    fill_exact(t, b, step);
   t.build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return t;
 }

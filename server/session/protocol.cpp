@@ -87,6 +87,139 @@ StatePatch parse_state(const json& j) {
   return p;
 }
 
+// One parser per message type, each given the whole message (its "type" already read).
+ClientMessage hello_message(const json& j) {
+  only_keys(j, "hello", {"token", "volume", "viewport", "state"});
+  Hello h;
+  if (j.contains("token")) h.token = string_of(j["token"], "hello.token", limits::kMaxTokenLength);
+  if (j.contains("volume")) h.volume = string_of(j["volume"], "hello.volume", limits::kMaxVolumeNameLength);
+  if (!j.contains("viewport")) bad("hello.viewport: required");
+  h.viewport = parse_viewport(j["viewport"], "hello.viewport");
+  if (j.contains("state")) h.state = parse_state(j["state"]);
+  return h;
+}
+
+ClientMessage camera_message(const json& j) {
+  only_keys(j, "camera", {"camera"});
+  if (!j.contains("camera")) bad("camera.camera: required");
+  return CameraMsg{*validate_parts({{"camera", j["camera"]}}).camera};
+}
+
+ClientMessage tf_message(const json& j) {
+  only_keys(j, "tf", {"tf", "version"});
+  if (!j.contains("tf")) bad("tf.tf: required");
+  Scene s = validate_parts({{"tf", j["tf"]}});
+  TfMsg m{*s.tf, s.opacity_unit, 0};
+  if (j.contains("version")) {
+    if (!j["version"].is_number_unsigned() || j["version"].get<uint64_t>() > 0xffffffffull)
+      bad("tf.version: must be an unsigned 32-bit integer");
+    m.version = j["version"].get<uint32_t>();
+  }
+  return m;
+}
+
+ClientMessage stroke_message(const json& j) {
+  only_keys(j, "stroke", {"seq", "stroke"});
+  if (!j.contains("seq") || !j["seq"].is_number_unsigned() || j["seq"].get<uint64_t>() > 0xffffffffull)
+    bad("stroke.seq: required, an unsigned 32-bit integer");
+  if (!j.contains("stroke")) bad("stroke.stroke: required");
+  StrokeMsg m;
+  m.seq = j["seq"].get<uint32_t>();
+  try {
+    m.stroke = parse_stroke(j["stroke"], "stroke.stroke");
+  } catch (const SceneError& e) {
+    bad(e.what());
+  }
+  return m;
+}
+
+ClientMessage render_message(const json& j) {
+  only_keys(j, "render", {"render"});
+  if (!j.contains("render")) bad("render.render: required");
+  if (!j["render"].is_object()) bad("render.render: must be an object");
+  json present = j["render"];  // null removes a setting (JSON merge patch): validate the rest
+  for (auto it = j["render"].begin(); it != j["render"].end(); ++it)
+    if (it.value().is_null()) present.erase(it.key());
+  validate_parts({{"render", present}});
+  return RenderMsg{j["render"]};
+}
+
+ClientMessage quality_message(const json& j) {
+  only_keys(
+      j, "quality",
+      {"interactive_scale", "interactive_ms", "interactive_quality", "final_quality", "final_format", "codec", "kbps"});
+  QualityMsg q;
+  if (j.contains("interactive_scale"))
+    q.interactive_scale = number_in(j["interactive_scale"], "quality.interactive_scale", 0.1, 1.0);
+  if (j.contains("interactive_ms"))
+    q.interactive_ms = number_in(j["interactive_ms"], "quality.interactive_ms", 0.0, 1000.0);
+  if (j.contains("interactive_quality"))
+    q.interactive_quality = int_in(j["interactive_quality"], "quality.interactive_quality", limits::kMinJpegQuality,
+                                   limits::kMaxJpegQuality);
+  if (j.contains("final_quality"))
+    q.final_quality =
+        int_in(j["final_quality"], "quality.final_quality", limits::kMinJpegQuality, limits::kMaxJpegQuality);
+  if (j.contains("final_format")) {
+    q.final_format = string_of(j["final_format"], "quality.final_format", 8);
+    if (*q.final_format != "jpeg" && *q.final_format != "png") bad("quality.final_format: jpeg or png");
+  }
+  if (j.contains("codec")) {
+    q.codec = string_of(j["codec"], "quality.codec", 16);
+    if (!encode::codec_available(*q.codec)) {
+      std::string known;
+      for (const auto& c : encode::available_codecs()) known += (known.empty() ? "" : ", ") + c;
+      bad("quality.codec: '" + *q.codec + "' is not a codec this server encodes (" + known + ")");
+    }
+  }
+  if (j.contains("kbps")) q.kbps = int_in(j["kbps"], "quality.kbps", limits::kMinKbps, limits::kMaxKbps);
+  return q;
+}
+
+ClientMessage viewport_message(const json& j) {
+  only_keys(j, "viewport", {"width", "height", "dpr"});
+  json v = j;
+  v.erase("type");
+  return ViewportMsg{parse_viewport(v, "viewport")};
+}
+
+ClientMessage volume_message(const json& j) {
+  only_keys(j, "volume", {"volume"});
+  if (!j.contains("volume")) bad("volume.volume: required");
+  return VolumeMsg{string_of(j["volume"], "volume.volume", limits::kMaxVolumeNameLength)};
+}
+
+ClientMessage ack_message(const json& j) {
+  only_keys(j, "ack", {"frame"});
+  if (!j.contains("frame") || !j["frame"].is_number_unsigned() || j["frame"].get<uint64_t>() > 0xffffffffull)
+    bad("ack.frame: must be an unsigned 32-bit integer");
+  return AckMsg{j["frame"].get<uint32_t>()};
+}
+
+ClientMessage keyframe_message(const json& j) {
+  only_keys(j, "keyframe", {});
+  return KeyframeMsg{};
+}
+
+ClientMessage ping_message(const json& j) {
+  only_keys(j, "ping", {"id"});
+  PingMsg p;
+  if (j.contains("id")) p.id = string_of(j["id"], "ping.id", limits::kMaxPingIdLength);
+  return p;
+}
+
+ClientMessage probe_message(const json& j) {
+  only_keys(j, "probe", {"id", "pixel"});
+  ProbeMsg m;
+  if (j.contains("id")) {
+    if (!j["id"].is_number_unsigned() || j["id"].get<uint64_t>() > 0xffffffffull)
+      bad("probe.id: must be an unsigned 32-bit integer");
+    m.id = j["id"].get<uint32_t>();
+  }
+  if (!j.contains("pixel")) bad("probe.pixel: required");
+  std::tie(m.x, m.y) = parse_pixel(j["pixel"], "probe.pixel");
+  return m;
+}
+
 }  // namespace
 
 int Viewport::pixel_width() const { return std::max(1, int(std::lround(width * dpr))); }
@@ -105,126 +238,13 @@ ClientMessage parse_client_message(const std::string& text) {
   if (!j.is_object()) bad("a message must be a JSON object");
   if (!j.contains("type") || !j["type"].is_string()) bad("type: required string");
   const std::string type = j["type"];
-  if (type == "hello") {
-    only_keys(j, "hello", {"token", "volume", "viewport", "state"});
-    Hello h;
-    if (j.contains("token")) h.token = string_of(j["token"], "hello.token", limits::kMaxTokenLength);
-    if (j.contains("volume")) h.volume = string_of(j["volume"], "hello.volume", limits::kMaxVolumeNameLength);
-    if (!j.contains("viewport")) bad("hello.viewport: required");
-    h.viewport = parse_viewport(j["viewport"], "hello.viewport");
-    if (j.contains("state")) h.state = parse_state(j["state"]);
-    return h;
-  }
-  if (type == "camera") {
-    only_keys(j, "camera", {"camera"});
-    if (!j.contains("camera")) bad("camera.camera: required");
-    return CameraMsg{*validate_parts({{"camera", j["camera"]}}).camera};
-  }
-  if (type == "tf") {
-    only_keys(j, "tf", {"tf", "version"});
-    if (!j.contains("tf")) bad("tf.tf: required");
-    Scene s = validate_parts({{"tf", j["tf"]}});
-    TfMsg m{*s.tf, s.opacity_unit, 0};
-    if (j.contains("version")) {
-      if (!j["version"].is_number_unsigned() || j["version"].get<uint64_t>() > 0xffffffffull)
-        bad("tf.version: must be an unsigned 32-bit integer");
-      m.version = j["version"].get<uint32_t>();
-    }
-    return m;
-  }
-  if (type == "stroke") {
-    only_keys(j, "stroke", {"seq", "stroke"});
-    if (!j.contains("seq") || !j["seq"].is_number_unsigned() || j["seq"].get<uint64_t>() > 0xffffffffull)
-      bad("stroke.seq: required, an unsigned 32-bit integer");
-    if (!j.contains("stroke")) bad("stroke.stroke: required");
-    StrokeMsg m;
-    m.seq = j["seq"].get<uint32_t>();
-    try {
-      m.stroke = parse_stroke(j["stroke"], "stroke.stroke");
-    } catch (const SceneError& e) {
-      bad(e.what());
-    }
-    return m;
-  }
-  if (type == "render") {
-    only_keys(j, "render", {"render"});
-    if (!j.contains("render")) bad("render.render: required");
-    if (!j["render"].is_object()) bad("render.render: must be an object");
-    json present = j["render"];  // null removes a setting (JSON merge patch): validate the rest
-    for (auto it = j["render"].begin(); it != j["render"].end(); ++it)
-      if (it.value().is_null()) present.erase(it.key());
-    validate_parts({{"render", present}});
-    return RenderMsg{j["render"]};
-  }
-  if (type == "quality") {
-    only_keys(j, "quality",
-              {"interactive_scale", "interactive_ms", "interactive_quality", "final_quality", "final_format", "codec",
-               "kbps"});
-    QualityMsg q;
-    if (j.contains("interactive_scale"))
-      q.interactive_scale = number_in(j["interactive_scale"], "quality.interactive_scale", 0.1, 1.0);
-    if (j.contains("interactive_ms"))
-      q.interactive_ms = number_in(j["interactive_ms"], "quality.interactive_ms", 0.0, 1000.0);
-    if (j.contains("interactive_quality"))
-      q.interactive_quality = int_in(j["interactive_quality"], "quality.interactive_quality", limits::kMinJpegQuality,
-                                     limits::kMaxJpegQuality);
-    if (j.contains("final_quality"))
-      q.final_quality =
-          int_in(j["final_quality"], "quality.final_quality", limits::kMinJpegQuality, limits::kMaxJpegQuality);
-    if (j.contains("final_format")) {
-      q.final_format = string_of(j["final_format"], "quality.final_format", 8);
-      if (*q.final_format != "jpeg" && *q.final_format != "png") bad("quality.final_format: jpeg or png");
-    }
-    if (j.contains("codec")) {
-      q.codec = string_of(j["codec"], "quality.codec", 16);
-      if (!encode::codec_available(*q.codec)) {
-        std::string known;
-        for (const auto& c : encode::available_codecs()) known += (known.empty() ? "" : ", ") + c;
-        bad("quality.codec: '" + *q.codec + "' is not a codec this server encodes (" + known + ")");
-      }
-    }
-    if (j.contains("kbps")) q.kbps = int_in(j["kbps"], "quality.kbps", limits::kMinKbps, limits::kMaxKbps);
-    return q;
-  }
-  if (type == "viewport") {
-    only_keys(j, "viewport", {"width", "height", "dpr"});
-    json v = j;
-    v.erase("type");
-    return ViewportMsg{parse_viewport(v, "viewport")};
-  }
-  if (type == "volume") {
-    only_keys(j, "volume", {"volume"});
-    if (!j.contains("volume")) bad("volume.volume: required");
-    return VolumeMsg{string_of(j["volume"], "volume.volume", limits::kMaxVolumeNameLength)};
-  }
-  if (type == "ack") {
-    only_keys(j, "ack", {"frame"});
-    if (!j.contains("frame") || !j["frame"].is_number_unsigned() || j["frame"].get<uint64_t>() > 0xffffffffull)
-      bad("ack.frame: must be an unsigned 32-bit integer");
-    return AckMsg{j["frame"].get<uint32_t>()};
-  }
-  if (type == "keyframe") {
-    only_keys(j, "keyframe", {});
-    return KeyframeMsg{};
-  }
-  if (type == "ping") {
-    only_keys(j, "ping", {"id"});
-    PingMsg p;
-    if (j.contains("id")) p.id = string_of(j["id"], "ping.id", limits::kMaxPingIdLength);
-    return p;
-  }
-  if (type == "probe") {
-    only_keys(j, "probe", {"id", "pixel"});
-    ProbeMsg m;
-    if (j.contains("id")) {
-      if (!j["id"].is_number_unsigned() || j["id"].get<uint64_t>() > 0xffffffffull)
-        bad("probe.id: must be an unsigned 32-bit integer");
-      m.id = j["id"].get<uint32_t>();
-    }
-    if (!j.contains("pixel")) bad("probe.pixel: required");
-    std::tie(m.x, m.y) = parse_pixel(j["pixel"], "probe.pixel");
-    return m;
-  }
+  static const std::pair<const char*, ClientMessage (*)(const json&)> kParsers[] = {
+      {"hello", hello_message},       {"camera", camera_message}, {"tf", tf_message},
+      {"stroke", stroke_message},     {"render", render_message}, {"quality", quality_message},
+      {"viewport", viewport_message}, {"volume", volume_message}, {"ack", ack_message},
+      {"keyframe", keyframe_message}, {"ping", ping_message},     {"probe", probe_message}};
+  for (const auto& [name, parse] : kParsers)
+    if (type == name) return parse(j);
   throw ProtocolError("unknown_type", "unknown message type '" + clean_utf8(type, 64) + "'");
 }
 
