@@ -31,6 +31,8 @@ void apply_ray_texture(vec3 c, INOUT(Lattice) L, INOUT(RayState) s) {
 // The ray through `pixel` (from the image's top-left corner) up to its walk; false when it draws
 // nothing here (s.samples: -1 missed the box, or none of its points is this brick's, or the
 // bricks in front stopped it; 0 the clip keeps none of it).
+// On false only s is meaningful: the out parameters that follow the return are left unwritten
+// (the callers read none of them then).
 bool start_ray(vec2 pixel, OUT(Ray) r, OUT(Lattice) L, INOUT(RayState) s, OUT(RayWalk) k, OUT(vec2) span,
                OUT(int) last) {
   r = make_ray(pixel);
