@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <stdexcept>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -42,7 +43,17 @@ Camera orbit_camera(const Camera& c, double deg) {
 }
 
 BenchRenderer make_bench_renderer() {
-  BenchRenderer r = render::open_backend(render::requested_backend());
+  BenchRenderer r;
+  static_cast<render::RenderBackend&>(r) = render::open_backend(render::requested_backend());
+  if (r.backend == render::Backend::Cpu) {
+    r.renderer = make_bare_cpu_renderer(r.bench);
+  } else {
+#ifdef PEAKCAST_HAVE_GL
+    r.renderer = make_bare_gl_renderer(*r.device->shaders(), r.bench);
+#else
+    throw std::logic_error("a GL backend in a build without GL");
+#endif
+  }
   std::fprintf(stderr, "renderer: %s\n", r.description().c_str());  // stdout may be --json
   return r;
 }

@@ -7,6 +7,7 @@
 
 #include "core/scene.h"
 #include "core/volume.h"
+#include "bench/bare_sampling.h"
 #include "render/backend.h"
 
 namespace peakcast::bench {
@@ -18,8 +19,11 @@ ResolvedScene bench_scene(const Volume& vol, int size, const std::string& filter
 Camera orbit_camera(const Camera& c, double deg);
 
 // The renderer a benchmark draws with: PEAKCAST_BACKEND's (auto: the CPU backend on a software
-// rasteriser), its line printed.
-using BenchRenderer = render::RenderBackend;
+// rasteriser), its line printed; the product's renderer with the bare sampling loop and the
+// renderer's switches added (`bench`: the same object).
+struct BenchRenderer : render::RenderBackend {
+  BareSampling* bench = nullptr;
+};
 BenchRenderer make_bench_renderer();
 
 }  // namespace peakcast::bench

@@ -30,7 +30,6 @@
 #include "reference/reference_renderer.h"
 #include "reference/metrics.h"
 #include "render/backend.h"
-#include "render/renderer_seam.h"
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
@@ -235,17 +234,17 @@ int run_quality(const QualityArgs& a) {
         rows.push_back(r);
       }
     }
-    // What the variant leaves out, put back (RendererSeam::force_variant) and timed on the
+    // What the variant leaves out, put back (RendererSwitches::force_variant) and timed on the
     // scene's own settings at step 1: the macrocell loop when every cell is visible, peak
     // finding for a peak classification whose TF has no peaks.
     auto time_with = [&](const ResolvedScene& s, std::function<void(render::VariantKey&)> f, render::RenderStats& st) {
-      render::RendererSeam::force_variant(caster, std::move(f));
+      gl.bench->force_variant(std::move(f));
       std::vector<double> ms;
       for (int i = 0; i <= a.frames; ++i) {
         caster.render(gv, s, render::RenderPath::Fragment, &st);
         if (i > 0) ms.push_back(st.render_ms);
       }
-      render::RendererSeam::force_variant(caster, nullptr);
+      gl.bench->force_variant(nullptr);
       return median(ms);
     };
     for (const auto& [what, settings, put_back] :

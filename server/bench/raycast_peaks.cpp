@@ -9,6 +9,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "bench/bench_scenes.h"
 #include "bench/bench_util.h"
 #include "bench/commands.h"
 #include "core/generators.h"
@@ -43,7 +44,7 @@ struct BenchVolume {
   GeneratorSpec spec;
 };
 
-BenchVolume bench_volume(const std::string& name) {
+BenchVolume raycast_volume(const std::string& name) {
   GeneratorSpec s;
   s.kind = parse_generator_kind(name);
   s.type = default_type(s.kind);
@@ -86,13 +87,12 @@ void add_raycast_peaks_commands(CLI::App& app, Runner& run) {
   rc->add_option("--data-dir", a->data_dir, "where generated volumes are cached");
   rc->callback([a, &run] {
     run = [a] {
-      render::RenderBackend b = render::open_backend(render::requested_backend());
-      std::printf("renderer: %s\n", b.description().c_str());
+      BenchRenderer b = make_bench_renderer();
       render::Renderer& caster = *b.renderer;
       std::printf("%-22s %5s %-5s %-30s %9s %8s %10s | %9s %10s | %6s\n", "volume", "size", "path", "variant",
                   "median_ms", "spr", "Msamples/s", "bare_ms", "bare_MS/s", "ratio");
       for (const auto& name : a->volumes) {
-        const BenchVolume bv = bench_volume(name);
+        const BenchVolume bv = raycast_volume(name);
         auto vol = load_or_make(bv, a->data_dir);
         auto resident = caster.make_resident(vol);
         const render::ResidentVolume& gv = *resident;
@@ -115,7 +115,7 @@ void add_raycast_peaks_commands(CLI::App& app, Runner& run) {
             Image img;
             for (int f = 0; f <= a->frames; ++f) {
               img = caster.render(gv, s, path, &st);
-              caster.render_bare(gv, s, path, img, &bst);
+              b.bench->render_bare(gv, s, path, img, &bst);
               if (f > 0) {  // frame 0 warms up (shader compile, first upload)
                 full_ms.push_back(st.render_ms);
                 bare_ms.push_back(bst.render_ms);

@@ -90,7 +90,7 @@ int run_scene_bench(const SceneBenchArgs& a) {
     render::RenderStats fs, bs;
     for (int k = 0; k < 3; ++k) {
       const Image full = caster.render(gv, s, req.path, &fs);
-      caster.render_bare(gv, s, req.path, full, &bs);
+      b.bench->render_bare(gv, s, req.path, full, &bs);
       full_ms.push_back(fs.render_ms);
       bare_ms.push_back(bs.render_ms);
     }

@@ -69,7 +69,7 @@ const CpuRenderer::TfTable& CpuRenderer::tf_table(const ResolvedScene& s, const 
     std::vector<float> rgba = render::step_tf_table(s, lo, hi);
     std::vector<uint64_t> bits = tf_cell_bits(rgba, TransferFunction::kTableSize);
     tf = &cache_insert(tf_tables_, TfTable{tf_key, std::move(rgba), std::move(bits)}, kCacheEntries);
-    ++seam_.table_builds;
+    ++table_builds_;
   }
   return *tf;
 }
@@ -96,7 +96,7 @@ const CpuRenderer::Tables& CpuRenderer::tables(const ResolvedScene& s, const std
     n.preint_size = table.size;
     n.preint_any = preint_cell_bits(n.preint, n.preint_size);
   }
-  ++seam_.table_builds;
+  ++table_builds_;
   return cache_insert(tables_, std::move(n), kCacheEntries);
 }
 
@@ -107,7 +107,7 @@ void CpuRenderer::cell_tables(CpuFrame& f, const CpuVolume& cv, const MacrocellG
   if (f.key.space_skipping) {
     CellBytes* d = cache_find(distances_, fs.occupancy_key);
     if (!d) {
-      std::vector<uint8_t> distance = render::traversal_distances(*fs.occupancy, seam_.leaps);
+      std::vector<uint8_t> distance = render::traversal_distances(*fs.occupancy, setup_options_.leaps);
       const bool any = std::find(distance.begin(), distance.end(), uint8_t(0)) != distance.end();
       distance.resize(distance.size() + 4, 0);  // the packet leaps read 4 bytes at a cell's index
       d = &cache_insert(distances_, CellBytes{fs.occupancy_key, std::move(distance), any}, kCacheEntries);
@@ -121,7 +121,7 @@ void CpuRenderer::cell_tables(CpuFrame& f, const CpuVolume& cv, const MacrocellG
     if (!m) {
       m = &cache_insert(multipliers_, CellBytes{mkey, adaptive_multipliers(cells, volume_stddev(cv.volume()))},
                         kCacheEntries);
-      ++seam_.table_builds;
+      ++table_builds_;
     }
     f.cell_stride = m->bytes.data();
   }
@@ -130,11 +130,7 @@ void CpuRenderer::cell_tables(CpuFrame& f, const CpuVolume& cv, const MacrocellG
 CpuFrame CpuRenderer::prepare(const CpuVolume& cv, const ResolvedScene& s, render::RenderPath path,
                               const PixelRect& rect, const render::Brick* brick, RenderStats* stats) {
   const MacrocellGrid& cells = cv.macrocells(s.scene.render.filter);
-  render::SetupOptions o;
-  o.leaps = seam_.leaps;
-  o.vs_widening = seam_.vs_widening;
-  o.force_variant = &seam_.force_variant;
-  const render::FrameSetup fs = render::setup_frame(cv, s, path, o, occupancy_, seam_.table_builds);
+  const render::FrameSetup fs = render::setup_frame(cv, s, path, setup_options_, occupancy_, table_builds_);
   const auto t_tables = Clock::now();
   const double lo = cv.tf_lo(), hi = cv.tf_hi();
 
@@ -188,6 +184,10 @@ void CpuRenderer::for_each_row(const PixelRect& rect, const PerRow& fn) const {
         for (int y = y0; y < std::min(rect.h, y0 + kTile); ++y) fn(x0, std::min(rect.w, x0 + kTile), y);
       },
       threads_);
+}
+
+void CpuRenderer::for_rows(const PixelRect& rect, const std::function<void(int, int, int)>& fn) const {
+  for_each_row(rect, fn);
 }
 
 void CpuRenderer::cast_rows(const CpuFrame& f, const PixelRect& rect, bool rgb8, bool read_samples,
@@ -309,36 +309,6 @@ Image CpuRenderer::render_brick(const render::ResidentVolume& v, const ResolvedS
       stats->rays_hit++;
     }
     stats->samples_mean = stats->rays_hit ? stats->samples_total / double(stats->rays_hit) : 0.0;
-  }
-  return img;
-}
-
-Image CpuRenderer::render_bare(const render::ResidentVolume& v, const ResolvedScene& s, render::RenderPath path,
-                               const Image& full, RenderStats* stats) {
-  const CpuVolume& cv = cpu_volume(v);
-  const int w = s.scene.width, h = s.scene.height;
-  if (full.width != w || full.height != h) throw std::invalid_argument("render_bare: image size differs");
-  if (stats) *stats = RenderStats::for_scene(s);
-  CpuFrame f = prepare(cv, s, path, PixelRect{0, 0, w, h}, nullptr, nullptr);
-  f.key = render::choose_variant(s, 0, path);
-  f.key.cpu = true;
-  f.key.shading = false;
-  f.key.bare_sampling = true;
-  f.v = render::shared_variant(f.key);
-  Image img(w, h);
-  const auto t0 = Clock::now();
-  for_each_row(PixelRect{0, 0, w, h}, [&](int x0, int x1, int y) {
-    for (int x = x0; x < x1; ++x) {
-      const size_t p = size_t(y) * size_t(w) + size_t(x);
-      const int budget = int(std::max(0.f, full.samples[p]));
-      const RayResult r = cast_ray_bare(f, float(x) + 0.5f, float(y) + 0.5f, budget);
-      img.rgba[p * 4 + 3] = r.acc.a;
-      img.samples[p] = r.samples;
-    }
-  });
-  if (stats) {
-    stats->render_ms = ms_since(t0);
-    stats->variant = f.key.name();
   }
   return img;
 }

@@ -5,6 +5,7 @@
 // it already lies in host memory (CpuVolume).
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -34,25 +35,26 @@ class CpuRenderer : public render::Renderer {
   // is ignored: both draw the same pixels.
   render::RenderResult render(const render::ResidentVolume& volume, const ResolvedScene& scene,
                               const render::RenderRequest& request, render::RenderStats* stats = nullptr) override;
-  Image render_bare(const render::ResidentVolume& volume, const ResolvedScene& scene, render::RenderPath path,
-                    const Image& full, render::RenderStats* stats = nullptr) override;
   int sample_cap(const render::VariantKey&) const override;
 
   using Brick = render::Brick;
   Image render_brick(const render::ResidentVolume& volume, const ResolvedScene& scene, const Brick& brick,
                      render::RenderStats* stats = nullptr,
                      std::optional<render::PixelRect> rect = std::nullopt) override;
-  // Off: every ray alone (cast_ray), without the packet leaps of cast_rays. Tests show both
-  // give the same pixels and sample counts.
-  void set_ray_packets(bool on) { packets_ = on; }
-  // Off: plain DVR walks every point through the shared visit, without the dense_run fast path.
-  // Tests show both give the same pixels and sample counts.
-  void set_dense_runs(bool on) { dense_runs_ = on; }
 
- private:
+ protected:
   // The frame's inputs, from the caches (built on a miss).
   CpuFrame prepare(const CpuVolume& volume, const ResolvedScene& scene, render::RenderPath path,
                    const render::PixelRect& rect, const render::Brick* brick, render::RenderStats* stats);
+  // for_each_row for a subclass's own per-pixel loop (peakcast-bench's bare sampling loop).
+  void for_rows(const render::PixelRect& rect, const std::function<void(int, int, int)>& fn) const;
+  // The SIMD fast paths, each held by a test to the shared code on the same rays (a test's
+  // subclass turns them off): the 16-ray packet leaps of cast_rays (off: every ray alone,
+  // cast_ray), and plain DVR's dense_run (off: every point through the shared visit).
+  bool packets_ = true;
+  bool dense_runs_ = true;
+
+ private:
   // Calls fn(x0, x1, y) for the rows of every tile of `rect` (rect-relative pixels), tiles
   // spread over the threads.
   // Casts the rect's rays into res (rgb8 or float) and, when asked, their sample counts.
@@ -62,8 +64,6 @@ class CpuRenderer : public render::Renderer {
   void for_each_row(const render::PixelRect& rect, const PerRow& fn) const;
 
   int threads_ = 1;
-  bool packets_ = true;
-  bool dense_runs_ = true;
   struct TfTable {
     std::string key;
     std::vector<float> rgba;

@@ -39,7 +39,6 @@ class RayCaster {
                !f.key.adaptive && !f.v.brick) {}
 
   RayResult cast(float px, float py) { return setup(px, py) ? walk(0) : result(); }
-  RayResult cast_bare(float px, float py, int budget);
   // The ray through (px, py) up to its traversal; false (and samples -1) when it misses the box.
   bool setup(float px, float py);
   // The traversal from lattice index `first` (walk_leaps only: the points before it lie in empty

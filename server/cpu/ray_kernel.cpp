@@ -87,17 +87,6 @@ RayResult RayCaster::walk(int first) {
   return result();
 }
 
-RayResult RayCaster::cast_bare(float px, float py, int budget) {
-  r_ = make_ray(vec2(px, py));
-  L_ = ray_lattice(r_, intersect_box(r_).x);
-  last_ = budget;
-  float sum = 0.f;
-  for (int i = 0; i < budget; ++i) sum += field_at(i, 1);
-  s_.acc = vec4(sum * 1e-9f);  // keeps the loop from being optimised away
-  s_.samples = float(budget);
-  return result();
-}
-
 }  // namespace
 
 RayResult CastRay(const CpuFrame& f, float px, float py) { return RayCaster(f).cast(px, py); }
@@ -128,9 +117,6 @@ void CastRays(const CpuFrame& f, const float* px, const float* py, int n, RayRes
     }
   }
 }
-RayResult CastRayBare(const CpuFrame& f, float px, float py, int budget) {
-  return RayCaster(f).cast_bare(px, py, budget);
-}
 
 }  // namespace HWY_NAMESPACE
 }  // namespace peakcast::cpu
@@ -140,16 +126,11 @@ HWY_AFTER_NAMESPACE();
 namespace peakcast::cpu {
 HWY_EXPORT(CastRay);
 HWY_EXPORT(CastRays);
-HWY_EXPORT(CastRayBare);
 
 RayResult cast_ray(const CpuFrame& f, float px, float py) { return HWY_DYNAMIC_DISPATCH(CastRay)(f, px, py); }
 
 void cast_rays(const CpuFrame& f, const float* px, const float* py, int n, RayResult* out) {
   HWY_DYNAMIC_DISPATCH(CastRays)(f, px, py, n, out);
-}
-
-RayResult cast_ray_bare(const CpuFrame& f, float px, float py, int budget) {
-  return HWY_DYNAMIC_DISPATCH(CastRayBare)(f, px, py, budget);
 }
 
 }  // namespace peakcast::cpu

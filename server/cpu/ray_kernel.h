@@ -64,7 +64,5 @@ RayResult cast_ray(const CpuFrame& f, float px, float py);
 // to each ray's first occupied cell are taken for a packet of rays in SIMD lanes.
 constexpr int kRayPacket = 16;
 void cast_rays(const CpuFrame& f, const float* px, const float* py, int n, RayResult* out);
-// Benchmark baseline: the same ray's first `budget` lattice points, reconstruction only.
-RayResult cast_ray_bare(const CpuFrame& f, float px, float py, int budget);
 
 }  // namespace peakcast::cpu

@@ -278,11 +278,6 @@ render::RenderResult MpiRenderer::render(const render::ResidentVolume& v, const 
   }
 }
 
-Image MpiRenderer::render_bare(const render::ResidentVolume&, const ResolvedScene&, render::RenderPath, const Image&,
-                               render::RenderStats*) {
-  throw std::invalid_argument("the bare sampling loop is not measured under MPI");
-}
-
 Image MpiRenderer::render_brick(const render::ResidentVolume&, const ResolvedScene&, const render::Brick&,
                                 render::RenderStats*, std::optional<render::PixelRect>) {
   throw std::invalid_argument("an MPI renderer draws whole frames: its ranks render the bricks");

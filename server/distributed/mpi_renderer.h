@@ -36,8 +36,6 @@ class MpiRenderer : public render::Renderer {
   // every brick with wider ghosts when a scene needs them (a longer step).
   render::RenderResult render(const render::ResidentVolume& volume, const ResolvedScene& scene,
                               const render::RenderRequest& request, render::RenderStats* stats = nullptr) override;
-  Image render_bare(const render::ResidentVolume&, const ResolvedScene&, render::RenderPath, const Image&,
-                    render::RenderStats* = nullptr) override;
   Image render_brick(const render::ResidentVolume&, const ResolvedScene&, const render::Brick&,
                      render::RenderStats* = nullptr, std::optional<render::PixelRect> = std::nullopt) override;
   int sample_cap(const render::VariantKey& key) const override;

@@ -19,6 +19,7 @@ class EglDevice final : public GlDevice {
                                                   program_cache, context_.get());
     return std::make_unique<GlRenderer>(*shaders_);
   }
+  ShaderCache* shaders() override { return shaders_.get(); }
   ~EglDevice() override {
     shaders_.reset();  // programs go while their context is still there
     context_.reset();

@@ -12,6 +12,8 @@
 
 namespace peakcast::gpu {
 
+class ShaderCache;
+
 class GlDevice {
  public:
   virtual ~GlDevice() = default;
@@ -21,6 +23,9 @@ class GlDevice {
   // binaries in `program_cache`, empty: off); the device must outlive it.
   virtual std::unique_ptr<render::Renderer> make_renderer(const std::filesystem::path& shader_dir,
                                                           const std::filesystem::path& program_cache) = 0;
+  // The shaders make_renderer loaded (null before): another GL renderer on this device shares
+  // them (peakcast-bench's, with its bare sampling loop).
+  virtual ShaderCache* shaders() = 0;
 };
 
 // An EGL context on `egl_device` ("auto", "surfaceless", an index; empty: PEAKCAST_EGL_DEVICE,

@@ -146,18 +146,14 @@ void GlRenderer::bind_tf_table(const GlVolume& gv, const ResolvedScene& s, const
     const std::vector<float> table = step_tf_table(s, gv.tf_lo(), gv.tf_hi());
     glTextureSubImage1D(e.texture.id(), 0, 0, TransferFunction::kTableSize, GL_RGBA, GL_FLOAT, table.data());
     tf_table = &cache_insert(tf_tables_, std::move(e), kCacheEntries);
-    ++seam_.table_builds;
+    ++table_builds_;
   }
   glBindTextureUnit(kUnitTf, tf_table->texture.id());
 }
 
 VariantKey GlRenderer::prepare(const GlVolume& gv, const ResolvedScene& s, RenderPath path, RenderStats* stats) {
   const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
-  SetupOptions o;
-  o.leaps = seam_.leaps;
-  o.vs_widening = seam_.vs_widening;
-  o.force_variant = &seam_.force_variant;
-  const FrameSetup f = setup_frame(gv, s, path, o, occupancy_cache_, seam_.table_builds);
+  const FrameSetup f = setup_frame(gv, s, path, setup_options_, occupancy_cache_, table_builds_);
   const auto t_tables = Clock::now();
   bind_tf_table(gv, s, f.tf_sig);
   upload_tables(gv, s, f.key.peaks ? f.peaks : std::vector<Peak>{});
@@ -165,10 +161,10 @@ VariantKey GlRenderer::prepare(const GlVolume& gv, const ResolvedScene& s, Rende
   if (f.key.space_skipping) {
     DistanceEntry* e = cache_find(distance_cache_, f.occupancy_key);
     if (!e) {
-      e = &cache_insert(
-          distance_cache_,
-          DistanceEntry{f.occupancy_key, make_cell_buffer(cells, traversal_distances(*f.occupancy, seam_.leaps))},
-          kCacheEntries);
+      e = &cache_insert(distance_cache_,
+                        DistanceEntry{f.occupancy_key,
+                                      make_cell_buffer(cells, traversal_distances(*f.occupancy, setup_options_.leaps))},
+                        kCacheEntries);
     }
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboCellDistance, e->buffer.id());
   }
@@ -180,26 +176,6 @@ VariantKey GlRenderer::prepare(const GlVolume& gv, const ResolvedScene& s, Rende
     stats->table_ms = table_ms;
   }
   return f.key;
-}
-
-Image GlRenderer::render_bare(const ResidentVolume& v, const ResolvedScene& s, RenderPath path, const Image& full,
-                              RenderStats* stats) {
-  const GlVolume& gv = gpu_volume(v);
-  const int w = s.scene.width, h = s.scene.height;
-  if (full.width != w || full.height != h) throw std::invalid_argument("render_bare: image size differs");
-  std::vector<float> budget(full.samples.size());  // rows top-down, like the render targets
-  for (size_t p = 0; p < budget.size(); ++p) budget[p] = std::max(0.f, full.samples[p]);
-  budget_texture_ = gpu::make_texture(GL_TEXTURE_2D);
-  glTextureStorage2D(budget_texture_.id(), 1, GL_R32F, w, h);
-  glTextureSubImage2D(budget_texture_.id(), 0, 0, 0, w, h, GL_RED, GL_FLOAT, budget.data());
-  glTextureParameteri(budget_texture_.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-  glTextureParameteri(budget_texture_.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-  glBindTextureUnit(kUnitBudget, budget_texture_.id());
-  VariantKey key = choose_variant(s, 0, path);
-  key.shading = false;
-  key.bare_sampling = true;
-  if (stats) *stats = RenderStats::for_scene(s);
-  return std::move(draw(gv, s, key, PixelRect{0, 0, w, h}, true, stats).image);
 }
 
 GlRenderer::Targets& GlRenderer::setup_draw(const GlVolume& gv, const ResolvedScene& s, const VariantKey& key,

@@ -45,8 +45,6 @@ class GlRenderer : public render::Renderer {
   // `volume` must be a GlVolume (std::invalid_argument otherwise).
   render::RenderResult render(const render::ResidentVolume& volume, const ResolvedScene& scene,
                               const render::RenderRequest& request, render::RenderStats* stats = nullptr) override;
-  Image render_bare(const render::ResidentVolume& volume, const ResolvedScene& scene, render::RenderPath path,
-                    const Image& full, render::RenderStats* stats = nullptr) override;
   // The fragment path with BRICK: ownership, look-behind and look-ahead as the CPU backend's.
   Image render_brick(const render::ResidentVolume& volume, const ResolvedScene& scene, const render::Brick& brick,
                      render::RenderStats* stats = nullptr,
@@ -54,6 +52,13 @@ class GlRenderer : public render::Renderer {
   int sample_cap(const render::VariantKey& key) const override;
   // For the layout test: the linked program of a variant.
   const gpu::Program& program(const render::VariantKey& key);
+
+ protected:
+  // One synchronous draw of `key` over `rect` (a subclass's own variant: peakcast-bench's bare
+  // sampling loop), read back; the per-TF tables must have been bound by a render of the scene.
+  render::RenderResult draw(const GlVolume& volume, const ResolvedScene& scene, const render::VariantKey& key,
+                            const render::PixelRect& rect, bool read_samples, render::RenderStats* stats,
+                            const render::Brick* brick = nullptr);
 
  private:
   // Render targets of one size and format. A few are kept: a still's tiles interleave with
@@ -72,9 +77,6 @@ class GlRenderer : public render::Renderer {
   void upload_tables(const GlVolume& volume, const ResolvedScene& scene, const std::vector<Peak>& peaks);
   void bind_tf_table(const GlVolume& volume, const ResolvedScene& scene, const std::string& tf_sig);
   void bind_multipliers(const GlVolume& volume, const MacrocellGrid& cells);
-  render::RenderResult draw(const GlVolume& volume, const ResolvedScene& scene, const render::VariantKey& key,
-                            const render::PixelRect& rect, bool read_samples, render::RenderStats* stats,
-                            const render::Brick* brick = nullptr);
   // A draw in parts, shared by draw() and the asynchronous frames: the program (its wait in
   // stats->compile_ms), uniforms and targets; then the draw or dispatch between a timer
   // query's begin and end; then the query's result (waits for it).
@@ -86,7 +88,6 @@ class GlRenderer : public render::Renderer {
   gpu::Buffer ubo_;
   gpu::Buffer front_opacity_;  // render_brick with a ray texture: Brick::front_opacity
   gpu::VertexArray vao_;
-  gpu::Texture budget_texture_;
   // Per-TF state in small caches, most recent first: sessions with different TFs (and a still's
   // tiles between their frames) take turns without rebuilding tables at every draw.
   struct TfTable {  // the 1D TF table over the value range

@@ -61,7 +61,7 @@ void GlRenderer::bind_multipliers(const GlVolume& gv, const MacrocellGrid& cells
   if (!e) {
     StrideEntry n{key, make_cell_buffer(cells, adaptive_multipliers(cells, volume_stddev(gv.volume())))};
     e = &cache_insert(stride_cache_, std::move(n), kCacheEntries);
-    ++seam_.table_builds;
+    ++table_builds_;
   }
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboCellStride, e->buffer.id());
 }
@@ -116,7 +116,7 @@ void GlRenderer::upload_tables(const GlVolume& gv, const ResolvedScene& s, const
   }
   tables_ = t.sizes;
   cache_insert(tables_cache_, std::move(t), kCacheEntries);
-  ++seam_.table_builds;
+  ++table_builds_;
 }
 
 }  // namespace peakcast::gpu

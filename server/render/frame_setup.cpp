@@ -70,8 +70,8 @@ FrameSetup setup_frame(const ResidentVolume& gv, const ResolvedScene& s, RenderP
         builds);
   }
   f.key = choose_variant(s, f.occupancy->empty_cells, path, f.peaks.size());
-  if (o.force_variant && *o.force_variant) {
-    (*o.force_variant)(f.key);
+  if (o.force_variant) {
+    o.force_variant(f.key);
     f.key.space_skipping = f.key.space_skipping && !f.occupancy_key.empty();  // forced only where occupancy was built
   }
   f.table_ms = ms_since(t0);

@@ -46,17 +46,20 @@ struct FrameSetup {
   double table_ms = 0.0;  // peaks and occupancy built for this frame
 };
 
+// How a renderer sets up its frames. The product keeps these defaults; the subclasses of tests
+// and peakcast-bench (render/renderer_switches.h) change them to show what each choice saves or
+// prevents.
 struct SetupOptions {
-  bool leaps = true;           // RendererSeam::set_empty_space_leaps
-  double vs_widening = 0.125;  // RendererSeam::set_virtual_sample_widening
-  const std::function<void(VariantKey&)>* force_variant = nullptr;
+  bool leaps = true;           // leap by the empty-space distance (off: step through every empty cell)
+  double vs_widening = 0.125;  // cells' value ranges widened for virtual samples (kCatmullRomOvershoot)
+  std::function<void(VariantKey&)> force_variant;  // a change to every frame's chosen variant
 };
 
 FrameSetup setup_frame(const ResidentVolume& volume, const ResolvedScene& s, RenderPath path, const SetupOptions& o,
                        OccupancyCache& cache, size_t& builds);
 
 // The empty-space distance per cell a traversal reads: the occupancy's, or, with leaps off
-// (RendererSeam::set_empty_space_leaps), at most 1 so that every empty cell is stepped through.
+// (SetupOptions::leaps), at most 1 so that every empty cell is stepped through.
 std::vector<uint8_t> traversal_distances(const Occupancy& occupancy, bool leaps);
 
 // The TF as TransferFunction::kTableSize entries over [lo, hi]: colour, and in the fourth channel

@@ -12,6 +12,7 @@
 #include "core/image.h"
 #include "core/scene.h"
 #include "render/brick.h"
+#include "render/frame_setup.h"
 #include "render/frame.h"
 #include "render/render_stats.h"
 #include "render/resident_volume.h"
@@ -42,15 +43,11 @@ class Renderer {
     req.path = path;
     return std::move(render(volume, scene, req, stats).image);
   }
-  // Benchmark baseline: the rays of `full` (an image this renderer made of the same scene)
-  // with its per-pixel sample counts, reconstruction only.
   // Distributed rendering: the brick's layer of the frame (render/brick.h), whole image or a
   // tile of it; `volume` holds the brick's region of the whole volume. Float RGBA,
   // premultiplied, no background; samples -1 where the ray owns no lattice point here.
   virtual Image render_brick(const ResidentVolume& volume, const ResolvedScene& scene, const Brick& brick,
                              RenderStats* stats = nullptr, std::optional<PixelRect> rect = std::nullopt) = 0;
-  virtual Image render_bare(const ResidentVolume& volume, const ResolvedScene& scene, RenderPath path,
-                            const Image& full, RenderStats* stats = nullptr) = 0;
   // The most samples a ray of this variant takes (kMaxSamplesPerRay, or less where a driver
   // bounds a shader's loops: llvmpipe); rays that reach it are counted in the stats.
   virtual int sample_cap(const VariantKey& key) const = 0;
@@ -76,17 +73,10 @@ class Renderer {
   virtual void prefetch_variants() {}
 
  protected:
-  // Switches for tests and benchmarks, set only through render/renderer_seam.h (the product
-  // never changes them): empty-space leaps, the cells' widening for virtual samples, a forced
-  // variant, and a count of the per-TF tables and occupancy grids built.
-  struct Seam {
-    bool leaps = true;
-    double vs_widening = 0.125;  // kCatmullRomOvershoot
-    std::function<void(VariantKey&)> force_variant;
-    size_t table_builds = 0;
-  };
-  Seam seam_;
-  friend class RendererSeam;
+  // How frames are set up (the product's defaults; subclasses in tests and peakcast-bench change
+  // them: render/renderer_switches.h), and the per-TF tables and occupancy grids built so far.
+  SetupOptions setup_options_;
+  size_t table_builds_ = 0;
 
   static void check_submit(const RenderRequest& request, size_t in_flight);
 

@@ -17,7 +17,6 @@
 #include "unit/test_util.h"
 #include "distributed/brick_frame.h"
 #include "distributed/kd_split.h"
-#include "render/renderer_seam.h"
 
 using namespace peakcast;
 
@@ -248,14 +247,14 @@ TEST(Bricks, VirtualSamplesEqualOneProcess) {
   // longer steps put fewer points between a run's end and the next: more runs end near a face.
   // (A visit after a gap within the look-ahead once took the flushed run's owner; these scenes
   // did not show it, measured by undoing the fix: the fix is by review.)
-  render::RendererSeam::set_virtual_sample_widening(*test::gpu().caster, 0.0);
+  test::gpu().switches->set_virtual_sample_widening(0.0);
   // GL on these 8-bit blobs with long steps: up to 0.0040 (measured; the texture unit's 8-bit
   // filter weights, as for the differential steps above). CPU: 2.0e-6.
   const double gl_8bit_long_steps = test::gpu().gl ? 0.015 : kBound;
   for (const char* r : {R"({"step": 1, "virtual_samples": 3})", R"({"step": 3, "virtual_samples": 3})",
                         R"({"step": 4.5, "virtual_samples": 3, "classification": "preint"})"})
     check_all_splits({"", r, blob_tf, blob_cam}, blobs, gl_8bit_long_steps);
-  render::RendererSeam::set_virtual_sample_widening(*test::gpu().caster, 0.125);
+  test::gpu().switches->set_virtual_sample_widening(0.125);
   std::filesystem::remove(blobs);
   check_all_splits(
       {"", R"({"step": 1, "virtual_samples": 3, "classification": "peaks"})",

@@ -11,7 +11,6 @@
 #include "cpu/cpu_renderer.h"
 #include "encode/png.h"
 #include "gpu/gpu_fixture.h"
-#include "render/renderer_seam.h"
 
 namespace peakcast {
 namespace {
@@ -107,15 +106,14 @@ TEST_P(Leaps, SkipExactlyWhatSteppingThroughEmptyCellsSkips) {
   const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
   const Occupancy occ = classify_cells(cells, s.tf, gv.tf_lo(), gv.tf_hi());
   ASSERT_GT(*std::max_element(occ.distance.begin(), occ.distance.end()), 2) << "nothing to leap over";
-  auto& caster = *test::gpu().caster;
   render::RenderStats st_lattice, st_leap, st_step;
   const Image lattice = test::render_gpu(gv, s, render::RenderPath::Fragment, &st_lattice);
-  render::RendererSeam::force_variant(caster, [](render::VariantKey& k) { k.cell_dda = true; });
+  test::gpu().switches->force_variant([](render::VariantKey& k) { k.cell_dda = true; });
   const Image leap = test::render_gpu(gv, s, render::RenderPath::Fragment, &st_leap);
-  render::RendererSeam::set_empty_space_leaps(caster, false);
+  test::gpu().switches->set_empty_space_leaps(false);
   const Image step = test::render_gpu(gv, s, render::RenderPath::Fragment, &st_step);
-  render::RendererSeam::set_empty_space_leaps(caster, true);
-  render::RendererSeam::force_variant(caster, nullptr);
+  test::gpu().switches->set_empty_space_leaps(true);
+  test::gpu().switches->force_variant(nullptr);
   ASSERT_NE(st_lattice.variant.find("+skip"), std::string::npos) << st_lattice.variant;
   ASSERT_NE(st_leap.variant.find("+dda"), std::string::npos) << st_leap.variant;
   EXPECT_GT(st_step.samples_mean, 0.0) << "nothing visible: the test would prove nothing";
@@ -146,7 +144,7 @@ TEST_P(Leaps, SkipExactlyWhatSteppingThroughEmptyCellsSkips) {
 // The CPU backend takes the leaps up to each ray's first occupied cell for 16 rays at once in
 // SIMD lanes (cpu::cast_rays): bit for bit what each ray alone does, pixels and sample counts.
 TEST_P(Leaps, CpuRayPacketsEqualSingleRays) {
-  auto* cpu = dynamic_cast<cpu::CpuRenderer*>(test::gpu().caster.get());
+  auto* cpu = test::gpu().cpu;
   if (!cpu) GTEST_SKIP() << "CPU backend only";
   const LeapCase& c = GetParam();
   auto v = test::make_volume(c.kind, c.dims, default_type(c.kind));
@@ -174,7 +172,7 @@ TEST_P(Leaps, CpuRayPacketsEqualSingleRays) {
 // path's stop). Not covered: a ray texture's step multiplier (the fast path's slow opacity on
 // every sample); blobs_peaks does not take the fast path (peaks).
 TEST_P(Leaps, CpuDenseRunsEqualTheSharedWalks) {
-  auto* cpu = dynamic_cast<cpu::CpuRenderer*>(test::gpu().caster.get());
+  auto* cpu = test::gpu().cpu;
   if (!cpu) GTEST_SKIP() << "CPU backend only";
   const LeapCase& c = GetParam();
   auto v = test::make_volume(c.kind, c.dims, default_type(c.kind));

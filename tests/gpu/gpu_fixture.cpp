@@ -18,12 +18,16 @@ Gpu& gpu() {
   static Gpu g = [] {
     Gpu x;
     if (cpu_backend()) {
-      x.caster = std::make_unique<cpu::CpuRenderer>();
+      auto cpu = std::make_unique<TestCpuRenderer>();
+      x.cpu = cpu.get();
+      x.switches = cpu.get();
+      x.caster = std::move(cpu);
     } else {
       x.context = gpu::EglContext::create();
       x.shaders = std::make_unique<gpu::ShaderCache>(std::filesystem::path(PEAKCAST_SOURCE_DIR) / "shaders");
-      auto gl = std::make_unique<gpu::GlRenderer>(*x.shaders);
+      auto gl = std::make_unique<render::Switchable<gpu::GlRenderer>>(*x.shaders);
       x.gl = gl.get();
+      x.switches = gl.get();
       x.caster = std::move(gl);
     }
     std::printf("renderer: %s\n", x.caster->description().c_str());

@@ -19,15 +19,29 @@
 #include "reference/metrics.h"
 #include "gpu/gl_volume.h"
 #include "gpu/gl_renderer.h"
+#include "cpu/cpu_renderer.h"
 #include "render/renderer.h"
+#include "render/renderer_switches.h"
 
 namespace peakcast::test {
+
+// The CPU backend with its SIMD fast paths switchable: each is held to the shared code on the
+// same rays.
+class TestCpuRenderer final : public render::Switchable<cpu::CpuRenderer> {
+ public:
+  // Off: every ray alone (cast_ray), without the packet leaps of cast_rays.
+  void set_ray_packets(bool on) { packets_ = on; }
+  // Off: plain DVR walks every point through the shared visit, without the dense_run fast path.
+  void set_dense_runs(bool on) { dense_runs_ = on; }
+};
 
 struct Gpu {
   std::unique_ptr<gpu::EglContext> context;  // GL backend only
   std::unique_ptr<gpu::ShaderCache> shaders;
-  std::unique_ptr<render::Renderer> caster;  // the backend under test
-  gpu::GlRenderer* gl = nullptr;             // the same renderer when it is the GL one
+  std::unique_ptr<render::Renderer> caster;      // the backend under test (a test subclass of the product's)
+  gpu::GlRenderer* gl = nullptr;                 // the same renderer when it is the GL one
+  TestCpuRenderer* cpu = nullptr;                // the same renderer when it is the CPU one
+  render::RendererSwitches* switches = nullptr;  // the same renderer's switches
 };
 Gpu& gpu();          // created on first use
 bool cpu_backend();  // PEAKCAST_TEST_BACKEND=cpu

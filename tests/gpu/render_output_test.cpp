@@ -6,7 +6,6 @@
 
 #include "encode/png.h"
 #include "gpu/gpu_fixture.h"
-#include "render/renderer_seam.h"
 
 using namespace peakcast;
 using nlohmann::json;
@@ -161,15 +160,14 @@ TEST(Tiles, InterleavedWithAnotherTfRebuildNothing) {
     json other_tf = tf_over_range(*v, {{0.0, 0, 0, 0, 0}, {0.4, 0.2, 0.5, 1.0, 0.3}, {1.0, 1, 1, 1, 0.8}});
     b["tf"] = other_tf;
     const ResolvedScene still = test::make_scene(*v, a), view = test::make_scene(*v, b);
-    auto& caster = *test::gpu().caster;
     draw(gv, still, render::RenderPath::Fragment, render::RenderOutput::Rgb8, render::PixelRect{0, 0, 8, 8});
     draw(gv, view, render::RenderPath::Fragment, render::RenderOutput::Rgb8);
-    const size_t built = render::RendererSeam::table_builds(caster);
+    const size_t built = test::gpu().switches->table_builds();
     for (const auto& r : render::tile_grid(still.scene.width, still.scene.height, 32, 32)) {
       draw(gv, still, render::RenderPath::Fragment, render::RenderOutput::Rgb8, r);
       draw(gv, view, render::RenderPath::Fragment, render::RenderOutput::Rgb8);
     }
-    EXPECT_EQ(render::RendererSeam::table_builds(caster), built);
+    EXPECT_EQ(test::gpu().switches->table_builds(), built);
   }
 }
 

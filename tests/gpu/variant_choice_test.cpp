@@ -7,7 +7,6 @@
 
 #include "cpu/cpu_renderer.h"
 #include "gpu/gpu_fixture.h"
-#include "render/renderer_seam.h"
 
 namespace peakcast {
 namespace {
@@ -106,11 +105,10 @@ TEST_P(Variants, HoldOnlyWhatTheSceneUsesAndOmissionsChangeNoPixel) {
   for (const char* part : c.has) EXPECT_NE(st.variant.find(part), std::string::npos) << st.variant << " lacks " << part;
   for (const char* part : c.lacks) EXPECT_EQ(st.variant.find(part), std::string::npos) << st.variant << " has " << part;
   if (!c.put_back) return;
-  auto& caster = *test::gpu().caster;
-  render::RendererSeam::force_variant(caster, c.put_back);
+  test::gpu().switches->force_variant(c.put_back);
   render::RenderStats full_st;
   const Image full = test::render_gpu(gv, s, render::RenderPath::Fragment, &full_st);
-  render::RendererSeam::force_variant(caster, nullptr);
+  test::gpu().switches->force_variant(nullptr);
   ASSERT_NE(full_st.variant, st.variant) << "nothing was put back";
   float worst = 0;
   for (size_t i = 0; i < chosen.rgba.size(); ++i) worst = std::max(worst, std::abs(chosen.rgba[i] - full.rgba[i]));

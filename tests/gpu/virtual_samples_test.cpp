@@ -6,7 +6,6 @@
 
 #include "core/sampling.h"
 #include "gpu/sampling_scenes.h"
-#include "render/renderer_seam.h"
 
 using namespace peakcast;
 using namespace peakcast::sampling_scenes;
@@ -135,9 +134,9 @@ TEST(VirtualSamples, WideningKeepsTheCellsSkippingWouldStreak) {
   sj["tf"] = {{"points", {{0.0, 0, 0, 0, 0}, {0.81, 1, 0.6, 0.2, 0.0}, {0.82, 1, 0.6, 0.2, 0.3}, {1.0, 1, 1, 1, 0.3}}}};
   auto render = [&](bool skipping, double widening, render::RenderStats* st = nullptr) {
     sj["render"]["space_skipping"] = skipping;
-    render::RendererSeam::set_virtual_sample_widening(caster, widening);
+    test::gpu().switches->set_virtual_sample_widening(widening);
     Image img = test::render_gpu(gv, test::make_scene(*v, sj), render::RenderPath::Fragment, st);
-    render::RendererSeam::set_virtual_sample_widening(caster, kCatmullRomOvershoot);
+    test::gpu().switches->set_virtual_sample_widening(kCatmullRomOvershoot);
     return img;
   };
   auto differing = [](const Image& a, const Image& b) {
