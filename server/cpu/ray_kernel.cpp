@@ -92,7 +92,7 @@ RayResult RayCaster::walk(int first) {
 RayResult CastRay(const CpuFrame& f, float px, float py) { return RayCaster(f).cast(px, py); }
 
 void CastRays(const CpuFrame& f, const float* px, const float* py, int n, RayResult* out) {
-  const bool leaps = f.key.space_skipping && !f.key.adaptive && !f.key.cell_dda;
+  const bool leaps = f.key.space_skipping && !f.key.adaptive;
   for (int k0 = 0; k0 < n; k0 += kRayPacket) {
     const int m = std::min(kRayPacket, n - k0);
     alignas(64) unsigned char storage[kRayPacket][sizeof(RayCaster)];

@@ -78,7 +78,6 @@ ray::Variant shared_variant(const VariantKey& key) {
   v.shading = key.shading;
   v.adaptive = key.adaptive;
   v.space_skipping = key.space_skipping;
-  v.cell_dda = key.cell_dda;
   v.virtual_samples = key.virtual_samples;
   v.peaks = key.peaks;
   v.peak_xor = key.peaks && key.peak_mode == PeakMode::Xor;

@@ -48,7 +48,6 @@ std::vector<std::string> VariantKey::defines() const {
   if (preintegration) d.push_back("PREINTEGRATION");
   if (rgb8) d.push_back("RGB8_OUTPUT");
   if (ray_texture) d.push_back("RAY_TEXTURE");
-  if (cell_dda) d.push_back("CELL_DDA");
   if (brick) d.push_back("BRICK");
   if (ray_texture_volume) d.push_back("RAY_TEXTURE_VOLUME");
   for (auto& i : interface_defines()) d.push_back(std::move(i));
@@ -68,7 +67,6 @@ std::string VariantKey::name() const {
   if (virtual_samples) n += "+vs" + std::to_string(virtual_samples);
   if (bare_sampling) n += "+bare";
   if (rgb8) n += "+rgb8";
-  if (cell_dda) n += "+dda";
   if (brick) n += "+brick";
   if (ray_texture) n += ray_texture_volume ? "+raytex:volume" : "+raytex:view";
   return n;

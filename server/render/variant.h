@@ -23,16 +23,13 @@ struct VariantKey {
   bool differential = false;   // Knoll §5, perspective cameras only (orthographic: uniform at the footprint)
   bool adaptive = false;       // Knoll §6.2 per-macrocell step multipliers (brings the cell traversal)
   int virtual_samples = 0;     // Lee 2010: 0, 3 or 7 Catmull-Rom samples between true ones
-  bool bare_sampling = false;  // benchmark baseline only
+  bool bare_sampling = false;  // peakcast-bench's renderer only (server/bench/bare_sampling.h)
   bool peaks = false;          // peak finding between samples
   PeakMode peak_mode = PeakMode::DvrPlusPeaks;
   bool preintegration = false;
   bool rgb8 = false;                // output quantised to 8-bit RGB on the GPU (RenderOutput::Rgb8)
   bool ray_texture = false;         // Raspe 2008 per-ray controls (any render.ray_texture)
   bool ray_texture_volume = false;  // ... indexed by the entry point (else by the pixel)
-  // Tests only: space skipping by the 3D-DDA over macrocells instead of lattice-driven leaps
-  // (the two must visit the same points; adaptive sampling always uses the DDA).
-  bool cell_dda = false;
   // Distributed rendering (render/brick.h): one brick's part of each ray, premultiplied, no
   // background. Set by render_brick, never chosen from a scene.
   bool brick = false;

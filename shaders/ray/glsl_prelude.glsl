@@ -40,11 +40,6 @@
 #else
 #define V_SPACE_SKIPPING false
 #endif
-#ifdef CELL_DDA
-#define V_CELL_DDA true
-#else
-#define V_CELL_DDA false
-#endif
 #ifdef VIRTUAL_SAMPLES
 #define V_VIRTUAL_SAMPLES VIRTUAL_SAMPLES
 #else
@@ -90,6 +85,6 @@
 #else
 #define V_BRICK false
 #endif
-const Variant V = Variant(V_ORTHOGRAPHIC, V_DIFFERENTIAL, V_SHADING, V_ADAPTIVE, V_SPACE_SKIPPING, V_CELL_DDA,
+const Variant V = Variant(V_ORTHOGRAPHIC, V_DIFFERENTIAL, V_SHADING, V_ADAPTIVE, V_SPACE_SKIPPING,
                           V_VIRTUAL_SAMPLES, V_PEAKS, V_PEAK_XOR, V_PEAKS_ONLY, V_PREINTEGRATION,
                           V_SEGMENTS, V_RAY_TEXTURE, V_RAY_TEXTURE_VOLUME, V_BRICK);

@@ -7,7 +7,6 @@ struct Variant {
   bool shading;
   bool adaptive;        // per-macrocell sample multipliers (walked by the 3D-DDA)
   bool space_skipping;  // empty macrocells are leapt over
-  bool cell_dda;        // the 3D-DDA even without adaptive multipliers (a test's cross-check of the leaps)
   int virtual_samples;  // 0, or the virtual samples between true ones (3 or 7)
   bool peaks;           // peak finding between samples (Knoll §4)
   bool peak_xor;        // ... the DVR term left out where a peak was found

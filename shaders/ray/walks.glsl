@@ -7,7 +7,7 @@
 //   The points visited are the 3D-DDA's (those inside occupied cells), but a ray costs a step per
 //   sample or leap instead of one per cell crossed plus one per sample;
 // - walk_cells: the macrocell 3D-DDA (Amanatides & Woo), for adaptive multipliers (each cell
-//   visits the multiples of its multiplier m) and, leaping likewise, the tests' CELL_DDA.
+//   visits the multiples of its multiplier m), leaping over empty cells likewise.
 // Segment methods (peaks, preintegration, virtual samples) also visit kExtension points on each
 // side of a run of occupied cells, so the segments that enter or leave the run are not lost
 // (walk_leaps visits the one point on each side itself: it assumes kExtension == 1).
@@ -202,7 +202,7 @@ SHARED_CONST int kWalkLeaps = 1;
 SHARED_CONST int kWalkCells = 2;
 int walk_kind() {
   if (!V.space_skipping && !V.adaptive) return kWalkPoints;
-  return !V.adaptive && !V.cell_dda ? kWalkLeaps : kWalkCells;
+  return V.adaptive ? kWalkCells : kWalkLeaps;
 }
 
 // The ray's walk of the given kind (walk_kind(); a constant, so the others fold away) from

@@ -90,54 +90,42 @@ const LeapCase kCases[] = {
 
 class Leaps : public ::testing::TestWithParam<LeapCase> {};
 
-// Three traversals of the same scene: the lattice-driven loop with empty-space leaps (what
-// space skipping renders with), the 3D-DDA leaping likewise, and the 3D-DDA stepping through
-// every empty cell (leaps off). All must visit the same lattice points.
+// Both traversals that skip space, each leaping by the empty-space distance and stepping through
+// every empty cell one at a time (leaps off): the lattice-driven loop (what space skipping renders
+// with) and the 3D-DDA (adaptive sampling's). The leaps must visit exactly the points the steps do.
 TEST_P(Leaps, SkipExactlyWhatSteppingThroughEmptyCellsSkips) {
   const LeapCase& c = GetParam();
   auto v = test::make_volume(c.kind, c.dims, default_type(c.kind));
   test::TestVolume gv(v);
-  json j = {{"image", {{"width", 96}, {"height", 96}}},
-            {"tf", tf_points(*v, c.tf)},
-            {"camera", c.camera},
-            {"render", c.render}};
-  const ResolvedScene s = test::make_scene(*v, j);
-  // The scene must leave room to leap: some cell at least two cells from anything visible.
-  const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
-  const Occupancy occ = classify_cells(cells, s.tf, gv.tf_lo(), gv.tf_hi());
-  ASSERT_GT(*std::max_element(occ.distance.begin(), occ.distance.end()), 2) << "nothing to leap over";
-  render::RenderStats st_lattice, st_leap, st_step;
-  const Image lattice = test::render_gpu(gv, s, render::RenderPath::Fragment, &st_lattice);
-  test::gpu().switches->force_variant([](render::VariantKey& k) { k.cell_dda = true; });
-  const Image leap = test::render_gpu(gv, s, render::RenderPath::Fragment, &st_leap);
-  test::gpu().switches->set_empty_space_leaps(false);
-  const Image step = test::render_gpu(gv, s, render::RenderPath::Fragment, &st_step);
-  test::gpu().switches->set_empty_space_leaps(true);
-  test::gpu().switches->force_variant(nullptr);
-  ASSERT_NE(st_lattice.variant.find("+skip"), std::string::npos) << st_lattice.variant;
-  ASSERT_NE(st_leap.variant.find("+dda"), std::string::npos) << st_leap.variant;
-  EXPECT_GT(st_step.samples_mean, 0.0) << "nothing visible: the test would prove nothing";
-  const bool segments =
-      st_lattice.variant.find("+peaks") != std::string::npos || st_lattice.variant.find("+preint") != std::string::npos;
-  for (const auto& [name, img, st] :
-       {std::tuple{"lattice leaps", &lattice, &st_lattice}, std::tuple{"dda leaps", &leap, &st_leap}}) {
-    const auto e = reference::compare(*img, step);
-    const size_t differ = size_t(std::count_if(img->samples.begin(), img->samples.end(),
+  for (const bool adaptive : {false, true}) {
+    json render = c.render;
+    if (adaptive) render["adaptive"] = true;
+    json j = {{"image", {{"width", 96}, {"height", 96}}},
+              {"tf", tf_points(*v, c.tf)},
+              {"camera", c.camera},
+              {"render", render}};
+    const ResolvedScene s = test::make_scene(*v, j);
+    // The scene must leave room to leap: some cell at least two cells from anything visible.
+    const MacrocellGrid& cells = gv.macrocells(s.scene.render.filter);
+    const Occupancy occ = classify_cells(cells, s.tf, gv.tf_lo(), gv.tf_hi());
+    ASSERT_GT(*std::max_element(occ.distance.begin(), occ.distance.end()), 2) << "nothing to leap over";
+    render::RenderStats st_leap, st_step;
+    const Image leap = test::render_gpu(gv, s, render::RenderPath::Fragment, &st_leap);
+    test::gpu().switches->set_empty_space_leaps(false);
+    const Image step = test::render_gpu(gv, s, render::RenderPath::Fragment, &st_step);
+    test::gpu().switches->set_empty_space_leaps(true);
+    SCOPED_TRACE(st_leap.variant);
+    ASSERT_NE(st_leap.variant.find("+skip"), std::string::npos);
+    ASSERT_EQ(st_leap.variant.find("+adaptive") != std::string::npos, adaptive);
+    EXPECT_GT(st_step.samples_mean, 0.0) << "nothing visible: the test would prove nothing";
+    const auto e = reference::compare(leap, step);
+    const size_t differ = size_t(std::count_if(leap.samples.begin(), leap.samples.end(),
                                                [&, i = size_t(0)](float x) mutable { return x != step.samples[i++]; }));
-    std::printf("%-20s %-14s %-34s max diff %.2e, samples/ray %.3f (dda steps %.3f), samples differ on %zu rays\n",
-                c.name, name, st->variant.c_str(), e.max_abs, st->samples_mean, st_step.samples_mean, differ);
-    EXPECT_LE(e.max_abs, 1.0 / 255.0) << name;
-    if (st == &st_lattice && segments) {
-      // Segment methods: both walks add the point before and after each run of occupied cells
-      // (until 2026-11-28 the DDA added the one after each cell); a run entered or left on a
-      // face can still take one point more in the lattice loop (measured: +0.3% on blobs_peaks,
-      // +0.07% on blobs_preint, with the DDA of before); never fewer.
-      EXPECT_GE(st->samples_mean, st_step.samples_mean * (1 - 1e-6)) << name;
-      EXPECT_LE(st->samples_mean, st_step.samples_mean * 1.01) << name;
-    } else {
-      EXPECT_NEAR(st->samples_mean, st_step.samples_mean, 1e-3 * st_step.samples_mean) << name;
-    }
-    if (e.max_abs > 1.0 / 255.0) test::save_artifacts(*img, step, std::string(c.name) + "_" + name);
+    std::printf("%-20s %-36s max diff %.2e, samples/ray %.4f (steps %.4f), samples differ on %zu rays\n", c.name,
+                st_leap.variant.c_str(), e.max_abs, st_leap.samples_mean, st_step.samples_mean, differ);
+    EXPECT_EQ(leap.rgba, step.rgba);
+    EXPECT_EQ(differ, 0u);
+    if (e.max_abs > 0) test::save_artifacts(leap, step, std::string(c.name) + (adaptive ? "_dda" : "_lattice"));
   }
 }
 
