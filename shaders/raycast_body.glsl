@@ -42,7 +42,9 @@ int cell_multiplier(ivec3 c) {
   return 1;
 #endif
 }
-ivec3 cell_containing(vec3 x) { return clamp(ivec3(floor(x)), ivec3(0), P.cell_grid - 1); }
+// Clamped in float before the conversion, as the CPU's cell_of: a point far outside the grid
+// never converts to an integer out of int's range (undefined in GLSL).
+ivec3 cell_containing(vec3 x) { return ivec3(clamp(floor(x), vec3(0.0), vec3(P.cell_grid - 1))); }
 bool dense_run(Ray r, Lattice L, inout RayState s, inout RayWalk k, inout int i, inout int visited, int last, bool cells,
                vec3 xo, vec3 dv) {
   return false;

@@ -87,15 +87,58 @@ int render_within_budget(const RenderArgs& a) {
   return 0;
 }
 
-}  // namespace
-
-int mpi_world_size_hint() {
-  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"})
-    if (const char* s = std::getenv(v)) return std::atoi(s);
-  return 1;
+// Writes render's --stats file: the render's stats, the TF it derived, and the backend that drew it.
+void write_render_stats(const std::string& path, const LoadedScene& ls, const render::RenderBackend& b,
+                        const render::RenderStats& st) {
+  // The render keys are the stream's stats keys (RenderStats::to_json); the backend's are the CLI's.
+  nlohmann::json j = st.to_json();
+  if (ls.scene.tf_derived) {  // the TF it derived, to start editing from
+    Scene with_tf;
+    with_tf.tf = ls.scene.tf;
+    with_tf.opacity_unit = ls.scene.tf.opacity_unit;
+    j["tf"] = scene_to_json(with_tf)["tf"];
+  }
+  j["backend"] = render::to_string(b.backend);
+  j["renderer"] = b.renderer->description();
+  if (b.device) {
+    j["gl_renderer"] = b.device->info().renderer;
+    j["gl_version"] = b.device->info().version;
+    j["egl_platform"] = b.device->info().platform;
+  }
+  std::ofstream(path) << j.dump(2) << "\n";
 }
 
-void add_render_commands(CLI::App& app, Runner& run) {
+// Renders the scene render names: one brick per rank under mpirun, by bricks within a memory budget, else whole.
+int run_render(const RenderArgs& ra) {
+  if (mpi_world_size_hint() > 1) {  // under mpirun -np N (N > 1): one brick per rank
+#ifdef PEAKCAST_HAVE_MPI
+    return mpi_render(MpiRenderArgs{ra.scene, ra.out, ra.stats, ra.backend});
+#else
+    throw std::invalid_argument(
+        "launched by mpirun with several ranks, but this peakcast was built without MPI "
+        "(install libopenmpi-dev and paraview-dev, rebuild with PEAKCAST_WITH_MPI=ON)");
+#endif
+  }
+  if (ra.memory_budget_mib > 0) {
+    const int code = render_within_budget(ra);
+    if (code >= 0) return code;  // -1: the volume fits the budget, read whole as usual
+  }
+  LoadedScene ls = load_scene_file(ra.scene);
+  render::RenderBackend b = render::open_backend(render::requested_backend(ra.backend), "", {}, ra.program_cache);
+  auto gv = b.renderer->make_resident(ls.volume);
+  render::RenderStats st;
+  const auto path = ra.path == "compute" ? render::RenderPath::Compute : render::RenderPath::Fragment;
+  Image img = b.renderer->render(*gv, ls.scene, path, &st);
+  encode::write_png(img, ra.out);
+  std::printf("wrote %s: %dx%d, %s, %s\n", ra.out.c_str(), img.width, img.height, st.to_string().c_str(),
+              b.description().c_str());
+  for (const std::string& w : st.warnings) std::fprintf(stderr, "peakcast: warning: %s\n", w.c_str());
+  if (!ra.stats.empty()) write_render_stats(ra.stats, ls, b, st);
+  return 0;
+}
+
+// Registers render.
+void add_render_command(CLI::App& app, Runner& run) {
   auto ra = std::make_shared<RenderArgs>();
   auto* render = app.add_subcommand("render", "Render a scene file to a PNG (GL through EGL, or the CPU backend)");
   render->add_option("scene", ra->scene, "scene JSON (proto/scene.schema.json)")->required()->check(CLI::ExistingFile);
@@ -113,53 +156,37 @@ void add_render_commands(CLI::App& app, Runner& run) {
                    "host memory for voxels: a volume larger than this is drawn by bricks, front to back, "
                    "read one after another (docs/chunked-volumes.md)")
       ->check(CLI::PositiveNumber);
-  render->callback([ra, &run] {
-    run = [ra] {
-      if (mpi_world_size_hint() > 1) {  // under mpirun -np N (N > 1): one brick per rank
-#ifdef PEAKCAST_HAVE_MPI
-        return mpi_render(MpiRenderArgs{ra->scene, ra->out, ra->stats, ra->backend});
-#else
-        throw std::invalid_argument(
-            "launched by mpirun with several ranks, but this peakcast was built without MPI "
-            "(install libopenmpi-dev and paraview-dev, rebuild with PEAKCAST_WITH_MPI=ON)");
-#endif
-      }
-      if (ra->memory_budget_mib > 0) {
-        const int code = render_within_budget(*ra);
-        if (code >= 0) return code;  // -1: the volume fits the budget, read whole as usual
-      }
-      LoadedScene ls = load_scene_file(ra->scene);
-      render::RenderBackend b = render::open_backend(render::requested_backend(ra->backend), "", {}, ra->program_cache);
-      auto gv = b.renderer->make_resident(ls.volume);
-      render::RenderStats st;
-      const auto path = ra->path == "compute" ? render::RenderPath::Compute : render::RenderPath::Fragment;
-      Image img = b.renderer->render(*gv, ls.scene, path, &st);
-      encode::write_png(img, ra->out);
-      std::printf("wrote %s: %dx%d, %s, %s\n", ra->out.c_str(), img.width, img.height, st.to_string().c_str(),
-                  b.description().c_str());
-      for (const std::string& w : st.warnings) std::fprintf(stderr, "peakcast: warning: %s\n", w.c_str());
-      if (!ra->stats.empty()) {
-        // The render keys are the stream's stats keys (RenderStats::to_json); the backend's are the CLI's.
-        nlohmann::json j = st.to_json();
-        if (ls.scene.tf_derived) {  // the TF it derived, to start editing from
-          Scene with_tf;
-          with_tf.tf = ls.scene.tf;
-          with_tf.opacity_unit = ls.scene.tf.opacity_unit;
-          j["tf"] = scene_to_json(with_tf)["tf"];
-        }
-        j["backend"] = render::to_string(b.backend);
-        j["renderer"] = b.renderer->description();
-        if (b.device) {
-          j["gl_renderer"] = b.device->info().renderer;
-          j["gl_version"] = b.device->info().version;
-          j["egl_platform"] = b.device->info().platform;
-        }
-        std::ofstream(ra->stats) << j.dump(2) << "\n";
-      }
-      return 0;
-    };
-  });
+  render->callback([ra, &run] { run = [ra] { return run_render(*ra); }; });
+}
 
+// Renders the scene reference names on the CPU, at a given step or converged, and writes the PNG.
+int run_reference(const ReferenceArgs& fa) {
+  LoadedScene ls = load_scene_file(fa.scene);
+  const auto t0 = std::chrono::steady_clock::now();
+  Image img;
+  std::string how;
+  if (fa.converged) {
+    const bool peaks =
+        fa.model.empty() ? ls.scene.scene.render.classification == Classification::Peaks : fa.model == "peaks";
+    auto c = reference::render_converged(*ls.volume, ls.scene,
+                                         peaks ? reference::OpticalModel::Peaks : reference::OpticalModel::Dvr);
+    img = std::move(c.image);
+    how = std::string(peaks ? "peak" : "DVR") + " model, converged=" + std::string(c.converged ? "yes" : "no") +
+          " step " + std::to_string(c.step) + " last change " + std::to_string(c.last_change);
+  } else {
+    reference::ReferenceOptions opt;
+    opt.step = fa.step;
+    img = reference::render_reference(*ls.volume, ls.scene, opt);
+    how = "step " + std::to_string(fa.step > 0 ? fa.step : ls.scene.step);
+  }
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  encode::write_png(img, fa.out);
+  std::printf("wrote %s: %dx%d, %.0f ms, %s\n", fa.out.c_str(), img.width, img.height, ms, how.c_str());
+  return 0;
+}
+
+// Registers reference.
+void add_reference_command(CLI::App& app, Runner& run) {
   auto fa = std::make_shared<ReferenceArgs>();
   auto* ref = app.add_subcommand("reference", "Render a scene on the CPU in double precision (the reference)");
   ref->add_option("scene", fa->scene, "scene JSON")->required()->check(CLI::ExistingFile);
@@ -169,33 +196,11 @@ void add_render_commands(CLI::App& app, Runner& run) {
       ->excludes(step);
   ref->add_option("--model", fa->model, "with --converged: dvr | peaks (default: peaks for classification peaks)")
       ->check(CLI::IsMember({"dvr", "peaks"}));
-  ref->callback([fa, &run] {
-    run = [fa] {
-      LoadedScene ls = load_scene_file(fa->scene);
-      const auto t0 = std::chrono::steady_clock::now();
-      Image img;
-      std::string how;
-      if (fa->converged) {
-        const bool peaks =
-            fa->model.empty() ? ls.scene.scene.render.classification == Classification::Peaks : fa->model == "peaks";
-        auto c = reference::render_converged(*ls.volume, ls.scene,
-                                             peaks ? reference::OpticalModel::Peaks : reference::OpticalModel::Dvr);
-        img = std::move(c.image);
-        how = std::string(peaks ? "peak" : "DVR") + " model, converged=" + std::string(c.converged ? "yes" : "no") +
-              " step " + std::to_string(c.step) + " last change " + std::to_string(c.last_change);
-      } else {
-        reference::ReferenceOptions opt;
-        opt.step = fa->step;
-        img = reference::render_reference(*ls.volume, ls.scene, opt);
-        how = "step " + std::to_string(fa->step > 0 ? fa->step : ls.scene.step);
-      }
-      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-      encode::write_png(img, fa->out);
-      std::printf("wrote %s: %dx%d, %.0f ms, %s\n", fa->out.c_str(), img.width, img.height, ms, how.c_str());
-      return 0;
-    };
-  });
+  ref->callback([fa, &run] { run = [fa] { return run_reference(*fa); }; });
+}
 
+// Registers compare.
+void add_compare_command(CLI::App& app, Runner& run) {
   auto ca = std::make_shared<CompareArgs>();
   auto* cmp = app.add_subcommand("compare", "Print RMSE, PSNR, max abs error and share of pixels off by > 1/255");
   cmp->add_option("a", ca->a, "image")->required()->check(CLI::ExistingFile);
@@ -206,6 +211,20 @@ void add_render_commands(CLI::App& app, Runner& run) {
       return 0;
     };
   });
+}
+
+}  // namespace
+
+int mpi_world_size_hint() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"})
+    if (const char* s = std::getenv(v)) return std::atoi(s);
+  return 1;
+}
+
+void add_render_commands(CLI::App& app, Runner& run) {
+  add_render_command(app, run);
+  add_reference_command(app, run);
+  add_compare_command(app, run);
 }
 
 }  // namespace peakcast::app

@@ -133,9 +133,26 @@ void print_pyramid(const std::string& path) {
   }
 }
 
-}  // namespace
+// Generates the procedural volume make-volume asked for and writes it.
+int run_make_volume(const MakeVolumeArgs& mv) {
+  GeneratorSpec s;
+  s.kind = parse_generator_kind(mv.kind);
+  s.dims = default_dims(s.kind);
+  s.type = mv.type.empty() ? default_type(s.kind) : parse_source_type(mv.type);
+  s.seed = mv.seed;
+  if (!mv.dims.empty()) s.dims = {mv.dims[0], mv.dims[1], mv.dims[2]};
+  if (!mv.spacing.empty()) s.spacing = {mv.spacing[0], mv.spacing[1], mv.spacing[2]};
+  const auto t0 = std::chrono::steady_clock::now();
+  generate_to_file(s, mv.out, {mv.gzip});
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("wrote %s: %s %lldx%lldx%lld %s seed %llu in %.2f s, peak RSS %.1f MiB\n", mv.out.c_str(),
+              to_string(s.kind), (long long)s.dims[0], (long long)s.dims[1], (long long)s.dims[2], to_string(s.type),
+              (unsigned long long)s.seed, secs, peak_rss_mib());
+  return 0;
+}
 
-void add_volume_commands(CLI::App& app, Runner& run) {
+// Registers make-volume.
+void add_make_volume_command(CLI::App& app, Runner& run) {
   auto mv = std::make_shared<MakeVolumeArgs>();
   auto* make =
       app.add_subcommand("make-volume", "Write a procedural volume (raw+JSON, NRRD or MetaImage by extension)");
@@ -146,25 +163,40 @@ void add_volume_commands(CLI::App& app, Runner& run) {
   make->add_option("--type", mv->type, "uint8 | int8 | uint16 | int16 | float32 (default per kind)");
   make->add_option("--spacing", mv->spacing, "SX SY SZ (default 1 1 1)")->expected(3);
   make->add_flag("--gzip", mv->gzip, "gzip-compress the data (.raw, .nrrd, .nhdr)");
-  make->callback([mv, &run] {
-    run = [mv] {
-      GeneratorSpec s;
-      s.kind = parse_generator_kind(mv->kind);
-      s.dims = default_dims(s.kind);
-      s.type = mv->type.empty() ? default_type(s.kind) : parse_source_type(mv->type);
-      s.seed = mv->seed;
-      if (!mv->dims.empty()) s.dims = {mv->dims[0], mv->dims[1], mv->dims[2]};
-      if (!mv->spacing.empty()) s.spacing = {mv->spacing[0], mv->spacing[1], mv->spacing[2]};
-      const auto t0 = std::chrono::steady_clock::now();
-      generate_to_file(s, mv->out, {mv->gzip});
-      const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      std::printf("wrote %s: %s %lldx%lldx%lld %s seed %llu in %.2f s, peak RSS %.1f MiB\n", mv->out.c_str(),
-                  to_string(s.kind), (long long)s.dims[0], (long long)s.dims[1], (long long)s.dims[2],
-                  to_string(s.type), (unsigned long long)s.seed, secs, peak_rss_mib());
-      return 0;
-    };
-  });
+  make->callback([mv, &run] { run = [mv] { return run_make_volume(*mv); }; });
+}
 
+// Checks convert's options against the output format, then loads the input and writes it again.
+int run_convert(const ConvertArgs& ca) {
+  const bool zarr = lower_ext(ca.out) == ".zarr";
+  if (!zarr && (ca.pyramid || ca.compressor != "blosc" || ca.chunk != 128))
+    throw std::invalid_argument("--pyramid, --chunk and --compressor are for an OME-Zarr output (OUT.zarr)");
+  if (zarr && ca.gzip) throw std::invalid_argument("--gzip is for .raw, .nrrd and .nhdr; OME-Zarr takes --compressor");
+  if (!zarr && ca.memory_budget_mib > 0) throw std::invalid_argument("--memory-budget-mib is for an OME-Zarr output");
+  if (zarr) {
+    const int64_t budget = ca.memory_budget_mib > 0 ? ca.memory_budget_mib << 20 : half_of_memory();
+    try {
+      VolumeHeader h;
+      const int64_t bytes = chunked::source_voxel_bytes(ca.in, ca.select.options(), &h);
+      if (chunked::whole_convert_bytes(bytes) > budget || h.voxel_count() > ca.select.options().max_voxels)
+        return convert_by_slabs(ca, budget);
+    } catch (const RegionNotReadable&) {  // a TIFF stack: read whole below, whatever its size
+    }
+  }
+  const Volume v = load_volume(ca.in, ca.select.options());
+  if (!zarr) {
+    write_volume(ca.out, v, {ca.gzip});
+    std::printf("wrote %s: %s\n", ca.out.c_str(), v.to_string().c_str());
+    return 0;
+  }
+  const auto r = chunked::write_ome_zarr(v, ca.out, zarr_options(ca));
+  std::printf("wrote %s: OME-Zarr, %d level%s, %lld chunks, %.1f MiB (%s)\n", ca.out.c_str(), r.levels,
+              r.levels == 1 ? "" : "s", (long long)r.chunks, double(r.bytes) / 1048576.0, v.to_string().c_str());
+  return 0;
+}
+
+// Registers convert.
+void add_convert_command(CLI::App& app, Runner& run) {
   auto ca = std::make_shared<ConvertArgs>();
   auto* conv = app.add_subcommand("convert",
                                   "Load a volume and write it again: .raw+.json, .nrrd, .nhdr, .mhd, .mha, "
@@ -183,38 +215,51 @@ void add_volume_commands(CLI::App& app, Runner& run) {
                    "is read by slabs of z-planes and never held whole (default: half of this machine's memory)")
       ->check(CLI::Range(int64_t(1), int64_t(1) << 30));
   add_chunk_select(conv, ca->select);
-  conv->callback([ca, &run] {
-    run = [ca] {
-      const bool zarr = lower_ext(ca->out) == ".zarr";
-      if (!zarr && (ca->pyramid || ca->compressor != "blosc" || ca->chunk != 128))
-        throw std::invalid_argument("--pyramid, --chunk and --compressor are for an OME-Zarr output (OUT.zarr)");
-      if (zarr && ca->gzip)
-        throw std::invalid_argument("--gzip is for .raw, .nrrd and .nhdr; OME-Zarr takes --compressor");
-      if (!zarr && ca->memory_budget_mib > 0)
-        throw std::invalid_argument("--memory-budget-mib is for an OME-Zarr output");
-      if (zarr) {
-        const int64_t budget = ca->memory_budget_mib > 0 ? ca->memory_budget_mib << 20 : half_of_memory();
-        try {
-          VolumeHeader h;
-          const int64_t bytes = chunked::source_voxel_bytes(ca->in, ca->select.options(), &h);
-          if (chunked::whole_convert_bytes(bytes) > budget || h.voxel_count() > ca->select.options().max_voxels)
-            return convert_by_slabs(*ca, budget);
-        } catch (const RegionNotReadable&) {  // a TIFF stack: read whole below, whatever its size
-        }
-      }
-      const Volume v = load_volume(ca->in, ca->select.options());
-      if (!zarr) {
-        write_volume(ca->out, v, {ca->gzip});
-        std::printf("wrote %s: %s\n", ca->out.c_str(), v.to_string().c_str());
-        return 0;
-      }
-      const auto r = chunked::write_ome_zarr(v, ca->out, zarr_options(*ca));
-      std::printf("wrote %s: OME-Zarr, %d level%s, %lld chunks, %.1f MiB (%s)\n", ca->out.c_str(), r.levels,
-                  r.levels == 1 ? "" : "s", (long long)r.chunks, double(r.bytes) / 1048576.0, v.to_string().c_str());
-      return 0;
-    };
-  });
+  conv->callback([ca, &run] { run = [ca] { return run_convert(*ca); }; });
+}
 
+// Prints the macrocell grids info was asked for: both, as the server builds them, or each of a given cell edge.
+void print_macrocells(const Volume& v, const InfoArgs& ia) {
+  if (ia.macrocells && ia.cell == 0) {  // what the server builds: both grids
+    const VolumeMacrocells both = build_volume_macrocells(v);
+    std::printf("macrocells (trilinear and tricubic): %lldx%lldx%lld cells of %d voxels, build %.1f ms\n",
+                (long long)both.trilinear->grid[0], (long long)both.trilinear->grid[1],
+                (long long)both.trilinear->grid[2], both.trilinear->cell, both.build_ms);
+  } else if (ia.macrocells) {
+    for (auto support : {FilterSupport::Trilinear, FilterSupport::Tricubic}) {
+      MacrocellGrid g = build_macrocells(v, ia.cell, support);
+      std::printf("macrocells (%s): %lldx%lldx%lld cells of %d voxels, build %.1f ms\n",
+                  support == FilterSupport::Trilinear ? "trilinear" : "tricubic", (long long)g.grid[0],
+                  (long long)g.grid[1], (long long)g.grid[2], g.cell, g.build_ms);
+    }
+  }
+}
+
+// Loads the volume info names and prints what it found.
+int run_info(const InfoArgs& ia) {
+  print_pyramid(ia.file);
+  LoadOptions opt = ia.select.options();
+  opt.max_voxels = ia.max_voxels;
+  opt.nonfinite = ia.nonfinite == "refuse" ? NonFinitePolicy::Refuse : NonFinitePolicy::Replace;
+  Volume v = load_volume(ia.file, opt);
+  const auto& d = v.dims();
+  std::printf("file: %s\ndims: %lld %lld %lld\ntype: %s (stored as %s, value offset %g)\n", ia.file.c_str(),
+              (long long)d[0], (long long)d[1], (long long)d[2], to_string(v.source_type()), to_string(v.type()),
+              v.value_offset);
+  std::printf(
+      "spacing: %g %g %g\norigin: %g %g %g\nrange: %.9g %.9g\nmemory: %.1f MiB\n"
+      "load: %.1f ms (read %.1f ms, range and histogram %.1f ms)\n",
+      v.spacing.x, v.spacing.y, v.spacing.z, v.origin.x, v.origin.y, v.origin.z, v.min_value, v.max_value,
+      double(v.byte_size()) / 1048576.0, v.load_ms, v.load_ms - v.statistics_ms, v.statistics_ms);
+  if (v.nonfinite_replaced > 0)
+    std::printf("warning: %lld NaN/Inf voxels replaced by the finite range ends\n", (long long)v.nonfinite_replaced);
+  print_macrocells(v, ia);
+  std::printf("peak RSS: %.1f MiB\n", peak_rss_mib());
+  return 0;
+}
+
+// Registers info.
+void add_info_command(CLI::App& app, Runner& run) {
   auto ia = std::make_shared<InfoArgs>();
   auto* info = app.add_subcommand("info", "Load a volume and print its dims, type, spacing, range and timings");
   info->add_option("file", ia->file, "volume file or TIFF directory")->required();
@@ -224,42 +269,15 @@ void add_volume_commands(CLI::App& app, Runner& run) {
       ->check(CLI::IsMember({"replace", "refuse"}));
   info->add_option("--max-voxels", ia->max_voxels, "refuse volumes with more voxels (default 2^32)");
   add_chunk_select(info, ia->select);
-  info->callback([ia, &run] {
-    run = [ia] {
-      print_pyramid(ia->file);
-      LoadOptions opt = ia->select.options();
-      opt.max_voxels = ia->max_voxels;
-      opt.nonfinite = ia->nonfinite == "refuse" ? NonFinitePolicy::Refuse : NonFinitePolicy::Replace;
-      Volume v = load_volume(ia->file, opt);
-      const auto& d = v.dims();
-      std::printf("file: %s\ndims: %lld %lld %lld\ntype: %s (stored as %s, value offset %g)\n", ia->file.c_str(),
-                  (long long)d[0], (long long)d[1], (long long)d[2], to_string(v.source_type()), to_string(v.type()),
-                  v.value_offset);
-      std::printf(
-          "spacing: %g %g %g\norigin: %g %g %g\nrange: %.9g %.9g\nmemory: %.1f MiB\n"
-          "load: %.1f ms (read %.1f ms, range and histogram %.1f ms)\n",
-          v.spacing.x, v.spacing.y, v.spacing.z, v.origin.x, v.origin.y, v.origin.z, v.min_value, v.max_value,
-          double(v.byte_size()) / 1048576.0, v.load_ms, v.load_ms - v.statistics_ms, v.statistics_ms);
-      if (v.nonfinite_replaced > 0)
-        std::printf("warning: %lld NaN/Inf voxels replaced by the finite range ends\n",
-                    (long long)v.nonfinite_replaced);
-      if (ia->macrocells && ia->cell == 0) {  // what the server builds: both grids
-        const VolumeMacrocells both = build_volume_macrocells(v);
-        std::printf("macrocells (trilinear and tricubic): %lldx%lldx%lld cells of %d voxels, build %.1f ms\n",
-                    (long long)both.trilinear->grid[0], (long long)both.trilinear->grid[1],
-                    (long long)both.trilinear->grid[2], both.trilinear->cell, both.build_ms);
-      } else if (ia->macrocells) {
-        for (auto support : {FilterSupport::Trilinear, FilterSupport::Tricubic}) {
-          MacrocellGrid g = build_macrocells(v, ia->cell, support);
-          std::printf("macrocells (%s): %lldx%lldx%lld cells of %d voxels, build %.1f ms\n",
-                      support == FilterSupport::Trilinear ? "trilinear" : "tricubic", (long long)g.grid[0],
-                      (long long)g.grid[1], (long long)g.grid[2], g.cell, g.build_ms);
-        }
-      }
-      std::printf("peak RSS: %.1f MiB\n", peak_rss_mib());
-      return 0;
-    };
-  });
+  info->callback([ia, &run] { run = [ia] { return run_info(*ia); }; });
+}
+
+}  // namespace
+
+void add_volume_commands(CLI::App& app, Runner& run) {
+  add_make_volume_command(app, run);
+  add_convert_command(app, run);
+  add_info_command(app, run);
 }
 
 }  // namespace peakcast::app

@@ -54,6 +54,120 @@ std::string toml_value(const std::string& s) {
   return q + "\"";
 }
 
+// The options that say where settings come from: a config file, or printing them.
+void add_config_options(CLI::App& s, ServeOptions& o) {
+  s.add_option("--config", o.config_file, "read options from this TOML file (also PEAKCAST_CONFIG)");
+  s.add_flag("--print-config", o.print_config, "print the effective configuration, each value's source, and exit");
+}
+
+// Where the server listens and which volumes it may open.
+void add_network_options(CLI::App& s, ServeOptions& o) {
+  net::ServerConfig& c = o.server;
+  s.add_option("--bind", c.bind, "address to listen on (default loopback only)");
+  s.add_option("--port", c.port, "TCP port (0: any free port)");
+  s.add_option("--data", o.data, "directory volumes may be opened from (repeatable)");
+  s.add_option("--volume", o.volumes, "volume to preload (repeatable; the first is the default view)");
+}
+
+// Who may connect: tokens, origins and host names.
+void add_security_options(CLI::App& s, ServeOptions& o) {
+  net::ServerConfig& c = o.server;
+  s.add_option("--token", c.token,
+               "require this bearer token (HTTP header, ?token= or hello.token); it shows in the process list: "
+               "prefer --token-file");
+  s.add_option("--token-file", o.token_file, "read the admin token from the first line of this file");
+  s.add_option(
+      "--user-token-file", o.user_token_file,
+      "user tokens, a line \"NAME TOKEN\" each: they view, render and upload, and delete only their own uploads");
+  s.add_option("--allow-origin", c.allow_origins, "WebSocket Origin to accept besides the server's own (repeatable)");
+  s.add_option("--allowed-host", c.allowed_hosts,
+               "a Host name to answer besides the bind address and localhost (repeatable; * for any): DNS rebinding");
+}
+
+// Caps on sessions, frame rates, memory and REST stills.
+void add_limit_options(CLI::App& s, ServeOptions& o) {
+  net::ServerConfig& c = o.server;
+  s.add_option("--max-sessions", c.max_sessions, "concurrent WebSocket sessions")->check(CLI::Range(1, 4096));
+  s.add_option("--idle-timeout", o.idle_seconds, "seconds without a client message before closing")
+      ->check(CLI::Range(1, 86400));
+  s.add_option("--max-fps", c.max_fps, "frames per second per session")->check(CLI::Range(1.0, 240.0));
+  s.add_option("--max-kbps", c.max_kbps,
+               "a video stream's bit-rate ceiling, kbit/s: what a session starts with and may not exceed")
+      ->check(CLI::Range(limits::kMinKbps, limits::kMaxKbps));
+  s.add_option("--gpu-budget-mib", o.gpu_budget_mib, "MiB of volume textures on the GPU")
+      ->check(CLI::Range(int64_t(1), int64_t(1) << 24));
+  s.add_option("--memory-budget-mib", o.memory_budget_mib,
+               "MiB of host memory for one volume's voxels: a pyramid (OME-Zarr, Neuroglancer) opens at its "
+               "finest level that fits, a larger volume of another format is refused; 0: no budget")
+      ->check(CLI::Range(int64_t(0), int64_t(1) << 24));
+  s.add_option("--preview-voxels", c.preview_voxels,
+               "with --memory-budget-mib: a pyramid whose level within the budget has more voxels opens first at "
+               "its finest level within this many (a first look), then at the level within the budget; 0: off")
+      ->check(CLI::Range(int64_t(0), int64_t(1) << 40));
+  s.add_option("--max-queued-stills", c.max_queued_stills,
+               "REST stills waiting or rendering at once; beyond, 503 with Retry-After")
+      ->check(CLI::Range(size_t(1), size_t(1024)));
+  s.add_option("--max-still-samples", c.max_still_samples,
+               "cost cap of one REST still: pixels x estimated samples per ray; beyond, 422")
+      ->check(CLI::Range(1e3, 1e15));
+  s.add_option("--still-band-samples", c.still_band_samples,
+               "estimated samples per band of a still (bands alternate with viewers' frames)")
+      ->check(CLI::Range(1e3, 1e12));
+}
+
+// Logging and thread counts.
+void add_logging_and_thread_options(CLI::App& s, ServeOptions& o) {
+  net::ServerConfig& c = o.server;
+  s.add_option("--log-level", o.log_level, "debug | info | warn | error | off (stderr)")
+      ->check(CLI::IsMember({"debug", "info", "warn", "error", "off"}));
+  s.add_option("--log-format", o.log_format, "text | json (one JSON object per line)")
+      ->check(CLI::IsMember({"text", "json"}));
+  s.add_option("--io-threads", c.io_threads, "network threads")->check(CLI::Range(1, 64));
+  s.add_option("--encode-threads", c.encode_threads, "JPEG encode threads")->check(CLI::Range(1, 64));
+}
+
+// Where uploads are kept and how large, how many and how fast they may be.
+void add_upload_options(CLI::App& s, ServeOptions& o) {
+  s.add_option(
+      "--upload-dir", o.upload_dir,
+      "where uploaded volumes are kept (POST /api/volumes); empty: uploads are off. Never inside a --data directory");
+  s.add_option("--max-upload-mib", o.max_upload_mib, "MiB of one upload")
+      ->check(CLI::Range(int64_t(1), int64_t(1) << 22));
+  s.add_option("--upload-budget-mib", o.upload_budget_mib, "MiB of every upload kept, in all")
+      ->check(CLI::Range(int64_t(1), int64_t(1) << 26));
+  s.add_option("--max-uploads", o.max_uploads, "uploads received at once; beyond, 503")->check(CLI::Range(1, 64));
+  s.add_option("--uploads-per-minute", o.uploads_per_minute,
+               "uploads one client address may start a minute (a burst of 10); beyond, 429")
+      ->check(CLI::Range(1.0, 1e6));
+  s.add_option("--upload-timeout", o.upload_timeout, "seconds an upload may send nothing before it is ended")
+      ->check(CLI::Range(1, 3600));
+  s.add_option("--upload-min-rate-kib", o.upload_min_rate_kib,
+               "KiB/s an upload must average after its first --upload-timeout seconds; slower, it is ended (408)")
+      ->check(CLI::Range(0.0, 1e6));
+  s.add_option("--upload-deadline", o.upload_deadline, "seconds within which an upload's whole body must arrive")
+      ->check(CLI::Range(1, 86400));
+}
+
+// The client's and shaders' folders, and the GPU, program cache and backend that render.
+void add_rendering_options(CLI::App& s, ServeOptions& o) {
+  net::ServerConfig& c = o.server;
+  s.add_option("--web-dir", o.web_dir, "the browser client's files");
+  s.add_option("--shader-dir", o.shader_dir, "the GLSL shaders");
+  s.add_option("--egl-device", c.egl_device,
+               "auto (a GPU first, else software) | surfaceless | an EGL device index (one GPU per process)")
+      ->check([](const std::string& v) {
+        const bool index = !v.empty() && v.size() < 4 &&
+                           std::all_of(v.begin(), v.end(), [](unsigned char ch) { return std::isdigit(ch) != 0; });
+        return v == "auto" || v == "surfaceless" || index ? std::string() : "auto, surfaceless or a device index";
+      });
+  s.add_option(
+      "--program-cache", c.program_cache,
+      "where GL keeps linked shader programs between runs: auto (~/.cache/peakcast/programs) | off | a folder");
+  s.add_option("--backend", c.backend,
+               "auto (the CPU backend when EGL offers only a software rasteriser, else GL) | gl | cpu")
+      ->check(CLI::IsMember({"auto", "gl", "cpu"}));
+}
+
 }  // namespace
 
 std::string env_name(const std::string& key) {
@@ -102,87 +216,13 @@ void add_serve_options(CLI::App& s, ServeOptions& o) {
   c.backend = "auto";
   c.program_cache = "auto";
   s.option_defaults()->always_capture_default();
-  s.add_option("--config", o.config_file, "read options from this TOML file (also PEAKCAST_CONFIG)");
-  s.add_flag("--print-config", o.print_config, "print the effective configuration, each value's source, and exit");
-  s.add_option("--bind", c.bind, "address to listen on (default loopback only)");
-  s.add_option("--port", c.port, "TCP port (0: any free port)");
-  s.add_option("--data", o.data, "directory volumes may be opened from (repeatable)");
-  s.add_option("--volume", o.volumes, "volume to preload (repeatable; the first is the default view)");
-  s.add_option("--token", c.token,
-               "require this bearer token (HTTP header, ?token= or hello.token); it shows in the process list: "
-               "prefer --token-file");
-  s.add_option("--token-file", o.token_file, "read the admin token from the first line of this file");
-  s.add_option(
-      "--user-token-file", o.user_token_file,
-      "user tokens, a line \"NAME TOKEN\" each: they view, render and upload, and delete only their own uploads");
-  s.add_option("--allow-origin", c.allow_origins, "WebSocket Origin to accept besides the server's own (repeatable)");
-  s.add_option("--allowed-host", c.allowed_hosts,
-               "a Host name to answer besides the bind address and localhost (repeatable; * for any): DNS rebinding");
-  s.add_option("--max-sessions", c.max_sessions, "concurrent WebSocket sessions")->check(CLI::Range(1, 4096));
-  s.add_option("--idle-timeout", o.idle_seconds, "seconds without a client message before closing")
-      ->check(CLI::Range(1, 86400));
-  s.add_option("--max-fps", c.max_fps, "frames per second per session")->check(CLI::Range(1.0, 240.0));
-  s.add_option("--max-kbps", c.max_kbps,
-               "a video stream's bit-rate ceiling, kbit/s: what a session starts with and may not exceed")
-      ->check(CLI::Range(limits::kMinKbps, limits::kMaxKbps));
-  s.add_option("--gpu-budget-mib", o.gpu_budget_mib, "MiB of volume textures on the GPU")
-      ->check(CLI::Range(int64_t(1), int64_t(1) << 24));
-  s.add_option("--memory-budget-mib", o.memory_budget_mib,
-               "MiB of host memory for one volume's voxels: a pyramid (OME-Zarr, Neuroglancer) opens at its "
-               "finest level that fits, a larger volume of another format is refused; 0: no budget")
-      ->check(CLI::Range(int64_t(0), int64_t(1) << 24));
-  s.add_option("--preview-voxels", c.preview_voxels,
-               "with --memory-budget-mib: a pyramid whose level within the budget has more voxels opens first at "
-               "its finest level within this many (a first look), then at the level within the budget; 0: off")
-      ->check(CLI::Range(int64_t(0), int64_t(1) << 40));
-  s.add_option("--max-queued-stills", c.max_queued_stills,
-               "REST stills waiting or rendering at once; beyond, 503 with Retry-After")
-      ->check(CLI::Range(size_t(1), size_t(1024)));
-  s.add_option("--max-still-samples", c.max_still_samples,
-               "cost cap of one REST still: pixels x estimated samples per ray; beyond, 422")
-      ->check(CLI::Range(1e3, 1e15));
-  s.add_option("--still-band-samples", c.still_band_samples,
-               "estimated samples per band of a still (bands alternate with viewers' frames)")
-      ->check(CLI::Range(1e3, 1e12));
-  s.add_option("--log-level", o.log_level, "debug | info | warn | error | off (stderr)")
-      ->check(CLI::IsMember({"debug", "info", "warn", "error", "off"}));
-  s.add_option("--log-format", o.log_format, "text | json (one JSON object per line)")
-      ->check(CLI::IsMember({"text", "json"}));
-  s.add_option("--io-threads", c.io_threads, "network threads")->check(CLI::Range(1, 64));
-  s.add_option("--encode-threads", c.encode_threads, "JPEG encode threads")->check(CLI::Range(1, 64));
-  s.add_option(
-      "--upload-dir", o.upload_dir,
-      "where uploaded volumes are kept (POST /api/volumes); empty: uploads are off. Never inside a --data directory");
-  s.add_option("--max-upload-mib", o.max_upload_mib, "MiB of one upload")
-      ->check(CLI::Range(int64_t(1), int64_t(1) << 22));
-  s.add_option("--upload-budget-mib", o.upload_budget_mib, "MiB of every upload kept, in all")
-      ->check(CLI::Range(int64_t(1), int64_t(1) << 26));
-  s.add_option("--max-uploads", o.max_uploads, "uploads received at once; beyond, 503")->check(CLI::Range(1, 64));
-  s.add_option("--uploads-per-minute", o.uploads_per_minute,
-               "uploads one client address may start a minute (a burst of 10); beyond, 429")
-      ->check(CLI::Range(1.0, 1e6));
-  s.add_option("--upload-timeout", o.upload_timeout, "seconds an upload may send nothing before it is ended")
-      ->check(CLI::Range(1, 3600));
-  s.add_option("--upload-min-rate-kib", o.upload_min_rate_kib,
-               "KiB/s an upload must average after its first --upload-timeout seconds; slower, it is ended (408)")
-      ->check(CLI::Range(0.0, 1e6));
-  s.add_option("--upload-deadline", o.upload_deadline, "seconds within which an upload's whole body must arrive")
-      ->check(CLI::Range(1, 86400));
-  s.add_option("--web-dir", o.web_dir, "the browser client's files");
-  s.add_option("--shader-dir", o.shader_dir, "the GLSL shaders");
-  s.add_option("--egl-device", c.egl_device,
-               "auto (a GPU first, else software) | surfaceless | an EGL device index (one GPU per process)")
-      ->check([](const std::string& v) {
-        const bool index = !v.empty() && v.size() < 4 &&
-                           std::all_of(v.begin(), v.end(), [](unsigned char ch) { return std::isdigit(ch) != 0; });
-        return v == "auto" || v == "surfaceless" || index ? std::string() : "auto, surfaceless or a device index";
-      });
-  s.add_option(
-      "--program-cache", c.program_cache,
-      "where GL keeps linked shader programs between runs: auto (~/.cache/peakcast/programs) | off | a folder");
-  s.add_option("--backend", c.backend,
-               "auto (the CPU backend when EGL offers only a software rasteriser, else GL) | gl | cpu")
-      ->check(CLI::IsMember({"auto", "gl", "cpu"}));
+  add_config_options(s, o);
+  add_network_options(s, o);
+  add_security_options(s, o);
+  add_limit_options(s, o);
+  add_logging_and_thread_options(s, o);
+  add_upload_options(s, o);
+  add_rendering_options(s, o);
   s.footer(
       "Every option is also a PEAKCAST_* environment variable (--max-fps: PEAKCAST_MAX_FPS; lists\n"
       "comma-separated) and a key of the --config TOML file (max-fps = 30; lists as arrays).\n"

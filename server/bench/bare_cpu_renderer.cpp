@@ -42,6 +42,13 @@ class BareCpuRenderer final : public render::Switchable<cpu::CpuRenderer, BareSa
     if (stats) {
       stats->render_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       stats->variant = f.key.name();
+      stats->has_samples = true;
+      for (float n : img.samples) {  // as the full render counts them (every ray's budget)
+        stats->samples_total += n;
+        stats->samples_max = std::max<double>(stats->samples_max, n);
+        stats->rays_hit += n > 0 ? 1 : 0;
+      }
+      stats->samples_mean = stats->rays_hit ? stats->samples_total / double(stats->rays_hit) : 0.0;
     }
     return img;
   }

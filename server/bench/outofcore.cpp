@@ -49,14 +49,8 @@ std::vector<float> axis_table(int64_t n0, int64_t n, int k) {
   return t;
 }
 
-int run_outofcore(const OutOfCoreArgs& a) {
-  const fs::path dir = a.dir.empty() ? fs::temp_directory_path() : fs::path(a.dir);
-  const fs::path path = dir / ("peakcast-outofcore-" + std::to_string(a.size) + ".zarr");
-  std::error_code ec;
-  fs::remove_all(path, ec);
-  const int64_t budget = a.budget_mib << 20;
-  nlohmann::json out = {{"size", a.size}, {"chunk", a.chunk}, {"budget_mib", a.budget_mib}, {"image", a.image}};
-
+// Writes the synthetic pyramid at `path` chunk by chunk; its write time, levels and size go into `out`.
+void write_pyramid(const OutOfCoreArgs& a, const fs::path& path, nlohmann::json& out) {
   // 1. The pyramid, chunk by chunk (zstd level 1: the writer's time is not what is measured).
   VolumeHeader h;
   h.dims = {a.size, a.size, a.size};
@@ -87,46 +81,40 @@ int run_outofcore(const OutOfCoreArgs& a) {
   out["disk_gib"] = double(written.bytes) / double(1 << 30);
   std::fprintf(stderr, "wrote %s: %d levels, %lld chunks, %.2f GiB on disk, %.0f s\n", path.c_str(), written.levels,
                (long long)written.chunks, out["disk_gib"].get<double>(), out["write_s"].get<double>());
+}
 
-  // 2. Open: metadata only.
-  t = Clock::now();
-  const auto cv = chunked::open_chunked(path);
-  out["open_ms"] = ms_between(t, Clock::now());
+// A first frame from level k as serve draws it (read, resident, rendered); its figures go into `out` under `key`.
+void time_first_frame(BenchRenderer& b, const chunked::ChunkedVolume& cv, const Scene& scene, int image, int k,
+                      const std::string& key, nlohmann::json& out) {
+  const auto t = Clock::now();
+  LoadOptions lo;
+  lo.level = k;
+  auto coarse = std::make_shared<Volume>(chunked::read_level(cv, k, lo));
+  const double read_ms = ms_between(t, Clock::now());
+  auto resident = b.renderer->make_resident(coarse);
+  // As serve draws a viewer's first frame: interactive, at half the size and twice the step.
+  ResolvedScene rs = resolve_scene(scene, *coarse);
+  rs.scene.width = rs.scene.height = std::max(1, image / 2);
+  rs.step *= 2.0;
+  b.renderer->render(*resident, rs);
+  out[key + "_level"] = k;
+  out[key + "_dims"] = coarse->dims();
+  out[key + "_read_ms"] = read_ms;
+  out[key + "_frame_ms"] = ms_between(t, Clock::now());
+}
 
-  // 3. The first interactive frame, as `serve` shows it: the preview level (the finest within
-  // --preview-voxels), read, resident, one interactive frame of the default scene (derived TF,
-  // three-quarter view; half the size, twice the step); then the same for the level within the
-  // budget, which replaces it.
-  BenchRenderer b = make_bench_renderer();
-  Scene scene = parse_scene_text(R"({"volume": "v"})");
-  scene.width = scene.height = a.image;
-  const int level = chunked::finest_level_within(*cv, 0, budget);
-  const int preview = a.preview_voxels > 0 ? chunked::finest_level_of_voxels(*cv, level, a.preview_voxels) : level;
-  auto first_frame = [&](int k, const std::string& key) {
-    t = Clock::now();
-    LoadOptions lo;
-    lo.level = k;
-    auto coarse = std::make_shared<Volume>(chunked::read_level(*cv, k, lo));
-    const double read_ms = ms_between(t, Clock::now());
-    auto resident = b.renderer->make_resident(coarse);
-    // As serve draws a viewer's first frame: interactive, at half the size and twice the step.
-    ResolvedScene rs = resolve_scene(scene, *coarse);
-    rs.scene.width = rs.scene.height = std::max(1, a.image / 2);
-    rs.step *= 2.0;
-    b.renderer->render(*resident, rs);
-    out[key + "_level"] = k;
-    out[key + "_dims"] = coarse->dims();
-    out[key + "_read_ms"] = read_ms;
-    out[key + "_frame_ms"] = ms_between(t, Clock::now());
-  };
-  first_frame(preview, "preview");
-  out["first_frame_ms"] = out["preview_frame_ms"].get<double>() + out["open_ms"].get<double>();
-  first_frame(level, "interactive");
+// What the full-resolution still left for the text report beside `out`.
+struct StillCounts {
+  int bricks = 0, statistics_bricks = 0;
+  double statistics_ms = 0, rss_before = 0;
+};
 
-  // 4. The full-resolution still by bricks, its peak RSS from here on.
+// The full-resolution still by bricks within the budget, its peak RSS from here on; its figures go into `out`.
+StillCounts time_still(BenchRenderer& b, const fs::path& path, const Scene& scene, int64_t budget,
+                       nlohmann::json& out) {
   reset_peak_rss();
   const double rss_before = rss_mib();
-  t = Clock::now();
+  const auto t = Clock::now();
   const auto stats = distributed::sequence_statistics(path.string(), {}, budget);
   out["statistics_peak_rss_over_before_mib"] = peak_rss_mib() - rss_before;  // the drawing's follows
   const ResolvedScene rs = resolve_scene(scene, stats.box);
@@ -139,27 +127,67 @@ int run_outofcore(const OutOfCoreArgs& a) {
   out["still_peak_rss_mib"] = peak_rss_mib();
   out["rss_before_still_mib"] = rss_before;  // the process without voxels: libraries, the renderer
   out["still_rss_over_before_mib"] = out["still_peak_rss_mib"].get<double>() - rss_before;
+  return {r.bricks, stats.bricks, stats.ms, rss_before};
+}
+
+// The text report: each figure against its goal.
+void print_outofcore(const OutOfCoreArgs& a, const nlohmann::json& out, const std::string& backend, int preview,
+                     int level, const StillCounts& c) {
+  const double rss_before = c.rss_before;
+  std::printf("outofcore %lld^3 uint8 (%.1f GiB of voxels), budget %lld MiB, %s\n", (long long)a.size,
+              double(a.size) * double(a.size) * double(a.size) / double(1 << 30), (long long)a.budget_mib,
+              backend.c_str());
+  std::printf("  open (metadata)       %8.1f ms   (goal <= 1000)\n", out["open_ms"].get<double>());
+  std::printf("  first interactive     %8.1f ms   (goal <= 2000; preview level %d, read %.0f ms)\n",
+              out["first_frame_ms"].get<double>(), preview, out["preview_read_ms"].get<double>());
+  std::printf("  level within budget   %8.1f ms   (level %d, read %.0f ms; replaces the preview)\n",
+              out["interactive_frame_ms"].get<double>(), level, out["interactive_read_ms"].get<double>());
+  std::printf("  full-resolution still %8.1f s    (%d bricks; statistics %.1f s over %d bricks; %.1f GiB read)\n",
+              out["still_s"].get<double>(), c.bricks, c.statistics_ms / 1000.0, c.statistics_bricks,
+              out["still_bytes_read_gib"].get<double>());
+  std::printf(
+      "  peak RSS during still %8.1f MiB  (%.1f MiB over the %.1f MiB before it; goal <= budget + 10%% = %.0f;"
+      " statistics alone %.1f over)\n",
+      out["still_peak_rss_mib"].get<double>(), out["still_peak_rss_mib"].get<double>() - rss_before, rss_before,
+      1.1 * double(a.budget_mib), out["statistics_peak_rss_over_before_mib"].get<double>());
+}
+
+int run_outofcore(const OutOfCoreArgs& a) {
+  const fs::path dir = a.dir.empty() ? fs::temp_directory_path() : fs::path(a.dir);
+  const fs::path path = dir / ("peakcast-outofcore-" + std::to_string(a.size) + ".zarr");
+  std::error_code ec;
+  fs::remove_all(path, ec);
+  const int64_t budget = a.budget_mib << 20;
+  nlohmann::json out = {{"size", a.size}, {"chunk", a.chunk}, {"budget_mib", a.budget_mib}, {"image", a.image}};
+
+  write_pyramid(a, path, out);
+
+  // 2. Open: metadata only.
+  const auto t = Clock::now();
+  const auto cv = chunked::open_chunked(path);
+  out["open_ms"] = ms_between(t, Clock::now());
+
+  // 3. The first interactive frame, as `serve` shows it: the preview level (the finest within
+  // --preview-voxels), read, resident, one interactive frame of the default scene (derived TF,
+  // three-quarter view; half the size, twice the step); then the same for the level within the
+  // budget, which replaces it.
+  BenchRenderer b = make_bench_renderer();
+  Scene scene = parse_scene_text(R"({"volume": "v"})");
+  scene.width = scene.height = a.image;
+  const int level = chunked::finest_level_within(*cv, 0, budget);
+  const int preview = a.preview_voxels > 0 ? chunked::finest_level_of_voxels(*cv, level, a.preview_voxels) : level;
+  time_first_frame(b, *cv, scene, a.image, preview, "preview", out);
+  out["first_frame_ms"] = out["preview_frame_ms"].get<double>() + out["open_ms"].get<double>();
+  time_first_frame(b, *cv, scene, a.image, level, "interactive", out);
+
+  // 4. The full-resolution still by bricks, its peak RSS from here on.
+  const StillCounts still = time_still(b, path, scene, budget, out);
   out["backend"] = b.description();
   if (!a.keep) fs::remove_all(path, ec);
   if (a.json) {
     std::printf("%s\n", out.dump().c_str());
   } else {
-    std::printf("outofcore %lld^3 uint8 (%.1f GiB of voxels), budget %lld MiB, %s\n", (long long)a.size,
-                double(a.size) * double(a.size) * double(a.size) / double(1 << 30), (long long)a.budget_mib,
-                b.description().c_str());
-    std::printf("  open (metadata)       %8.1f ms   (goal <= 1000)\n", out["open_ms"].get<double>());
-    std::printf("  first interactive     %8.1f ms   (goal <= 2000; preview level %d, read %.0f ms)\n",
-                out["first_frame_ms"].get<double>(), preview, out["preview_read_ms"].get<double>());
-    std::printf("  level within budget   %8.1f ms   (level %d, read %.0f ms; replaces the preview)\n",
-                out["interactive_frame_ms"].get<double>(), level, out["interactive_read_ms"].get<double>());
-    std::printf("  full-resolution still %8.1f s    (%d bricks; statistics %.1f s over %d bricks; %.1f GiB read)\n",
-                out["still_s"].get<double>(), r.bricks, stats.ms / 1000.0, stats.bricks,
-                out["still_bytes_read_gib"].get<double>());
-    std::printf(
-        "  peak RSS during still %8.1f MiB  (%.1f MiB over the %.1f MiB before it; goal <= budget + 10%% = %.0f;"
-        " statistics alone %.1f over)\n",
-        out["still_peak_rss_mib"].get<double>(), out["still_peak_rss_mib"].get<double>() - rss_before, rss_before,
-        1.1 * double(a.budget_mib), out["statistics_peak_rss_over_before_mib"].get<double>());
+    print_outofcore(a, out, b.description(), preview, level, still);
   }
   return 0;
 }

@@ -28,25 +28,108 @@ struct SamplingBenchArgs {
   int frames = 3;
 };
 
+// One case's median frame ms, samples per ray and last image.
+struct Timed {
+  double ms = 0, spr = 0;
+  Image img;
+};
+
+// Renders a scene once to warm up and `frames` times timed.
+Timed time_render(render::Renderer& caster, int frames, const render::ResidentVolume& gv, const ResolvedScene& s) {
+  Timed t;
+  std::vector<double> ms;
+  render::RenderStats st;
+  for (int f = 0; f <= frames; ++f) {
+    t.img = caster.render(gv, s, render::RenderPath::Fragment, &st);
+    if (f > 0) ms.push_back(st.render_ms);
+  }
+  t.ms = median(ms);
+  t.spr = st.samples_mean;
+  return t;
+}
+
+// The rows of one view: uniform and differential sweeps, each with adaptive sampling, and virtual samples.
+std::vector<std::pair<std::string, nlohmann::json>> sampling_methods(const Volume& vol) {
+  std::vector<std::pair<std::string, nlohmann::json>> methods;
+  for (double step : {2.0, 1.0, 0.5, 0.25})
+    methods.push_back({"uniform step " + std::to_string(step).substr(0, 4), {{"step", step * vol.spacing.x}}});
+  for (double sk : {8.0, 4.0, 2.0, 1.0, 0.5, 0.25})
+    methods.push_back(
+        {"differential s_k " + std::to_string(sk).substr(0, 4), {{"sampling", "differential"}, {"s_k", sk}}});
+  methods.push_back({"uniform 0.5 + adaptive", {{"step", 0.5 * vol.spacing.x}, {"adaptive", true}}});
+  methods.push_back({"differential 2 + adaptive", {{"sampling", "differential"}, {"s_k", 2.0}, {"adaptive", true}}});
+  // Lee Table 1 style: tricubic at step 1 with 0, 3 or 7 virtual samples against step 1/4.
+  for (const auto& [name, step, vs] :
+       {std::tuple{"tricubic x1", 1.0, 0}, std::tuple{"tricubic x4", 0.25, 0}, std::tuple{"tricubic x1 + vs3", 1.0, 3},
+        std::tuple{"tricubic x1 + vs7", 1.0, 7}})
+    methods.push_back({name, {{"filter", "tricubic"}, {"step", step * vol.spacing.x}, {"virtual_samples", vs}}});
+  return methods;
+}
+
+// One volume seen from one view: what every row is measured on.
+struct SamplingView {
+  render::Renderer& caster;
+  const SamplingBenchArgs& a;
+  const Volume& vol;
+  const render::ResidentVolume& gv;
+  const char* view;
+  const nlohmann::json& jv;  // the scene with the view's camera
+};
+
+// Every method of the view, its PSNR against the converged image of the same filter.
+void time_sampling_methods(const SamplingView& v) {
+  const ResolvedScene sv = resolve_scene(parse_scene(v.jv), v.vol);
+  const auto conv = reference::render_converged(v.vol, sv, reference::OpticalModel::Dvr, 1e-4);
+  nlohmann::json jc = v.jv;  // tricubic rows are judged against the tricubic field's own limit
+  jc["render"]["filter"] = "tricubic";
+  const auto conv_cubic =
+      reference::render_converged(v.vol, resolve_scene(parse_scene(jc), v.vol), reference::OpticalModel::Dvr, 1e-4);
+  for (const auto& [name, render] : sampling_methods(v.vol)) {
+    nlohmann::json jm = v.jv;
+    jm["render"].update(render);
+    const ResolvedScene s = resolve_scene(parse_scene(jm), v.vol);
+    const Timed t = time_render(v.caster, v.a.frames, v.gv, s);
+    std::printf(
+        "%-16s %-5s %-26s %9.2f %8.1f %9.2f\n", v.vol.name.c_str(), v.view, name.c_str(), t.ms, t.spr,
+        reference::compare(t.img, s.scene.render.filter == Filter::Tricubic ? conv_cubic.image : conv.image).psnr);
+    std::fflush(stdout);
+  }
+}
+
+// Differential sampling at half size against uniform sampling at the step that visits as many samples.
+void time_interactive(const SamplingView& v) {
+  // Interactive frames are rendered at half size (quality.interactive_scale): a differential
+  // scene keeps its s_k, so the larger footprint makes the steps twice as long. The
+  // alternative: uniform sampling at the step that costs the same (visited samples matched).
+  nlohmann::json jh = v.jv;
+  jh["image"] = {{"width", v.a.size / 2}, {"height", v.a.size / 2}};
+  const auto conv_half =
+      reference::render_converged(v.vol, resolve_scene(parse_scene(jh), v.vol), reference::OpticalModel::Dvr, 1e-4);
+  for (double sk : {4.0, 1.0, 0.25}) {
+    nlohmann::json jd = jh;
+    jd["render"].update({{"sampling", "differential"}, {"s_k", sk}});
+    const Timed d = time_render(v.caster, v.a.frames, v.gv, resolve_scene(parse_scene(jd), v.vol));
+    double step = v.vol.spacing.x;
+    Timed u;
+    for (int k = 0; k < 6; ++k) {
+      nlohmann::json ju = jh;
+      ju["render"]["step"] = step;
+      u = time_render(v.caster, v.a.frames, v.gv, resolve_scene(parse_scene(ju), v.vol));
+      if (std::abs(u.spr / d.spr - 1.0) < 0.02) break;
+      step *= u.spr / d.spr;
+    }
+    std::printf(
+        "%-16s %-5s interactive %3d^2: differential s_k %.2f %6.2f ms %6.1f spr %6.2f dB | uniform step "
+        "%.3f %6.2f ms %6.1f spr %6.2f dB\n",
+        v.vol.name.c_str(), v.view, v.a.size / 2, sk, d.ms, d.spr, reference::compare(d.img, conv_half.image).psnr,
+        step, u.ms, u.spr, reference::compare(u.img, conv_half.image).psnr);
+    std::fflush(stdout);
+  }
+}
+
 int run_sampling_bench(const SamplingBenchArgs& a) {
   BenchRenderer b = make_bench_renderer();
   render::Renderer& caster = *b.renderer;
-  struct Timed {
-    double ms = 0, spr = 0;
-    Image img;
-  };
-  auto time_render = [&](const render::ResidentVolume& gv, const ResolvedScene& s) {
-    Timed t;
-    std::vector<double> ms;
-    render::RenderStats st;
-    for (int f = 0; f <= a.frames; ++f) {
-      t.img = caster.render(gv, s, render::RenderPath::Fragment, &st);
-      if (f > 0) ms.push_back(st.render_ms);
-    }
-    t.ms = median(ms);
-    t.spr = st.samples_mean;
-    return t;
-  };
   std::printf("%-16s %-5s %-26s %9s %8s %9s\n", "volume", "view", "method", "median_ms", "spr", "PSNR_dB");
   for (const auto& path : a.volumes) {
     auto vol = std::make_shared<Volume>(load_volume(path));
@@ -71,63 +154,9 @@ int run_sampling_bench(const SamplingBenchArgs& a) {
                             {"fov_y", fov}};
       nlohmann::json jv = j;
       jv["camera"] = cam;
-      const ResolvedScene sv = resolve_scene(parse_scene(jv), *vol);
-      const auto conv = reference::render_converged(*vol, sv, reference::OpticalModel::Dvr, 1e-4);
-      nlohmann::json jc = jv;  // tricubic rows are judged against the tricubic field's own limit
-      jc["render"]["filter"] = "tricubic";
-      const auto conv_cubic =
-          reference::render_converged(*vol, resolve_scene(parse_scene(jc), *vol), reference::OpticalModel::Dvr, 1e-4);
-      std::vector<std::pair<std::string, nlohmann::json>> methods;
-      for (double step : {2.0, 1.0, 0.5, 0.25})
-        methods.push_back({"uniform step " + std::to_string(step).substr(0, 4), {{"step", step * vol->spacing.x}}});
-      for (double sk : {8.0, 4.0, 2.0, 1.0, 0.5, 0.25})
-        methods.push_back(
-            {"differential s_k " + std::to_string(sk).substr(0, 4), {{"sampling", "differential"}, {"s_k", sk}}});
-      methods.push_back({"uniform 0.5 + adaptive", {{"step", 0.5 * vol->spacing.x}, {"adaptive", true}}});
-      methods.push_back(
-          {"differential 2 + adaptive", {{"sampling", "differential"}, {"s_k", 2.0}, {"adaptive", true}}});
-      // Lee Table 1 style: tricubic at step 1 with 0, 3 or 7 virtual samples against step 1/4.
-      for (const auto& [name, step, vs] :
-           {std::tuple{"tricubic x1", 1.0, 0}, std::tuple{"tricubic x4", 0.25, 0},
-            std::tuple{"tricubic x1 + vs3", 1.0, 3}, std::tuple{"tricubic x1 + vs7", 1.0, 7}})
-        methods.push_back({name, {{"filter", "tricubic"}, {"step", step * vol->spacing.x}, {"virtual_samples", vs}}});
-      for (const auto& [name, render] : methods) {
-        nlohmann::json jm = jv;
-        jm["render"].update(render);
-        const ResolvedScene s = resolve_scene(parse_scene(jm), *vol);
-        const Timed t = time_render(gv, s);
-        std::printf(
-            "%-16s %-5s %-26s %9.2f %8.1f %9.2f\n", vol->name.c_str(), view, name.c_str(), t.ms, t.spr,
-            reference::compare(t.img, s.scene.render.filter == Filter::Tricubic ? conv_cubic.image : conv.image).psnr);
-        std::fflush(stdout);
-      }
-      // Interactive frames are rendered at half size (quality.interactive_scale): a differential
-      // scene keeps its s_k, so the larger footprint makes the steps twice as long. The
-      // alternative: uniform sampling at the step that costs the same (visited samples matched).
-      nlohmann::json jh = jv;
-      jh["image"] = {{"width", a.size / 2}, {"height", a.size / 2}};
-      const auto conv_half =
-          reference::render_converged(*vol, resolve_scene(parse_scene(jh), *vol), reference::OpticalModel::Dvr, 1e-4);
-      for (double sk : {4.0, 1.0, 0.25}) {
-        nlohmann::json jd = jh;
-        jd["render"].update({{"sampling", "differential"}, {"s_k", sk}});
-        const Timed d = time_render(gv, resolve_scene(parse_scene(jd), *vol));
-        double step = vol->spacing.x;
-        Timed u;
-        for (int k = 0; k < 6; ++k) {
-          nlohmann::json ju = jh;
-          ju["render"]["step"] = step;
-          u = time_render(gv, resolve_scene(parse_scene(ju), *vol));
-          if (std::abs(u.spr / d.spr - 1.0) < 0.02) break;
-          step *= u.spr / d.spr;
-        }
-        std::printf(
-            "%-16s %-5s interactive %3d^2: differential s_k %.2f %6.2f ms %6.1f spr %6.2f dB | uniform step "
-            "%.3f %6.2f ms %6.1f spr %6.2f dB\n",
-            vol->name.c_str(), view, a.size / 2, sk, d.ms, d.spr, reference::compare(d.img, conv_half.image).psnr, step,
-            u.ms, u.spr, reference::compare(u.img, conv_half.image).psnr);
-        std::fflush(stdout);
-      }
+      const SamplingView v{caster, a, *vol, gv, view, jv};
+      time_sampling_methods(v);
+      time_interactive(v);
     }
   }
   std::printf(

@@ -39,6 +39,127 @@ double psnr(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
   return mse == 0 ? 99.0 : 10 * std::log10(255.0 * 255.0 / mse);
 }
 
+// The lossless renders of the orbit, one 8-bit RGB frame per planned frame; their wall time goes into `render_s`.
+std::vector<std::vector<uint8_t>> render_orbit(const StreamArgs& a, render::Renderer& renderer,
+                                               const render::ResidentVolume& resident, const Volume& vol, int w, int h,
+                                               int frames, double& render_s) {
+  ResolvedScene s = bench_scene(vol, w, "trilinear");
+  s.scene.width = w;
+  s.scene.height = h;
+  const Camera start = s.camera;
+  std::vector<std::vector<uint8_t>> renders;
+  render::RenderRequest req;
+  req.output = render::RenderOutput::Rgb8;
+  const auto t_render = Clock::now();
+  for (int f = 0; f < frames; ++f) {
+    s.camera = orbit_camera(start, a.orbit_deg_per_s * f / a.fps);
+    renders.push_back(renderer.render(resident, s, req, nullptr).rgb8.rgb);
+  }
+  render_s = std::chrono::duration<double>(Clock::now() - t_render).count();
+  return renders;
+}
+
+// What encoding the orbit measured: every frame's encode ms over all passes, and the first pass's packets.
+struct Encoded {
+  std::vector<double> encode_ms;
+  std::string encoder = "turbojpeg";
+  std::vector<std::vector<uint8_t>> packets;
+};
+
+// Encodes the orbit --passes times, each pass with a fresh encoder (JPEG when `video` is empty).
+Encoded encode_orbit(const StreamArgs& a, const std::optional<encode::VideoCodec>& video,
+                     const std::vector<std::vector<uint8_t>>& renders, int w, int h) {
+  Encoded e;
+  encode::JpegEncoder jpeg;
+  for (int pass = 0; pass < a.passes; ++pass) {
+    std::unique_ptr<encode::VideoEncoder> enc;
+    if (video) {
+      encode::VideoSettings vs;
+      vs.codec = *video;
+      vs.width = w;
+      vs.height = h;
+      vs.kbps = a.kbps;
+      vs.quality = a.quality;
+      vs.fps = int(std::lround(a.fps));
+      vs.encoder_options = a.encoder_options;
+      enc = std::make_unique<encode::VideoEncoder>(vs);
+      e.encoder = enc->encoder_name();
+    }
+    for (const auto& rgb : renders) {
+      const auto t0 = Clock::now();
+      std::vector<uint8_t> packet = enc ? enc->encode(rgb.data(), w, h, false).bytes
+                                        : jpeg.encode(rgb.data(), w, h, a.quality, encode::Subsampling::S420);
+      e.encode_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+      if (pass == 0) e.packets.push_back(std::move(packet));
+    }
+  }
+  return e;
+}
+
+// Decodes the first pass's packets in order: each frame's PSNR against its render, into `db`; returns their bytes.
+size_t decode_orbit(const std::optional<encode::VideoCodec>& video, const Encoded& e,
+                    const std::vector<std::vector<uint8_t>>& renders, std::vector<double>& db) {
+  const std::vector<std::vector<uint8_t>>& packets = e.packets;
+  size_t bytes = 0;
+  std::unique_ptr<encode::VideoDecoder> dec;
+  if (video) dec = std::make_unique<encode::VideoDecoder>(*video);
+  for (size_t f = 0; f < packets.size(); ++f) {
+    std::vector<uint8_t> out;
+    int dw = 0, dh = 0;
+    if (dec) {
+      if (!dec->decode(packets[f], out, dw, dh)) throw std::runtime_error("the decoder gave no picture for a frame");
+    } else {
+      out = encode::decode_jpeg(packets[f].data(), packets[f].size(), dw, dh);
+    }
+    bytes += packets[f].size();
+    db.push_back(psnr(renders[f], out));
+  }
+  return bytes;
+}
+
+// What the report shows beside the arguments and the encoding.
+struct StreamResult {
+  int w = 0, h = 0, frames = 0;
+  bool video = false;
+  double render_s = 0, mbps = 0, mean_db = 0;
+  std::vector<double> db;
+};
+
+// Prints the report: one JSON object (--json) or two lines of text.
+void print_stream(const StreamArgs& a, const Encoded& e, const StreamResult& r) {
+  const std::vector<double>& db = r.db;
+  const std::vector<double>& encode_ms = e.encode_ms;
+  const std::string& encoder = e.encoder;
+  if (a.json) {
+    nlohmann::json j = {{"codec", a.codec},
+                        {"encoder", encoder},
+                        {"mbps", r.mbps},
+                        {"psnr_db", r.mean_db},
+                        {"psnr_db_min", *std::min_element(db.begin(), db.end())},
+                        {"encode_ms", median(encode_ms)},
+                        {"encode_ms_max", *std::max_element(encode_ms.begin(), encode_ms.end())},
+                        {"fps", a.fps},
+                        {"frames", r.frames},
+                        {"width", r.w},
+                        {"height", r.h},
+                        {"kbps", r.video ? a.kbps : 0},
+                        {"quality", a.quality},
+                        {"delay_frames", 0},
+                        {"encoder_options", a.encoder_options},
+                        {"passes", a.passes}};
+    std::printf("%s\n", j.dump().c_str());
+  } else {
+    std::printf("%s (%s) %dx%d, %d frames at %.0f frames/s over a %.0f-degree orbit (rendered in %.1f s)\n",
+                a.codec.c_str(), encoder.c_str(), r.w, r.h, r.frames, a.fps, a.orbit_deg_per_s * r.frames / a.fps,
+                r.render_s);
+    std::printf(
+        "  %.2f Mbit/s, PSNR %.2f dB (min %.2f), encode %.2f ms per frame (median; max %.2f; %d pass%s), delay 0 "
+        "frames\n",
+        r.mbps, r.mean_db, *std::min_element(db.begin(), db.end()), median(encode_ms),
+        *std::max_element(encode_ms.begin(), encode_ms.end()), a.passes, a.passes == 1 ? "" : "es");
+  }
+}
+
 int run_stream(const StreamArgs& a) {
   int w = 0, h = 0;
   if (std::sscanf(a.size.c_str(), "%dx%d", &w, &h) != 2 || w < 16 || h < 16 || w % 2 || h % 2)
@@ -54,94 +175,19 @@ int run_stream(const StreamArgs& a) {
   BenchRenderer b = make_bench_renderer();
   auto vol = bench_volume(a.volume);
   auto resident = b.renderer->make_resident(vol);
-  ResolvedScene s = bench_scene(*vol, w, "trilinear");
-  s.scene.width = w;
-  s.scene.height = h;
-  const Camera start = s.camera;
-  std::vector<std::vector<uint8_t>> renders;
-  render::RenderRequest req;
-  req.output = render::RenderOutput::Rgb8;
-  const auto t_render = Clock::now();
-  for (int f = 0; f < frames; ++f) {
-    s.camera = orbit_camera(start, a.orbit_deg_per_s * f / a.fps);
-    renders.push_back(b.renderer->render(*resident, s, req, nullptr).rgb8.rgb);
-  }
-  const double render_s = std::chrono::duration<double>(Clock::now() - t_render).count();
+  StreamResult r;
+  r.w = w, r.h = h, r.frames = frames, r.video = bool(video);
+  const auto renders = render_orbit(a, *b.renderer, *resident, *vol, w, h, frames, r.render_s);
 
   // Each pass encodes the whole orbit with a fresh encoder, back to back as a stream is encoded
   // (the timed part); the first pass's packets are then decoded in order, for the bits and the
   // PSNR. The encode ms is the median (and the max) over every pass: one pass's median varied by
   // 20-40% between runs on a shared 2-core machine.
-  std::vector<double> encode_ms, db;
-  size_t bytes = 0;
-  std::string encoder = "turbojpeg";
-  encode::JpegEncoder jpeg;
-  std::vector<std::vector<uint8_t>> packets;
-  for (int pass = 0; pass < a.passes; ++pass) {
-    std::unique_ptr<encode::VideoEncoder> enc;
-    if (video) {
-      encode::VideoSettings vs;
-      vs.codec = *video;
-      vs.width = w;
-      vs.height = h;
-      vs.kbps = a.kbps;
-      vs.quality = a.quality;
-      vs.fps = int(std::lround(a.fps));
-      vs.encoder_options = a.encoder_options;
-      enc = std::make_unique<encode::VideoEncoder>(vs);
-      encoder = enc->encoder_name();
-    }
-    for (const auto& rgb : renders) {
-      const auto t0 = Clock::now();
-      std::vector<uint8_t> packet = enc ? enc->encode(rgb.data(), w, h, false).bytes
-                                        : jpeg.encode(rgb.data(), w, h, a.quality, encode::Subsampling::S420);
-      encode_ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
-      if (pass == 0) packets.push_back(std::move(packet));
-    }
-  }
-  std::unique_ptr<encode::VideoDecoder> dec;
-  if (video) dec = std::make_unique<encode::VideoDecoder>(*video);
-  for (size_t f = 0; f < packets.size(); ++f) {
-    std::vector<uint8_t> out;
-    int dw = 0, dh = 0;
-    if (dec) {
-      if (!dec->decode(packets[f], out, dw, dh)) throw std::runtime_error("the decoder gave no picture for a frame");
-    } else {
-      out = encode::decode_jpeg(packets[f].data(), packets[f].size(), dw, dh);
-    }
-    bytes += packets[f].size();
-    db.push_back(psnr(renders[f], out));
-  }
-  double mean_db = 0;
-  for (double d : db) mean_db += d / double(db.size());
-  const double mbps = double(bytes) * 8.0 / (frames / a.fps) / 1e6;
-  if (a.json) {
-    nlohmann::json j = {{"codec", a.codec},
-                        {"encoder", encoder},
-                        {"mbps", mbps},
-                        {"psnr_db", mean_db},
-                        {"psnr_db_min", *std::min_element(db.begin(), db.end())},
-                        {"encode_ms", median(encode_ms)},
-                        {"encode_ms_max", *std::max_element(encode_ms.begin(), encode_ms.end())},
-                        {"fps", a.fps},
-                        {"frames", frames},
-                        {"width", w},
-                        {"height", h},
-                        {"kbps", video ? a.kbps : 0},
-                        {"quality", a.quality},
-                        {"delay_frames", 0},
-                        {"encoder_options", a.encoder_options},
-                        {"passes", a.passes}};
-    std::printf("%s\n", j.dump().c_str());
-  } else {
-    std::printf("%s (%s) %dx%d, %d frames at %.0f frames/s over a %.0f-degree orbit (rendered in %.1f s)\n",
-                a.codec.c_str(), encoder.c_str(), w, h, frames, a.fps, a.orbit_deg_per_s * frames / a.fps, render_s);
-    std::printf(
-        "  %.2f Mbit/s, PSNR %.2f dB (min %.2f), encode %.2f ms per frame (median; max %.2f; %d pass%s), delay 0 "
-        "frames\n",
-        mbps, mean_db, *std::min_element(db.begin(), db.end()), median(encode_ms),
-        *std::max_element(encode_ms.begin(), encode_ms.end()), a.passes, a.passes == 1 ? "" : "es");
-  }
+  const Encoded enc = encode_orbit(a, video, renders, w, h);
+  const size_t bytes = decode_orbit(video, enc, renders, r.db);
+  for (double d : r.db) r.mean_db += d / double(r.db.size());
+  r.mbps = double(bytes) * 8.0 / (frames / a.fps) / 1e6;
+  print_stream(a, enc, r);
   return 0;
 }
 

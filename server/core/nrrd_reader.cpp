@@ -104,15 +104,8 @@ std::string format_name(const fs::path& file, const std::string& pattern, long l
   return prefix + number + suffix;
 }
 
-}  // namespace
-
-Volume read_nrrd(const fs::path& path, const LoadOptions& options) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw VolumeError(path, "cannot open");
-  std::string line;
-  std::getline(in, line);
-  if (line.rfind("NRRD000", 0) != 0) throw VolumeError(path, "not a NRRD file (no NRRD000x magic)");
-
+// What a NRRD header says, as its fields are read.
+struct NrrdHeader {
   VolumeHeader h;
   PayloadSpec payload;
   std::string type, encoding = "raw", data_file;
@@ -120,12 +113,70 @@ Volume read_nrrd(const fs::path& path, const LoadOptions& options) {
   bool have_sizes = false, list_mode = false;
   int dimension = 0;
   int64_t line_skip = 0;
-  const fs::path dir = path.parent_path();
   int64_t header_bytes = 0;
+};
+
+// Sets what one header field says; fields that do not change the voxels are ignored.
+void parse_nrrd_field(const fs::path& path, const std::string& field, const std::string& value, NrrdHeader& n) {
+  VolumeHeader& h = n.h;
+  if (field == "type") {
+    n.type = value;
+  } else if (field == "dimension") {
+    n.dimension = int(parse_int(path, field, value));
+    if (n.dimension != 3) throw VolumeError(path, "dimension " + value + " is not supported (need a 3D scalar volume)");
+  } else if (field == "sizes") {
+    auto parts = split_ws(value);
+    if (parts.size() != 3) throw VolumeError(path, "sizes must list 3 values");
+    for (int a = 0; a < 3; ++a) h.dims[a] = parse_int(path, field, parts[a]);
+    n.have_sizes = true;
+  } else if (field == "spacings") {
+    auto parts = split_ws(value);
+    if (parts.size() != 3) throw VolumeError(path, "spacings must list 3 values");
+    for (int a = 0; a < 3; ++a) h.spacing[a] = lower(parts[a]) == "nan" ? 1.0 : parse_double(path, field, parts[a]);
+  } else if (field == "space directions") {
+    auto vecs = split_vectors(value);
+    if (vecs.size() != 3) throw VolumeError(path, "space directions must list 3 vectors");
+    for (int a = 0; a < 3; ++a) {
+      auto v = parse_vector(path, vecs[a]);
+      if (v.empty()) continue;
+      if (v.size() != 3) throw VolumeError(path, "space directions: need 3D vectors");
+      for (int b = 0; b < 3; ++b)
+        if (b != a && v[b] != 0.0)
+          throw VolumeError(path, "space directions are not axis-aligned (oblique grids are not supported)");
+      h.spacing[a] = std::abs(v[a]);
+    }
+  } else if (field == "space origin") {
+    auto v = parse_vector(path, value);
+    if (v.size() != 3) throw VolumeError(path, "space origin must be a 3D vector");
+    h.origin = {v[0], v[1], v[2]};
+  } else if (field == "axis mins" || field == "axismins") {
+    auto parts = split_ws(value);
+    for (size_t a = 0; a < 3 && a < parts.size(); ++a)
+      if (lower(parts[a]) != "nan") h.origin[a] = parse_double(path, field, parts[a]);
+  } else if (field == "encoding") {
+    n.encoding = lower(value);
+  } else if (field == "endian") {
+    h.big_endian = lower(value) == "big";
+  } else if (field == "byte skip") {
+    n.payload.byte_skip = parse_int(path, field, value);
+  } else if (field == "line skip") {
+    n.line_skip = parse_int(path, field, value);
+  } else if (field == "data file" || field == "datafile") {
+    n.data_file = value;
+    if (lower(split_ws(value).empty() ? "" : split_ws(value)[0]) == "list") n.list_mode = true;
+  }
+  // Other fields (space, kinds, centers, content, ...) do not change the voxels.
+}
+
+// Reads the header lines after the magic, up to the blank line before attached data (or the end of
+// a detached header), and the LIST of data files when there is one.
+NrrdHeader read_nrrd_header(const fs::path& path, std::ifstream& in) {
+  NrrdHeader n;
+  std::string line;
   for (int lines = 0; std::getline(in, line); ++lines) {
     if (lines > 10000) throw VolumeError(path, "header too long");
-    if (list_mode) {
-      if (!trim(line).empty()) list_files.push_back(trim(line));
+    if (n.list_mode) {
+      if (!trim(line).empty()) n.list_files.push_back(trim(line));
       continue;
     }
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -136,95 +187,74 @@ Volume read_nrrd(const fs::path& path, const LoadOptions& options) {
     if (colon == std::string::npos) throw VolumeError(path, "malformed header line '" + line + "'");
     std::string field = lower(trim(line.substr(0, colon)));
     std::string value = trim(line.substr(colon + 2));
-    if (field == "type") {
-      type = value;
-    } else if (field == "dimension") {
-      dimension = int(parse_int(path, field, value));
-      if (dimension != 3) throw VolumeError(path, "dimension " + value + " is not supported (need a 3D scalar volume)");
-    } else if (field == "sizes") {
-      auto parts = split_ws(value);
-      if (parts.size() != 3) throw VolumeError(path, "sizes must list 3 values");
-      for (int a = 0; a < 3; ++a) h.dims[a] = parse_int(path, field, parts[a]);
-      have_sizes = true;
-    } else if (field == "spacings") {
-      auto parts = split_ws(value);
-      if (parts.size() != 3) throw VolumeError(path, "spacings must list 3 values");
-      for (int a = 0; a < 3; ++a) h.spacing[a] = lower(parts[a]) == "nan" ? 1.0 : parse_double(path, field, parts[a]);
-    } else if (field == "space directions") {
-      auto vecs = split_vectors(value);
-      if (vecs.size() != 3) throw VolumeError(path, "space directions must list 3 vectors");
-      for (int a = 0; a < 3; ++a) {
-        auto v = parse_vector(path, vecs[a]);
-        if (v.empty()) continue;
-        if (v.size() != 3) throw VolumeError(path, "space directions: need 3D vectors");
-        for (int b = 0; b < 3; ++b)
-          if (b != a && v[b] != 0.0)
-            throw VolumeError(path, "space directions are not axis-aligned (oblique grids are not supported)");
-        h.spacing[a] = std::abs(v[a]);
-      }
-    } else if (field == "space origin") {
-      auto v = parse_vector(path, value);
-      if (v.size() != 3) throw VolumeError(path, "space origin must be a 3D vector");
-      h.origin = {v[0], v[1], v[2]};
-    } else if (field == "axis mins" || field == "axismins") {
-      auto parts = split_ws(value);
-      for (size_t a = 0; a < 3 && a < parts.size(); ++a)
-        if (lower(parts[a]) != "nan") h.origin[a] = parse_double(path, field, parts[a]);
-    } else if (field == "encoding") {
-      encoding = lower(value);
-    } else if (field == "endian") {
-      h.big_endian = lower(value) == "big";
-    } else if (field == "byte skip") {
-      payload.byte_skip = parse_int(path, field, value);
-    } else if (field == "line skip") {
-      line_skip = parse_int(path, field, value);
-    } else if (field == "data file" || field == "datafile") {
-      data_file = value;
-      if (lower(split_ws(value).empty() ? "" : split_ws(value)[0]) == "list") list_mode = true;
-    }
-    // Other fields (space, kinds, centers, content, ...) do not change the voxels.
+    parse_nrrd_field(path, field, value, n);
   }
-  header_bytes = in.tellg();
-  if (type.empty()) throw VolumeError(path, "missing field 'type'");
-  if (dimension == 0) throw VolumeError(path, "missing field 'dimension'");
-  if (!have_sizes) throw VolumeError(path, "missing field 'sizes'");
+  n.header_bytes = in.tellg();
+  return n;
+}
+
+// Refuses a header that lacks a required field or asks for what is not supported; sets the
+// source type and the encoding.
+void check_nrrd_fields(const fs::path& path, NrrdHeader& n) {
+  if (n.type.empty()) throw VolumeError(path, "missing field 'type'");
+  if (n.dimension == 0) throw VolumeError(path, "missing field 'dimension'");
+  if (!n.have_sizes) throw VolumeError(path, "missing field 'sizes'");
   try {
-    h.source = parse_source_type(type);
+    n.h.source = parse_source_type(n.type);
   } catch (const std::invalid_argument& e) {
     throw VolumeError(path, e.what());
   }
-  if (encoding == "raw") {
-    payload.encoding = Encoding::Raw;
-  } else if (encoding == "gzip" || encoding == "gz") {
-    payload.encoding = Encoding::Gzip;
+  if (n.encoding == "raw") {
+    n.payload.encoding = Encoding::Raw;
+  } else if (n.encoding == "gzip" || n.encoding == "gz") {
+    n.payload.encoding = Encoding::Gzip;
   } else {
-    throw VolumeError(path, "unsupported encoding '" + encoding + "' (supported: raw, gzip)");
+    throw VolumeError(path, "unsupported encoding '" + n.encoding + "' (supported: raw, gzip)");
   }
-  if (line_skip != 0) throw VolumeError(path, "'line skip' is not supported");
+  if (n.line_skip != 0) throw VolumeError(path, "'line skip' is not supported");
+}
 
-  if (data_file.empty()) {
+// The files the voxels are in: attached after the header, or the detached header's `data file`
+// (one file, a LIST, or a printf-style pattern over a range).
+void locate_nrrd_data(const fs::path& path, NrrdHeader& n) {
+  PayloadSpec& payload = n.payload;
+  const fs::path dir = path.parent_path();
+  if (n.data_file.empty()) {
     payload.files = {path};
     if (payload.byte_skip == -1 && payload.encoding == Encoding::Raw) {
       // data is the last bytes of the file
     } else {
-      payload.byte_skip = header_bytes + std::max<int64_t>(payload.byte_skip, 0);
+      payload.byte_skip = n.header_bytes + std::max<int64_t>(payload.byte_skip, 0);
     }
-  } else if (list_mode) {
-    for (auto& f : list_files) payload.files.push_back(dir / f);
+  } else if (n.list_mode) {
+    for (auto& f : n.list_files) payload.files.push_back(dir / f);
   } else {
-    auto parts = split_ws(data_file);
+    auto parts = split_ws(n.data_file);
     if (parts.size() >= 4) {  // printf-style: fmt min max step [subdim]
       long long lo = parse_int(path, "data file", parts[1]), hi = parse_int(path, "data file", parts[2]);
       long long step = parse_int(path, "data file", parts[3]);
       if (step == 0 || (hi - lo) / step < 0 || (hi - lo) / step > 1000000)
-        throw VolumeError(path, "data file: bad range '" + data_file + "'");
+        throw VolumeError(path, "data file: bad range '" + n.data_file + "'");
       for (long long i = lo; step > 0 ? i <= hi : i >= hi; i += step)
         payload.files.push_back(dir / format_name(path, parts[0], i));
     } else {
-      payload.files = {dir / data_file};
+      payload.files = {dir / n.data_file};
     }
   }
-  return read_payload(path, h, payload, options);
+}
+
+}  // namespace
+
+Volume read_nrrd(const fs::path& path, const LoadOptions& options) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw VolumeError(path, "cannot open");
+  std::string line;
+  std::getline(in, line);
+  if (line.rfind("NRRD000", 0) != 0) throw VolumeError(path, "not a NRRD file (no NRRD000x magic)");
+  NrrdHeader n = read_nrrd_header(path, in);
+  check_nrrd_fields(path, n);
+  locate_nrrd_data(path, n);
+  return read_payload(path, n.h, n.payload, options);
 }
 
 }  // namespace peakcast::detail

@@ -12,24 +12,12 @@ namespace asio = boost::asio;
 namespace peakcast::net {
 namespace {
 
-// The scene is valid and its volume loaded: resolve, queue on the render thread, answer later.
-// `full`: the finest level's statistics, for a pyramid held coarser (drawn by bricks).
-void submit_still(AppContext& app, const Request& req, const Scene& scene, std::shared_ptr<VolumeEntry> vol,
-                  std::function<void(Response)> send, std::shared_ptr<std::atomic<bool>> cancelled,
-                  std::shared_ptr<const distributed::SequenceStatistics> full = nullptr) {
-  StillJob job;
-  job.cancelled = std::move(cancelled);
-  const int level = full ? 0 : vol->volume->pyramid_level;
-  try {
-    job.scene = full ? resolve_scene(scene, full->box) : resolve_scene(scene, *vol->volume);
-    job.full_statistics = std::move(full);
-  } catch (const SceneError& e) {
-    count(app, "render", http::status::bad_request);
-    return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
-  }
+// Answers 422 when the still's estimated samples exceed the server's cost cap; true when it did.
+bool refused_for_cost(AppContext& app, const Request& req, const ResolvedScene& scene,
+                      const std::function<void(Response)>& send) {
   // The cost cap: a still whose estimated samples exceed it would hold the render thread for
   // minutes; refused before it queues, naming the limit.
-  const double cost = estimated_still_samples(job.scene);
+  const double cost = estimated_still_samples(scene);
   if (cost > app.config.max_still_samples) {
     count(app, "render", http::status::unprocessable_entity);
     app.metrics.add("peakcast_stills_total", "outcome=\"refused_cost\"", 1);
@@ -37,16 +25,24 @@ void submit_still(AppContext& app, const Request& req, const Scene& scene, std::
     std::snprintf(text, sizeof text,
                   "this still needs about %.3g samples (%d x %d pixels x %.0f samples per ray); the server's limit "
                   "max_still_samples is %.3g: use a smaller image or a larger render.step",
-                  cost, job.scene.scene.width, job.scene.scene.height, estimated_samples_per_ray(job.scene),
+                  cost, scene.scene.width, scene.scene.height, estimated_samples_per_ray(scene),
                   app.config.max_still_samples);
     auto res = error_response(req, http::status::unprocessable_entity, "too_costly", text);
-    return send(std::move(res));
+    send(std::move(res));
+    return true;
   }
+  return false;
+}
+
+// Reads the image format (?format=, else the Accept header) and ?quality= into the job; false when it
+// answered 400 instead.
+bool read_still_format(AppContext& app, const Request& req, StillJob& job, const std::function<void(Response)>& send) {
   const std::string format = query_param(std::string(req.target()), "format");
   const std::string accept(req[http::field::accept]);
   if (!format.empty() && format != "png" && format != "jpeg" && format != "jpg" && format != "rgb") {
     count(app, "render", http::status::bad_request);
-    return send(error_response(req, http::status::bad_request, "bad_request", "format must be png, jpeg or rgb"));
+    send(error_response(req, http::status::bad_request, "bad_request", "format must be png, jpeg or rgb"));
+    return false;
   }
   job.raw_rgb = format == "rgb";  // packed 8-bit RGB rows from the top: what a script puts in an array
   job.png = !(format == "jpeg" || format == "jpg" ||
@@ -61,18 +57,25 @@ void submit_still(AppContext& app, const Request& req, const Scene& scene, std::
     }
     if (job.quality < limits::kMinJpegQuality || job.quality > limits::kMaxJpegQuality) {
       count(app, "render", http::status::bad_request);
-      return send(error_response(req, http::status::bad_request, "bad_request",
-                                 "quality must be " + std::to_string(limits::kMinJpegQuality) + ".." +
-                                     std::to_string(limits::kMaxJpegQuality)));
+      send(error_response(req, http::status::bad_request, "bad_request",
+                          "quality must be " + std::to_string(limits::kMinJpegQuality) + ".." +
+                              std::to_string(limits::kMaxJpegQuality)));
+      return false;
     }
   }
-  job.volume = std::move(vol);
+  return true;
+}
+
+// The still's answer once drawn: the image with its timings and the scene's warnings, or the
+// render's error. `level`: the pyramid level drawn.
+std::function<void(StillResult)> still_reply(AppContext& app, const Request& req, const ResolvedScene& scene, int level,
+                                             std::function<void(Response)> send) {
   const unsigned version = req.version();
   const bool keep_alive = req.keep_alive();
   // Of the scene: whether its TF was derived, and what it asks for that it will not get.
-  const std::string tf_source = job.scene.tf_derived ? "auto" : "scene";
-  const std::vector<std::string> warnings = job.scene.warnings;
-  job.done = [&app, send, version, keep_alive, tf_source, warnings, level](StillResult r) {
+  const std::string tf_source = scene.tf_derived ? "auto" : "scene";
+  const std::vector<std::string> warnings = scene.warnings;
+  return [&app, send = std::move(send), version, keep_alive, tf_source, warnings, level](StillResult r) {
     if (!r.error.empty()) {
       const auto status = r.error_code == "shutting_down" || r.error_code == "cancelled"
                               ? http::status::service_unavailable
@@ -103,19 +106,43 @@ void submit_still(AppContext& app, const Request& req, const Scene& scene, std::
     count(app, "render", http::status::ok);
     send(std::move(res));
   };
-  if (!app.render.submit_still(std::move(job))) {
-    const bool stopping = app.stopping.load();
-    count(app, "render", http::status::service_unavailable);
-    app.metrics.add("peakcast_stills_total", stopping ? "outcome=\"shutting_down\"" : "outcome=\"refused_queue\"", 1);
-    auto res =
-        stopping
-            ? error_response(req, http::status::service_unavailable, "shutting_down", "the server is shutting down")
-            : error_response(req, http::status::service_unavailable, "queue_full",
-                             "the still queue holds its maximum of " + std::to_string(app.config.max_queued_stills) +
-                                 " renders (max_queued_stills); retry later");
-    res.set(http::field::retry_after, std::to_string(limits::kStillRetryAfter.count()));
-    send(std::move(res));
+}
+
+// Answers 503 for a still the render thread would not queue: the server is shutting down, or the
+// queue is full.
+void refuse_queued_still(AppContext& app, const Request& req, const std::function<void(Response)>& send) {
+  const bool stopping = app.stopping.load();
+  count(app, "render", http::status::service_unavailable);
+  app.metrics.add("peakcast_stills_total", stopping ? "outcome=\"shutting_down\"" : "outcome=\"refused_queue\"", 1);
+  auto res =
+      stopping ? error_response(req, http::status::service_unavailable, "shutting_down", "the server is shutting down")
+               : error_response(req, http::status::service_unavailable, "queue_full",
+                                "the still queue holds its maximum of " + std::to_string(app.config.max_queued_stills) +
+                                    " renders (max_queued_stills); retry later");
+  res.set(http::field::retry_after, std::to_string(limits::kStillRetryAfter.count()));
+  send(std::move(res));
+}
+
+// The scene is valid and its volume loaded: resolve, queue on the render thread, answer later.
+// `full`: the finest level's statistics, for a pyramid held coarser (drawn by bricks).
+void submit_still(AppContext& app, const Request& req, const Scene& scene, std::shared_ptr<VolumeEntry> vol,
+                  std::function<void(Response)> send, std::shared_ptr<std::atomic<bool>> cancelled,
+                  std::shared_ptr<const distributed::SequenceStatistics> full = nullptr) {
+  StillJob job;
+  job.cancelled = std::move(cancelled);
+  const int level = full ? 0 : vol->volume->pyramid_level;
+  try {
+    job.scene = full ? resolve_scene(scene, full->box) : resolve_scene(scene, *vol->volume);
+    job.full_statistics = std::move(full);
+  } catch (const SceneError& e) {
+    count(app, "render", http::status::bad_request);
+    return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
   }
+  if (refused_for_cost(app, req, job.scene, send)) return;
+  if (!read_still_format(app, req, job, send)) return;
+  job.volume = std::move(vol);
+  job.done = still_reply(app, req, job.scene, level, send);
+  if (!app.render.submit_still(std::move(job))) refuse_queued_still(app, req, send);
 }
 
 }  // namespace

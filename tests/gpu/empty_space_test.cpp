@@ -6,6 +6,7 @@
 // methods that join samples into segments (peak finding, preintegration).
 #include <cmath>
 #include <tuple>
+#include <utility>
 
 #include "core/occupancy.h"
 #include "cpu/cpu_renderer.h"
@@ -157,19 +158,29 @@ TEST_P(Leaps, CpuRayPacketsEqualSingleRays) {
 // steps) through its dense_run fast path instead of the shared visit: bit for bit what the shared
 // walks give without it, pixels and sample counts, with space skipping (the runs between leaps)
 // and without (one run along the whole ray), with the default early termination (the fast
-// path's stop). Not covered: a ray texture's step multiplier (the fast path's slow opacity on
-// every sample); blobs_peaks does not take the fast path (peaks).
+// path's stop), and with a ray texture whose step multiplier varies over the image (the fast
+// path's opacity corrected on every sample, its early termination per ray). blobs_peaks does not
+// take the fast path (peaks).
 TEST_P(Leaps, CpuDenseRunsEqualTheSharedWalks) {
   auto* cpu = test::gpu().cpu;
   if (!cpu) GTEST_SKIP() << "CPU backend only";
   const LeapCase& c = GetParam();
   auto v = test::make_volume(c.kind, c.dims, default_type(c.kind));
   test::TestVolume gv(v);
-  for (const bool skip : {true, false}) {
+  for (const auto& [skip, ray_texture] : {std::pair{true, false}, {false, false}, {true, true}}) {
     json render = c.render;
     render["sampling"] = "uniform";  // (the fast path takes uniform steps, unshaded)
     render["shading"] = false;
     render["space_skipping"] = skip;
+    if (ray_texture) {  // a finer step in a soft disk, a coarser one and an earlier stop elsewhere
+      render["ray_texture"] = {
+          {"mapping", "view"},
+          {"size", {64, 64}},
+          {"strokes",
+           {{{"channel", "step"}, {"center", {0.5, 0.5}}, {"radius", 1.0}, {"value", 1.7}},
+            {{"channel", "step"}, {"center", {0.45, 0.55}}, {"radius", 0.3}, {"falloff", 0.8}, {"value", 0.4}},
+            {{"channel", "termination"}, {"center", {0.7, 0.3}}, {"radius", 0.25}, {"falloff", 0.5}, {"value", 0.6}}}}};
+    }
     json j = {{"image", {{"width", 61}, {"height", 53}}},
               {"tf", tf_points(*v, c.tf)},
               {"camera", c.camera},
@@ -182,6 +193,7 @@ TEST_P(Leaps, CpuDenseRunsEqualTheSharedWalks) {
     cpu->set_dense_runs(true);
     SCOPED_TRACE(st_dense.variant);
     EXPECT_EQ(st_dense.variant.find("+skip") != std::string::npos, skip);
+    EXPECT_EQ(st_dense.variant.find("+raytex") != std::string::npos, ray_texture);
     EXPECT_GT(st_shared.samples_mean, 0.0) << "nothing visible: the test would prove nothing";
     EXPECT_EQ(dense.rgba, shared.rgba);
     EXPECT_EQ(dense.samples, shared.samples);
