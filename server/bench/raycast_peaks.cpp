@@ -73,21 +73,8 @@ std::shared_ptr<Volume> load_or_make(const BenchVolume& bv, const fs::path& dir)
   return std::make_shared<Volume>(load_volume(file));
 }
 
-// The raycast scene of a volume at one image size: a ramp TF over its range, a three-quarter view.
-ResolvedScene raycast_scene(const BenchVolume& bv, const Volume& vol, int size) {
-  nlohmann::json j = {{"volume", bv.name}, {"image", {{"width", size}, {"height", size}}}};
-  const double lo = vol.min_value, hi = vol.max_value;
-  j["tf"] = {{"points",
-              {{lo, 0, 0, 0, 0},
-               {lo + 0.3 * (hi - lo), 0.2, 0.4, 1.0, 0.0},
-               {lo + 0.6 * (hi - lo), 1.0, 0.8, 0.4, 0.3},
-               {hi, 1, 1, 1, 0.6}}}};
-  ResolvedScene s = resolve_scene(parse_scene(j), vol);
-  // A three-quarter view rather than the axis-aligned default.
-  const glm::dvec3 c = s.camera.center;
-  s.camera.eye = c + (s.camera.eye - c).z * glm::dvec3(0.55, 0.45, 0.7);
-  return s;
-}
+// The raycast scene of a volume at one image size: bench_scene's ramp TF and three-quarter view.
+ResolvedScene raycast_scene(const Volume& vol, int size) { return bench_scene(vol, size, "trilinear"); }
 
 // `raycast`: every volume, size and path, the full ray caster against the bare sampling loop.
 int run_raycast(const BenchArgs& a) {
@@ -101,7 +88,7 @@ int run_raycast(const BenchArgs& a) {
     auto resident = caster.make_resident(vol);
     const render::ResidentVolume& gv = *resident;
     for (int size : a.sizes) {
-      const ResolvedScene s = raycast_scene(bv, *vol, size);
+      const ResolvedScene s = raycast_scene(*vol, size);
       for (const auto& p : a.paths) {
         const auto path = p == "compute" ? render::RenderPath::Compute : render::RenderPath::Fragment;
         std::vector<double> full_ms, bare_ms;
