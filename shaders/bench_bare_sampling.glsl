@@ -1,4 +1,5 @@
-// peakcast-bench's ceiling for the ray caster (BARE_SAMPLING, set only by the benchmark's renderer:
+// peakcast-bench's ceiling for the ray caster (its programs' entry points,
+// bench_raycast_bare.frag and .comp, are drawn only by the benchmark's renderer:
 // server/gpu/bench_bare_renderer.cpp): the same rays and the same number of samples as a full
 // render (its per-pixel sample counts arrive in u_budget), reconstruction only: no TF, no
 // compositing.

@@ -15,7 +15,7 @@ void main() {
   ivec2 id = ivec2(gl_GlobalInvocationID.xy);  // in the tile, rows from the top
   if (any(greaterThanEqual(id, imageSize(u_out_color)))) return;
   vec2 pixel = vec2(ivec2(P.tile_x, P.tile_y) + id) + 0.5;
-  RayState res = CAST_RAY(pixel, id);
+  RayState res = cast_ray(pixel);
   imageStore(u_out_color, id, output_color(res.acc));
   imageStore(u_out_samples, id, vec4(res.samples));
 }

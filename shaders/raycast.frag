@@ -13,7 +13,7 @@ void main() {
   // Target row k holds image row P.tile_y + k (row 0 at the top), so the read-back is already
   // in image order; (P.tile_x, P.tile_y) is the tile's first pixel (0, 0 for a full frame).
   vec2 pixel = vec2(P.tile_x, P.tile_y) + gl_FragCoord.xy;
-  RayState res = CAST_RAY(pixel, ivec2(gl_FragCoord.xy));
+  RayState res = cast_ray(pixel);
   out_color = output_color(res.acc);
   out_samples = res.samples;
 }

@@ -67,9 +67,3 @@ RayState cast_ray(vec2 pixel) {
   return res;
 }
 
-#ifdef BARE_SAMPLING
-#include "bench_bare_sampling.glsl"
-#define CAST_RAY(pixel, texel) cast_ray_bare(pixel, texel)
-#else
-#define CAST_RAY(pixel, texel) cast_ray(pixel)
-#endif

@@ -26,7 +26,6 @@ class BareCpuRenderer final : public render::Switchable<cpu::CpuRenderer, BareSa
     f.key = render::choose_variant(s, 0, path);
     f.key.cpu = true;
     f.key.shading = false;
-    f.key.bare_sampling = true;
     f.v = render::shared_variant(f.key);
     Image img(w, h);
     const auto t0 = std::chrono::steady_clock::now();
@@ -41,7 +40,7 @@ class BareCpuRenderer final : public render::Switchable<cpu::CpuRenderer, BareSa
     });
     if (stats) {
       stats->render_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-      stats->variant = f.key.name();
+      stats->variant = f.key.name() + "+bare";
       stats->has_samples = true;
       for (float n : img.samples) {  // as the full render counts them (every ray's budget)
         stats->samples_total += n;

@@ -31,6 +31,16 @@ bool RayCaster::dense_loop(const Lattice& lattice, RayState& st, RayWalk& k, int
   int i = index, visited = last_visited;
   const float stop = st.stop, dvr_weight = st.dvr_weight;
   const bool preint = f_.key.preintegration;
+  // The tables and the macrocells, and the current run of samples (field_at's stride-1 case; a
+  // run of another stride is sampled anew, to the same values): members that new_run and
+  // dense_opacity_slow, being calls, would make the compiler reload at every sample.
+  const float* const tf = f_.tf;
+  const uint64_t* const tf_bits = f_.tf_alpha_any;
+  const uint8_t* const cells = f_.cell_distance;
+  const float inv_edge = 1.f / P.cell_edge;
+  const ivec3 top = P.cell_grid - 1;
+  const float* const run = run_;
+  int run_lo = run_first_, run_n = run_stride_ == 1 ? run_count_ : 0;
   vec4 acc = st.acc;
   float samples = st.samples, prev_f = st.prev_f;
   const int first = i;
@@ -40,15 +50,25 @@ bool RayCaster::dense_loop(const Lattice& lattice, RayState& st, RayWalk& k, int
   while (i <= last) {
     if constexpr (kCells) {  // walk_leaps's cell test, as it would make it
       const vec3 x = xo + lattice_t(L, float(i)) * dv;
-      const ivec3 c = cell_containing(x * (1.f / P.cell_edge));
-      if (cell_distance(c) != 0) break;
+      const vec3 y = x * inv_edge;  // cell_containing and cell_distance, with the grid in locals
+      const size_t cell =
+          size_t(cell_of(y.x, top.x)) +
+          size_t(top.x + 1) * (size_t(cell_of(y.y, top.y)) + size_t(top.y + 1) * size_t(cell_of(y.z, top.z)));
+      if (cells[cell] != 0) break;
     }
-    const float fv = field_at(i, 1);
+    float fv;
+    if (HWY_LIKELY(unsigned(i - run_lo) < unsigned(run_n))) {
+      fv = run[i - run_lo];
+    } else {
+      fv = new_run(i, 1);
+      run_lo = run_first_;
+      run_n = run_count_;
+    }
     samples += 1.f;
     vec4 s;
     if (preint) {  // the segment from the previous point (visited without a gap)
       if (preint_lookup(r_, prev_f, fv, s)) composite_premultiplied(acc, s, dvr_weight);
-    } else if (tf_lookup(fv, s) && s.a < 1.f) {
+    } else if (tf_lookup_in(tf, tf_bits, fv, s) && s.a < 1.f) {
       // (The first point is never in a run; the last one's chord is cut at the exit.) One cold
       // call: more of them made the compiler keep the ray's opacity in memory.
       const float a = HWY_LIKELY(whole && i != last) ? 1.f - s.a : dense_opacity_slow(k, s.a, i, dt);

@@ -67,12 +67,10 @@ class RayCaster {
 
   // The field's hooks (the ray's copies of the uniforms are GL's: P is read here).
   float sample_field(const Ray&, vec3 x) const { return SamplePoint(f_.voxels, x); }
-  vec3 field_gradient(const Ray& r, vec3 x) const {
-    vec3 g;
-    g.x = sample_field(r, x + vec3(1, 0, 0)) - sample_field(r, x - vec3(1, 0, 0));
-    g.y = sample_field(r, x + vec3(0, 1, 0)) - sample_field(r, x - vec3(0, 1, 0));
-    g.z = sample_field(r, x + vec3(0, 0, 1)) - sample_field(r, x - vec3(0, 0, 1));
-    return g / (2.f * P.spacing);
+  vec3 field_gradient(const Ray&, vec3 x) const {  // central differences (the six samples at once)
+    float s[6];
+    SampleCross(f_.voxels, x, s);
+    return vec3(s[0] - s[1], s[2] - s[3], s[4] - s[5]) / (2.f * P.spacing);
   }
   // The value at lattice index i: from the current run, or a new run from i (stride m).
   float field_at(int i, int m);
@@ -82,6 +80,7 @@ class RayCaster {
   // The TF table at s (colour, and the step's transparency in .a); false, leaving `out` alone,
   // where its opacity is exactly zero.
   bool tf_lookup(float s, vec4& out) const;
+  static bool tf_lookup_in(const float* tf, const uint64_t* bits, float s, vec4& out);  // of the given table
   vec4 tf_point(int k) const { return f_.tf_points[k]; }
   // The peak table's cell (i, j), layer `layer`; peak_cell_any: layer 0 holds a peak there (one
   // bit per cell, so that a segment finding none does not read the table, which misses the cache).

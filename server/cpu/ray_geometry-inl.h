@@ -33,7 +33,7 @@ using namespace peakcast::ray;
 // floor(x) clamped to [0, hi]: what a cell index needs, without floor (a library call or a
 // dozen instructions below SSE4.1). Truncation equals floor for x >= 0; x < 0 clamps to 0
 // either way; NaN goes to 0 as the clamp of the GL path's int(floor(NaN)) is undefined anyway.
-int cell_of(float x, int hi) {
+inline int cell_of(float x, int hi) {
   if (!(x > 0.f)) return 0;
   return x >= float(hi) ? hi : int(x);
 }

@@ -22,13 +22,15 @@ namespace peakcast::cpu {
 namespace HWY_NAMESPACE {
 namespace {
 
-HWY_INLINE bool RayCaster::tf_lookup(float s, vec4& out) const {
+HWY_INLINE bool RayCaster::tf_lookup(float s, vec4& out) const { return tf_lookup_in(f_.tf, f_.tf_alpha_any, s, out); }
+
+HWY_INLINE bool RayCaster::tf_lookup_in(const float* tf, const uint64_t* bits, float s, vec4& out) {
   // GL_LINEAR between texel centres of an n-entry table, clamped: texel space u = s (n - 1).
   const int size = TransferFunction::kTableSize;
   const float u = std::clamp(s, 0.f, 1.f) * float(size - 1);
   const int i = std::min(int(u), size - 2);
-  if (!test_bit(f_.tf_alpha_any, size_t(i))) return false;  // both texels transparent
-  const float* a = f_.tf + 4 * i;
+  if (!test_bit(bits, size_t(i))) return false;  // both texels transparent
+  const float* a = tf + 4 * i;
   out = to_vec4(lerp4(load4(a), load4(a + 4), u - float(i)));
   return true;
 }

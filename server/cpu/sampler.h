@@ -51,30 +51,56 @@ struct VoxelGrid {
 // Makes the grid of `data` laid out like `v` (x fastest).
 VoxelGrid make_voxel_grid(const Volume& v, const uint8_t* data, VoxelType type, float scale, float bias, bool tricubic);
 
+// One axis of a trilinear lookup: the lower corner's index and the weight of the upper one.
+struct TrilinearAxis {
+  int32_t i;
+  float f;
+};
+
+// Coordinate p on axis a clamped to [0, hi] (GL_CLAMP_TO_EDGE), its corner and weight.
+[[gnu::always_inline]] inline TrilinearAxis trilinear_axis(const VoxelGrid& g, float p, int a) {
+  // fmin(fmax(p, 0), hi) without libm's calls: NaN -> 0 (the comparison is false).
+  const float lo = p > 0.f ? p : 0.f;
+  const float c = lo < g.hi[a] ? lo : g.hi[a];
+  const int32_t i = std::min(int32_t(c), g.base_max[a]);
+  return {i, c - float(i)};
+}
+
+// The trilinear blend of the eight voxels around the corner (x.i, y.i, z.i), for voxels of type T.
+template <class T>
+[[gnu::always_inline]] inline float trilinear_blend(const VoxelGrid& g, TrilinearAxis x, TrilinearAxis y,
+                                                    TrilinearAxis z) {
+  const int64_t o = x.i + y.i * g.stride_y + z.i * g.stride_z;
+  const int64_t nx = g.n[0] > 1 ? 1 : 0;
+  auto row = [&](int64_t at) {
+    const float a = g.at<T>(at), b = g.at<T>(at + nx);
+    return a + x.f * (b - a);
+  };
+  const float c00 = row(o), c10 = row(o + g.next_y), c01 = row(o + g.next_z), c11 = row(o + g.next_y + g.next_z);
+  const float c0 = c00 + y.f * (c10 - c00), c1 = c01 + y.f * (c11 - c01);
+  return c0 + z.f * (c1 - c0);
+}
+
 // Trilinear in stored units (GL_LINEAR, GL_CLAMP_TO_EDGE on every axis), for voxels of type T.
 // Always inlined: the per-target ray kernel's point sampler (sampler-inl.h's SamplePoint) then
 // gets its target's instructions, where an out-of-line copy would link as the baseline's.
 template <class T>
 [[gnu::always_inline]] inline float trilinear_typed(const VoxelGrid& g, float x, float y, float z) {
-  const float p[3] = {x, y, z};
-  int32_t i[3];
-  float f[3];
-  for (int a = 0; a < 3; ++a) {
-    // fmin(fmax(p, 0), hi) without libm's calls: NaN -> 0 (the comparison is false).
-    const float lo = p[a] > 0.f ? p[a] : 0.f;
-    const float c = lo < g.hi[a] ? lo : g.hi[a];
-    i[a] = std::min(int32_t(c), g.base_max[a]);
-    f[a] = c - float(i[a]);
-  }
-  const int64_t o = i[0] + i[1] * g.stride_y + i[2] * g.stride_z;
-  const int64_t nx = g.n[0] > 1 ? 1 : 0;
-  auto row = [&](int64_t at) {
-    const float a = g.at<T>(at), b = g.at<T>(at + nx);
-    return a + f[0] * (b - a);
-  };
-  const float c00 = row(o), c10 = row(o + g.next_y), c01 = row(o + g.next_z), c11 = row(o + g.next_y + g.next_z);
-  const float c0 = c00 + f[1] * (c10 - c00), c1 = c01 + f[1] * (c11 - c01);
-  return c0 + f[2] * (c1 - c0);
+  return trilinear_blend<T>(g, trilinear_axis(g, x, 0), trilinear_axis(g, y, 1), trilinear_axis(g, z, 2));
+}
+
+// The six samples of a central difference, at p + 1 and p - 1 on each axis (in that order, x
+// first), as trilinear_typed gives each (the same arithmetic, bit for bit): the axes a sample
+// keeps at p are clamped and split once for all of them.
+template <class T>
+[[gnu::always_inline]] inline void trilinear_cross(const VoxelGrid& g, const glm::vec3& p, float out[6]) {
+  const TrilinearAxis at[3] = {trilinear_axis(g, p.x, 0), trilinear_axis(g, p.y, 1), trilinear_axis(g, p.z, 2)};
+  for (int a = 0; a < 3; ++a)
+    for (int k = 0; k < 2; ++k) {
+      TrilinearAxis ax[3] = {at[0], at[1], at[2]};
+      ax[a] = trilinear_axis(g, k == 0 ? p[a] + 1.f : p[a] - 1.f, a);
+      out[2 * a + k] = trilinear_blend<T>(g, ax[0], ax[1], ax[2]);
+    }
 }
 
 // The same for the grid's voxel type.

@@ -66,7 +66,6 @@ void GlRenderer::prefetch_variants() {
   // output of stills; built on the shader cache's thread, most likely first.
   std::vector<VariantKey> next;
   VariantKey k = last_key_;
-  k.bare_sampling = false;
   auto with = [&](auto change) {
     VariantKey v = k;
     change(v);

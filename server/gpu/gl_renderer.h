@@ -50,8 +50,9 @@ class GlRenderer : public render::Renderer {
                      render::RenderStats* stats = nullptr,
                      std::optional<render::PixelRect> rect = std::nullopt) override;
   int sample_cap(const render::VariantKey& key) const override;
-  // For the layout test: the linked program of a variant.
-  const gpu::Program& program(const render::VariantKey& key);
+  // The linked program of a variant (also for the layout test); a subclass may draw its own
+  // (peakcast-bench's bare sampling loop).
+  virtual const gpu::Program& program(const render::VariantKey& key);
 
  protected:
   // One synchronous draw of `key` over `rect` (a subclass's own variant: peakcast-bench's bare

@@ -11,7 +11,6 @@ namespace peakcast::render {
 // Texture units (sampler bindings).
 constexpr unsigned kUnitVolume = 0;      // sampler3D: the scalar volume
 constexpr unsigned kUnitTf = 1;          // sampler1D: the baked TF table
-constexpr unsigned kUnitBudget = 3;      // sampler2D: per-pixel sample budget (progressive frames)
 constexpr unsigned kUnitPeakTable = 4;   // sampler2DArray: peak values per (f_front, f_back) bin
 constexpr unsigned kUnitPreint = 5;      // sampler2D: preintegration table
 constexpr unsigned kUnitRayTexture = 7;  // sampler2D: ray texture (step, termination, blend)

@@ -13,7 +13,6 @@ std::vector<std::string> interface_defines() {
   no_peak << std::showpoint << kNoPeakTexel;
   return {"UNIT_VOLUME " + std::to_string(kUnitVolume),
           "UNIT_TF " + std::to_string(kUnitTf),
-          "UNIT_BUDGET " + std::to_string(kUnitBudget),
           "UNIT_PEAK_TABLE " + std::to_string(kUnitPeakTable),
           "UNIT_PREINT " + std::to_string(kUnitPreint),
           "UNIT_RAY_TEXTURE " + std::to_string(kUnitRayTexture),
@@ -39,7 +38,6 @@ std::vector<std::string> VariantKey::defines() const {
   if (differential) d.push_back("DIFFERENTIAL");
   if (adaptive) d.push_back("ADAPTIVE");
   if (virtual_samples) d.push_back("VIRTUAL_SAMPLES " + std::to_string(virtual_samples));
-  if (bare_sampling) d.push_back("BARE_SAMPLING");
   if (peaks) {
     d.push_back("PEAKS");
     if (peak_mode == PeakMode::Xor) d.push_back("PEAK_XOR");
@@ -65,7 +63,6 @@ std::string VariantKey::name() const {
   if (differential) n += "+diff";
   if (adaptive) n += "+adaptive";
   if (virtual_samples) n += "+vs" + std::to_string(virtual_samples);
-  if (bare_sampling) n += "+bare";
   if (rgb8) n += "+rgb8";
   if (brick) n += "+brick";
   if (ray_texture) n += ray_texture_volume ? "+raytex:volume" : "+raytex:view";

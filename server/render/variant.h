@@ -20,11 +20,10 @@ struct VariantKey {
   bool shading = false;
   bool space_skipping = false;  // only when the TF leaves some macrocell empty
   bool orthographic = false;
-  bool differential = false;   // Knoll §5, perspective cameras only (orthographic: uniform at the footprint)
-  bool adaptive = false;       // Knoll §6.2 per-macrocell step multipliers (brings the cell traversal)
-  int virtual_samples = 0;     // Lee 2010: 0, 3 or 7 Catmull-Rom samples between true ones
-  bool bare_sampling = false;  // peakcast-bench's renderer only (server/bench/bare_sampling.h)
-  bool peaks = false;          // peak finding between samples
+  bool differential = false;  // Knoll §5, perspective cameras only (orthographic: uniform at the footprint)
+  bool adaptive = false;      // Knoll §6.2 per-macrocell step multipliers (brings the cell traversal)
+  int virtual_samples = 0;    // Lee 2010: 0, 3 or 7 Catmull-Rom samples between true ones
+  bool peaks = false;         // peak finding between samples
   PeakMode peak_mode = PeakMode::DvrPlusPeaks;
   bool preintegration = false;
   bool rgb8 = false;                // output quantised to 8-bit RGB on the GPU (RenderOutput::Rgb8)

@@ -14,12 +14,13 @@ vec3 sample_gradient(IN(Ray) r, float t, vec3 g) {
 // (virtual samples). True when the ray is opaque enough to stop.
 bool consume(IN(Ray) r, INOUT(RayState) s, float t, float f, vec3 g, float dt) {
   bool segment = s.have_prev && !s.gap;
+  bool draw = !V.brick || s.draw;  // a brick draws only the points it owns
   float dvr_weight = V.ray_texture ? s.dvr_weight : 1.0f;  // (folded where no ray texture can change it)
   bool peak_hit = false;
   if (V.peaks && segment) peak_hit = find_peaks(r, s, s.prev_t, s.prev_f, t, f);
   if (V.preintegration) {
     vec4 c;
-    if (segment && (!V.brick || s.draw) && preint_lookup(r, s.prev_f, f, c)) {
+    if (segment && draw && preint_lookup(r, s.prev_f, f, c)) {
       // The table holds segments of the uniform step: correct for this one's length.
       bool varying_steps = V.differential || V.adaptive || V.virtual_samples != 0;
       if (varying_steps && c.w > 0.0f) c = segment_for_length(c, t - s.prev_t, r.step);
@@ -30,19 +31,20 @@ bool consume(IN(Ray) r, INOUT(RayState) s, float t, float f, vec3 g, float dt) {
         composite_premultiplied(s.acc, c, dvr_weight);  // opacity-weighted already: no divide
       }
     }
-  } else if ((!V.brick || s.draw) && !V.peaks_only && !(V.peak_xor && peak_hit)) {
+  } else if (draw && !(V.peaks && (V.peaks_only || (V.peak_xor && peak_hit)))) {
     vec4 c;  // .w: the uniform step's transparency
     if (tf_lookup(f, c) && c.w < 1.0f) {
+      float alpha = step_opacity(c.w, dt, r.step) * dvr_weight;
       vec3 rgb = vec3(c);
       if (V.shading) rgb = shade(r, rgb, sample_gradient(r, t, g));
-      composite(s.acc, rgb, step_opacity(c.w, dt, r.step) * dvr_weight);
+      composite(s.acc, rgb, alpha);
     }
   }
   s.prev_t = t;
   s.prev_f = f;
   s.have_prev = true;
   s.gap = false;
-  return (!V.brick || s.draw) && s.acc.w >= s.stop;
+  return draw && s.acc.w >= s.stop;
 }
 
 // The segment from the last lattice point visited to the exit (preintegration without virtual

@@ -164,12 +164,16 @@ RAY_INLINE bool walk_cells(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(Ra
   float t_in = span.x;
   int next = 0;      // the first lattice index not yet visited
   int run_end = -1;  // the last index of the run whose points after it are owed (end_run)
+  // The next cell's first lattice index where the occupied cell before it gave it (its end + 1:
+  // the same ceil(lattice_index(t)) at the face they share, without its square root); -1: unknown.
+  int next_first = -1;
   for (int guard = 0; guard < 4 * (g.grid.x + g.grid.y + g.grid.z) + 4; ++guard) {
     ivec3 c = clamp(cell, ivec3(0), g.grid - 1);
     bool occupied = true;
     if (V.space_skipping) {
       uint empty_distance = cell_distance(c);
       occupied = empty_distance == 0u;
+      if (!occupied) next_first = -1;
       if (!occupied && end_run(r, L, s, k, w, last, next, run_end)) return true;  // an empty cell or a leap: the run ends
       if (empty_distance > 1u && cell == c) {
         if (!leap_cells(g, span.y, int(empty_distance) - 1, cell, t_max, t_in)) break;
@@ -179,10 +183,11 @@ RAY_INLINE bool walk_cells(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(Ra
     float t_out = min(min(t_max.x, t_max.y), t_max.z);
     bool final_cell = t_out >= span.y || any(lessThan(cell, ivec3(0))) || any(greaterThanEqual(cell, g.grid));
     if (occupied) {  // lattice points with t in [t_in, t_out); all remaining ones in the last cell
-      int first = index_at_most(ceil(lattice_index(L, t_in)), last + 1);
+      int first = next_first >= 0 ? next_first : index_at_most(ceil(lattice_index(L, t_in)), last + 1);
       int end = final_cell ? last : min(last, index_at_most(ceil(lattice_index(L, t_out)), last + 1) - 1);
       if (visit_cell(r, L, s, k, w, first, end, V.adaptive ? cell_multiplier(c) : 1, next)) return true;
       run_end = end;
+      next_first = end + 1;
     }
     if (final_cell || next > last) break;
     // Step to the neighbour across the nearest face; ties step every tied axis at once.

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <random>
+#include <vector>
 
 #include "core/generators.h"
 #include "cpu/cpu_volume.h"
@@ -63,6 +64,62 @@ TEST(CpuSampler, RunsEqualTheScalarSamplerForEveryTypeAndFilter) {
       expect_runs_equal_points(g, "scalar path");
     }
   }
+}
+
+// field_gradient's six samples at once (trilinear_cross) equal six trilinear lookups at p +- 1
+// on each axis, bit for bit: inside, at and beyond the faces, on an axis of one voxel, at
+// coordinates where p + 1 rounds (a large grid's far side), and at NaN.
+template <class T>
+void expect_cross_equals_points(const cpu::VoxelGrid& g, const char* what) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-0.3f, 1.3f);
+  std::vector<glm::vec3> points;
+  for (int r = 0; r < 400; ++r) points.emplace_back(u(rng) * g.hi[0], u(rng) * g.hi[1], u(rng) * g.hi[2]);
+  points.emplace_back(0.f, 0.f, 0.f);
+  points.emplace_back(g.hi[0], g.hi[1], g.hi[2]);
+  points.emplace_back(g.hi[0] - 0.5f, 1.f, g.hi[2] + 3.f);
+  points.emplace_back(NAN, 1.f, 1.f);
+  points.emplace_back(1.f, -0.f, 1.f);
+  points.emplace_back(std::nextafter(8.f, 0.f), std::nextafter(8.f, 0.f), std::nextafter(4.f, 0.f));  // p + 1 rounds
+  for (const glm::vec3& p : points) {
+    float got[6];
+    cpu::trilinear_cross<T>(g, p, got);
+    for (int a = 0; a < 3; ++a)
+      for (int k = 0; k < 2; ++k) {
+        glm::vec3 e(0.f);
+        e[a] = 1.f;
+        const glm::vec3 q = k == 0 ? p + e : p - e;
+        const float want = cpu::trilinear_typed<T>(g, q.x, q.y, q.z);
+        const float have = got[2 * a + k];
+        ASSERT_TRUE(have == want || (std::isnan(have) && std::isnan(want)))
+            << what << " at " << p.x << " " << p.y << " " << p.z << " axis " << a << (k ? " -1" : " +1") << ": " << have
+            << " vs " << want;
+      }
+  }
+}
+
+TEST(CpuSampler, GradientSamplesEqualSixTrilinearLookups) {
+  for (Dims dims : {Dims{19, 13, 11}, Dims{1, 6, 3}, Dims{40, 2, 33}}) {
+    auto u8 = blobs(SourceType::U8, dims), u16 = blobs(SourceType::U16, dims), f32 = blobs(SourceType::F32, dims);
+    for (const auto& v : {u8, u16, f32}) {
+      cpu::CpuVolume cv(v);
+      const cpu::VoxelGrid g = cv.grid(Filter::Trilinear);
+      switch (g.type) {
+        case VoxelType::U8: expect_cross_equals_points<uint8_t>(g, "u8"); break;
+        case VoxelType::U16: expect_cross_equals_points<uint16_t>(g, "u16"); break;
+        case VoxelType::F32: expect_cross_equals_points<float>(g, "f32"); break;
+      }
+    }
+  }
+  // The check itself: a cross whose +x sample reads a voxel further fails it.
+  auto v = blobs(SourceType::U8, {19, 13, 11});
+  cpu::CpuVolume cv(v);
+  const cpu::VoxelGrid g = cv.grid(Filter::Trilinear);
+  const glm::vec3 p(4.25f, 5.5f, 6.75f);
+  float got[6];
+  cpu::trilinear_cross<uint8_t>(g, p, got);
+  EXPECT_NE(got[0], cpu::trilinear_typed<uint8_t>(g, p.x + 2.f, p.y, p.z));
+  EXPECT_EQ(got[0], cpu::trilinear_typed<uint8_t>(g, p.x + 1.f, p.y, p.z));
 }
 
 TEST(CpuSampler, TrilinearIsGlClampToEdge) {
