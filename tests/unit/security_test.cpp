@@ -1,5 +1,5 @@
 // The security rules held function by function (the net tests hold them against the real server,
-// tests/net/test_audit.py): UTF-8 cleaning, errors without server paths, reads confined to the
+// tests/net/test_audit_*.py): UTF-8 cleaning, errors without server paths, reads confined to the
 // data directories, uploads as one file, chunk decoding charged to the memory budget, the Host
 // allow-list, constant-time tokens, the static file list.
 #include <gtest/gtest.h>
