@@ -9,8 +9,16 @@ nowhere transparent, post @0.75), preint (the same, preintegrated @1), peaks sha
 peak, peak classification, shading), tricubic + virtual samples (blobs 256^3 u8, 3 virtual
 samples), differential + adaptive (Marschner-Lobb, dense TF), em (900x500x930 u8, a band TF).
 
+With --count, instructions are counted instead of time (the machine's timings scatter by 15%,
+instructions do not): each build runs each scene under `valgrind --tool=cachegrind --cache-sim=no`
+with --frames 1 and with --frames 3, and (I3 - I1) / 2 is one frame's instructions, whole process
+(GL: `LP_NUM_THREADS=1`, the shader being llvmpipe's JIT code). GL's programs are compiled once per
+build without valgrind first, into private Mesa and peakcast program caches, so that both valgrind
+runs load the same programs and the subtraction cancels the load (compiling under valgrind takes
+over 15 minutes a scene).
+
 Usage: scripts/bench_ab.py --old DIR --new DIR [--size 512] [--frames 5] [--rounds 2]
-       [--backends cpu,gl] [--scenes LIST] [--data-dir bench-data/ab]
+       [--backends cpu,gl] [--scenes LIST] [--data-dir bench-data/ab] [--count]
 DIR holds server/peakcast-bench and server/peakcast of a build; --old-shaders / --new-shaders
 name the shader folders the builds read (default: DIR/shaders; required where DIR has none).
 """
@@ -76,6 +84,22 @@ def time_scene(build, shaders, backend, scene, frames):
     return json.loads(out.strip().splitlines()[-1])
 
 
+def count_scene(build, shaders, backend, scene, caches):
+    """One frame's instructions (whole process) by cachegrind: (frames 3 - frames 1) / 2."""
+    env = dict(os.environ, PEAKCAST_BACKEND=backend, PEAKCAST_SHADER_DIR=str(shaders), LP_NUM_THREADS="1",
+               MESA_SHADER_CACHE_DIR=str(caches / "mesa"), PEAKCAST_PROGRAM_CACHE=str(caches / "programs"))
+    env.pop("MESA_SHADER_CACHE_DISABLE", None)
+    bench = [build / "server/peakcast-bench", "scene", scene, "--warmup", 0, "--orbit", 0, "--frames"]
+    if backend == "gl":  # compile (and store) the programs outside valgrind
+        run(bench + [1], env=env)
+    counts = {}
+    for frames in (1, 3):
+        out = subprocess.run(["valgrind", "--tool=cachegrind", "--cache-sim=no", "--cachegrind-out-file=/dev/null"]
+                             + [str(c) for c in bench + [frames]], env=env, capture_output=True, text=True, check=True)
+        counts[frames] = int(re.search(r"I\s+refs:\s+([\d,]+)", out.stderr).group(1).replace(",", ""))
+    return (counts[3] - counts[1]) / 2.0
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--old", required=True, type=pathlib.Path)
@@ -88,6 +112,7 @@ def main():
     ap.add_argument("--backends", default="cpu,gl")
     ap.add_argument("--scenes", default=",".join(SCENES))
     ap.add_argument("--data-dir", type=pathlib.Path, default=ROOT / "bench-data/ab")
+    ap.add_argument("--count", action="store_true", help="count instructions (cachegrind) instead of timing")
     a = ap.parse_args()
     a.data_dir.mkdir(parents=True, exist_ok=True)
     shaders = {}
@@ -101,16 +126,22 @@ def main():
         scene = scene_file(name, SCENES[name], a.new / "server/peakcast", a.data_dir, a.size)
         for backend in a.backends.split(","):
             ms = {"old": [], "new": []}
-            for k in range(a.rounds):
+            if a.count:
+                for side in ("old", "new"):
+                    caches = a.data_dir / f"caches-{side}"
+                    ms[side].append(count_scene(builds[side], shaders[side], backend, scene, caches) / 1e6)
+            for k in range(0 if a.count else a.rounds):
                 for side in (("old", "new") if k % 2 == 0 else ("new", "old")):  # neither always first
                     r = time_scene(builds[side], shaders[side], backend, scene, a.frames)
                     ms[side].append(r["frame_ms_median"])
             old, new = statistics.median(ms["old"]), statistics.median(ms["new"])
             rows.append((name, backend, old, new, new / old, ms))
-            print(f"{name:14s} {backend:4s} old {old:8.1f} ms  new {new:8.1f} ms  new/old {new / old:5.3f}   "
+            unit = "M" if a.count else "ms"
+            print(f"{name:14s} {backend:4s} old {old:8.1f} {unit}  new {new:8.1f} {unit}  new/old {new / old:5.3f}   "
                   f"(old {', '.join(f'{x:.1f}' for x in ms['old'])}; new {', '.join(f'{x:.1f}' for x in ms['new'])})",
                   flush=True)
-    print("\n| scene | backend | old ms | new ms | new / old |\n|---|---|---|---|---|")
+    unit = "M instructions" if a.count else "ms"
+    print(f"\n| scene | backend | old {unit} | new {unit} | new / old |\n|---|---|---|---|---|")
     for name, backend, old, new, ratio, _ in rows:
         print(f"| {name} | {backend} | {old:.1f} | {new:.1f} | {ratio:.3f} |")
 

@@ -6,7 +6,7 @@
 layout(binding = UNIT_BUDGET) uniform sampler2D u_budget;
 
 RayState cast_ray_bare(vec2 pixel, ivec2 texel) {
-  RayState res = RayState(vec4(0.0), 0.0, P.stop, 1.0, 1.0, true, 0.0, 0.0, false, false);
+  RayState res = RayState(vec4(0.0), 0.0, P.stop, 1.0, 1.0, true, 0.0, 0.0, false, false, 0.0, 0.0);
   Ray r = make_ray(pixel);
   vec2 span = intersect_box(r);
   int budget = int(texelFetch(u_budget, texel, 0).r);

@@ -17,6 +17,7 @@ layout(std430, binding = SSBO_CELL_DISTANCE) readonly buffer CellDistance { uint
 // a variant without them folds the calls away and the compiler drops what they bind).
 #include "peak_find.glsl"
 #include "preintegration.glsl"
+#include "ray/projection.glsl"
 #include "ray/consume.glsl"
 
 
@@ -26,6 +27,21 @@ float lattice_field(Ray r, Lattice L, int i, int m) { return sample_field(r, vox
 #include "ray/visit.glsl"
 
 // The walks' hooks (ray/walks.glsl): the macrocell tables, the cell of a point, and no fast path.
+// Per macrocell, its values' (min, max) in TF coordinates: what a maximum or minimum projection
+// skips by (ray/projection.glsl projection_skips).
+#ifdef PROJECTION
+#if PROJECTION != 3 && !defined(VIRTUAL_SAMPLES)
+#define CELL_RANGES
+layout(std430, binding = SSBO_CELL_RANGE) readonly buffer CellRange { vec2 u_cell_range[]; };
+#endif
+#endif
+vec2 cell_range(ivec3 c) {
+#ifdef CELL_RANGES
+  return u_cell_range[cell_index(c)];
+#else
+  return vec2(0.0, 1.0);
+#endif
+}
 uint cell_distance(ivec3 c) {
 #ifdef SPACE_SKIPPING
   return cell_byte(u_cell_distance, c);
@@ -54,7 +70,7 @@ bool dense_run(Ray r, Lattice L, inout RayState s, inout RayWalk k, inout int i,
 #include "ray/ray_start.glsl"
 
 RayState cast_ray(vec2 pixel) {
-  RayState res = RayState(vec4(0.0), 0.0, P.stop, 1.0, 1.0, true, 0.0, 0.0, false, false);
+  RayState res = RayState(vec4(0.0), 0.0, P.stop, 1.0, 1.0, true, 0.0, 0.0, false, false, 0.0, 0.0);
   SampleWindow window;  // virtual samples (n counts the samples it holds; the rest is never read)
   window.n = 0;
   window.own = 0u;

@@ -14,7 +14,9 @@ const LABELS = {
 // What each control does (docs/scenes.md has the whole story).
 export const HELP = {
   classification: 'post: the TF applied to each sample (DVR). preint: a preintegrated table per segment, smoother at ' +
-    'large steps. peaks: DVR plus the TF\'s opacity peaks found between samples and drawn as crisp surfaces (Knoll 2009).',
+    'large steps. peaks: DVR plus the TF\'s opacity peaks found between samples and drawn as crisp surfaces (Knoll 2009). ' +
+    'mip, minip, average: intensity projections, the largest, smallest or mean value along each ray, coloured by ' +
+    'the TF at that value (sparse structure such as axons or vessels reads at once in a MIP).',
   peak_mode: 'With peak finding: dvr+peaks draws both; xor draws a segment\'s peak instead of its DVR; peaks_only ' +
     'the surfaces alone; dvr_only leaves peak finding out.',
   max_peaks: 'With peak finding: how many peak crossings one segment between samples may hold (1 to 4).',
@@ -30,6 +32,9 @@ export const HELP = {
   space_skipping: 'Skip the macrocells the TF leaves empty. Changes no pixel, saves time.',
   adaptive: 'A step per macrocell from its spread of values (Knoll §6.2): finer where the data varies.',
 };
+
+// The classifications that are intensity projections (one value per ray: no shading, no skipping).
+const PROJECTIONS = new Set(['mip', 'minip', 'average']);
 
 export class RenderControls extends EventTarget {
   constructor(container, disposer) {
@@ -117,6 +122,8 @@ export class RenderControls extends EventTarget {
       peak_mode: [v('classification') === 'peaks', 'applies with classification peaks'],
       max_peaks: [v('classification') === 'peaks' && v('peak_mode') !== 'dvr_only', 'applies with peak finding'],
       s_k: [v('sampling') === 'differential', 'applies with differential sampling'],
+      shading: [!PROJECTIONS.has(v('classification')), 'a projection is not shaded'],
+      space_skipping: [!PROJECTIONS.has(v('classification')), 'a projection walks every cell'],
     };
     for (const [key, [on, why]] of Object.entries(rules)) {
       const input = this.inputs[key];

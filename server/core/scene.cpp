@@ -69,9 +69,13 @@ RenderSettings parse_render(const json& j) {
              "space_skipping", "adaptive", "clip", "ray_texture"});
   RenderSettings r;
   if (j.contains("classification"))
-    r.classification = choice<Classification>(
-        j["classification"], "render.classification",
-        {{"post", Classification::Post}, {"preint", Classification::Preint}, {"peaks", Classification::Peaks}});
+    r.classification = choice<Classification>(j["classification"], "render.classification",
+                                              {{"post", Classification::Post},
+                                               {"preint", Classification::Preint},
+                                               {"peaks", Classification::Peaks},
+                                               {"mip", Classification::Mip},
+                                               {"minip", Classification::Minip},
+                                               {"average", Classification::Average}});
   if (j.contains("peak_mode"))
     r.peak_mode = choice<PeakMode>(j["peak_mode"], "render.peak_mode",
                                    {{"dvr+peaks", PeakMode::DvrPlusPeaks},
@@ -161,8 +165,20 @@ PreintegrationMethod preint_method(const RenderSettings& r) {
   return r.preint_method == "integral" ? PreintegrationMethod::Integral : PreintegrationMethod::Exact;
 }
 
+bool is_projection(Classification c) {
+  return c == Classification::Mip || c == Classification::Minip || c == Classification::Average;
+}
+
 const char* to_string(Classification c) {
-  return c == Classification::Post ? "post" : c == Classification::Preint ? "preint" : "peaks";
+  switch (c) {
+    case Classification::Post: return "post";
+    case Classification::Preint: return "preint";
+    case Classification::Peaks: return "peaks";
+    case Classification::Mip: return "mip";
+    case Classification::Minip: return "minip";
+    case Classification::Average: return "average";
+  }
+  return "post";
 }
 const char* to_string(PeakMode m) {
   static const char* n[] = {"dvr+peaks", "xor", "peaks_only", "dvr_only"};

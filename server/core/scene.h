@@ -26,7 +26,9 @@ constexpr int64_t kMaxImagePixels = 4096ll * 4096;  // pixels per image
 constexpr size_t kMaxTfPoints = 1024;               // TF control points
 constexpr double kMinStepFraction = 1e-3;           // step >= this x smallest spacing
 
-enum class Classification { Post, Preint, Peaks };
+enum class Classification { Post, Preint, Peaks, Mip, Minip, Average };
+// The intensity projections (mip, minip, average): the TF colours one value per ray.
+bool is_projection(Classification c);
 enum class PeakMode { DvrPlusPeaks, Xor, PeaksOnly, DvrOnly };
 enum class Sampling { Uniform, Differential };
 enum class Filter { Trilinear, Tricubic };

@@ -88,8 +88,9 @@ const CpuRenderer::Tables& CpuRenderer::tables(const ResolvedScene& s, const std
     n.peak_bins = table.bins;
     n.peak_layers = table.layers;
     n.peak_any = peak_texel_bits(n.peak_texels, n.peak_bins);
-    n.tf_points = render::tf_point_pairs(s.tf, lo, hi);
   }
+  if (s.scene.render.classification == Classification::Peaks || is_projection(s.scene.render.classification))
+    n.tf_points = render::tf_point_pairs(s.tf, lo, hi);  // tf_exact's points
   if (s.scene.render.classification == Classification::Preint) {
     PreintegrationTable table = render::scene_preintegration(s, lo, hi);
     n.preint = std::move(table.rgba);
@@ -124,6 +125,15 @@ void CpuRenderer::cell_tables(CpuFrame& f, const CpuVolume& cv, const MacrocellG
       ++table_builds_;
     }
     f.cell_stride = m->bytes.data();
+  }
+  if (f.key.projection_skips()) {  // data only: once per grid
+    const std::string rkey = std::to_string(cv.serial()) + " " + cells.to_string();
+    CellRanges* r = cache_find(ranges_, rkey);
+    if (!r) {
+      r = &cache_insert(ranges_, CellRanges{rkey, render::cell_ranges(cells, cv.tf_lo(), cv.tf_hi())}, kCacheEntries);
+      ++table_builds_;
+    }
+    f.cell_range = r->ranges.data();
   }
 }
 

@@ -91,6 +91,11 @@ class CpuRenderer : public render::Renderer {
   std::vector<Tables> tables_;
   render::OccupancyCache occupancy_;
   std::vector<CellBytes> distances_, multipliers_;
+  struct CellRanges {  // a grid's value ranges (projections)
+    std::string key;
+    std::vector<glm::vec2> ranges;
+  };
+  std::vector<CellRanges> ranges_;
   struct NoCopy {};
   render::RayTextureCache<NoCopy> ray_textures_;
 };

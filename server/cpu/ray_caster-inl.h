@@ -36,7 +36,7 @@ class RayCaster {
         V(f.v),
         f_(f),
         dense_(f.dense_runs && !f.key.peaks && !f.key.virtual_samples && !f.key.shading && !f.key.differential &&
-               !f.key.adaptive && !f.v.brick) {}
+               !f.key.adaptive && !f.v.brick && f.v.projection == 0) {}
 
   RayResult cast(float px, float py) { return setup(px, py) ? walk(0) : result(); }
   // The ray through (px, py) up to its traversal; false (and samples -1) when it misses the box.
@@ -59,6 +59,7 @@ class RayCaster {
 #include "ray/catmull_rom.glsl"
 #include "ray/peaks.glsl"
 #include "ray/brick.glsl"
+#include "ray/projection.glsl"
 #include "ray/consume.glsl"
 #include "ray/virtual_samples.glsl"
 #include "ray/visit.glsl"
@@ -113,6 +114,7 @@ class RayCaster {
     return size_t(c.x) + size_t(P.cell_grid.x) * (size_t(c.y) + size_t(P.cell_grid.y) * size_t(c.z));
   }
   uint cell_distance(ivec3 c) const { return f_.cell_distance[cell_offset(c)]; }
+  vec2 cell_range(ivec3 c) const { return f_.cell_range[cell_offset(c)]; }
   int cell_multiplier(ivec3 c) const { return std::clamp(int(f_.cell_stride[cell_offset(c)]), 1, 8); }
   ivec3 cell_containing(vec3 x) const {
     return ivec3(cell_of(x.x, P.cell_grid.x - 1), cell_of(x.y, P.cell_grid.y - 1), cell_of(x.z, P.cell_grid.z - 1));
@@ -147,7 +149,7 @@ class RayCaster {
   Lattice L_;
   // What the ray has composited, its termination and weights, and its previous sample (shared
   // with the shader: shaders/ray/types.glsl).
-  RayState s_{vec4(0.f), 0.f, 1.f, 1.f, 1.f, true, 0.f, 0.f, false, false};
+  RayState s_{vec4(0.f), 0.f, 1.f, 1.f, 1.f, true, 0.f, 0.f, false, false, 0.f, 0.f};
   int last_ = 0;  // the walk's last lattice index (a brick's may end before the ray's)
   RayWalk k_{0, 0, std::numeric_limits<int>::max(), 0, 0.f, 0.f, ivec4(-1, -1, 1, 1)};  // the walk's bookkeeping
   SampleWindow w_{vec4(0.f), vec4(0.f), vec4(0.f), vec3(0.f), vec3(0.f),

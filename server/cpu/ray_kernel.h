@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 #include <glm/vec4.hpp>
 
@@ -37,7 +38,8 @@ struct CpuFrame {
   const uint8_t* cell_distance = nullptr;  // space skipping
   // Space skipping found no occupied cell: no ray samples anything, every pixel is background.
   bool nothing_visible = false;
-  const uint8_t* cell_stride = nullptr;  // adaptive multipliers
+  const uint8_t* cell_stride = nullptr;   // adaptive multipliers
+  const glm::vec2* cell_range = nullptr;  // maximum and minimum projections: (min, max), TF coordinates
   // Per-TF tables.
   const float* tf = nullptr;               // TransferFunction::kTableSize RGBA, opacity for `step`
   const uint64_t* tf_alpha_any = nullptr;  // bit i: texel i or i + 1 has opacity (tf_cell_bits)

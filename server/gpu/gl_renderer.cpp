@@ -72,9 +72,9 @@ void GlRenderer::prefetch_variants() {
     next.push_back(v);
   };
   with([](VariantKey& v) { v.shading = !v.shading; });
-  with([](VariantKey& v) { v.peaks = false, v.preintegration = false; });
-  with([](VariantKey& v) { v.peaks = false, v.preintegration = true; });
-  with([](VariantKey& v) { v.peaks = true, v.preintegration = false; });
+  with([](VariantKey& v) { v.peaks = false, v.preintegration = false, v.projection = 0; });
+  with([](VariantKey& v) { v.peaks = false, v.preintegration = true, v.projection = 0; });
+  with([](VariantKey& v) { v.peaks = true, v.preintegration = false, v.projection = 0; });
   with([](VariantKey& v) { v.rgb8 = !v.rgb8; });
   for (const VariantKey& v : next) {
     if (v.path == RenderPath::Compute)
@@ -168,6 +168,7 @@ VariantKey GlRenderer::prepare(const GlVolume& gv, const ResolvedScene& s, Rende
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboCellDistance, e->buffer.id());
   }
   if (f.key.adaptive) bind_multipliers(gv, cells);
+  if (f.key.projection_skips()) bind_cell_ranges(gv, cells);
   if (f.key.ray_texture) bind_ray_texture(s, stats);
   if (stats) {
     stats->empty_cells = f.occupancy->empty_cells;

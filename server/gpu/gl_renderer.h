@@ -78,6 +78,7 @@ class GlRenderer : public render::Renderer {
   void upload_tables(const GlVolume& volume, const ResolvedScene& scene, const std::vector<Peak>& peaks);
   void bind_tf_table(const GlVolume& volume, const ResolvedScene& scene, const std::string& tf_sig);
   void bind_multipliers(const GlVolume& volume, const MacrocellGrid& cells);
+  void bind_cell_ranges(const GlVolume& volume, const MacrocellGrid& cells);
   // A draw in parts, shared by draw() and the asynchronous frames: the program (its wait in
   // stats->compile_ms), uniforms and targets; then the draw or dispatch between a timer
   // query's begin and end; then the query's result (waits for it).
@@ -110,11 +111,11 @@ class GlRenderer : public render::Renderer {
   std::vector<Tables> tables_cache_;
   render::OccupancyCache occupancy_cache_;
   std::vector<DistanceEntry> distance_cache_;
-  struct StrideEntry {  // adaptive multipliers of one volume's grid
+  struct StrideEntry {  // adaptive multipliers, or the value ranges, of one volume's grid
     std::string key;
     gpu::Buffer buffer;
   };
-  std::vector<StrideEntry> stride_cache_;
+  std::vector<StrideEntry> stride_cache_, range_cache_;
   // Ray textures on the host (strokes read them: add, multiply), each with its texture.
   using RayTextureEntry = render::RayTextureCache<gpu::Texture>::Entry;
   render::RayTextureCache<gpu::Texture> ray_textures_;

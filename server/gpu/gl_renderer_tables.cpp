@@ -66,6 +66,20 @@ void GlRenderer::bind_multipliers(const GlVolume& gv, const MacrocellGrid& cells
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboCellStride, e->buffer.id());
 }
 
+void GlRenderer::bind_cell_ranges(const GlVolume& gv, const MacrocellGrid& cells) {
+  const std::string key = std::to_string(gv.serial()) + " " + cells.to_string();
+  StrideEntry* e = cache_find(range_cache_, key);
+  if (!e) {
+    const std::vector<glm::vec2> ranges = cell_ranges(cells, gv.tf_lo(), gv.tf_hi());
+    StrideEntry n{key, gpu::make_buffer()};
+    glNamedBufferStorage(n.buffer.id(), GLsizeiptr(std::max<size_t>(1, ranges.size()) * sizeof(glm::vec2)),
+                         ranges.data(), 0);
+    e = &cache_insert(range_cache_, std::move(n), kCacheEntries);
+    ++table_builds_;
+  }
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboCellRange, e->buffer.id());
+}
+
 void GlRenderer::upload_tables(const GlVolume& gv, const ResolvedScene& s, const std::vector<Peak>& peaks) {
   const RenderSettings& r = s.scene.render;
   const double lo = gv.tf_lo(), hi = gv.tf_hi();
@@ -91,16 +105,18 @@ void GlRenderer::upload_tables(const GlVolume& gv, const ResolvedScene& s, const
     glTextureParameteri(t.peak_table.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     glTextureParameteri(t.peak_table.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     glBindTextureUnit(kUnitPeakTable, t.peak_table.id());
-    const std::vector<glm::vec4> points = tf_point_pairs(s.tf, lo, hi);
-    t.tf_points = gpu::make_buffer();
-    glNamedBufferStorage(t.tf_points.id(), GLsizeiptr(points.size() * sizeof(glm::vec4)), points.data(), 0);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboTfPoints, t.tf_points.id());
     t.sizes.peak_bins = table.bins;
     t.sizes.peak_layers = table.layers;
     t.sizes.max_peaks = r.max_peaks;
     t.sizes.secant_iterations = r.secant_iterations;
-    t.sizes.tf_points = int(s.tf.points.size());
     t.sizes.peak_count = peaks.size();
+  }
+  if (r.classification == Classification::Peaks || is_projection(r.classification)) {  // tf_exact's points
+    const std::vector<glm::vec4> points = tf_point_pairs(s.tf, lo, hi);
+    t.tf_points = gpu::make_buffer();
+    glNamedBufferStorage(t.tf_points.id(), GLsizeiptr(points.size() * sizeof(glm::vec4)), points.data(), 0);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, kSsboTfPoints, t.tf_points.id());
+    t.sizes.tf_points = int(s.tf.points.size());
   }
   if (r.classification == Classification::Preint) {
     const PreintegrationTable table = scene_preintegration(s, lo, hi);

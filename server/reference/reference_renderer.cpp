@@ -59,8 +59,9 @@ struct FrameTables {
   double dt = 0;      // the uniform step: the preintegration table's segment length
   double stop = 2.0;  // early termination (2: none)
   bool peaks_on = false, preint = false, dvr_on = true;
-  bool varying_steps = false;  // steps that differ from the table's:
-                               // preintegrated segments corrected
+  Classification projection = Classification::Post;  // mip, minip or average; else post (none)
+  bool varying_steps = false;                        // steps that differ from the table's:
+                                                     // preintegrated segments corrected
   PeakTable table;
   PreintegrationTable pre;
   MacrocellGrid cells;
@@ -79,6 +80,7 @@ FrameTables make_tables(const Frame& fr, const ReferenceOptions& opt) {
   t.peaks_on = rs.classification == Classification::Peaks && rs.peak_mode != PeakMode::DvrOnly;
   t.preint = rs.classification == Classification::Preint;
   t.dvr_on = !(t.peaks_on && rs.peak_mode == PeakMode::PeaksOnly);
+  if (is_projection(rs.classification)) t.projection = rs.classification;
   t.varying_steps = t.plan.differential || rs.adaptive || rs.virtual_samples;
   t.table = build_peak_table(t.peaks_on ? find_peaks(s.tf) : std::vector<Peak>{}, fr.lo, fr.hi, rs.peak_table_bins);
   if (t.preint) t.pre = build_preintegration(s.tf, fr.lo, fr.hi, t.dt, rs.preint_table_size, preint_method(rs));
@@ -122,6 +124,7 @@ class RefRay {
     if (rs_.adaptive ? walk_cells() : walk_points()) return;
     finish();
     close();
+    if (t_.projection != Classification::Post) project();
   }
 
  private:
@@ -172,6 +175,10 @@ class RefRay {
   // shading needs it. True when the ray is opaque. The backends' is consume()
   // in shaders/ray/consume.glsl.
   bool consume(double t, double f, const glm::dvec3* g, double step) {
+    if (t_.projection != Classification::Post) {
+      gather(t, f, step);
+      return false;
+    }
     auto lit = [&](const glm::dvec3& rgb) {
       return fr_.shading ? fr_.lit_with(rgb, g ? *g : fr_.grad(r_, t), r_) : rgb;
     };
@@ -194,6 +201,34 @@ class RefRay {
     f_prev_ = f;
     first_ = false;
     return acc_.alpha >= stop_;
+  }
+
+  // Intensity projections (the backends' is shaders/ray/projection.glsl): the maximum, the
+  // minimum or the chord-weighted mean of every sample's value (in data units), and where the
+  // extreme lies (the probe's answer); then the TF at that value, its own opacity, composited
+  // once.
+  void gather(double t, double f, double chord) {
+    const bool first = proj_len_ == 0 && !proj_any_;
+    proj_any_ = true;
+    proj_len_ += chord;
+    if (t_.projection == Classification::Average) {
+      proj_ += f * chord;
+      proj_t_ = t;
+    } else if (first || (t_.projection == Classification::Mip ? f > proj_ : f < proj_)) {
+      proj_ = f;
+      proj_t_ = t;
+    }
+  }
+  void project() {
+    if (!proj_any_) return;
+    double v = proj_;
+    if (t_.projection == Classification::Average) {
+      if (!(proj_len_ > 0)) return;
+      v = proj_ / proj_len_;
+    }
+    const glm::dvec4 c = fr_.s.tf.eval(v);
+    acc_.at_t = proj_t_, acc_.at_value = v;
+    acc_.add(glm::dvec3(c), c.a * dvr_weight_);
   }
 
   // Virtual samples (Lee §3.1, §4): the same window of four true samples as the
@@ -323,6 +358,8 @@ class RefRay {
   int64_t visited_end_ = -1;  // the last visit's i + m (preintegration closes the ray from it)
   double t_prev_ = 0, f_prev_ = 0;
   bool first_ = true;
+  double proj_ = 0, proj_len_ = 0, proj_t_ = 0;  // projections: the value so far (a mean's sum), the chords, where
+  bool proj_any_ = false;
   std::vector<True> w_;  // waiting true samples, at most 4
 };
 

@@ -119,6 +119,14 @@ std::vector<float> peak_texels(const PeakTable& table, double lo, double hi) {
   return texels;
 }
 
+std::vector<glm::vec2> cell_ranges(const MacrocellGrid& cells, double lo, double hi) {
+  std::vector<glm::vec2> out(cells.size());
+  const double scale = 1.0 / (hi - lo), pad = 1e-5;  // float samples round within ~1e-7 of their cell's range
+  for (size_t i = 0; i < out.size(); ++i)
+    out[i] = glm::vec2(float((cells.min[i] - lo) * scale - pad), float((cells.max[i] - lo) * scale + pad));
+  return out;
+}
+
 std::vector<glm::vec4> tf_point_pairs(const TransferFunction& tf, double lo, double hi) {
   std::vector<glm::vec4> points;
   for (const auto& p : tf.points) {

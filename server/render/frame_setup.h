@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include <glm/vec2.hpp>
 #include <glm/vec4.hpp>
 
 #include "core/occupancy.h"
@@ -78,6 +79,10 @@ std::string tables_key(const ResolvedScene& s, double lo, double hi, size_t peak
 std::vector<float> peak_texels(const PeakTable& table, double lo, double hi);
 // Per TF point: (value in TF coordinates, 0, 0, 0), then (r, g, b, a).
 std::vector<glm::vec4> tf_point_pairs(const TransferFunction& tf, double lo, double hi);
+// Per macrocell, (min, max) of its values in TF coordinates, widened outward by a few roundings
+// so that a sample computed in float inside the cell never lies outside: what a maximum or
+// minimum projection skips by (shaders/ray/projection.glsl). Grid order.
+std::vector<glm::vec2> cell_ranges(const MacrocellGrid& cells, double lo, double hi);
 // The preintegration table for the scene's step.
 PreintegrationTable scene_preintegration(const ResolvedScene& s, double lo, double hi);
 

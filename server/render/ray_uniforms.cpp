@@ -87,6 +87,7 @@ ray::Variant shared_variant(const VariantKey& key) {
   v.ray_texture = key.ray_texture;
   v.ray_texture_volume = key.ray_texture && key.ray_texture_volume;
   v.brick = key.brick;
+  v.projection = key.projection;
   return v;
 }
 

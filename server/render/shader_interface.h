@@ -26,6 +26,7 @@ constexpr unsigned kSsboTfPoints = 0;  // TF points for the peak root solve
 constexpr unsigned kSsboCellDistance = 1;  // cells to the nearest occupied macrocell (0: occupied)
 constexpr unsigned kSsboCellStride = 2;    // adaptive step multiplier per macrocell
 constexpr unsigned kSsboFrontOpacity = 3;  // BRICK + RAY_TEXTURE: the opacity in front, per pixel of the rect
+constexpr unsigned kSsboCellRange = 4;     // maximum/minimum projections: (min, max) per macrocell, TF coordinates
 
 // A peak-table texel with no peak. Peak values are TF coordinates in [0, 1], so any negative
 // value is free; the CPU table's own sentinel is PeakTable::kNoPeak (data units, unbounded).

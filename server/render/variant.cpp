@@ -23,6 +23,7 @@ std::vector<std::string> interface_defines() {
           "SSBO_CELL_DISTANCE " + std::to_string(kSsboCellDistance),
           "SSBO_CELL_STRIDE " + std::to_string(kSsboCellStride),
           "SSBO_FRONT_OPACITY " + std::to_string(kSsboFrontOpacity),
+          "SSBO_CELL_RANGE " + std::to_string(kSsboCellRange),
           "NO_PEAK_TEXEL " + no_peak.str(),
           "TF_TABLE_SIZE " + std::to_string(TransferFunction::kTableSize)};
 }
@@ -44,6 +45,7 @@ std::vector<std::string> VariantKey::defines() const {
     if (peak_mode == PeakMode::PeaksOnly) d.push_back("PEAKS_ONLY");
   }
   if (preintegration) d.push_back("PREINTEGRATION");
+  if (projection) d.push_back("PROJECTION " + std::to_string(projection));
   if (rgb8) d.push_back("RGB8_OUTPUT");
   if (ray_texture) d.push_back("RAY_TEXTURE");
   if (brick) d.push_back("BRICK");
@@ -57,6 +59,7 @@ std::string VariantKey::name() const {
   n += tricubic ? "+tricubic" : "+trilinear";
   if (peaks) n += std::string("+peaks:") + to_string(peak_mode);
   if (preintegration) n += "+preint";
+  if (projection) n += projection == 1 ? "+mip" : projection == 2 ? "+minip" : "+average";
   if (shading) n += "+shade";
   if (space_skipping) n += "+skip";
   if (orthographic) n += "+ortho";
@@ -71,7 +74,7 @@ std::string VariantKey::name() const {
 
 nlohmann::json capabilities() {
   return {
-      {"classification", {"post", "preint", "peaks"}},
+      {"classification", {"post", "preint", "peaks", "mip", "minip", "average"}},
       {"peak_mode", {"dvr+peaks", "xor", "peaks_only", "dvr_only"}},
       {"max_peaks", {1, 2, 3, 4}},
       {"sampling", {"uniform", "differential"}},
@@ -94,10 +97,14 @@ VariantKey choose_variant(const ResolvedScene& s, int64_t empty_cells, RenderPat
   VariantKey k;
   k.path = path;
   k.tricubic = s.scene.render.filter == Filter::Tricubic;
-  k.shading = s.scene.render.shading;
+  const Classification c = s.scene.render.classification;
+  k.projection = c == Classification::Mip ? 1 : c == Classification::Minip ? 2 : c == Classification::Average ? 3 : 0;
+  // A projection composites one TF value per ray, unshaded; the TF's empty cells may hold its
+  // maximum or minimum, so none is skipped.
+  k.shading = s.scene.render.shading && !k.projection;
   // Virtual samples skip cells too: their cells' ranges are joined over the Catmull-Rom
   // window's reach and widened by Lee's (M - m)/8 (GlRenderer::prepare).
-  k.space_skipping = s.scene.render.space_skipping && empty_cells > 0;
+  k.space_skipping = s.scene.render.space_skipping && empty_cells > 0 && !k.projection;
   k.orthographic = s.camera.orthographic;
   k.differential = s.scene.render.sampling == Sampling::Differential && !s.camera.orthographic;
   k.adaptive = s.scene.render.adaptive;

@@ -26,6 +26,11 @@ struct VariantKey {
   bool peaks = false;         // peak finding between samples
   PeakMode peak_mode = PeakMode::DvrPlusPeaks;
   bool preintegration = false;
+  // An intensity projection (shaders/ray/projection.glsl kProjection*: 1 max, 2 min, 3 mean), or 0.
+  int projection = 0;
+  // A maximum or minimum projection skips the cells that cannot change it (it reads their value
+  // ranges, render::cell_ranges): shaders/ray/projection.glsl projection_skips.
+  bool projection_skips() const { return (projection == 1 || projection == 2) && virtual_samples == 0; }
   bool rgb8 = false;                // output quantised to 8-bit RGB on the GPU (RenderOutput::Rgb8)
   bool ray_texture = false;         // Raspe 2008 per-ray controls (any render.ray_texture)
   bool ray_texture_volume = false;  // ... indexed by the entry point (else by the pixel)

@@ -13,6 +13,7 @@ vec3 sample_gradient(IN(Ray) r, float t, vec3 g) {
 // One sample at t with value f (TF coordinates), standing for the step dt, with gradient g
 // (virtual samples). True when the ray is opaque enough to stop.
 bool consume(IN(Ray) r, INOUT(RayState) s, float t, float f, vec3 g, float dt) {
+  if (V.projection != kProjectionNone) return project_sample(s, f, dt);  // (one process: no brick draws a projection)
   bool segment = s.have_prev && !s.gap;
   bool draw = !V.brick || s.draw;  // a brick draws only the points it owns
   float dvr_weight = V.ray_texture ? s.dvr_weight : 1.0f;  // (folded where no ray texture can change it)

@@ -35,6 +35,8 @@ void apply_ray_texture(vec3 c, INOUT(Lattice) L, INOUT(RayState) s) {
 // (the callers read none of them then).
 bool start_ray(vec2 pixel, OUT(Ray) r, OUT(Lattice) L, INOUT(RayState) s, OUT(RayWalk) k, OUT(vec2) span,
                OUT(int) last) {
+  s.proj = projection_start();
+  s.proj_len = 0.0f;
   r = make_ray(pixel);
   span = intersect_box(r);
   if (!(span.x <= span.y)) {  // missed (also false for NaN)

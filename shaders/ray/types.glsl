@@ -45,6 +45,10 @@ struct RayState {
   float prev_f;
   bool have_prev;
   bool gap;           // lattice points were skipped since it (an empty macrocell's): no segment across
+  // Projections (ray/projection.glsl): the value projected so far (TF coordinates; a mean's sum
+  // of value x chord), and the chords summed (a mean's weight).
+  float proj;
+  float proj_len;
 };
 
 // Virtual samples' window (Lee et al. 2010): the last four true samples, newest in .w (no dynamic

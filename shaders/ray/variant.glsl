@@ -16,4 +16,5 @@ struct Variant {
   bool ray_texture;     // per-ray controls (Raspe 2008): RayState's stop and weights vary per ray
   bool ray_texture_volume;  // ... read where the ray enters the box (else at its pixel)
   bool brick;           // distributed rendering: one brick's part of each ray (RayState.draw)
+  int projection;       // kProjectionNone, or the intensity projection (ray/projection.glsl) that replaces compositing
 };

@@ -12,8 +12,12 @@
 // side of a run of occupied cells, so the segments that enter or leave the run are not lost
 // (walk_leaps visits the one point on each side itself: it assumes kExtension == 1).
 //
+// A maximum or minimum projection walks the 3D-DDA too, skipping the cells that cannot change
+// the ray's value so far (ray/projection.glsl).
+//
 // What a target supplies (its hooks): cell_distance(c), space skipping's byte per macrocell
-// (Chebyshev distance in cells to the nearest occupied one, 0: occupied); cell_multiplier(c),
+// (Chebyshev distance in cells to the nearest occupied one, 0: occupied); cell_range(c), the
+// cell's value range in TF coordinates (min, max) for projections; cell_multiplier(c),
 // the adaptive multiplier 1..8; cell_containing(x), the cell of a point in cell units, clamped
 // to the grid; dense_run(...), a target's fast path over the points that follow a visit while
 // they lie in occupied cells (the CPU's, held by a test to these walks; GL has none).
@@ -179,6 +183,9 @@ RAY_INLINE bool walk_cells(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(Ra
         if (!leap_cells(g, span.y, int(empty_distance) - 1, cell, t_max, t_in)) break;
         continue;
       }
+    } else if (projection_skips()) {  // a cell that cannot change the ray's maximum (minimum)
+      occupied = projection_may_change(s, cell_range(c));
+      if (!occupied) next_first = -1;
     }
     float t_out = min(min(t_max.x, t_max.y), t_max.z);
     bool final_cell = t_out >= span.y || any(lessThan(cell, ivec3(0))) || any(greaterThanEqual(cell, g.grid));
@@ -206,6 +213,7 @@ SHARED_CONST int kWalkPoints = 0;
 SHARED_CONST int kWalkLeaps = 1;
 SHARED_CONST int kWalkCells = 2;
 int walk_kind() {
+  if (projection_skips()) return kWalkCells;  // (space skipping is off for projections)
   if (!V.space_skipping && !V.adaptive) return kWalkPoints;
   return V.adaptive ? kWalkCells : kWalkLeaps;
 }
@@ -225,9 +233,11 @@ RAY_INLINE void walk_ray(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(RayW
     stopped = walk_leaps(r, L, s, k, w, last, span, max(first, k.own_first - behind - 1));
   else
     stopped = walk_cells(r, L, s, k, w, last, span);
-  if (stopped) return;
-  if (V.virtual_samples != 0)
-    vs_finish(r, s, w, L, last, k.own_last, span.y);
-  else if (V.preintegration)
-    close_segment(r, s, span.y, k.expect == k.ray_last + 1);
+  if (!stopped) {
+    if (V.virtual_samples != 0)
+      vs_finish(r, s, w, L, last, k.own_last, span.y);
+    else if (V.preintegration)
+      close_segment(r, s, span.y, k.expect == k.ray_last + 1);
+  }
+  if (V.projection != kProjectionNone) finish_projection(s);
 }

@@ -53,6 +53,7 @@ struct Probe {
 #include "ray/catmull_rom.glsl"
 #include "ray/peaks.glsl"
 #include "ray/brick.glsl"
+#include "ray/projection.glsl"
 #include "ray/consume.glsl"
 #include "gpu/ray_functions/cases.glsl"
 };
@@ -60,13 +61,16 @@ struct Probe {
 using probe::Probe;
 
 // The variants the table runs under: perspective with differential and adaptive sampling, shading
-// and virtual samples; orthographic, uniform; peaks (xor) shaded; preintegration.
-enum class Config { Persp, Ortho, Peaks, Preint };
-const Config kConfigs[] = {Config::Persp, Config::Ortho, Config::Peaks, Config::Preint};
+// and virtual samples; orthographic, uniform; peaks (xor) shaded; preintegration; a maximum
+// intensity projection (perspective, differential); a mean projection with virtual samples
+// (orthographic).
+enum class Config { Persp, Ortho, Peaks, Preint, Mip, Mean };
+const Config kConfigs[] = {Config::Persp, Config::Ortho, Config::Peaks, Config::Preint, Config::Mip, Config::Mean};
 const char* name(Config c) {
-  return c == Config::Persp ? "persp" : c == Config::Ortho ? "ortho" : c == Config::Peaks ? "peaks" : "preint";
+  const char* n[] = {"persp", "ortho", "peaks", "preint", "mip", "mean"};
+  return n[int(c)];
 }
-bool ortho(Config c) { return c == Config::Ortho || c == Config::Preint; }
+bool ortho(Config c) { return c == Config::Ortho || c == Config::Preint || c == Config::Mean; }
 
 RayUniforms uniforms(Config config) {
   const bool ortho = peakcast::ortho(config);
@@ -113,9 +117,10 @@ Variant variant(Config c) {
   Variant v{};
   v.orthographic = ortho(c);
   v.differential = !ortho(c);
-  v.shading = c != Config::Ortho;
+  v.projection = c == Config::Mip ? Probe::kProjectionMax : c == Config::Mean ? Probe::kProjectionMean : 0;
+  v.shading = c != Config::Ortho && v.projection == 0;
   v.adaptive = c == Config::Persp;
-  v.virtual_samples = c == Config::Persp ? 3 : 0;
+  v.virtual_samples = c == Config::Persp || c == Config::Mean ? 3 : 0;
   v.peaks = v.peak_xor = c == Config::Peaks;
   v.preintegration = c == Config::Preint;
   v.segments = v.peaks || v.preintegration || v.virtual_samples != 0;
@@ -135,6 +140,7 @@ std::vector<std::string> defines(Config c, int rows) {
   if (v.peaks) d.insert(d.end(), {"PEAKS", "PEAK_XOR"});
   if (v.preintegration) d.push_back("PREINTEGRATION");
   if (v.ray_texture) d.push_back("RAY_TEXTURE");
+  if (v.projection) d.push_back("PROJECTION " + std::to_string(v.projection));
   return d;
 }
 
@@ -200,6 +206,11 @@ std::vector<float> table(Config config) {
         case Probe::kConsume:
           k = vec4(float(kind), hit ? box.x : 0.0f, 0.25f + g, 0.0f);
           c = vec4(f, n % 4 == 0 ? 0.3f : g, n % 4 == 1 ? 0.8f : h, e);  // values on the TF's opacity edges
+          a.w = 1.0f - f;
+          break;
+        case Probe::kProject:
+          k = vec4(float(kind), hit ? box.x : 0.0f, 0.25f + g, 0.0f);
+          c = vec4(f, n % 4 == 0 ? 1.0f : g, n % 4 == 1 ? 0.0f : h, e);  // values at the range's ends
           a.w = 1.0f - f;
           break;
         case Probe::kWindow:
@@ -297,13 +308,15 @@ std::vector<KindDiff> compare(const std::vector<float>& rows, const std::vector<
 // a brick's points). One or two roundings apart: what divides, takes a square root or a power,
 // which llvmpipe computes otherwise than libm (a / b as a * (1 / b), pow as exp2(y log2 x)):
 // make_ray (1.9e-7), spans (8.1e-7), lattice (1.2e-7), opacity (1.8e-7), shade (3.9e-7), consume
-// over six samples (8.3e-7), the virtual-sample window over a run (4.2e-7). A peak's root (2.0e-5) is regula falsi on a
+// over six samples (8.3e-7), the virtual-sample window over a run (4.2e-7). A projection over six
+// samples takes products, sums, comparisons and the TF's exact interpolation (a division): one
+// rounding apart where it divides. A peak's root (2.0e-5) is regula falsi on a
 // field that is nearly flat near a tangency, where a value one rounding apart moves the root by its error over the
 // slope; find_peaks (7.5e-8) solves roots too, so it is held to the same bound.
-const double kBound[] = {1e-6, 2e-6, 1e-6, 0.0, 1e-6, 0.0, 1e-6, 0.0, 1e-4, 0.0, 1e-4, 2e-6, 2e-6};
+const double kBound[] = {1e-6, 2e-6, 1e-6, 0.0, 1e-6, 0.0, 1e-6, 0.0, 1e-4, 0.0, 1e-4, 2e-6, 2e-6, 1e-6};
 
 const char* const kNames[] = {"make_ray",    "spans",     "lattice", "chord",      "opacity", "composite", "shade",
-                              "catmull_rom", "peak_root", "brick",   "find_peaks", "consume", "window"};
+                              "catmull_rom", "peak_root", "brick",   "find_peaks", "consume", "window",    "project"};
 
 TEST(RayFunctions, GlslAndCxxAgreeRowByRow) {
   PEAKCAST_GL_ONLY();

@@ -86,6 +86,24 @@ const VariantCase kCases[] = {
     {"virtual_samples_3", {{"tf", kSmooth}, {"render", {{"virtual_samples", 3}}}}, {"+vs3"}, {}, nullptr},
     {"adaptive_on", {{"tf", kSmooth}, {"render", {{"adaptive", true}}}}, {"+adaptive"}, {}, nullptr},
     {"ray_texture_view", {{"tf", kSmooth}, {"render", {{"ray_texture", kTexture}}}}, {"+raytex:view"}, {}, nullptr},
+    // Projections: the TF's empty cells may hold the maximum, so no skipping even where the TF
+    // hides most cells; no shading; no peak or preintegration code.
+    {"mip_sparse_tf",
+     {{"tf", kSparse}, {"render", {{"classification", "mip"}, {"shading", true}}}},
+     {"+mip"},
+     {"+skip", "+shade", "+peaks", "+preint", "+minip", "+average"},
+     nullptr},
+    {"minip",
+     {{"tf", kSmooth}, {"render", {{"classification", "minip"}}}},
+     {"+minip"},
+     {"+skip", "+mip", "+average"},
+     nullptr},
+    {"average_differential_vs",
+     {{"tf", kSmooth},
+      {"render", {{"classification", "average"}, {"sampling", "differential"}, {"virtual_samples", 3}}}},
+     {"+average", "+diff", "+vs3"},
+     {"+skip"},
+     nullptr},
 };
 
 class Variants : public ::testing::TestWithParam<VariantCase> {};

@@ -72,6 +72,22 @@ def test_rest_stills_honour_the_clip():
     assert status == 400 and b"render.clip.plane.normal" in body, body
 
 
+def test_rest_projections_equal_the_cli():
+    """classification mip, minip and average over REST: the variant says so, the picture is the
+    CLI's, and each differs from the others."""
+    pictures = {}
+    for c in ("mip", "minip", "average"):
+        scene = dict(SCENE, render={"classification": c}, tf={"points": [[0, 0, 0, 0, 0], [255, 1, 1, 1, 1]]})
+        status, headers, png = http(SERVER, "/api/render", "POST", json.dumps(scene).encode())
+        assert status == 200 and "+" + c in headers["X-Variant"], (c, status, png[:200])
+        with tempfile.TemporaryDirectory() as tmp:
+            pathlib.Path(tmp, "s.json").write_text(json.dumps(dict(scene, volume=str(DATA / "heptane_151.nrrd"))))
+            subprocess.run([PEAKCAST, "render", f"{tmp}/s.json", "-o", f"{tmp}/cli.png"], check=True, capture_output=True)
+            assert psnr(decode_image(png), Image.open(f"{tmp}/cli.png")) == 200.0, c
+        pictures[c] = decode_image(png)
+    assert psnr(pictures["mip"], pictures["average"]) < 30 and psnr(pictures["average"], pictures["minip"]) < 30
+
+
 def test_sixteen_sessions_share_one_gpu_copy():
     async def run():
         clients = [await Client.connect(SERVER) for _ in range(16)]

@@ -46,6 +46,18 @@ TEST(Scene, RoundTripsThroughJson) {
   EXPECT_NE(s.to_string().find("tricubic"), std::string::npos);
 }
 
+TEST(Scene, ProjectionsParseAndRoundTrip) {
+  for (const auto& [name, c] : {std::pair{"mip", Classification::Mip}, std::pair{"minip", Classification::Minip},
+                                std::pair{"average", Classification::Average}}) {
+    Scene s = parse_scene_text(std::string(R"({"volume": "v", "render": {"classification": ")") + name + "\"}}");
+    EXPECT_EQ(s.render.classification, c);
+    EXPECT_TRUE(is_projection(c));
+    EXPECT_EQ(parse_scene(scene_to_json(s)).render.classification, c);
+  }
+  for (Classification c : {Classification::Post, Classification::Preint, Classification::Peaks})
+    EXPECT_FALSE(is_projection(c));
+}
+
 TEST(Scene, Refusals) {
   expect_refused(R"({"volume": "v", "camra": {}})", "camra");
   expect_refused(R"({"volume": "v", "render": {"stpe": 1}})", "render.stpe");
@@ -67,6 +79,8 @@ TEST(Scene, Refusals) {
   expect_refused(R"({"volume": "v", "camera": {"eye": [0,0,5], "center": [0,0,0], "projection": "orthographic"}})",
                  "camera.height");
   expect_refused(R"({"volume": "v", "render": {"filter": "nearest"}})", "render.filter");
+  expect_refused(R"({"volume": "v", "render": {"classification": "maxip"}})", "render.classification");
+  expect_refused(R"({"volume": "v", "render": {"classification": "MIP"}})", "render.classification");
   expect_refused(R"({"volume": "v", "render": {"max_peaks": 5}})", "render.max_peaks");
   expect_refused(R"({"volume": "v", "render": {"virtual_samples": 4}})", "render.virtual_samples");
   expect_refused(R"({"volume": "v", "render": {"virtual_samples": 5}})", "render.virtual_samples");

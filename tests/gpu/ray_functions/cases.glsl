@@ -14,7 +14,8 @@ SHARED_CONST int kBrick = 9;       // clip_to_brick, owns, index_near (brick fac
 SHARED_CONST int kFindPeaks = 10;  // find_peaks (the slot walk, roots, compositing)
 SHARED_CONST int kConsume = 11;    // consume over a sequence of samples across opacity edges, close_segment
 SHARED_CONST int kWindow = 12;     // the virtual-sample window: vs_push over a run with a gap, vs_finish
-SHARED_CONST int kKinds = 13;
+SHARED_CONST int kProject = 13;    // project_sample over six samples, finish_projection (projection variants)
+SHARED_CONST int kKinds = 14;
 
 // The field at lattice point i, for vs_finish (the targets read it from their sample runs).
 float lattice_field(Ray r, Lattice L, int i, int m) { return sample_field(r, voxel_at(r, lattice_t(L, float(i)))); }
@@ -85,13 +86,13 @@ void run_case(vec4 k, vec4 a, vec4 b, vec4 c, OUT(vec4) r0, OUT(vec4) r1) {
     r0 = vec4(owned ? 1.0f : 0.0f, float(own_first), float(own_last), float(walk_last));
     r1 = vec4(owns(r, L, int(c.w)) ? 1.0f : 0.0f, float(index_near(L, mix(span.x, span.y, a.w), span, last)), 0.0f, 0.0f);
   } else if (kind == kFindPeaks) {
-    RayState s = {vec4(0.0f), 0.0f, 0.95f, 1.0f, 0.7f, true, 0.0f, 0.0f, false, false};
+    RayState s = {vec4(0.0f), 0.0f, 0.95f, 1.0f, 0.7f, true, 0.0f, 0.0f, false, false, 0.0f, 0.0f};
     bool hit = find_peaks(r, s, k.y, c.x, k.z, c.y);
     r0 = s.acc;
     r1 = vec4(s.samples, hit ? 1.0f : 0.0f, 0.0f, 0.0f);
   } else if (kind == kConsume) {
     // Six samples at t = k.y + q * k.z with values from c and a.w, the fourth after a gap.
-    RayState s = {vec4(0.0f), 0.0f, 0.99f, 0.8f, 1.0f, true, 0.0f, 0.0f, false, false};
+    RayState s = {vec4(0.0f), 0.0f, 0.99f, 0.8f, 1.0f, true, 0.0f, 0.0f, false, false, projection_start(), 0.0f};
     bool stopped = false;
     for (int q = 0; q < 6 && !stopped; ++q) {
       float f = q < 4 ? c[q] : (q == 4 ? a.w : c.x);
@@ -100,11 +101,27 @@ void run_case(vec4 k, vec4 a, vec4 b, vec4 c, OUT(vec4) r0, OUT(vec4) r1) {
     }
     if (!stopped) close_segment(r, s, k.y + 6.5f * k.z, true);
     r0 = s.acc;
-    r1 = vec4(s.samples, s.prev_t, s.prev_f, stopped ? 1.0f : 0.0f);
+    bool proj = V.projection != kProjectionNone;  // (a projection's consume keeps its value, not a segment's start)
+    r1 = vec4(s.samples, proj ? s.proj : s.prev_t, proj ? s.proj_len : s.prev_f, stopped ? 1.0f : 0.0f);
+  } else if (kind == kProject) {
+    // Six samples as kConsume's through consume (a projection's), then the pixel's colour; in the
+    // other variants the same samples composited.
+    RayState s = {vec4(0.0f), 0.0f, 0.99f, 0.8f, 1.0f, true, 0.0f, 0.0f, false, false, projection_start(), 0.0f};
+    bool stopped = false;
+    int taken = 0;
+    for (int q = 0; q < 6 && !stopped; ++q) {
+      float f = q < 4 ? c[q] : (q == 4 ? a.w : c.x);
+      stopped = consume(r, s, k.y + float(q) * k.z, f, vec3(0.0f), k.z * (0.5f + 0.1f * float(q)));
+      taken = q + 1;
+    }
+    float projected = V.projection == kProjectionNone ? 0.0f : s.proj;
+    if (V.projection != kProjectionNone) finish_projection(s);
+    r0 = s.acc;
+    r1 = vec4(projected, s.proj_len, float(taken), stopped ? 1.0f : 0.0f);
   } else if (kind == kWindow) {
     // True samples at lattice points 0..last of the ray's lattice, with a gap before point k.z,
     // each pushed into the window as sample_visit does, then the ray's end.
-    RayState s = {vec4(0.0f), 0.0f, 0.995f, 1.0f, 1.0f, true, 0.0f, 0.0f, false, false};
+    RayState s = {vec4(0.0f), 0.0f, 0.995f, 1.0f, 1.0f, true, 0.0f, 0.0f, false, false, 0.0f, 0.0f};
     SampleWindow w = {vec4(0.0f), vec4(0.0f), vec4(0.0f), vec3(0.0f), vec3(0.0f), vec3(0.0f), vec3(0.0f), 0, 0u};
     int last = min(int(k.y), 40), gap_at = int(k.z);
     bool stopped = false;
