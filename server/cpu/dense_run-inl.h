@@ -21,8 +21,9 @@ namespace peakcast::cpu {
 namespace HWY_NAMESPACE {
 namespace {
 
+template <class S>
 template <bool kCells>
-bool RayCaster::dense_loop(const Lattice& lattice, RayState& st, RayWalk& k, int& index, int& last_visited, int last,
+bool RayCaster<S>::dense_loop(const Lattice& lattice, RayState& st, RayWalk& k, int& index, int& last_visited, int last,
                            vec3 xo, vec3 dv) {
   // Locals: what the loop reads of the references, which the run sampler's stores (floats) could
   // otherwise alias, would be reloaded after every new run; the indices, which through the
@@ -90,6 +91,45 @@ bool RayCaster::dense_loop(const Lattice& lattice, RayState& st, RayWalk& k, int
     st.prev_f = prev_f;
     k.expect = visited + 1;
   }
+  return stopped;
+}
+
+template <class S>
+bool RayCaster<S>::project_loop(const Lattice& lattice, RayState& st, RayWalk& k, int& index, int& last_visited,
+                                int last) {
+  const Lattice L = lattice;  // (locals, as dense_loop's: the run sampler's stores cannot alias them)
+  RayState s = st;
+  int i = index, visited = last_visited;
+  const int first = i;
+  const float* const run = run_;
+  int run_lo = run_first_, run_n = run_stride_ == 1 ? run_count_ : 0;
+  bool stopped = false;
+  if (i <= last && i != k.expect) s.gap = true;  // as sample_visit marks a gap
+  while (i <= last) {
+    float fv;
+    if (HWY_LIKELY(unsigned(i - run_lo) < unsigned(run_n))) {
+      fv = run[i - run_lo];
+    } else {
+      fv = new_run(i, 1);
+      run_lo = run_first_;
+      run_n = run_count_;
+    }
+    s.samples += 1.f;
+    float dt = 0.f;  // (a maximum or minimum reads no chord)
+    if (V.projection == kProjectionMean) {  // sample_visit's chord
+      dt = lattice_step(L, float(i), 1.f);
+      if (i == 0 || i + 1 > k.ray_last) dt = chord_at_ends(dt, i, 1, k.head, k.tail, k.ray_last);
+    }
+    visited = i++;
+    if (project_sample(s, fv, dt)) {
+      stopped = true;
+      break;
+    }
+  }
+  if (i > first) k.expect = visited + 1;
+  st = s;
+  index = i;
+  last_visited = visited;
   return stopped;
 }
 

@@ -29,14 +29,30 @@ namespace peakcast::cpu {
 namespace HWY_NAMESPACE {
 namespace {
 
+// The switches of a frame without a projection: ray::Variant with `projection` hidden by the
+// constant 0, so the compiler folds the projection's test out of every consume and visit of the
+// DVR paths (read at run time, it cost peaks shaded 1.6% of its instructions).
+struct DvrSwitches : ray::Variant {
+  static constexpr int projection = 0;
+};
+template <class Switches>
+Switches switches_of(const ray::Variant& v) {
+  Switches s{};
+  static_cast<ray::Variant&>(s) = v;
+  return s;
+}
+
+// Switches: DvrSwitches, or ray::Variant for a projection (ray_kernel.cpp picks by the frame).
+template <class Switches>
 class RayCaster {
  public:
   explicit RayCaster(const CpuFrame& f)
       : P(f.u),
-        V(f.v),
+        V(switches_of<Switches>(f.v)),
         f_(f),
-        dense_(f.dense_runs && !f.key.peaks && !f.key.virtual_samples && !f.key.shading && !f.key.differential &&
-               !f.key.adaptive && !f.v.brick && f.v.projection == 0) {}
+        dense_(f.dense_runs && !f.v.brick && !f.key.virtual_samples &&
+               (f.v.projection != 0 ||
+                (!f.key.peaks && !f.key.shading && !f.key.differential && !f.key.adaptive))) {}
 
   RayResult cast(float px, float py) { return setup(px, py) ? walk(0) : result(); }
   // The ray through (px, py) up to its traversal; false (and samples -1) when it misses the box.
@@ -50,7 +66,7 @@ class RayCaster {
  private:
   // The frame's uniforms and switches, as the shared code (shaders/ray/) reads them.
   const ray::RayUniforms& P;
-  const ray::Variant V;
+  const Switches V;
   // The ray code shared with the GL shader, as members (shaders/ray/cxx_prelude.h).
 #include "ray/ray_setup.glsl"
 #include "ray/lattice.glsl"
@@ -126,12 +142,17 @@ class RayCaster {
   // uniform steps, one process); advances i and visited; true when the ray stopped.
   // Held to the walks without it by Leaps.CpuDenseRunsEqualTheSharedWalks
   // (tests/gpu/empty_space_test.cpp).
+  // Projections: the points up to `last` (walk_points: the ray's; visit_cell: the cell's), folded
+  // into the ray's value by the shared project_sample with the ray's state in a local, so the
+  // same operations in the same order: bit for bit the shared walk's (tests/gpu/projection_test.cpp).
   bool dense_run(const Ray&, const Lattice& L, RayState& s, RayWalk& k, int& i, int& visited, int last, bool cells,
                  vec3 xo, vec3 dv) {
     if (!dense_) return false;
+    if (V.projection != kProjectionNone) return project_loop(L, s, k, i, visited, last);
     return cells ? dense_loop<true>(L, s, k, i, visited, last, xo, dv)
                  : dense_loop<false>(L, s, k, i, visited, last, xo, dv);
   }
+  bool project_loop(const Lattice& L, RayState& s, RayWalk& k, int& i, int& visited, int last);
   template <bool kCells>
   bool dense_loop(const Lattice& L, RayState& s, RayWalk& k, int& i, int& visited, int last, vec3 xo, vec3 dv);
   // dense_loop's opacity for a step other than the table's (a ray texture's multiplier) or the
@@ -142,7 +163,8 @@ class RayCaster {
 
   const CpuFrame& f_;
   // Plain DVR (postclassified or preintegrated, unshaded, uniform steps, one process): runs of
-  // occupied points go through dense_loop, which holds the colour in registers.
+  // occupied points go through dense_loop, which holds the colour in registers. Projections
+  // without virtual samples (one process): project_loop.
   const bool dense_;
   float span_x_ = 0, span_y_ = 0;
   Ray r_;

@@ -33,7 +33,8 @@ namespace peakcast::cpu {
 namespace HWY_NAMESPACE {
 namespace {
 
-HWY_INLINE float RayCaster::field_at(int i, int m) {
+template <class S>
+HWY_INLINE float RayCaster<S>::field_at(int i, int m) {
   const int k = i - run_first_;
   if (run_stride_ == 1) {  // the common case, without integer divisions
     if (unsigned(k) < unsigned(run_count_)) return run_[k];
@@ -43,7 +44,8 @@ HWY_INLINE float RayCaster::field_at(int i, int m) {
   return new_run(i, m);
 }
 
-HWY_NOINLINE float RayCaster::new_run(int i, int m) {
+template <class S>
+HWY_NOINLINE float RayCaster<S>::new_run(int i, int m) {
   // Runs grow while the ray walks on without a gap, and start at one SIMD vector after one: a
   // leap or the end of an occupied run would waste the rest of a long run, and a vector costs
   // the same however few of its lanes are used.
@@ -67,7 +69,8 @@ HWY_NOINLINE float RayCaster::new_run(int i, int m) {
   return run_[0];
 }
 
-bool RayCaster::setup(float px, float py) {
+template <class S>
+bool RayCaster<S>::setup(float px, float py) {
   s_.stop = P.stop;
   vec2 span;
   if (!start_ray(vec2(px, py), r_, L_, s_, k_, span, last_)) return false;
@@ -76,7 +79,8 @@ bool RayCaster::setup(float px, float py) {
   return true;
 }
 
-RayResult RayCaster::walk(int first) {
+template <class S>
+RayResult RayCaster<S>::walk(int first) {
   // One function per walk, each with the shared walk inlined into it (with every walk inlined
   // into one function, the compiler kept vs_push out of line: +8% instructions).
   switch (walk_kind()) {
@@ -87,11 +91,9 @@ RayResult RayCaster::walk(int first) {
   return result();
 }
 
-}  // namespace
-
-RayResult CastRay(const CpuFrame& f, float px, float py) { return RayCaster(f).cast(px, py); }
-
-void CastRays(const CpuFrame& f, const float* px, const float* py, int n, RayResult* out) {
+template <class S>
+void cast_packets(const CpuFrame& f, const float* px, const float* py, int n, RayResult* out) {
+  using RayCaster = RayCaster<S>;
   const bool leaps = f.key.space_skipping && !f.key.adaptive;
   for (int k0 = 0; k0 < n; k0 += kRayPacket) {
     const int m = std::min(kRayPacket, n - k0);
@@ -116,6 +118,22 @@ void CastRays(const CpuFrame& f, const float* px, const float* py, int n, RayRes
       rays[q]->~RayCaster();
     }
   }
+}
+
+}  // namespace
+
+// A projection's frame gets the switches read at run time; every other frame the DVR switches,
+// with the projection's code folded away.
+RayResult CastRay(const CpuFrame& f, float px, float py) {
+  if (f.v.projection != 0) return RayCaster<ray::Variant>(f).cast(px, py);
+  return RayCaster<DvrSwitches>(f).cast(px, py);
+}
+
+void CastRays(const CpuFrame& f, const float* px, const float* py, int n, RayResult* out) {
+  if (f.v.projection != 0)
+    cast_packets<ray::Variant>(f, px, py, n, out);
+  else
+    cast_packets<DvrSwitches>(f, px, py, n, out);
 }
 
 }  // namespace HWY_NAMESPACE

@@ -22,9 +22,11 @@ namespace peakcast::cpu {
 namespace HWY_NAMESPACE {
 namespace {
 
-HWY_INLINE bool RayCaster::tf_lookup(float s, vec4& out) const { return tf_lookup_in(f_.tf, f_.tf_alpha_any, s, out); }
+template <class S>
+HWY_INLINE bool RayCaster<S>::tf_lookup(float s, vec4& out) const { return tf_lookup_in(f_.tf, f_.tf_alpha_any, s, out); }
 
-HWY_INLINE bool RayCaster::tf_lookup_in(const float* tf, const uint64_t* bits, float s, vec4& out) {
+template <class S>
+HWY_INLINE bool RayCaster<S>::tf_lookup_in(const float* tf, const uint64_t* bits, float s, vec4& out) {
   // GL_LINEAR between texel centres of an n-entry table, clamped: texel space u = s (n - 1).
   const int size = TransferFunction::kTableSize;
   const float u = std::clamp(s, 0.f, 1.f) * float(size - 1);
@@ -35,7 +37,8 @@ HWY_INLINE bool RayCaster::tf_lookup_in(const float* tf, const uint64_t* bits, f
   return true;
 }
 
-HWY_INLINE bool RayCaster::preint_lookup(const Ray&, float s_front, float s_back, vec4& out) const {
+template <class S>
+HWY_INLINE bool RayCaster<S>::preint_lookup(const Ray&, float s_front, float s_back, vec4& out) const {
   const int n = P.preint_size;
   const float u = std::clamp(s_front, 0.f, 1.f) * float(n - 1), v = std::clamp(s_back, 0.f, 1.f) * float(n - 1);
   const int i = std::min(int(u), n - 2), j = std::min(int(v), n - 2);

@@ -29,13 +29,14 @@ bool projection_may_change(IN(RayState) s, vec2 range) {
   return V.projection == kProjectionMax ? range.y > s.proj : range.x < s.proj;
 }
 
-// One sample of value f (TF coordinates) standing for the chord dt. True when no later sample
+// One sample of value f (TF coordinates) standing for the chord dt (a mean's weight; a maximum
+// or minimum reads no chord). True when no later sample
 // can change the result: a maximum at the top of the TF's domain, a minimum at its bottom (the
 // volume's value range: trilinear and B-spline samples stay inside it; Catmull-Rom virtual
 // samples may overshoot, so then the ray goes on).
 bool project_sample(INOUT(RayState) s, float f, float dt) {
-  s.proj_len += dt;
   if (V.projection == kProjectionMean) {
+    s.proj_len += dt;
     s.proj += f * dt;
     return false;
   }

@@ -46,7 +46,7 @@ struct RayState {
   bool have_prev;
   bool gap;           // lattice points were skipped since it (an empty macrocell's): no segment across
   // Projections (ray/projection.glsl): the value projected so far (TF coordinates; a mean's sum
-  // of value x chord), and the chords summed (a mean's weight).
+  // of value x chord), and a mean's chords summed (its weight).
   float proj;
   float proj_len;
 };

@@ -20,7 +20,8 @@
 // cell's value range in TF coordinates (min, max) for projections; cell_multiplier(c),
 // the adaptive multiplier 1..8; cell_containing(x), the cell of a point in cell units, clamped
 // to the grid; dense_run(...), a target's fast path over the points that follow a visit while
-// they lie in occupied cells (the CPU's, held by a test to these walks; GL has none).
+// they lie in occupied cells, or over an occupied cell's points (the CPU's, held by tests to
+// these walks; GL has none).
 
 SHARED_CONST int kExtension = 1;  // lattice points visited on each side of an occupied run
 // Lattice points per inner loop: llvmpipe stops any single loop after 65535 iterations
@@ -135,6 +136,9 @@ RAY_INLINE bool visit_cell(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(Ra
     for (int e = kExtension; e >= 1; --e)
       if (first - e >= next && visit(r, L, s, k, w, first - e, 1)) return true;
   int i = max(next, first);
+  int visited = i - 1;
+  // A target's fast path over the cell's points (the CPU's for projections; GL's folds away).
+  if (m == 1 && dense_run(r, L, s, k, i, visited, end, false, vec3(0.0f), vec3(0.0f))) return true;
   while (i <= end) {  // in chunks (kChunk; a target without the loop limit takes one)
     int chunk_end = kChunk > 65535 ? end : min(end, i + (kChunk - 1) * m);
     for (; i <= chunk_end; i += m)

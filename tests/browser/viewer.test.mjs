@@ -133,6 +133,13 @@ test('controls that do not apply are disabled and every control explains itself'
   await page.selectOption('select[name=sampling]', 'differential');
   assert.ok(await page.isEnabled('select[name=peak_mode]'));
   assert.ok(await page.isEnabled('input[name=s_k]'));
+  // A projection (offered because the server lists it) is drawn unshaded, every cell walked.
+  assert.ok(await page.isEnabled('input[name=shading]'));
+  await page.selectOption('select[name=classification]', 'mip');
+  assert.ok(await page.isDisabled('input[name=shading]') && await page.isDisabled('input[name=space_skipping]'));
+  await page.waitForFunction(() => /\+mip/.test(document.querySelector('#variant')?.textContent ?? ''), null,
+    { timeout: 20000 });
+  await page.selectOption('select[name=classification]', 'peaks');
   const untitled = await page.$$eval('#controls label', (ls) => ls.filter((l) => (l.title || '').length < 20).map((l) => l.textContent));
   assert.deepEqual(untitled, []);
   // Each links to docs/scenes.md, which the server serves beside the client.

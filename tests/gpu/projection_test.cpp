@@ -189,6 +189,34 @@ TEST(Projections, MipStopsWhereNoSampleCanExceedItAndStaysExact) {
   EXPECT_LE(e.max_abs, 1e-5);
 }
 
+// The CPU backend's fast path for projections (project_loop, over the rest of a ray or an occupied
+// cell's points) against the shared walk without it: bit for bit, pixels and sample counts, with
+// uniform and differential steps and a ray texture's step multiplier.
+TEST(Projections, CpuFastPathEqualsTheSharedWalk) {
+  auto* cpu = test::gpu().cpu;
+  if (!cpu) GTEST_SKIP() << "CPU backend only";
+  const json texture = {{"mapping", "view"},
+                        {"size", {32, 32}},
+                        {"strokes", {{{"channel", "step"}, {"center", {0.5, 0.5}}, {"radius", 0.4}, {"value", 0.6}}}}};
+  for (int scene : {0, 1}) {
+    auto v = scenes()[size_t(scene)].volume();
+    test::TestVolume gv(v);
+    for (const char* p : kProjections)
+      for (const Method& m : {methods()[0], methods()[2], Method{"ray_texture", {{"ray_texture", texture}}}}) {
+        const ResolvedScene s = scene_for(*v, p, m, coloured(*v));
+        render::RenderStats st_fast, st_shared;
+        const Image fast = test::render_gpu(gv, s, render::RenderPath::Fragment, &st_fast);
+        cpu->set_dense_runs(false);
+        const Image shared = test::render_gpu(gv, s, render::RenderPath::Fragment, &st_shared);
+        cpu->set_dense_runs(true);
+        SCOPED_TRACE(std::string(p) + " " + m.name + " " + st_fast.variant);
+        EXPECT_GT(st_shared.samples_mean, 3.0);
+        EXPECT_EQ(fast.rgba, shared.rgba);
+        EXPECT_EQ(fast.samples, shared.samples);
+      }
+  }
+}
+
 // render.clip cuts a projection's rays as it does DVR's: the clipped MIP matches the clipped
 // reference, and differs from the unclipped picture.
 TEST(Projections, ClippedLikeEveryMethod) {
