@@ -226,6 +226,41 @@ const StiffCase kCases[] = {
      Check::Twin,
      60},                                                                               // 72.3 dB
     {"image_1x1", ml41, {{"image", {{"width", 1}, {"height", 1}}}}, Check::Twin, 100},  // 135.1 dB
+    // Projections at the edges: a constant volume (a maximum skips every cell after the first:
+    // none can raise it), values far from 1, replaced non-finite voxels, a camera far away, the
+    // least grid, a one-point TF. Measured GL / CPU backend in the comments.
+    {"mip_constant_volume",
+     constant(),
+     {{"tf", ramp_tf(0.0, 1.0)}, {"render", {{"classification", "mip"}}}},
+     Check::Twin,
+     100},  // 176.2 / 176.2 dB
+    {"mip_float_range_1e30",
+     ml_scaled(1e30),
+     {{"render", {{"classification", "mip"}}}},
+     Check::Unscaled,
+     100,
+     nullptr,
+     1e30},  // 162.0 / 155.3 dB
+    {"average_nan_inf_replaced",
+     with_nonfinite(),
+     {{"render", {{"classification", "average"}}}},
+     Check::Twin,
+     100},  // 151.2 / 153.3 dB
+    {"minip_camera_1e6_away",
+     ml41,
+     {{"camera", cam({20, 20, 1e6}, {20, 20, 20}, {0, 1, 0}, 0.003)}, {"render", {{"classification", "minip"}}}},
+     Check::Twin,
+     100},  // 144.6 / 149.5 dB
+    {"mip_volume_2x2x2",
+     sized({2, 2, 2}),
+     {{"tf", ramp_tf(0.0, 1.0, 0.9)}, {"render", {{"classification", "mip"}}}},
+     Check::Twin,
+     100},  // 147.1 / 146.9 dB
+    {"mip_single_point_tf",
+     ml41,
+     {{"tf", {{"points", {{0.5, 0.9, 0.5, 0.1, 0.05}}}}}, {"render", {{"classification", "mip"}}}},
+     Check::Twin,
+     100},  // 174.7 / 174.7 dB
     // The largest image (4096^2 pixels) of a volume far away (few rays hit: the reference stays cheap).
     {"image_max_4096x4096",
      ml41,
