@@ -137,8 +137,9 @@ RAY_INLINE bool visit_cell(IN(Ray) r, IN(Lattice) L, INOUT(RayState) s, INOUT(Ra
       if (first - e >= next && visit(r, L, s, k, w, first - e, 1)) return true;
   int i = max(next, first);
   int visited = i - 1;
-  // A target's fast path over the cell's points (the CPU's for projections; GL's folds away).
-  if (m == 1 && dense_run(r, L, s, k, i, visited, end, false, vec3(0.0f), vec3(0.0f))) return true;
+  // A target's fast path over the cell's points, for projections (the CPU's; GL's folds away).
+  if (V.projection != kProjectionNone && m == 1 && dense_run(r, L, s, k, i, visited, end, false, vec3(0.0f), vec3(0.0f)))
+    return true;
   while (i <= end) {  // in chunks (kChunk; a target without the loop limit takes one)
     int chunk_end = kChunk > 65535 ? end : min(end, i + (kChunk - 1) * m);
     for (; i <= chunk_end; i += m)
