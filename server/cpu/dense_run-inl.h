@@ -24,7 +24,7 @@ namespace {
 template <class S>
 template <bool kCells>
 bool RayCaster<S>::dense_loop(const Lattice& lattice, RayState& st, RayWalk& k, int& index, int& last_visited, int last,
-                           vec3 xo, vec3 dv) {
+                              vec3 xo, vec3 dv) {
   // Locals: what the loop reads of the references, which the run sampler's stores (floats) could
   // otherwise alias, would be reloaded after every new run; the indices, which through the
   // references were stored and reloaded at every sample (3 of em's 97 instructions per sample).
@@ -115,7 +115,7 @@ bool RayCaster<S>::project_loop(const Lattice& lattice, RayState& st, RayWalk& k
       run_n = run_count_;
     }
     s.samples += 1.f;
-    float dt = 0.f;  // (a maximum or minimum reads no chord)
+    float dt = 0.f;                         // (a maximum or minimum reads no chord)
     if (V.projection == kProjectionMean) {  // sample_visit's chord
       dt = lattice_step(L, float(i), 1.f);
       if (i == 0 || i + 1 > k.ray_last) dt = chord_at_ends(dt, i, 1, k.head, k.tail, k.ray_last);

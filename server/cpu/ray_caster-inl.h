@@ -51,8 +51,7 @@ class RayCaster {
         V(switches_of<Switches>(f.v)),
         f_(f),
         dense_(f.dense_runs && !f.v.brick && !f.key.virtual_samples &&
-               (f.v.projection != 0 ||
-                (!f.key.peaks && !f.key.shading && !f.key.differential && !f.key.adaptive))) {}
+               (f.v.projection != 0 || (!f.key.peaks && !f.key.shading && !f.key.differential && !f.key.adaptive))) {}
 
   RayResult cast(float px, float py) { return setup(px, py) ? walk(0) : result(); }
   // The ray through (px, py) up to its traversal; false (and samples -1) when it misses the box.

@@ -23,7 +23,9 @@ namespace HWY_NAMESPACE {
 namespace {
 
 template <class S>
-HWY_INLINE bool RayCaster<S>::tf_lookup(float s, vec4& out) const { return tf_lookup_in(f_.tf, f_.tf_alpha_any, s, out); }
+HWY_INLINE bool RayCaster<S>::tf_lookup(float s, vec4& out) const {
+  return tf_lookup_in(f_.tf, f_.tf_alpha_any, s, out);
+}
 
 template <class S>
 HWY_INLINE bool RayCaster<S>::tf_lookup_in(const float* tf, const uint64_t* bits, float s, vec4& out) {
