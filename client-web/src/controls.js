@@ -33,7 +33,7 @@ export const HELP = {
   adaptive: 'A step per macrocell from its spread of values (Knoll §6.2): finer where the data varies.',
 };
 
-// The classifications that are intensity projections (one value per ray: no shading, no skipping).
+// The classifications that are intensity projections (one value per ray: no shading, no TF skipping).
 const PROJECTIONS = new Set(['mip', 'minip', 'average']);
 
 export class RenderControls extends EventTarget {
@@ -123,7 +123,8 @@ export class RenderControls extends EventTarget {
       max_peaks: [v('classification') === 'peaks' && v('peak_mode') !== 'dvr_only', 'applies with peak finding'],
       s_k: [v('sampling') === 'differential', 'applies with differential sampling'],
       shading: [!PROJECTIONS.has(v('classification')), 'a projection is not shaded'],
-      space_skipping: [!PROJECTIONS.has(v('classification')), 'a projection walks every cell'],
+      space_skipping: [!PROJECTIONS.has(v('classification')),
+        'a projection does not skip by the TF (mip and minip skip the cells that cannot change them)'],
     };
     for (const [key, [on, why]] of Object.entries(rules)) {
       const input = this.inputs[key];

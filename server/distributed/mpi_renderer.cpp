@@ -13,6 +13,7 @@
 
 #include "core/volume_io.h"
 #include "distributed/brick_frame.h"
+#include "render/brick.h"
 #include "distributed/opacity_chain.h"
 #include "distributed/ray_texture_sync.h"
 #include "distributed/coordinator.h"
@@ -227,6 +228,7 @@ render::RenderResult MpiRenderer::render(const render::ResidentVolume& v, const 
   if (!res) throw std::invalid_argument("the MPI renderer draws its own volumes only");
   const render::PixelRect rect = req.tile.value_or(render::PixelRect{0, 0, s.scene.width, s.scene.height});
   render::check_rect(rect, s.scene.width, s.scene.height);
+  render::check_bricks_draw(s);  // before any rank is asked: a throw after that aborts the job
   auto& bricks = const_cast<Resident*>(res)->bricks;
   Coordinator& c = *impl_->coord;
   auto held = c.lock();  // against a volume load on the loader pool

@@ -71,7 +71,7 @@ void GlRenderer::prefetch_variants() {
     change(v);
     next.push_back(v);
   };
-  with([](VariantKey& v) { v.shading = !v.shading; });
+  if (!k.projection) with([](VariantKey& v) { v.shading = !v.shading; });  // (a projection is never shaded)
   with([](VariantKey& v) { v.peaks = false, v.preintegration = false, v.projection = 0; });
   with([](VariantKey& v) { v.peaks = false, v.preintegration = true, v.projection = 0; });
   with([](VariantKey& v) { v.peaks = true, v.preintegration = false, v.projection = 0; });

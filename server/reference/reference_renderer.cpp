@@ -142,7 +142,8 @@ class RefRay {
                               ? view_uv(x, y, s.scene.width, s.scene.height)
                               : volume_uv(r_.o + t_box * r_.d, fr_.half);
     const auto c = sample_ray_texture(*t_.ray_texture, uv);
-    if (opt.early_termination) stop_ = c[1];
+    if (opt.early_termination && t_.projection == Classification::Post)
+      stop_ = c[1];  // (a projection never stops by opacity)
     dvr_weight_ = 1.0 - std::max(c[2], 0.0);
     peak_weight_ = 1.0 + std::min(c[2], 0.0);
     return c[0];
@@ -205,15 +206,15 @@ class RefRay {
 
   // Intensity projections (the backends' is shaders/ray/projection.glsl): the maximum, the
   // minimum or the chord-weighted mean of every sample's value (in data units), and where the
-  // extreme lies (the probe's answer); then the TF at that value, its own opacity, composited
-  // once.
+  // probe places it: at the extreme, or at the chord-weighted centre of the mean's samples; then
+  // the TF at that value, its own opacity, composited once.
   void gather(double t, double f, double chord) {
-    const bool first = proj_len_ == 0 && !proj_any_;
+    const bool first = !proj_any_;
     proj_any_ = true;
     proj_len_ += chord;
     if (t_.projection == Classification::Average) {
       proj_ += f * chord;
-      proj_t_ = t;
+      proj_t_ += t * chord;
     } else if (first || (t_.projection == Classification::Mip ? f > proj_ : f < proj_)) {
       proj_ = f;
       proj_t_ = t;
@@ -222,12 +223,14 @@ class RefRay {
   void project() {
     if (!proj_any_) return;
     double v = proj_;
+    double at = proj_t_;
     if (t_.projection == Classification::Average) {
       if (!(proj_len_ > 0)) return;
       v = proj_ / proj_len_;
+      at = proj_t_ / proj_len_;
     }
     const glm::dvec4 c = fr_.s.tf.eval(v);
-    acc_.at_t = proj_t_, acc_.at_value = v;
+    acc_.at_t = at, acc_.at_value = v;
     acc_.add(glm::dvec3(c), c.a * dvr_weight_);
   }
 
@@ -358,7 +361,9 @@ class RefRay {
   int64_t visited_end_ = -1;  // the last visit's i + m (preintegration closes the ray from it)
   double t_prev_ = 0, f_prev_ = 0;
   bool first_ = true;
-  double proj_ = 0, proj_len_ = 0, proj_t_ = 0;  // projections: the value so far (a mean's sum), the chords, where
+  // Projections: the value so far (a mean's sum), the chords, where the probe places it (a mean's
+  // sum of t x chord).
+  double proj_ = 0, proj_len_ = 0, proj_t_ = 0;
   bool proj_any_ = false;
   std::vector<True> w_;  // waiting true samples, at most 4
 };

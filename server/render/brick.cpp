@@ -7,12 +7,16 @@
 
 namespace peakcast::render {
 
-PixelRect check_brick_frame(const ResolvedScene& s, const Brick& brick, const glm::dvec3& spacing,
-                            std::optional<PixelRect> tile) {
+void check_bricks_draw(const ResolvedScene& s) {
   if (is_projection(s.scene.render.classification))
     throw SceneError(std::string("render.classification ") + to_string(s.scene.render.classification) +
                      ": projections are not drawn by bricks yet (MPI ranks, or a volume larger than memory at "
                      "full resolution); render a pyramid level that fits, or use post, preint or peaks");
+}
+
+PixelRect check_brick_frame(const ResolvedScene& s, const Brick& brick, const glm::dvec3& spacing,
+                            std::optional<PixelRect> tile) {
+  check_bricks_draw(s);
   for (int a = 0; a < 3; ++a) {
     const double whole = (s.box_max[a] - s.box_min[a]) / spacing[a];
     if (!(brick.own_lo[a] >= 0 && brick.own_lo[a] < brick.own_hi[a] && brick.own_hi[a] <= whole + 1e-9))

@@ -37,8 +37,12 @@ struct Brick {
 // pixel of it. Returns the pixels to draw (`tile`, or the whole image). A brick's resident
 // volume carries the whole volume's macrocell grids (core/macrocell_share.h), so cell walks
 // (space skipping, adaptive multipliers, where a virtual-sample run ends) visit the points one
-// process visits: every scene one process draws, bricks draw.
+// process visits: every scene one process draws, bricks draw, but projections (check_bricks_draw).
 PixelRect check_brick_frame(const ResolvedScene& scene, const Brick& brick, const glm::dvec3& spacing,
                             std::optional<PixelRect> tile);
+// What bricks cannot draw yet, refused (SceneError naming the key) before any brick is read or
+// any rank asked: projections (a brick's layer is composited front to back; a projection needs
+// the values' maximum, minimum or mean across bricks).
+void check_bricks_draw(const ResolvedScene& scene);
 
 }  // namespace peakcast::render

@@ -100,7 +100,8 @@ VariantKey choose_variant(const ResolvedScene& s, int64_t empty_cells, RenderPat
   const Classification c = s.scene.render.classification;
   k.projection = c == Classification::Mip ? 1 : c == Classification::Minip ? 2 : c == Classification::Average ? 3 : 0;
   // A projection composites one TF value per ray, unshaded; the TF's empty cells may hold its
-  // maximum or minimum, so none is skipped.
+  // maximum or minimum, so the TF's space skipping is off (a maximum or minimum skips by values:
+  // VariantKey::projection_skips).
   k.shading = s.scene.render.shading && !k.projection;
   // Virtual samples skip cells too: their cells' ranges are joined over the Catmull-Rom
   // window's reach and widened by Lee's (M - m)/8 (GlRenderer::prepare).

@@ -9,6 +9,7 @@
 
 #include "core/log.h"
 #include "distributed/brick_sequence.h"
+#include "render/brick.h"
 #include "encode/png.h"
 #include "render/backend.h"
 #include "session/frame_encoder.h"
@@ -245,6 +246,7 @@ void RenderService::render_brick(Scheduler::Work& w) {
   try {
     // The first turn opens the sequence (and starts reading its first brick): a still waiting in
     // the queue holds no voxels.
+    if (!sw.bricks) render::check_bricks_draw(sw.job.scene);  // before the first brick is read
     if (!sw.bricks)
       sw.bricks = std::make_shared<distributed::SequenceRun>(
           full.path.string(), full.options, sw.job.full_statistics, sw.job.scene,

@@ -1,7 +1,8 @@
 // Intensity projections (classifications mip, minip, average; docs/scenes.md): instead of
 // compositing, a ray keeps the maximum, the minimum or the chord-weighted mean of its samples'
-// values (true and virtual, every lattice point of its span: the TF does not decide which cells
-// matter, so no macrocell is skipped), and its pixel is the TF at that value, composited once:
+// values (true and virtual, on the lattice of its span; the TF does not decide which cells matter,
+// so TF space skipping does not apply, but a maximum or minimum skips the cells whose values
+// cannot change it: below), and its pixel is the TF at that value, composited once:
 // colour c.rgb and opacity c.a, the TF's own opacity (no step correction), over the background.
 // Reads tf_exact (ray/peaks.glsl).
 
@@ -20,8 +21,9 @@ float projection_start() {
 
 // A maximum or a minimum skips the macrocells that cannot change it (walks.glsl walk_cells): a
 // cell whose values (over its filter's support: cell_range, the target's hook, in TF
-// coordinates, widened by a rounding) all lie at or below the maximum so far, or at or above the
-// minimum. Exact, as a cell's samples are convex blends of those values; not with virtual
+// coordinates, widened by 1e-5) all lie at or below the maximum so far, or at or above the
+// minimum. Exact up to float rounding, as a cell's samples are convex blends of those values
+// (a cell whose top equals the maximum so far is still walked: the widening); not with virtual
 // samples (the spline overshoots, and the window would lose its neighbours). A mean takes every
 // sample.
 bool projection_skips() { return (V.projection == kProjectionMax || V.projection == kProjectionMin) && V.virtual_samples == 0; }

@@ -21,7 +21,7 @@ vec2 ray_texture_uv(IN(Ray) r, vec2 pixel, float t_box) {
 // opacity, c.z the blend in [-1, 1] (c.z > 0 fades the DVR samples' opacity by 1 - c.z, c.z < 0
 // the peaks' by 1 + c.z).
 void apply_ray_texture(vec3 c, INOUT(Lattice) L, INOUT(RayState) s) {
-  s.stop = c.y;
+  if (V.projection == kProjectionNone) s.stop = c.y;  // (a projection's opacity does not accumulate)
   s.dvr_weight = 1.0f - max(c.z, 0.0f);
   s.peak_weight = 1.0f + min(c.z, 0.0f);
   L.A *= c.x;

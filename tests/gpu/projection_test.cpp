@@ -191,7 +191,8 @@ TEST(Projections, MipStopsWhereNoSampleCanExceedItAndStaysExact) {
 
 // The CPU backend's fast path for projections (project_loop, over the rest of a ray or an occupied
 // cell's points) against the shared walk without it: bit for bit, pixels and sample counts, with
-// uniform and differential steps and a ray texture's step multiplier.
+// uniform and differential steps, tricubic, adaptive multipliers (the cell walk's cells of
+// multiplier 1) and a ray texture's step multiplier.
 TEST(Projections, CpuFastPathEqualsTheSharedWalk) {
   auto* cpu = test::gpu().cpu;
   if (!cpu) GTEST_SKIP() << "CPU backend only";
@@ -202,7 +203,8 @@ TEST(Projections, CpuFastPathEqualsTheSharedWalk) {
     auto v = scenes()[size_t(scene)].volume();
     test::TestVolume gv(v);
     for (const char* p : kProjections)
-      for (const Method& m : {methods()[0], methods()[2], Method{"ray_texture", {{"ray_texture", texture}}}}) {
+      for (const Method& m : {methods()[0], methods()[1], methods()[2], methods()[3],
+                              Method{"ray_texture", {{"ray_texture", texture}}}}) {
         const ResolvedScene s = scene_for(*v, p, m, coloured(*v));
         render::RenderStats st_fast, st_shared;
         const Image fast = test::render_gpu(gv, s, render::RenderPath::Fragment, &st_fast);
@@ -214,6 +216,28 @@ TEST(Projections, CpuFastPathEqualsTheSharedWalk) {
         EXPECT_EQ(fast.rgba, shared.rgba);
         EXPECT_EQ(fast.samples, shared.samples);
       }
+  }
+}
+
+// A ray texture's termination does not stop a projection (its opacity does not accumulate): a
+// termination of 0 everywhere, with virtual samples (whose window's end tests the stop), draws
+// exactly what no ray texture draws; its blend still weighs the projected opacity.
+TEST(Projections, ARayTexturesTerminationDoesNotStopThem) {
+  auto v = scenes()[0].volume();
+  test::TestVolume gv(v);
+  const Method vs = methods()[4];
+  for (const char* p : kProjections) {
+    Method stop = vs;
+    stop.render["ray_texture"] = {
+        {"mapping", "view"},
+        {"size", {16, 16}},
+        {"strokes", {{{"channel", "termination"}, {"center", {0.5, 0.5}}, {"radius", 1.0}, {"value", 0.0}}}}};
+    const Image plain = test::render_gpu(gv, scene_for(*v, p, vs, coloured(*v)), render::RenderPath::Fragment);
+    const ResolvedScene stopped = scene_for(*v, p, stop, coloured(*v));
+    const Image g = test::render_gpu(gv, stopped, render::RenderPath::Fragment);
+    EXPECT_EQ(g.rgba, plain.rgba) << p;
+    const auto e = reference::compare(g, reference::render_reference(*v, stopped));
+    EXPECT_GE(e.psnr, test::cpu_backend() ? kMinPsnrCpu : kMinPsnrGl) << p;
   }
 }
 

@@ -226,9 +226,9 @@ const StiffCase kCases[] = {
      Check::Twin,
      60},                                                                               // 72.3 dB
     {"image_1x1", ml41, {{"image", {{"width", 1}, {"height", 1}}}}, Check::Twin, 100},  // 135.1 dB
-    // Projections at the edges: a constant volume (a maximum skips every cell after the first:
-    // none can raise it), values far from 1, replaced non-finite voxels, a camera far away, the
-    // least grid, a one-point TF. Measured GL / CPU backend in the comments.
+    // Projections at the edges: a constant volume (no cell can raise the maximum, but each is
+    // walked: the ranges are widened by 1e-5), values far from 1, replaced non-finite voxels, a
+    // camera far away, the least grid, a one-point TF. Measured GL / CPU backend in the comments.
     {"mip_constant_volume",
      constant(),
      {{"tf", ramp_tf(0.0, 1.0)}, {"render", {{"classification", "mip"}}}},
