@@ -63,6 +63,14 @@ def test_pyramid_opens_at_the_level_the_memory_budget_holds():
         status, headers, held = http(s, "/api/render?resolution=held", "POST", json.dumps(scene).encode())
         assert status == 200 and headers["X-Level"] == "1" and "X-Bricks" not in headers, headers
         assert http(s, "/api/render?resolution=half", "POST", json.dumps(scene).encode())[0] == 400
+        # A projection: drawn at the level held; at full resolution by bricks it is refused by name
+        # (bricks do not composite projections yet), and the server goes on.
+        mip = dict(scene, render={"classification": "mip"})
+        status, headers, _ = http(s, "/api/render?resolution=held", "POST", json.dumps(mip).encode())
+        assert status == 200 and "+mip" in headers["X-Variant"], (status, headers)
+        status, _, body = http(s, "/api/render", "POST", json.dumps(mip).encode())
+        assert status >= 400 and b"render.classification mip" in body and TMP.name.encode() not in body, (status, body)
+        assert http(s, "/api/health")[0] == 200
         status, _, body = http(s, "/api/render", "POST", json.dumps(
             {"volume": "blobs.nrrd", "image": {"width": 8, "height": 8}}).encode())
         message = json.loads(body)["message"]
