@@ -49,12 +49,13 @@ class Client:
         """One volume's info, with its histogram."""
         return self._json("GET", "/api/volumes/" + urllib.parse.quote(volume_id, safe=""))
 
-    def upload(self, array_or_path, spacing=(1.0, 1.0, 1.0), name=None, origin=None):
+    def upload(self, array_or_path, spacing=(1.0, 1.0, 1.0), name=None, origin=None, units=None):
         """Sends a volume; returns its id, usable as a scene's "volume".
 
         An array is indexed [z, y, x] (any memory order) and holds uint8, int8, uint16, int16 or
         float32 (float64 is sent as float32, which the server keeps; other types are refused);
-        spacing and origin are in x, y, z order. A path is a file the server reads as one
+        spacing and origin are in x, y, z order, in `units` (a unit of length: "um", "nm",
+        "mm", "micrometer", ...; None: the server shows lengths in "units"). A path is a file the server reads as one
         file: NRRD (data attached), MetaImage (.mha) or TIFF; its header gives spacing and origin."""
         if isinstance(array_or_path, (str, os.PathLike)):
             path = os.fspath(array_or_path)
@@ -76,6 +77,10 @@ class Client:
         query = {"dims": ",".join(str(n) for n in a.shape[::-1]), "dtype": _DTYPES[a.dtype.newbyteorder("=")],
                  "spacing": ",".join(repr(float(s)) for s in _three(spacing, "spacing")),
                  "endian": "little", "name": name or "array"}
+        if units is not None:
+            if not isinstance(units, str):
+                raise ValueError(f"units must be a unit of length such as 'um' or 'mm', not {units!r}")
+            query["units"] = units
         if origin is not None:
             query["origin"] = ",".join(repr(float(o)) for o in _three(origin, "origin"))
         return self._upload(query, memoryview(a).cast("B"), a.nbytes)["id"]

@@ -65,6 +65,7 @@ def test_an_uploaded_array_renders_like_peakcast_render(server, dtype):
         info = next(v for v in c.volumes() if v["id"] == vid)
         assert info["uploaded"] and info["dims"] == [28, 24, 20] and info["dtype"] == np.dtype(dtype).name, info
         assert info["spacing"] == list(spacing)
+        assert info["units"] == "units", "an array sent without units: the server shows lengths in units"
         got = c.render(dict(SCENE, volume=vid))
         assert got.shape == (80, 96, 3) and got.dtype == np.uint8
         want = cli_render(a, spacing, SCENE)
@@ -72,6 +73,20 @@ def test_an_uploaded_array_renders_like_peakcast_render(server, dtype):
         assert got.std() > 5, "the picture shows nothing"
     finally:
         c.delete(vid)
+
+
+def test_units_travel_with_an_upload(server):
+    c = peakcast.Client(server.url)
+    vid = c.upload(blobs(), spacing=(0.2, 0.2, 1.0), units="micrometer")
+    try:
+        assert c.volume(vid)["units"] == "µm"
+    finally:
+        c.delete(vid)
+    with pytest.raises(peakcast.ServerError) as e:
+        c.upload(blobs(), units="second")
+    assert e.value.status == 400 and "units: 'second' is not a unit of length" in str(e.value), str(e.value)
+    with pytest.raises(ValueError):
+        c.upload(blobs(), units=3)
 
 
 def test_memory_order_does_not_change_the_picture(server):

@@ -1,10 +1,11 @@
 // What a viewer shows around the picture, drawn by the page over the frame: an axes triad (the
-// world's x, y, z as the camera sees them), the volume's bounding box, a scale bar in world units
-// at the focal plane, and a colour bar of the TF over the data's range. Each can be hidden. The
+// world's x, y, z as the camera sees them), the volume's bounding box, a scale bar in the volume's
+// unit (units.js) at the focal plane, and a colour bar of the TF over the data's range. Each can be hidden. The
 // projection is the server's (docs/scenes.md: perspective with fov_y, or orthographic with height;
 // up orthogonalised), so the box lies on the volume's edges.
 import { cross, dot, length, normalize, sub } from './vec.js';
 import { planeSection } from './clip-controls.js';
+import { niceLength } from './units.js';
 
 const AXES = [[[1, 0, 0], '#e55', 'x'], [[0, 1, 0], '#5d5', 'y'], [[0, 0, 1], '#59f', 'z']];
 
@@ -13,6 +14,7 @@ export class Annotations {
   camera = null;
   volume = null;
   tf = null;
+  unit = 'units';  // lengths' unit (units.js)
   marks = [];  // the measure's points (world), drawn whatever is hidden
   clip = null;  // render.clip: its box and the plane's cut through the volume, drawn whatever is hidden
   #raf = 0;
@@ -153,7 +155,7 @@ export class Annotations {
     }
   }
 
-  // World units per CSS pixel at the focal plane (the camera's centre).
+  // Lengths (the volume's unit) per CSS pixel at the focal plane (the camera's centre).
   unitsPerPixel(h) {
     const c = this.camera;
     if (c.projection === 'orthographic') return c.height / h;
@@ -162,8 +164,7 @@ export class Annotations {
 
   #scaleBar(g, w, h) {
     const per = this.unitsPerPixel(h);
-    const target = 120 * per, p10 = 10 ** Math.floor(Math.log10(target));
-    const nice = [1, 2, 5, 10].map((m) => m * p10).filter((v) => v <= target).pop() ?? p10;
+    const { length: nice, label } = niceLength(120 * per, this.unit);
     const px = nice / per, x = 16, y = h - 44;
     g.strokeStyle = g.fillStyle = '#dde';
     g.lineWidth = 2;
@@ -173,7 +174,7 @@ export class Annotations {
     g.lineTo(x + px, y);
     g.lineTo(x + px, y - 5);
     g.stroke();
-    g.fillText(`${+nice.toPrecision(3)} (world units, at the centre)`, x, y - 8);
+    g.fillText(`${label} (at the centre)`, x, y - 8);
   }
 
   #colorBar(g, w, h) {

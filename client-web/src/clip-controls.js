@@ -2,6 +2,7 @@
 // dragging the handles on its six faces in the view, and one clip plane, turned to face the viewer
 // or an axis and moved along its normal by its slider or by Ctrl+drag in the view (up: further in). Each change goes out as `render.clip` (null: none), one
 // per animation frame; the annotations draw the box and the plane's cut through the volume.
+import { formatLength } from './units.js';
 import { add, dot, normalize, scale, sub } from './vec.js';
 
 const AXES = ['x', 'y', 'z'];
@@ -12,6 +13,7 @@ export class ClipControls extends EventTarget {
   box = null;    // [[x0, y0, z0], [x1, y1, z1]] or null
   plane = null;  // { normal, offset }: the point is centre + offset * normal; null: none
   #volume = null;
+  unit = 'units';  // lengths' unit (units.js), in the readout
   #raf = 0;
   #drag = null;
 
@@ -164,9 +166,16 @@ export class ClipControls extends EventTarget {
     for (const el of [...ui.sliders]) el.disabled = !this.box;
     for (const el of [ui.offset, ui.flip]) el.disabled = !this.plane;
     if (this.plane) ui.offset.value = this.plane.offset;
-    ui.readout.textContent = this.plane
-      ? `plane normal (${this.plane.normal.map((n) => +n.toFixed(2)).join(', ')}), ${+this.plane.offset.toPrecision(3)} from the centre`
-      : '';
+    const parts = [];
+    if (this.box) {
+      const span = (a) => `${'xyz'[a]} ${+this.box[0][a].toPrecision(4)}…${+this.box[1][a].toPrecision(4)}`;
+      parts.push(`box ${[0, 1, 2].map(span).join(', ')} ${this.unit}`);
+    }
+    if (this.plane) {
+      parts.push(`plane normal (${this.plane.normal.map((n) => +n.toFixed(2)).join(', ')}), ` +
+        `${formatLength(this.plane.offset, this.unit, 3)} from the centre`);
+    }
+    ui.readout.textContent = parts.join('; ');
   }
 
   #sync() {

@@ -8,7 +8,7 @@ import { Disposer } from './disposer.js';
 
 const LABELS = {
   classification: 'classification', peak_mode: 'peak mode', max_peaks: 'max peaks', sampling: 'sampling',
-  s_k: 's_k', step: 'step (world units)', filter: 'filter', virtual_samples: 'virtual samples',
+  s_k: 's_k', step: 'step', filter: 'filter', virtual_samples: 'virtual samples',
   shading: 'shading', space_skipping: 'space skipping', adaptive: 'adaptive sampling',
 };
 // What each control does (docs/scenes.md has the whole story).
@@ -24,7 +24,7 @@ export const HELP = {
     '(Knoll §5), scaled by s_k; perspective cameras only.',
   s_k: 'With differential sampling: the step where a ray crosses the focal plane in units of the pixel footprint ' +
     'there; smaller is finer and slower.',
-  step: 'The sample step in world units (empty: the smallest voxel spacing). At least 1/1000 of that spacing.',
+  step: 'The sample step in the volume\'s unit (empty: the smallest voxel spacing). At least 1/1000 of that spacing.',
   filter: 'trilinear: hardware-style interpolation. tricubic: a smooth B-spline from 8 trilinear fetches, slower, ' +
     'fewer staircase artefacts.',
   virtual_samples: 'Catmull-Rom samples between the true ones (Lee 2010): 3 or 7 per segment, smoother at large steps.',
@@ -43,6 +43,7 @@ export class RenderControls extends EventTarget {
     this.built = new Disposer();
     this.inputs = {};
     this.minStep = 0;  // from the volume: 1/1000 of its smallest spacing
+    this.unit = 'units';  // the volume's unit of length (units.js), shown with the step
     disposer.add(() => this.built.dispose());
   }
 
@@ -59,7 +60,9 @@ export class RenderControls extends EventTarget {
         rel: 'noopener', className: 'doc', textContent: '?', title: `${LABELS[key] ?? key} in docs/scenes.md` });
       doc.setAttribute('aria-label', `${LABELS[key] ?? key}: explained in docs/scenes.md`);
       const name = document.createElement('span');
-      name.append(LABELS[key] ?? key, ' ', doc);
+      const text = document.createTextNode(key === 'step' ? `step (${this.unit})` : LABELS[key] ?? key);
+      if (key === 'step') this.stepText = text;
+      name.append(text, ' ', doc);
       label.append(name, input);
       this.container.append(label);
       this.inputs[key] = input;
@@ -88,6 +91,11 @@ export class RenderControls extends EventTarget {
   }
 
   setVolume(info) { this.minStep = 1e-3 * Math.min(...info.spacing); }
+
+  setUnit(unit) {
+    this.unit = unit;
+    if (this.stepText) this.stepText.data = `step (${unit})`;
+  }
 
   // Sets controls as the user would (a preset that needs peak finding and shading), sending one
   // change with every key.

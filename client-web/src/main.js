@@ -15,6 +15,8 @@ import { FileBrowser } from './file-browser.js';
 import { DropUpload } from './upload.js';
 import { bindPanel, bindViewKeys, toggle, toggleFullscreen } from './keys.js';
 import { Probe } from './probe.js';
+import { lengthUnit } from './units.js';
+import { TimeControls } from './time-controls.js';
 import { ClipControls } from './clip-controls.js';
 import { Annotations } from './annotations.js';
 import { bindTfTools } from './tf-tools.js';
@@ -29,9 +31,9 @@ let token = takeTokenFromUrl() || sessionStorage.getItem('peakcast-token') || ''
 
 // What the client knows of its session; sent again in hello after a reconnect.
 // The ray texture is the brush's (its strokes do not fit a URL): never in app.render.
-const app = { volume: null, volumeInfo: null, camera: null, tf: null, render: {}, cameraVersion: 1, welcomed: false };
+const app = { volume: null, volumeInfo: null, camera: null, tf: null, render: {}, time: 0, cameraVersion: 1, welcomed: false };
 const restored = readState();
-if (restored) Object.assign(app, { volume: restored.volume, camera: restored.camera, tf: restored.tf, render: restored.render || {} });
+if (restored) Object.assign(app, { volume: restored.volume, camera: restored.camera, tf: restored.tf, render: restored.render || {}, time: restored.time || 0 });
 
 const stats = new StatsOverlay($('stats'));
 const camera = new CameraController(canvas, disposer);
@@ -54,6 +56,7 @@ function helloFor() {
   if (app.camera) state.camera = app.camera;
   if (app.tf) state.tf = { points: app.tf };
   if (Object.keys(app.render).length) state.render = app.render;
+  if (app.time > 0) state.time = app.time;
   const rayTexture = brush.helloSpec();  // the first strokes; the rest follow as stroke messages
   if (rayTexture) state.render = { ...app.render, ray_texture: rayTexture };
   if (Object.keys(state).length) hello.state = state;
@@ -67,9 +70,17 @@ const brush = new Brush({ section: $('ray-texture'), controls: $('rt-controls'),
   previewBox: $('rt-preview-box'), preview: $('rt-preview'), legend: $('rt-legend'), status: $('rt-status'), undo: $('rt-undo'),
   clear: $('rt-clear') }, { stream, camera, scene: () => ({ camera: app.camera, volume: app.volumeInfo }) }, disposer);
 
-function share() { return { volume: app.volume, camera: app.camera, tf: app.tf, render: app.render }; }
+function share() {
+  const s = { volume: app.volume, camera: app.camera, tf: app.tf, render: app.render };
+  if (app.time > 0) s.time = app.time;  // a time series' time point
+  return s;
+}
 
 function titleOf(v) { return `peakcast — ${v.uploaded ? v.name : v.id}`; }
+
+const timeControls = new TimeControls({ root: $('time'), slider: $('time-slider'), play: $('time-play'),
+  rate: $('time-rate'), readout: $('time-readout') }, disposer);
+disposer.listen(timeControls, 'time', (e) => stream.send({ type: 'time', time: e.detail }));
 
 const annotations = new Annotations($('annotations'), disposer);
 const clip = new ClipControls({ boxOn: $('clip-box'), sliders: [...document.querySelectorAll('.clip-sliders input')],
@@ -99,7 +110,13 @@ function applyState(state, volumeInfo, volumes) {
   tfEditor.set(state.tf.points);
   clip.setVolume(volumeInfo, render.clip);
   if (volumes) picker.show(volumes, volumeInfo);
-  annotations.update({ camera: app.camera, volume: volumeInfo, tf: app.tf, clip: render.clip ?? null });
+  const unit = lengthUnit(volumeInfo, state);
+  probe.unit = unit;
+  clip.unit = unit;
+  controls.setUnit(unit);
+  app.time = state.time ?? 0;
+  timeControls.setVolume(volumeInfo, app.time);
+  annotations.update({ camera: app.camera, volume: volumeInfo, tf: app.tf, clip: render.clip ?? null, unit });
   writeState(share());
 }
 
@@ -147,6 +164,11 @@ disposer.listen(stream, 'stats', (e) => {
   if (e.detail.refining) refining('full resolution: starting…');
   else if (refineEl.dataset.refining) refining('');
   stats.stats(e.detail);
+  if (e.detail.time !== undefined && e.detail.time !== app.time) {
+    app.time = e.detail.time;
+    writeState(share());
+  }
+  timeControls.drawn(e.detail.time);
   $('variant').textContent = e.detail.variant;
   const warnings = e.detail.warnings ?? [];
   warningEl.textContent = warnings.join('\n');
@@ -158,6 +180,7 @@ disposer.add(() => clearTimeout(errorTimer));
 disposer.listen(stream, 'error', (e) => {
   console.warn('peakcast:', e.detail.code, e.detail.message);
   brush.sync.onError(e.detail);  // a refused stroke or texture: the brush resends its list
+  if (e.detail.message?.startsWith('time')) timeControls.failed();  // a time point refused or unreadable
   if (e.detail.code === 'volume_error') return picker.failed(e.detail.message);
   if (e.detail.code === 'unauthorized') return;  // the status banner and token form say it
   if (e.detail.message?.startsWith('probe: ')) return probe.failed(e.detail.message);  // said under the view
@@ -287,5 +310,5 @@ disposer.listen($('share'), 'click', async () => {
 });
 
 disposer.listen(window, 'pagehide', () => disposer.dispose());
-window.peakcast = { app, stats, stream, camera, tfEditor, controls, brush, disposer, uploads, panel, annotations, probe, files, clip };  // for tests and the console
+window.peakcast = { app, stats, stream, camera, tfEditor, controls, brush, disposer, uploads, panel, annotations, probe, files, clip, timeControls };  // for tests and the console
 stream.connect();

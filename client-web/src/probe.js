@@ -3,6 +3,7 @@
 // newest answer is shown), and a two-point distance: with "measure" on, a click fixes a point, a
 // second click the other, and the distance between them is shown (and drawn by the annotations).
 // The server answers where the pixel's ray gets half opaque: what a scientist sees there.
+import { formatLength } from './units.js';
 import { length, sub } from './vec.js';
 
 const CLICK_PX = 4;  // a press that moves less than this is a click, not a drag
@@ -17,6 +18,7 @@ export class Probe extends EventTarget {
   #unavailable = '';
   last = null;          // the newest hover answer
   points = [];          // measure points (world), at most two
+  unit = 'units';       // lengths' unit (units.js)
   measuring = false;
 
   constructor({ canvas, readout, measure, stream }, disposer) {
@@ -114,13 +116,13 @@ export class Probe extends EventTarget {
     if (this.#unavailable) parts.push(`probing unavailable: ${this.#unavailable}`);
     else if (this.#at && this.last) {
       const a = this.last;
-      parts.push(a.hit ? `value ${fmt(a.value)} at (${a.position.map(fmt).join(', ')})` : 'nothing opaque under the cursor');
+      parts.push(a.hit ? `value ${fmt(a.value)} at (${a.position.map(fmt).join(', ')}) ${this.unit}` : 'nothing opaque under the cursor');
     }
     if (this.measuring) {
       const [p, q] = this.points;
       if (!p) parts.push('measure: click a first point');
-      else if (!q) parts.push(`measure: from (${p.map(fmt).join(', ')}), click a second point`);
-      else parts.push(`distance ${fmt(this.distance)} world units`);
+      else if (!q) parts.push(`measure: from (${p.map(fmt).join(', ')}) ${this.unit}, click a second point`);
+      else parts.push(`distance ${formatLength(this.distance, this.unit)}`);
     }
     this.readout.textContent = parts.join(' · ');
     this.readout.hidden = parts.length === 0;

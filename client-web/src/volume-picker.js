@@ -19,7 +19,7 @@ export class VolumePicker extends EventTarget {
     const label = (v) => `${v.uploaded ? `${v.name} (uploaded, ` : `${v.id} (`}${v.dims.join('×')} ${v.dtype})`;
     this.ui.select.replaceChildren(...volumes.map((v) => new Option(label(v), v.id)));
     this.ui.select.value = current.id;
-    this.ui.info.textContent = `${current.dims.join('×')} ${current.dtype}, spacing ${current.spacing.join(' ')}, range ${current.range.map((x) => +x.toPrecision(5)).join(' … ')}`;
+    this.ui.info.textContent = `${current.dims.join('×')} ${current.dtype}, spacing ${current.spacing.map((x) => +x.toPrecision(5)).join(' ')} ${current.units ?? 'units'}, range ${current.range.map((x) => +x.toPrecision(5)).join(' … ')}`;
     this.#done('');
   }
 

@@ -122,6 +122,7 @@ Volume read_level(const ChunkedVolume& cv, int level, const LoadOptions& options
   h.dims = L.dims;
   h.spacing = L.spacing;
   h.origin = L.origin;
+  h.unit = cv.unit();
   h.source = cv.source();
   h.big_endian = cv.big_endian();
   Dims rlo{0, 0, 0}, rhi = L.dims;

@@ -46,6 +46,8 @@ class ChunkedVolume {
   const std::vector<ChunkLevel>& levels() const { return levels_; }
   SourceType source() const { return source_; }
   bool big_endian() const { return big_endian_; }
+  // The spacing's unit, an SI symbol ("nm"; core/length_unit.h); "": the metadata names none.
+  const std::string& unit() const { return unit_; }
   // One voxel's bytes (file byte order) for a level's chunks that are not stored.
   const std::vector<uint8_t>& fill(int level) const { return fills_[size_t(level)]; }
 
@@ -63,6 +65,7 @@ class ChunkedVolume {
   std::vector<ChunkLevel> levels_;
   SourceType source_ = SourceType::U8;
   bool big_endian_ = false;
+  std::string unit_;
   std::vector<std::vector<uint8_t>> fills_;  // per level
   // The level's folder listed once, on its first chunk (chunked/formats.h, FolderIndex): whether
   // a chunk may be stored there, without a stat per missing chunk. Thread-safe.

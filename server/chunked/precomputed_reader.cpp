@@ -93,6 +93,7 @@ class PrecomputedVolume : public ChunkedVolume {
       }
       checked_bytes({L.chunk[0], L.chunk[1], L.chunk[2], channels_, int64_t(source_bytes(source_))}, file, "a chunk");
       levels_.push_back(L);
+      unit_ = "nm";  // the format's resolution is in nanometres
       offsets_.push_back(offset);
       fills_.push_back(std::vector<uint8_t>(source_bytes(source_), 0));  // Neuroglancer shows a missing chunk as 0
     }

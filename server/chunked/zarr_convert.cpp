@@ -108,6 +108,7 @@ int64_t source_voxel_bytes(const fs::path& in, const LoadOptions& select, Volume
     header->dims = d;
     header->spacing = head.spacing;
     header->origin = head.origin;
+    header->unit = head.unit;
     header->source = head.source_type();
   }
   return d[0] * d[1] * d[2] * int64_t(voxel_bytes(head.type()));

@@ -8,6 +8,7 @@
 
 #include "chunked/chunk_codec.h"
 #include "chunked/formats.h"
+#include "core/length_unit.h"
 #include "core/volume_io_detail.h"
 
 namespace fs = std::filesystem;
@@ -155,6 +156,19 @@ std::string axis_roles(const json& ms, size_t ndim, const fs::path& file) {
   return roles;
 }
 
+// The x, y and z axes' `unit`s as written ("" where absent; NGFF 0.4 names them "micrometer").
+std::array<std::string, 3> axis_units(const json& ms) {
+  std::array<std::string, 3> units;
+  if (!ms.is_object() || !ms.contains("axes") || !ms["axes"].is_array()) return units;
+  for (const auto& ax : ms["axes"]) {
+    if (!ax.is_object() || !ax.contains("name") || !ax["name"].is_string()) continue;
+    const std::string name = ax["name"];
+    const int a = name == "x" ? 0 : name == "y" ? 1 : name == "z" ? 2 : -1;
+    if (a >= 0 && ax.contains("unit") && ax["unit"].is_string()) units[size_t(a)] = ax["unit"];
+  }
+  return units;
+}
+
 // A coordinateTransformations list's scale and translation (1 and 0 where absent).
 void transforms(const json& list, size_t ndim, std::vector<double>& scale, std::vector<double>& shift,
                 const fs::path& file) {
@@ -238,6 +252,11 @@ class ZarrVolume : public ChunkedVolume {
         L.spacing[ax] = scale[k];
         L.origin[ax] = shift[k];
         if (!(scale[k] > 0) || !std::isfinite(scale[k])) throw VolumeError(meta, "scales must be finite and > 0");
+      }
+      try {  // every level in the finest of the axes' units (NGFF lets each axis have its own)
+        unit_ = common_unit(axis_units(ms), L.spacing, L.origin, "multiscales.axes unit");
+      } catch (const std::invalid_argument& e) {
+        throw VolumeError(meta, e.what());
       }
       check_select(a, meta);
       levels_.push_back(L);

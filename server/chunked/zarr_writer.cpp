@@ -9,6 +9,7 @@
 
 #include <unistd.h>
 
+#include "core/length_unit.h"
 #include "core/parallel.h"
 #include "core/volume_io.h"
 
@@ -127,7 +128,11 @@ ZarrWriteReport write_levels(const fs::path& out, const fs::path& tmp, const Vol
                          {{{"type", "scale"}, {"scale", scale}}, {{"type", "translation"}, {"translation", shift}}}}});
   }
   json axes = json::array();
-  for (const char* n : {"z", "y", "x"}) axes.push_back({{"name", n}, {"type", "space"}});
+  for (const char* n : {"z", "y", "x"}) {
+    json ax = {{"name", n}, {"type", "space"}};
+    if (const std::string u = ngff_unit_name(h.unit); !u.empty()) ax["unit"] = u;
+    axes.push_back(ax);
+  }
   write_json(tmp / ".zgroup", {{"zarr_format", 2}});
   write_json(tmp / ".zattrs", {{"multiscales",
                                 {{{"version", "0.4"},
@@ -211,6 +216,7 @@ ZarrWriteReport write_ome_zarr(const Volume& volume, const fs::path& out, const 
   h.dims = volume.dims();
   h.spacing = volume.spacing;
   h.origin = volume.origin;
+  h.unit = volume.unit;
   h.source = volume.source_type();
   const size_t bpv = source_bytes(h.source);
   return write_ome_zarr_levels(

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <fstream>
 
+#include "core/length_unit.h"
 #include "core/volume_io_detail.h"
 
 namespace fs = std::filesystem;
@@ -114,7 +115,21 @@ struct NrrdHeader {
   int dimension = 0;
   int64_t line_skip = 0;
   int64_t header_bytes = 0;
+  std::array<std::string, 3> units;  // `space units` (or the axes' `units`), as written
+  std::string units_field;
 };
+
+// A field of quoted strings (`space units: "mm" "mm" "µm"`), unquoted.
+std::vector<std::string> quoted_strings(const std::string& value) {
+  std::vector<std::string> out;
+  for (size_t i = value.find('"'); i != std::string::npos; i = value.find('"', i)) {
+    const size_t end = value.find('"', i + 1);
+    if (end == std::string::npos) break;
+    out.push_back(value.substr(i + 1, end - i - 1));
+    i = end + 1;
+  }
+  return out;
+}
 
 // Sets what one header field says; fields that do not change the voxels are ignored.
 void parse_nrrd_field(const fs::path& path, const std::string& field, const std::string& value, NrrdHeader& n) {
@@ -153,6 +168,11 @@ void parse_nrrd_field(const fs::path& path, const std::string& field, const std:
     auto parts = split_ws(value);
     for (size_t a = 0; a < 3 && a < parts.size(); ++a)
       if (lower(parts[a]) != "nan") h.origin[a] = parse_double(path, field, parts[a]);
+  } else if (field == "space units" || (field == "units" && n.units_field != "space units")) {
+    const auto u = quoted_strings(value);
+    if (u.size() != 3) throw VolumeError(path, "'" + field + "' must list 3 quoted units");
+    n.units = {u[0], u[1], u[2]};
+    n.units_field = field;
   } else if (field == "encoding") {
     n.encoding = lower(value);
   } else if (field == "endian") {
@@ -212,6 +232,11 @@ void check_nrrd_fields(const fs::path& path, NrrdHeader& n) {
     throw VolumeError(path, "unsupported encoding '" + n.encoding + "' (supported: raw, gzip)");
   }
   if (n.line_skip != 0) throw VolumeError(path, "'line skip' is not supported");
+  try {
+    n.h.unit = common_unit(n.units, n.h.spacing, n.h.origin, "'" + n.units_field + "'");
+  } catch (const std::invalid_argument& e) {
+    throw VolumeError(path, e.what());
+  }
 }
 
 // The files the voxels are in: attached after the header, or the detached header's `data file`

@@ -1,14 +1,30 @@
 // Raw voxels with a JSON sidecar: {"dims": [x,y,z], "dtype": "uint16", "spacing": [..],
-// "origin": [..], "endian": "little"|"big", "data_file": "v.raw", "encoding": "raw"|"gzip"}.
+// "origin": [..], "endian": "little"|"big", "data_file": "v.raw", "encoding": "raw"|"gzip",
+// "units": "µm"}.
 // Open either the .json or the data file (its sidecar is `<file>.json` or `<stem>.json`).
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "core/length_unit.h"
 #include "core/volume_io_detail.h"
 
 namespace fs = std::filesystem;
 
 namespace peakcast::detail {
+namespace {
+
+// The sidecar's "units": one unit, or one per axis (x, y, z); spacing and origin in the finest.
+void sidecar_units(const nlohmann::json& j, const fs::path& sidecar, VolumeHeader& h) {
+  if (!j.contains("units")) return;
+  const auto& u = j.at("units");
+  if (!u.is_string() && !(u.is_array() && u.size() == 3))
+    throw VolumeError(sidecar, "'units' must be a unit (\"µm\") or a list of 3");
+  std::array<std::string, 3> names;
+  for (int a = 0; a < 3; ++a) names[size_t(a)] = (u.is_string() ? u : u[size_t(a)]).get<std::string>();
+  h.unit = common_unit(names, h.spacing, h.origin, "'units'");
+}
+
+}  // namespace
 
 Volume read_raw_json(const fs::path& path, const LoadOptions& options) {
   fs::path sidecar = path;
@@ -32,7 +48,8 @@ Volume read_raw_json(const fs::path& path, const LoadOptions& options) {
     throw VolumeError(sidecar, std::string("invalid JSON: ") + e.what());
   }
   if (!j.is_object()) throw VolumeError(sidecar, "sidecar must be a JSON object");
-  static const char* known[] = {"dims", "dtype", "spacing", "origin", "endian", "data_file", "encoding", "byte_skip"};
+  static const char* known[] = {"dims",      "dtype",    "spacing",   "origin", "endian",
+                                "data_file", "encoding", "byte_skip", "units"};
   for (auto& [key, _] : j.items())
     if (std::find(std::begin(known), std::end(known), key) == std::end(known))
       throw VolumeError(sidecar, "unknown key '" + key + "'");
@@ -60,6 +77,7 @@ Volume read_raw_json(const fs::path& path, const LoadOptions& options) {
       auto o = vec3("origin", false);
       for (int a = 0; a < 3; ++a) h.origin[a] = o[a].get<double>();
     }
+    sidecar_units(j, sidecar, h);
     h.source = parse_source_type(j.at("dtype").get<std::string>());
     std::string endian = j.value("endian", "little");
     if (endian != "little" && endian != "big") throw VolumeError(sidecar, "endian must be 'little' or 'big'");

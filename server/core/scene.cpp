@@ -6,6 +6,7 @@
 
 #include "core/auto_tf.h"
 #include "core/json_fields.h"
+#include "core/length_unit.h"
 #include "core/peaks.h"
 #include "core/preintegration.h"
 
@@ -128,7 +129,7 @@ RenderSettings parse_render(const json& j) {
 }  // namespace
 
 Scene parse_scene(const json& j) {
-  only_keys(j, "", {"volume", "camera", "image", "tf", "background", "render"});
+  only_keys(j, "", {"volume", "camera", "image", "tf", "background", "render", "units"});
   Scene s;
   if (!j.contains("volume") || !j["volume"].is_string() || j["volume"].get<std::string>().empty())
     fail("volume", "required: a volume id or path");
@@ -148,6 +149,14 @@ Scene parse_scene(const json& j) {
       if (s.background[c] < 0 || s.background[c] > 1) fail("background", "components must lie in [0, 1]");
   }
   if (j.contains("render")) s.render = parse_render(j["render"]);
+  if (j.contains("units")) {
+    if (!j["units"].is_string()) fail("units", "must be a unit of length such as \"µm\"");
+    try {
+      s.units = length_symbol(j["units"].get<std::string>(), "units");
+    } catch (const std::invalid_argument& e) {
+      throw SceneError(e.what());
+    }
+  }
   return s;
 }
 
@@ -210,6 +219,7 @@ json scene_to_json(const Scene& s) {
     if (s.opacity_unit > 0) j["tf"]["opacity_unit"] = s.opacity_unit;
   }
   j["background"] = {s.background.x, s.background.y, s.background.z};
+  if (!s.units.empty()) j["units"] = s.units;
   const RenderSettings& r = s.render;
   j["render"] = {{"classification", to_string(r.classification)},
                  {"peak_mode", to_string(r.peak_mode)},

@@ -63,6 +63,9 @@ struct Scene {
   double opacity_unit = 0.0;
   glm::dvec3 background{0, 0, 0};
   RenderSettings render;
+  // The unit of the volume's spacing, an SI symbol (core/length_unit.h), for a file that names
+  // none or names it wrong; "": the volume's own. Shown with lengths; nothing drawn changes.
+  std::string units;
   std::string to_string() const;
 };
 

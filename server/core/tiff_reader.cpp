@@ -3,9 +3,12 @@
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <regex>
 
 #include "core/file_roots.h"
+#include "core/length_unit.h"
 #include "core/volume_io_detail.h"
 
 namespace fs = std::filesystem;
@@ -52,6 +55,34 @@ std::unique_ptr<ImageInput> open_image(const fs::path& file) {
   auto in = ImageInput::open(file.string());
   if (!in) throw VolumeError(file, "cannot read TIFF: " + OIIO::geterror());
   return in;
+}
+
+// ImageJ's geometry (its ImageDescription "ImageJ=...\nunit=micron\nspacing=2.5\n" and the
+// resolution tags in pixels per unit): spacing and unit. Other TIFFs' resolution (72 dpi by
+// default in most writers) says nothing of the voxels and is not read.
+void imagej_geometry(const fs::path& file, const ImageSpec& spec, VolumeHeader& h) {
+  const std::string d = spec.get_string_attribute("ImageDescription");
+  if (d.rfind("ImageJ=", 0) != 0) return;
+  auto field = [&](const std::string& key) {
+    const size_t at = d.find("\n" + key + "=");
+    if (at == std::string::npos) return std::string();
+    const size_t b = at + key.size() + 2;
+    return d.substr(b, d.find('\n', b) == std::string::npos ? std::string::npos : d.find('\n', b) - b);
+  };
+  std::string unit = field("unit");
+  if (const size_t u = unit.find("\\u00B5"); u != std::string::npos) unit.replace(u, 6, "µ");  // "\u00B5m"
+  try {
+    h.unit = length_symbol(unit, "ImageJ unit");
+  } catch (const std::invalid_argument& e) {
+    throw VolumeError(file, e.what());
+  }
+  const float xr = spec.get_float_attribute("XResolution", 0.f), yr = spec.get_float_attribute("YResolution", 0.f);
+  if (xr > 0 && std::isfinite(1.0 / xr)) h.spacing.x = 1.0 / xr;
+  if (yr > 0 && std::isfinite(1.0 / yr)) h.spacing.y = 1.0 / yr;
+  const std::string z = field("spacing");
+  char* end = nullptr;
+  const double dz = z.empty() ? 0.0 : std::strtod(z.c_str(), &end);
+  if (dz > 0 && std::isfinite(dz) && end && *end == '\0') h.spacing.z = dz;
 }
 
 void check_slice(const fs::path& file, const ImageSpec& spec, const VolumeHeader& h) {
@@ -101,6 +132,7 @@ Volume read_tiff(const fs::path& path, const LoadOptions& options) {
   const ImageSpec spec0 = in->spec();
   h.dims = {spec0.width, spec0.height, 0};
   h.source = source_from(first, spec0.format);
+  imagej_geometry(first, spec0, h);
   if (slices.empty()) {  // multi-page: count the subimages
     int pages = 0;
     while (in->seek_subimage(pages, 0)) ++pages;

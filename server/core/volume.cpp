@@ -69,6 +69,7 @@ Volume::Volume(const VolumeHeader& h)
     : spacing(h.spacing),
       origin(h.origin),
       value_offset(storage_offset(h.source)),
+      unit(h.unit),
       dims_(h.dims),
       type_(storage_type(h.source)),
       source_(h.source),
@@ -81,6 +82,7 @@ Volume Volume::header_only(const VolumeHeader& h) {
   v.spacing = h.spacing;
   v.origin = h.origin;
   v.value_offset = storage_offset(h.source);
+  v.unit = h.unit;
   v.dims_ = h.dims;
   v.type_ = storage_type(h.source);
   v.source_ = h.source;

@@ -37,6 +37,7 @@ struct VolumeHeader {
   glm::dvec3 origin{0.0, 0.0, 0.0};
   SourceType source = SourceType::U8;
   bool big_endian = false;
+  std::string unit;  // the spacing's unit, an SI symbol (core/length_unit.h); "": the file names none
   int64_t voxel_count() const { return dims[0] * dims[1] * dims[2]; }
 };
 
@@ -71,6 +72,7 @@ class Volume {
   glm::dvec3 spacing{1.0, 1.0, 1.0};
   glm::dvec3 origin{0.0, 0.0, 0.0};
   double value_offset = 0.0;  // physical value = stored value + value_offset
+  std::string unit;           // spacing and origin's unit ("µm"; core/length_unit.h); "": unknown
 
   // Physical value of voxel (i, j, k); no bounds check.
   double value(int64_t i, int64_t j, int64_t k) const {

@@ -54,6 +54,7 @@ std::string nrrd_header(const VolumeHeader& h, bool gzip, const std::string& dat
     << "space directions: (" << h.spacing.x << ",0,0) (0," << h.spacing.y << ",0) (0,0," << h.spacing.z
     << ")\nspace origin: (" << h.origin.x << "," << h.origin.y << "," << h.origin.z << ")\n"
     << "encoding: " << (gzip ? "gzip" : "raw") << "\nendian: little\n";
+  if (!h.unit.empty()) s << "space units: \"" << h.unit << "\" \"" << h.unit << "\" \"" << h.unit << "\"\n";
   if (!data_file.empty()) s << "data file: " << data_file << "\n";
   return s.str();
 }
@@ -159,6 +160,7 @@ void write_volume(const fs::path& path, const Volume& v, WriteOptions options) {
   h.dims = v.dims();
   h.spacing = v.spacing;
   h.origin = v.origin;
+  h.unit = v.unit;
   h.source = v.source_type();
   SlabWriter w(path, h, options);
   const size_t slice = size_t(h.dims[0] * h.dims[1]) * voxel_bytes(v.type());

@@ -119,6 +119,7 @@ LoadedVolume Coordinator::load(const std::filesystem::path& path, const LoadOpti
   h.dims = dims;
   h.spacing = head.spacing;
   h.origin = head.origin;
+  h.unit = head.unit;
   h.source = head.source_type();
   auto whole = std::make_shared<Volume>(Volume::header_only(h));
   whole->min_value = b.box.min_value;

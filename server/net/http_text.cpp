@@ -94,7 +94,7 @@ std::optional<nlohmann::json> raw_header_from_query(const std::string& target) {
   h["dims"] = numbers("dims");
   for (const char* key : {"spacing", "origin"})
     if (!query_param(target, key).empty()) h[key] = numbers(key);
-  for (const char* key : {"dtype", "endian"})
+  for (const char* key : {"dtype", "endian", "units"})
     if (const std::string v = url_decode(query_param(target, key)); !v.empty()) h[key] = v;
   return h;
 }

@@ -1,11 +1,14 @@
 #include "session/upload_formats.h"
 
+#include "core/length_unit.h"
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <fstream>
 #include <vector>
 
+#include "core/length_unit.h"
 #include "core/utf8.h"
 #include "session/upload_store.h"
 
@@ -121,10 +124,10 @@ UploadFormat sniff_upload(const fs::path& file, bool raw_header_given) {
 
 nlohmann::json raw_sidecar(const nlohmann::json& h, const std::string& data_file) {
   if (!h.is_object()) throw bad("the raw header must be a JSON object");
-  static const char* known[] = {"dims", "dtype", "spacing", "origin", "endian"};
+  static const char* known[] = {"dims", "dtype", "spacing", "origin", "endian", "units"};
   for (auto& [key, _] : h.items())
     if (std::find(std::begin(known), std::end(known), key) == std::end(known))
-      throw bad("raw header: unknown key '" + key.substr(0, 40) + "' (dims, dtype, spacing, origin, endian)");
+      throw bad("raw header: unknown key '" + key.substr(0, 40) + "' (dims, dtype, spacing, origin, endian, units)");
   auto triple = [&](const char* key, bool positive_int) {
     const auto& v = h.at(key);
     if (!v.is_array() || v.size() != 3) throw bad(std::string("raw header: ") + key + " must be 3 numbers");
@@ -149,6 +152,14 @@ nlohmann::json raw_sidecar(const nlohmann::json& h, const std::string& data_file
       if (!(x.get<double>() > 0)) throw bad("raw header: spacing must be > 0");
   }
   if (h.contains("origin")) out["origin"] = triple("origin", false);
+  if (h.contains("units")) {  // one unit of length for the three axes
+    if (!h["units"].is_string()) throw bad("raw header: units must be a unit of length such as um or mm");
+    try {
+      out["units"] = length_symbol(h["units"].get<std::string>(), "raw header: units");
+    } catch (const std::invalid_argument& e) {
+      throw bad(e.what());
+    }
+  }
   if (h.contains("endian")) {
     if (h["endian"] != "little" && h["endian"] != "big") throw bad("raw header: endian must be little or big");
     out["endian"] = h["endian"];

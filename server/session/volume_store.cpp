@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "chunked/chunked_volume.h"
+#include "core/length_unit.h"
 #include "core/log.h"
 #include "distributed/brick_sequence.h"
 
@@ -18,6 +19,8 @@ nlohmann::json VolumeEntry::info(bool with_histogram) const {
                       {"dims", {v.dims()[0], v.dims()[1], v.dims()[2]}},
                       {"dtype", to_string(v.source_type())},
                       {"spacing", {v.spacing.x, v.spacing.y, v.spacing.z}},
+                      // spacing and origin's unit ("µm"); "units" when the file names none
+                      {"units", v.unit.empty() ? kNoUnit : v.unit},
                       {"origin", {v.origin.x, v.origin.y, v.origin.z}},
                       {"range", {v.min_value, v.max_value}},
                       {"bytes", v.byte_size()},

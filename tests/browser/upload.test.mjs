@@ -65,3 +65,62 @@ test('a file the server cannot read shows why, and nothing is opened', async () 
   assert.equal(await page.evaluate(() => window.peakcast.app.volumeInfo.id), first);
   await page.close();
 });
+
+// A 24³ ball whose NRRD says its spacing is 500 nm: every length the viewer shows says so.
+function ballNrrd() {
+  const n = 24, voxels = Buffer.alloc(n ** 3);
+  for (let z = 0; z < n; z++)
+    for (let y = 0; y < n; y++)
+      for (let x = 0; x < n; x++) voxels[(z * n + y) * n + x] = Math.hypot(x - 11.5, y - 11.5, z - 11.5) < 8 ? 200 : 10;
+  const header = `NRRD0004\ntype: uint8\ndimension: 3\nsizes: ${n} ${n} ${n}\nspacings: 500 500 500\n` +
+    'units: "nm" "nm" "nm"\nencoding: raw\n\n';
+  return Buffer.concat([Buffer.from(header), voxels]);
+}
+
+test('lengths show in the volume\'s unit: scale bar, probe, measure, crop box, step and volume info', async () => {
+  const page = await openClient(browser, server.url);
+  // Every text the annotations draw (the scale bar's label is drawn on the overlay canvas).
+  await page.addInitScript(() => {
+    window.__drawn = [];
+    const fill = CanvasRenderingContext2D.prototype.fillText;
+    CanvasRenderingContext2D.prototype.fillText = function (t, ...a) { window.__drawn.push(String(t)); return fill.call(this, t, ...a); };
+  });
+  await page.reload();
+  await waitFinal(page);
+  const first = await page.evaluate(() => window.peakcast.app.volumeInfo.id);
+  assert.equal(await page.evaluate(() => window.peakcast.app.volumeInfo.units), 'units', 'heptane names no unit');
+  assert.match(await page.textContent('#controls'), /step \(units\)/);
+  const n = await frameCount(page);
+  await drop(page, 'ball.nrrd', ballNrrd());
+  await page.waitForFunction((id) => window.peakcast.app.volumeInfo?.id !== id, first, { timeout: 30000 });
+  await waitFinal(page, { afterFrames: n });
+  assert.equal(await page.evaluate(() => window.peakcast.app.volumeInfo.units), 'nm');
+  assert.match(await page.textContent('#volume-info'), /spacing 500 500 500 nm/);
+  assert.match(await page.textContent('#controls'), /step \(nm\)/);
+  // The box is 11.5 µm wide: the scale bar moves to µm ("2 µm", "5 µm"), never "world units".
+  await page.evaluate(() => { window.__drawn = []; window.peakcast.annotations.update({}); });
+  await page.waitForFunction(() => window.__drawn.some((t) => /\(at the centre\)/.test(t)));
+  const bar = await page.evaluate(() => window.__drawn.find((t) => /\(at the centre\)/.test(t)));
+  assert.match(bar, /^(1|2|5|10) µm \(at the centre\)$/, bar);
+  // The probe's position, in the volume's unit.
+  const box = await page.locator('#frame').boundingBox();
+  await page.mouse.move(box.x + box.width / 2, box.y + box.height / 2);
+  await page.waitForFunction(() => /^value .* at \(.*\) nm/.test(document.querySelector('#probe-readout').textContent));
+  // The measure's distance.
+  await page.click('#measure');
+  await page.mouse.click(box.x + box.width * 0.47, box.y + box.height * 0.5);
+  await page.waitForFunction(() => window.peakcast.probe.points.length === 1);
+  await page.mouse.click(box.x + box.width * 0.53, box.y + box.height * 0.52);
+  await page.waitForFunction(() => window.peakcast.probe.points.length === 2);
+  const d = +(await page.getAttribute('#probe-readout', 'data-distance'));
+  const shown = await page.textContent('#probe-readout');
+  const want = d >= 1000 ? `distance ${+(d / 1000).toPrecision(4)} µm` : `distance ${+d.toPrecision(4)} nm`;
+  assert.ok(shown.includes(want), `${shown} (want ${want})`);
+  await page.click('#measure');
+  // The crop box's readout.
+  await page.check('#clip-box');
+  await page.waitForFunction(() => /^box x .* nm/.test(document.querySelector('#clip-readout').textContent));
+  assert.deepEqual(page.errors, []);
+  await screenshot(page, 'units');
+  await page.close();
+});

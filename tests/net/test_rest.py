@@ -22,6 +22,7 @@ def test_health_and_volumes():
     status, _, body = http(SERVER, "/api/volumes")
     v = json.loads(body)
     assert v["default"] == "heptane_151" and v["volumes"][0]["dims"] == [151, 151, 151]
+    assert v["volumes"][0]["units"] == "units", "heptane's NRRD names no unit: lengths in units"
     status, _, body = http(SERVER, "/api/volumes/heptane_151")
     info = json.loads(body)
     assert len(info["histogram"]) == 1024 and sum(info["histogram"]) == 151 ** 3

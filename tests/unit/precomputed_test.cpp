@@ -67,6 +67,7 @@ TEST(Precomputed, RawAndGzipChunksAndChannels) {
       const Volume v = load_volume(root, o);
       ASSERT_EQ(v.dims(), (Dims{10, 7, 5}));
       EXPECT_DOUBLE_EQ(v.spacing.z, 2.0);
+      EXPECT_EQ(v.unit, "nm");              // the format's resolution is in nanometres
       EXPECT_DOUBLE_EQ(v.origin.x, 100.5);  // voxel 100 spans [100, 101) nm: its centre
       EXPECT_DOUBLE_EQ(v.origin.z, 101.0);
       int64_t wrong = 0;

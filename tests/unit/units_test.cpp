@@ -1,0 +1,197 @@
+// Units of length (core/length_unit.h, docs/scenes.md "Units"): the spellings files use, the
+// refusal of what is not a length, mixed units per axis, and each reader that carries a unit.
+#include <gtest/gtest.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "chunked/zarr_writer.h"
+#include "core/length_unit.h"
+#include "core/scene.h"
+#include "core/volume_io.h"
+#include "core/volume_writer.h"
+#include "unit/chunked_test_util.h"
+#include "unit/test_util.h"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using namespace peakcast;
+using test::refusal;
+
+namespace {
+
+std::string symbol(const std::string& name) {
+  const auto u = parse_length_unit(name);
+  return u ? u->symbol : "(none)";
+}
+
+std::string scene_refusal(const json& j) {
+  try {
+    parse_scene(j);
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// 4x3x2 uint8 raw voxels with the NRRD header lines given.
+fs::path nrrd_with(const fs::path& dir, const std::string& name, const std::string& fields) {
+  const fs::path p = dir / name;
+  test::write_file(p, "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4 3 2\nencoding: raw\n" + fields + "\n\n" +
+                          std::string(24, '\x07'));
+  return p;
+}
+
+}  // namespace
+
+TEST(Units, SpellingsFilesUseAreOneSymbol) {
+  for (const char* n : {"micrometer", "micrometre", "micrometers", "um", "µm", "\xce\xbcm", "micron", "microns"})
+    EXPECT_EQ(symbol(n), "µm") << n;
+  for (const char* n : {"nanometer", "nm", "Nanometers"}) EXPECT_EQ(symbol(n), "nm") << n;
+  for (const char* n : {"millimeter", "millimetre", "mm"}) EXPECT_EQ(symbol(n), "mm") << n;
+  EXPECT_EQ(symbol("Mm"), "Mm") << "SI symbols are case-sensitive";
+  EXPECT_EQ(symbol("meter"), "m");
+  EXPECT_EQ(symbol("angstrom"), "Å");
+  EXPECT_EQ(symbol("inch"), "in");
+  EXPECT_DOUBLE_EQ(parse_length_unit("micrometer")->metres, 1e-6);
+  EXPECT_DOUBLE_EQ(parse_length_unit("parsec")->metres, 3.0856775814913673e16);
+  for (const char* n : {"second", "ms", "kg", "micrometerss", "degree", "mmm"}) EXPECT_EQ(symbol(n), "(none)") << n;
+  for (const char* n : {"", "pixel", "voxels", "unknown", "none", "units", "???"}) {
+    EXPECT_TRUE(says_no_unit(n)) << n;
+    EXPECT_EQ(length_symbol(n, "k"), "") << n;
+  }
+  try {
+    length_symbol("second", "units");
+    ADD_FAILURE() << "a time is not a length";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("units: 'second' is not a unit of length"), std::string::npos) << e.what();
+  }
+  for (const char* s : {"nm", "µm", "mm", "m", "Å", "in"})  // what the OME-Zarr writer names
+    EXPECT_EQ(symbol(ngff_unit_name(s)), s) << s;
+  EXPECT_EQ(ngff_unit_name(""), "");
+}
+
+TEST(Units, MixedAxesTakeTheFinestUnit) {
+  glm::dvec3 spacing{4, 4, 1}, origin{100, 0, 2};
+  EXPECT_EQ(common_unit({"nanometer", "nanometer", "micrometer"}, spacing, origin, "k"), "nm");
+  EXPECT_DOUBLE_EQ(spacing.x, 4);
+  EXPECT_DOUBLE_EQ(spacing.z, 1000);
+  EXPECT_DOUBLE_EQ(origin.x, 100);
+  EXPECT_DOUBLE_EQ(origin.z, 2000);
+  glm::dvec3 s2{1, 1, 1}, o2{0, 0, 0};
+  EXPECT_EQ(common_unit({"", "mm", ""}, s2, o2, "k"), "mm") << "an axis without a unit takes the others'";
+  EXPECT_EQ(s2, glm::dvec3(1, 1, 1));
+  EXPECT_EQ(common_unit({"", "", ""}, s2, o2, "k"), "");
+  EXPECT_THROW(common_unit({"mm", "mm", "s"}, s2, o2, "k"), std::invalid_argument);
+}
+
+TEST(Units, NrrdSpaceUnitsAndAxisUnits) {
+  test::TempDir dir;
+  const Volume a = load_volume(nrrd_with(dir.path(), "a.nrrd",
+                                         "space: right-anterior-superior\nspace directions: (0.5,0,0) (0,0.5,0) "
+                                         "(0,0,2)\nspace units: \"mm\" \"mm\" \"mm\""));
+  EXPECT_EQ(a.unit, "mm");
+  EXPECT_DOUBLE_EQ(a.spacing.z, 2.0);
+  const Volume b =
+      load_volume(nrrd_with(dir.path(), "b.nrrd", "spacings: 200 200 1\nunits: \"nm\" \"nm\" \"microns\""));
+  EXPECT_EQ(b.unit, "nm");
+  EXPECT_DOUBLE_EQ(b.spacing.z, 1000.0);
+  EXPECT_EQ(load_volume(nrrd_with(dir.path(), "c.nrrd", "spacings: 1 1 1")).unit, "") << "the file says nothing";
+  EXPECT_EQ(load_volume(nrrd_with(dir.path(), "d.nrrd", "units: \"???\" \"???\" \"???\"")).unit, "");
+  const std::string why = refusal(nrrd_with(dir.path(), "e.nrrd", "space units: \"mm\" \"mm\" \"ms\""));
+  EXPECT_NE(why.find("'space units': 'ms' is not a unit of length"), std::string::npos) << why;
+  EXPECT_NE(refusal(nrrd_with(dir.path(), "f.nrrd", "space units: \"mm\" \"mm\"")).find("must list 3 quoted units"),
+            std::string::npos);
+  // What peakcast writes it reads back with its unit.
+  Volume v = test::anisotropic_blobs(SourceType::U8, {5, 4, 3});
+  v.unit = "µm";
+  write_volume(dir / "w.nrrd", v);
+  EXPECT_EQ(load_volume(dir / "w.nrrd").unit, "µm");
+}
+
+TEST(Units, RawSidecarUnits) {
+  test::TempDir dir;
+  test::write_file(dir / "v.raw", std::string(24, '\x01'));
+  test::write_file(dir / "v.raw.json", R"({"dims":[4,3,2],"dtype":"uint8","spacing":[1,1,2],"units":"micrometer"})");
+  EXPECT_EQ(load_volume(dir / "v.raw").unit, "µm");
+  test::write_file(dir / "w.raw", std::string(24, '\x01'));
+  test::write_file(dir / "w.raw.json",
+                   R"({"dims":[4,3,2],"dtype":"uint8","spacing":[5,5,1],"units":["nm","nm","um"]})");
+  const Volume w = load_volume(dir / "w.raw");
+  EXPECT_EQ(w.unit, "nm");
+  EXPECT_DOUBLE_EQ(w.spacing.z, 1000.0);
+  test::write_file(dir / "x.raw", std::string(24, '\x01'));
+  test::write_file(dir / "x.raw.json", R"({"dims":[4,3,2],"dtype":"uint8","units":"kg"})");
+  EXPECT_NE(refusal(dir / "x.raw").find("'units': 'kg' is not a unit of length"), std::string::npos);
+}
+
+TEST(Units, OmeZarrAxesUnits) {
+  test::TempDir dir;
+  Volume src = test::anisotropic_blobs(SourceType::U16, {9, 8, 7});
+  src.unit = "µm";
+  chunked::ZarrWriteOptions o;
+  o.chunk = 4;
+  o.pyramid = true;
+  chunked::write_ome_zarr(src, dir / "a.zarr", o);
+  std::ifstream in(dir / "a.zarr/.zattrs");
+  json attrs = json::parse(in);
+  EXPECT_EQ(attrs["multiscales"][0]["axes"][2]["unit"], "micrometer") << "NGFF's name, for napari and Neuroglancer";
+  EXPECT_EQ(load_volume(dir / "a.zarr").unit, "µm");
+  LoadOptions l1;
+  l1.level = 1;
+  EXPECT_EQ(load_volume(dir / "a.zarr", l1).unit, "µm");
+  // z in micrometres, y and x in nanometres: all in nanometres.
+  fs::copy(dir / "a.zarr", dir / "b.zarr", fs::copy_options::recursive);
+  attrs["multiscales"][0]["axes"][1]["unit"] = "nanometer";
+  attrs["multiscales"][0]["axes"][2]["unit"] = "nanometer";
+  test::write_json(dir / "b.zarr/.zattrs", attrs);
+  const Volume b = load_volume(dir / "b.zarr");
+  EXPECT_EQ(b.unit, "nm");
+  EXPECT_DOUBLE_EQ(b.spacing.z, 1000 * src.spacing.z);
+  EXPECT_DOUBLE_EQ(b.spacing.x, src.spacing.x);
+  fs::copy(dir / "a.zarr", dir / "c.zarr", fs::copy_options::recursive);
+  attrs["multiscales"][0]["axes"][0]["unit"] = "second";
+  test::write_json(dir / "c.zarr/.zattrs", attrs);
+  EXPECT_NE(refusal(dir / "c.zarr").find("multiscales.axes unit: 'second' is not a unit of length"), std::string::npos)
+      << refusal(dir / "c.zarr");
+}
+
+TEST(Units, ImageJTiffSpacingAndUnit) {
+  using namespace OIIO;
+  test::TempDir dir;
+  const fs::path p = dir / "imagej.tif";
+  auto out = ImageOutput::create(p.string());
+  std::vector<ImageSpec> specs(3, ImageSpec(4, 3, 1, TypeDesc::UINT8));
+  for (auto& s : specs) {
+    s.attribute("ImageDescription", "ImageJ=1.54f\nimages=3\nslices=3\nunit=\\u00B5m\nspacing=2.5\nloop=false\n");
+    s.attribute("XResolution", 4.0f);
+    s.attribute("YResolution", 4.0f);
+    s.attribute("ResolutionUnit", "none");
+  }
+  ASSERT_TRUE(out->open(p.string(), 3, specs.data()));
+  const std::vector<uint8_t> px(12, 9);
+  for (int z = 0; z < 3; ++z) {
+    if (z > 0) ASSERT_TRUE(out->open(p.string(), specs[size_t(z)], ImageOutput::AppendSubimage));
+    ASSERT_TRUE(out->write_image(TypeDesc::UINT8, px.data()));
+  }
+  out->close();
+  const Volume v = load_volume(p);
+  EXPECT_EQ(v.unit, "µm");
+  EXPECT_DOUBLE_EQ(v.spacing.x, 0.25);
+  EXPECT_DOUBLE_EQ(v.spacing.y, 0.25);
+  EXPECT_DOUBLE_EQ(v.spacing.z, 2.5);
+}
+
+TEST(Units, SceneUnitsAreALength) {
+  const Scene s = parse_scene({{"volume", "v"}, {"units", "micron"}});
+  EXPECT_EQ(s.units, "µm");
+  EXPECT_EQ(scene_to_json(s)["units"], "µm");
+  EXPECT_EQ(parse_scene(scene_to_json(s)).units, "µm");
+  EXPECT_FALSE(scene_to_json(parse_scene({{"volume", "v"}})).contains("units"));
+  EXPECT_EQ(parse_scene({{"volume", "v"}, {"units", "pixel"}}).units, "");
+  EXPECT_NE(scene_refusal({{"volume", "v"}, {"units", "second"}}).find("units: 'second' is not a unit of length"),
+            std::string::npos);
+  EXPECT_NE(scene_refusal({{"volume", "v"}, {"units", 3}}).find("units: must be a unit of length"), std::string::npos);
+}
