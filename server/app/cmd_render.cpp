@@ -47,10 +47,12 @@ int render_within_budget(const RenderArgs& a) {
   const int64_t bytes = d[0] * d[1] * d[2] * int64_t(voxel_bytes(head.type()));
   if (bytes <= budget) return -1;
   const auto t0 = std::chrono::steady_clock::now();
-  const auto stats = distributed::sequence_statistics(parsed.volume.string(), {}, budget);
+  LoadOptions select;
+  select.time_point = parsed.scene.time;
+  const auto stats = distributed::sequence_statistics(parsed.volume.string(), select, budget);
   const ResolvedScene scene = resolve_scene(parsed.scene, stats.box);
   render::RenderBackend b = render::open_backend(render::requested_backend(a.backend), "", {}, a.program_cache);
-  const auto r = distributed::render_sequence(*b.renderer, parsed.volume.string(), {}, stats, scene, budget);
+  const auto r = distributed::render_sequence(*b.renderer, parsed.volume.string(), select, stats, scene, budget);
   encode::write_png(r.image, a.out);
   if (stats.budget_too_small)
     std::fprintf(stderr,

@@ -40,7 +40,9 @@ ParsedSceneFile parse_scene_file(const fs::path& path) {
 LoadedScene load_scene_file(const fs::path& path) {
   ParsedSceneFile parsed = parse_scene_file(path);
   LoadedScene out;
-  out.volume = std::make_shared<Volume>(load_volume(parsed.volume));
+  LoadOptions options;
+  options.time_point = parsed.scene.time;  // a time series' (resolve_scene refuses it for a volume without)
+  out.volume = std::make_shared<Volume>(load_volume(parsed.volume, options));
   try {
     out.scene = resolve_scene(parsed.scene, *out.volume);
   } catch (const SceneError& e) {

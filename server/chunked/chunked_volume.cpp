@@ -123,6 +123,8 @@ Volume read_level(const ChunkedVolume& cv, int level, const LoadOptions& options
   h.spacing = L.spacing;
   h.origin = L.origin;
   h.unit = cv.unit();
+  h.time_point = cv.time_point();
+  h.time_points = cv.time_points();
   h.source = cv.source();
   h.big_endian = cv.big_endian();
   Dims rlo{0, 0, 0}, rhi = L.dims;

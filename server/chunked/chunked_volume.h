@@ -48,6 +48,9 @@ class ChunkedVolume {
   bool big_endian() const { return big_endian_; }
   // The spacing's unit, an SI symbol ("nm"; core/length_unit.h); "": the metadata names none.
   const std::string& unit() const { return unit_; }
+  // A time series: the time point read (ChunkSelect::time) and how many the array holds.
+  int64_t time_point() const { return time_point_; }
+  int64_t time_points() const { return time_points_; }
   // One voxel's bytes (file byte order) for a level's chunks that are not stored.
   const std::vector<uint8_t>& fill(int level) const { return fills_[size_t(level)]; }
 
@@ -66,6 +69,7 @@ class ChunkedVolume {
   SourceType source_ = SourceType::U8;
   bool big_endian_ = false;
   std::string unit_;
+  int64_t time_point_ = 0, time_points_ = 1;
   std::vector<std::vector<uint8_t>> fills_;  // per level
   // The level's folder listed once, on its first chunk (chunked/formats.h, FolderIndex): whether
   // a chunk may be stored there, without a stat per missing chunk. Thread-safe.

@@ -259,6 +259,8 @@ class ZarrVolume : public ChunkedVolume {
         throw VolumeError(meta, e.what());
       }
       check_select(a, meta);
+      if (const size_t t = roles_.find('t'); t != std::string::npos) time_points_ = a.shape[t];
+      time_point_ = select_.time;
       levels_.push_back(L);
       fills_.push_back(a.fill);
       arrays_.push_back(std::move(a));

@@ -129,7 +129,7 @@ RenderSettings parse_render(const json& j) {
 }  // namespace
 
 Scene parse_scene(const json& j) {
-  only_keys(j, "", {"volume", "camera", "image", "tf", "background", "render", "units"});
+  only_keys(j, "", {"volume", "camera", "image", "tf", "background", "render", "units", "time"});
   Scene s;
   if (!j.contains("volume") || !j["volume"].is_string() || j["volume"].get<std::string>().empty())
     fail("volume", "required: a volume id or path");
@@ -149,6 +149,7 @@ Scene parse_scene(const json& j) {
       if (s.background[c] < 0 || s.background[c] > 1) fail("background", "components must lie in [0, 1]");
   }
   if (j.contains("render")) s.render = parse_render(j["render"]);
+  if (j.contains("time")) s.time = integer(j["time"], "time", 0, 1000000);
   if (j.contains("units")) {
     if (!j["units"].is_string()) fail("units", "must be a unit of length such as \"µm\"");
     try {
@@ -220,6 +221,7 @@ json scene_to_json(const Scene& s) {
   }
   j["background"] = {s.background.x, s.background.y, s.background.z};
   if (!s.units.empty()) j["units"] = s.units;
+  if (s.time > 0) j["time"] = s.time;
   const RenderSettings& r = s.render;
   j["render"] = {{"classification", to_string(r.classification)},
                  {"peak_mode", to_string(r.peak_mode)},
@@ -308,7 +310,17 @@ ResolvedScene resolve(const Scene& s, const VolumeBox& v, const std::vector<uint
 
 }  // namespace
 
+std::string time_refusal(int64_t time, int64_t times) {
+  if (time >= 0 && time < times) return "";
+  return "time: time point " + std::to_string(time) + " is outside the volume's " +
+         (times == 1 ? std::string("one time point (0)") : "0.." + std::to_string(times - 1));
+}
+
 ResolvedScene resolve_scene(const Scene& s, const Volume& v) {
+  if (const std::string why = time_refusal(s.time, v.time_points); !why.empty()) throw SceneError(why);
+  if (s.time != v.time_point)  // a caller's slip: the scene asks for another time point than it was given
+    throw SceneError("time: time point " + std::to_string(s.time) + " asked, " + std::to_string(v.time_point) +
+                     " held");
   return resolve(s, VolumeBox{v.dims(), v.spacing, v.origin, v.min_value, v.max_value, {}}, &v.histogram);
 }
 

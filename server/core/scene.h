@@ -66,6 +66,8 @@ struct Scene {
   // The unit of the volume's spacing, an SI symbol (core/length_unit.h), for a file that names
   // none or names it wrong; "": the volume's own. Shown with lengths; nothing drawn changes.
   std::string units;
+  // A time series' time point (docs/scenes.md, "Time"): 0 .. the volume's `times` - 1.
+  int64_t time = 0;
   std::string to_string() const;
 };
 
@@ -91,7 +93,10 @@ struct ResolvedScene {
   // peak finding with a TF that has no opacity peak inside the data's range.
   std::vector<std::string> warnings;
 };
+// Refuses (SceneError naming `time`) a scene whose time point is not the one `v` holds.
 ResolvedScene resolve_scene(const Scene& s, const Volume& v);
+// The refusal of a time point past a series of `times` points ("" when it is one of them).
+std::string time_refusal(int64_t time, int64_t times);
 // What resolving needs of a volume: its box, value range and histogram (for a derived TF; none:
 // a ramp over the range). Distributed rendering resolves against the whole volume's, which no
 // rank holds.

@@ -70,6 +70,8 @@ Volume::Volume(const VolumeHeader& h)
       origin(h.origin),
       value_offset(storage_offset(h.source)),
       unit(h.unit),
+      time_point(h.time_point),
+      time_points(h.time_points),
       dims_(h.dims),
       type_(storage_type(h.source)),
       source_(h.source),
@@ -83,6 +85,8 @@ Volume Volume::header_only(const VolumeHeader& h) {
   v.origin = h.origin;
   v.value_offset = storage_offset(h.source);
   v.unit = h.unit;
+  v.time_point = h.time_point;
+  v.time_points = h.time_points;
   v.dims_ = h.dims;
   v.type_ = storage_type(h.source);
   v.source_ = h.source;

@@ -38,6 +38,7 @@ struct VolumeHeader {
   SourceType source = SourceType::U8;
   bool big_endian = false;
   std::string unit;  // the spacing's unit, an SI symbol (core/length_unit.h); "": the file names none
+  int64_t time_point = 0, time_points = 1;  // a time series: the point read, of how many
   int64_t voxel_count() const { return dims[0] * dims[1] * dims[2]; }
 };
 
@@ -73,6 +74,8 @@ class Volume {
   glm::dvec3 origin{0.0, 0.0, 0.0};
   double value_offset = 0.0;  // physical value = stored value + value_offset
   std::string unit;           // spacing and origin's unit ("µm"; core/length_unit.h); "": unknown
+  // A time series (an OME-Zarr with a t axis): the time point these voxels are, of how many.
+  int64_t time_point = 0, time_points = 1;
 
   // Physical value of voxel (i, j, k); no bounds check.
   double value(int64_t i, int64_t j, int64_t k) const {

@@ -89,6 +89,9 @@ struct AppContext {
   // A pyramid's long reads (its finest level's statistics, the level within the budget after a
   // preview): apart from the loader, so that minutes of reading hold up no load, PNG or probe.
   boost::asio::thread_pool pyramid{1};
+  // A time series' next time points, read ahead of a viewer stepping through them: apart from the
+  // loader, so that a volume asked for waits for no read-ahead.
+  boost::asio::thread_pool ahead{1};
 
   explicit AppContext(ServerConfig c);
   // Ray-texture PNGs, like volumes given by path, are read only from inside the data directories.

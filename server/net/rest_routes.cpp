@@ -66,7 +66,7 @@ void probe(AppContext& app, const Request& req, std::function<void(Response)> se
     std::shared_ptr<VolumeEntry> vol;
     try {
       scene.render.ray_texture = load_ray_texture_png(scene.render.ray_texture, app.png_locator());
-      vol = app.volumes.get(scene.volume);
+      vol = app.volumes.at_time(scene.volume, scene.time);
     } catch (const SceneError& e) {
       return refuse(http::status::bad_request, "bad_scene", e.what());
     } catch (const VolumeError& e) {

@@ -172,7 +172,7 @@ void render_still(AppContext& app, const Request& req, std::function<void(Respon
     return send(error_response(req, http::status::bad_request, "bad_request", "resolution must be full or held"));
   }
   const bool finest = resolution != "held";
-  if (auto vol = app.volumes.find(scene.volume); vol && !png) {
+  if (auto vol = app.volumes.find_time(scene.volume, scene.time); vol && !png) {
     if (!(vol->full && finest))
       return submit_still(app, req, scene, std::move(vol), std::move(send), std::move(cancelled));
     if (auto known = vol->full->statistics())  // reduced before: no wait
@@ -191,7 +191,10 @@ void render_still(AppContext& app, const Request& req, std::function<void(Respon
     }
     std::shared_ptr<VolumeEntry> vol;
     try {
-      vol = app.volumes.get(scene.volume);
+      vol = app.volumes.at_time(scene.volume, scene.time);
+    } catch (const SceneError& e) {  // a time point past the series' last
+      count(app, "render", http::status::bad_request);
+      return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
     } catch (const VolumeError& e) {
       count(app, "render", http::status::not_found);
       return send(error_response(req, http::status::not_found, "volume_error", e.what()));

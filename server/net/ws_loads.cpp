@@ -5,15 +5,18 @@
 #include <boost/asio/post.hpp>
 
 #include "core/ray_texture_png.h"
+#include "core/scene_error.h"
 #include "net/rest_still.h"
 #include "net/ws_session.h"
+#include "session/limits.h"
 #include "session/protocol.h"
 
 namespace peakcast::net {
 
-void WsSession::with_volume(const std::string& id, std::function<void(std::shared_ptr<VolumeEntry>)> then) {
-  if (auto e = app_.volumes.find(id)) return then(e);
-  asio::post(app_.loader, [self = shared_from_this(), id, then = std::move(then)] {
+void WsSession::with_volume(const std::string& id, std::function<void(std::shared_ptr<VolumeEntry>)> then,
+                            int64_t time) {
+  if (auto e = app_.volumes.find_time(id, time)) return then(e);
+  asio::post(app_.loader, [self = shared_from_this(), id, then = std::move(then), time] {
     std::shared_ptr<VolumeEntry> entry;
     std::string error;
     // The client hears how far the read is: the first percent, then at most every 100 ms, and the
@@ -27,20 +30,51 @@ void WsSession::with_volume(const std::string& id, std::function<void(std::share
         if (!self->closing_) self->queue_text(std::move(message));
       });
     };
+    std::string code = "volume_error";
     try {
-      entry = self->app_.volumes.get(id, progress);
+      entry = self->app_.volumes.at_time(id, time, progress);
+    } catch (const SceneError& e) {  // a time point past the series' last
+      code = "bad_message";
+      error = e.what();
     } catch (const std::exception& e) {
       error = e.what();
     }
-    asio::post(self->ws_.get_executor(), [self, entry, error, then] {
+    asio::post(self->ws_.get_executor(), [self, entry, error, code, then] {
       if (self->closing_) return;
       if (!error.empty()) {
         self->starting_ = false;
-        return self->send_error("volume_error", error);
+        return self->send_error(code, error);
       }
       self->guarded([&] { then(entry); });
     });
   });
+}
+
+void WsSession::open_volume(const std::string& id) {
+  with_volume(id, [this](std::shared_ptr<VolumeEntry> entry) {
+    session_->set_volume(entry);
+    prepare_finest(entry);
+    queue_text(protocol::volume_message(entry->info(true), session_->state_json()));
+    app_.render.notify();
+  });
+}
+
+void WsSession::step_time(int64_t time) {
+  const std::string id = session_->volume_id();
+  const uint64_t step = ++time_steps_;
+  with_volume(
+      id,
+      [this, step](std::shared_ptr<VolumeEntry> entry) {
+        if (step != time_steps_) return;  // a later step was asked while this one was read
+        session_->set_time(entry);
+        prepare_finest(entry);
+        app_.render.notify();
+        // The next time points, apart from the loader (a pick waits for no read-ahead).
+        asio::post(app_.ahead, [self = shared_from_this(), id = entry->id, t = entry->time] {
+          self->app_.volumes.read_ahead(id, t, limits::kTimeReadAhead);
+        });
+      },
+      time);
 }
 
 void WsSession::with_png(const nlohmann::json& render, TextureThen then) {

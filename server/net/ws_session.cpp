@@ -205,10 +205,13 @@ void WsSession::handle(const std::string& text) {
     starting_ = true;
     const nlohmann::json render = hello->state.render ? *hello->state.render : nlohmann::json();
     with_png(render, [this, hello = *hello, vid](std::optional<std::shared_ptr<const RayTextureSpec>> texture) {
-      with_volume(vid, [this, hello, texture](std::shared_ptr<VolumeEntry> volume) {
-        starting_ = false;
-        start_session(hello, std::move(volume), texture);
-      });
+      with_volume(
+          vid,
+          [this, hello, texture](std::shared_ptr<VolumeEntry> volume) {
+            starting_ = false;
+            start_session(hello, std::move(volume), texture);
+          },
+          hello.state.time);
     });
     return;
   }
@@ -231,14 +234,8 @@ void WsSession::handle(const std::string& text) {
         if constexpr (std::is_same_v<T, ProbeMsg>) probe(m);
         if constexpr (std::is_same_v<T, StrokeMsg>)
           queue_text(stroke_ack_message(m.seq, session_->add_stroke(m.stroke)));
-        if constexpr (std::is_same_v<T, VolumeMsg>) {
-          with_volume(m.volume, [this](std::shared_ptr<VolumeEntry> entry) {
-            session_->set_volume(entry);
-            prepare_finest(entry);
-            queue_text(volume_message(entry->info(true), session_->state_json()));
-            app_.render.notify();
-          });
-        }
+        if constexpr (std::is_same_v<T, VolumeMsg>) open_volume(m.volume);
+        if constexpr (std::is_same_v<T, TimeMsg>) step_time(m.time);
       },
       msg);
   app_.render.notify();

@@ -48,7 +48,11 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   // Runs fn on the strand, turning every exception into an error reply (nothing escapes a handler).
   void guarded(const std::function<void()>& fn);
   // Calls then(entry) on the strand once the volume is loaded (on the loader pool when needed).
-  void with_volume(const std::string& id, std::function<void(std::shared_ptr<VolumeEntry>)> then);
+  // `time`: that time point of a time series (VolumeStore::at_time).
+  void with_volume(const std::string& id, std::function<void(std::shared_ptr<VolumeEntry>)> then, int64_t time = 0);
+  void open_volume(const std::string& id);  // a volume message
+  void step_time(int64_t time);             // a time message: then the next time points read ahead
+  uint64_t time_steps_ = 0;                 // time messages handled: a step read late yields to a newer one
   // A render patch's ray-texture PNG is read on the loader pool, never on an io thread; no
   // further message is read until then(texture) has run, so a stroke sent after it applies to
   // it. then(nullopt) at once when the patch names no PNG (the session parses it inline).

@@ -10,7 +10,8 @@ namespace peakcast::limits {
 
 constexpr size_t kMaxWsMessageBytes =
     256 * 1024;  // one WebSocket text message (a 1024-point TF fits); larger: error reply
-constexpr size_t kMaxWsReadBytes = 4 * 1024 * 1024;    // larger than this is not even read: the socket closes (1009)
+constexpr size_t kMaxWsReadBytes = 4 * 1024 * 1024;  // larger than this is not even read: the socket closes (1009)
+constexpr int kTimeReadAhead = 8;  // time points read ahead of a viewer stepping a series (within the budget)
 constexpr size_t kMaxHttpBodyBytes = 1024 * 1024;      // one REST request body
 constexpr size_t kMaxHttpHeaderBytes = 16 * 1024;      // request line + headers
 constexpr int kMaxViewportSide = 8192;                 // pixels, after the device pixel ratio

@@ -76,7 +76,8 @@ Viewport parse_viewport(const json& j, const std::string& where) {
 StatePatch parse_state(const json& j) {
   if (!j.is_object()) bad("hello.state: must be an object");
   for (auto& [k, _] : j.items())
-    if (k != "camera" && k != "tf" && k != "render" && k != "background") bad("hello.state." + k + ": unknown key");
+    if (k != "camera" && k != "tf" && k != "render" && k != "background" && k != "time")
+      bad("hello.state." + k + ": unknown key");
   Scene s = validate_parts(j);
   StatePatch p;
   p.camera = s.camera;
@@ -84,6 +85,7 @@ StatePatch parse_state(const json& j) {
   p.opacity_unit = s.opacity_unit;
   if (j.contains("render")) p.render = j["render"];
   if (j.contains("background")) p.background = s.background;
+  if (j.contains("time")) p.time = int_in(j["time"], "hello.state.time", 0, 1000000);
   return p;
 }
 
@@ -188,6 +190,12 @@ ClientMessage volume_message(const json& j) {
   return VolumeMsg{string_of(j["volume"], "volume.volume", limits::kMaxVolumeNameLength)};
 }
 
+ClientMessage time_message(const json& j) {
+  only_keys(j, "time", {"time"});
+  if (!j.contains("time")) bad("time.time: required");
+  return TimeMsg{int_in(j["time"], "time.time", 0, 1000000)};
+}
+
 ClientMessage ack_message(const json& j) {
   only_keys(j, "ack", {"frame"});
   if (!j.contains("frame") || !j["frame"].is_number_unsigned() || j["frame"].get<uint64_t>() > 0xffffffffull)
@@ -242,7 +250,8 @@ ClientMessage parse_client_message(const std::string& text) {
       {"hello", hello_message},       {"camera", camera_message}, {"tf", tf_message},
       {"stroke", stroke_message},     {"render", render_message}, {"quality", quality_message},
       {"viewport", viewport_message}, {"volume", volume_message}, {"ack", ack_message},
-      {"keyframe", keyframe_message}, {"ping", ping_message},     {"probe", probe_message}};
+      {"keyframe", keyframe_message}, {"ping", ping_message},     {"probe", probe_message},
+      {"time", time_message}};
   for (const auto& [name, parse] : kParsers)
     if (type == name) return parse(j);
   throw ProtocolError("unknown_type", "unknown message type '" + clean_utf8(type, 64) + "'");

@@ -37,6 +37,7 @@ struct StatePatch {
   double opacity_unit = 0.0;
   std::optional<nlohmann::json> render;  // validated render settings object, merged over the current ones
   std::optional<glm::dvec3> background;
+  int64_t time = 0;  // a time series' time point (a share link's)
 };
 
 struct Hello {
@@ -71,6 +72,10 @@ struct ViewportMsg {
 struct VolumeMsg {
   std::string volume;
 };
+// A time series' time point to show (docs/scenes.md, "Time"); camera and TF stay.
+struct TimeMsg {
+  int64_t time = 0;
+};
 struct AckMsg {
   uint32_t frame = 0;
 };
@@ -91,7 +96,7 @@ struct ProbeMsg {
   int x = 0, y = 0;
 };
 using ClientMessage = std::variant<Hello, CameraMsg, TfMsg, RenderMsg, QualityMsg, ViewportMsg, VolumeMsg, AckMsg,
-                                   PingMsg, StrokeMsg, ProbeMsg, KeyframeMsg>;
+                                   PingMsg, StrokeMsg, ProbeMsg, KeyframeMsg, TimeMsg>;
 
 // Throws ProtocolError (bad_json, too_large, bad_message, unknown_type).
 ClientMessage parse_client_message(const std::string& text);

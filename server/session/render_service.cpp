@@ -155,6 +155,7 @@ void RenderService::collect_frame() {
     f.rgb = std::move(out.rgb8.rgb);
     f.stats = st.to_json();
     if (const Volume& v = *s.job.volume->volume; v.pyramid_levels > 1) f.stats["level"] = v.pyramid_level;
+    if (const Volume& v = *s.job.volume->volume; v.time_points > 1) f.stats["time"] = v.time_point;
     if (s.job.refine) f.stats["refining"] = true;  // the finest level's frame follows
     f.job = std::move(s.job);
     if (f.job.video) f.video_ticket = f.job.video->take_ticket();  // encoded in the order rendered

@@ -83,6 +83,7 @@ void Session::start(std::shared_ptr<VolumeEntry> volume, const protocol::Viewpor
   viewport_ = vp;
   scene_ = Scene{};
   scene_.volume = volume_->id;
+  scene_.time = volume_->time;
   if (state.render) {
     render_json_ = *state.render;
     if (auto rt = take_ray_texture(render_json_, texture)) ray_texture_ = *rt;
@@ -110,6 +111,7 @@ void Session::set_volume(std::shared_ptr<VolumeEntry> volume) {
   volume_ = std::move(volume);
   full_statistics_.reset();
   scene_.volume = volume_->id;
+  scene_.time = volume_->time;
   scene_.camera.reset();
   scene_.tf.reset();
   scene_.opacity_unit = 0.0;
@@ -119,6 +121,16 @@ void Session::set_volume(std::shared_ptr<VolumeEntry> volume) {
   tf_derived_ = true;
   camera_version_++;
   tf_version_++;
+  touch();
+}
+
+void Session::set_time(std::shared_ptr<VolumeEntry> volume) {
+  std::lock_guard lock(m_);
+  if (!volume_ || volume->id != volume_->id) return;  // another volume was opened meanwhile
+  volume_ = std::move(volume);
+  full_statistics_.reset();
+  scene_.time = volume_->time;
+  render_version_++;
   touch();
 }
 

@@ -90,6 +90,8 @@ class Session {
   void start(std::shared_ptr<VolumeEntry> volume, const protocol::Viewport& vp, const protocol::StatePatch& state,
              std::optional<std::shared_ptr<const RayTextureSpec>> texture = std::nullopt);
   void set_volume(std::shared_ptr<VolumeEntry> volume);  // resets camera and TF to the volume's defaults
+  // Another time point of the volume viewed (VolumeStore::at_time): camera, TF and settings stay.
+  void set_time(std::shared_ptr<VolumeEntry> volume);
   void set_camera(const Camera& c);
   void set_tf(const TransferFunction& tf, double opacity_unit, uint32_t version);
   // ray_texture in the patch replaces the texture (null: none); `texture`, when given, is that

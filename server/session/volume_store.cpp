@@ -1,10 +1,12 @@
 #include "session/volume_store.h"
 
 #include <algorithm>
+#include <set>
 
 #include "chunked/chunked_volume.h"
 #include "core/length_unit.h"
 #include "core/log.h"
+#include "core/scene.h"
 #include "distributed/brick_sequence.h"
 
 namespace fs = std::filesystem;
@@ -32,7 +34,10 @@ nlohmann::json VolumeEntry::info(bool with_histogram) const {
                        {{"read_ms", v.load_ms - v.statistics_ms},
                         {"statistics_ms", v.statistics_ms},
                         {"macrocells_ms", macrocells.build_ms}}},
-                      {"nonfinite_replaced", v.nonfinite_replaced}};
+                      {"nonfinite_replaced", v.nonfinite_replaced},
+                      // a time series: how many time points, and the one these voxels are
+                      {"times", v.time_points},
+                      {"time", v.time_point}};
   if (const double up = upload_ms.load(); up >= 0) j["load_phases"]["upload_ms"] = up;
   if (v.pyramid_levels > 1 || v.pyramid_level > 0) {  // a chunked pyramid: the level shown
     j["level"] = v.pyramid_level;
@@ -60,17 +65,20 @@ VolumeStore::VolumeStore(std::vector<fs::path> dirs, Residency& residency, LoadO
 
 std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::path& path, bool preloaded,
                                               const std::string& upload_name, std::function<void(double)> progress,
-                                              const LoadOptions* given, const std::string& owner) {
+                                              const LoadOptions* given, const std::string& owner, int64_t time) {
   std::lock_guard load(load_m_);
-  if (auto e = find(id)) return e;
+  const std::string key = key_of(id, time);
+  if (auto e = find(key)) return e;
   auto e = std::make_shared<VolumeEntry>();
   e->id = id;
+  e->time = time;
   e->path = path;
   e->uploaded = !upload_name.empty();
   e->name = upload_name;
   e->owner = owner;
   LoadOptions options = given ? *given : options_;
   options.progress = std::move(progress);
+  options.time_point = time;
   int finer = -1;  // a preview: the level within the budget, read after
   if (in_process_ && preview_voxels_ > 0 && options.memory_budget_bytes > 0 && chunked::is_chunked_volume(path)) {
     const auto cv = chunked::open_chunked(path, {options.time_point, options.channel});
@@ -88,8 +96,8 @@ std::shared_ptr<VolumeEntry> VolumeStore::add(const std::string& id, const fs::p
   e->preloaded = preloaded;
   finish_entry(e);
   std::lock_guard lock(m_);
-  entries_[id] = e;
-  if (default_.empty()) default_ = id;
+  entries_[key] = e;
+  if (default_.empty() && time == 0) default_ = id;
   if (finer >= 0) background_([this, e, finer] { read_finer(e, finer); });
   return e;
 }
@@ -100,6 +108,7 @@ void VolumeStore::finish_entry(const std::shared_ptr<VolumeEntry>& e) {
     full->path = e->path;
     full->options = options_;
     full->options.level = 0;
+    full->options.time_point = e->time;
     full->options.memory_budget_bytes = 0;
     full->budget_bytes = options_.memory_budget_bytes;
     e->full = std::move(full);
@@ -126,11 +135,13 @@ void VolumeStore::read_finer(const std::shared_ptr<VolumeEntry>& preview, int le
   e->id = preview->id;
   e->path = preview->path;
   e->preloaded = preview->preloaded;
+  e->time = preview->time;
   e->full = preview->full;  // one reduction of the finest level serves both
   try {
     LoadOptions options = options_;
     options.level = level;
     options.memory_budget_bytes = 0;
+    options.time_point = e->time;
     LoadedVolume loaded = loader_(e->path, options);
     e->volume = std::move(loaded.volume);
     e->resident_bytes = loaded.resident_bytes;
@@ -140,7 +151,7 @@ void VolumeStore::read_finer(const std::shared_ptr<VolumeEntry>& preview, int le
     return;
   }
   std::lock_guard lock(m_);
-  auto it = entries_.find(e->id);
+  auto it = entries_.find(key_of(e->id, e->time));
   if (it == entries_.end() || it->second != preview) return;  // dropped or replaced meanwhile
   it->second = e;
   preview->set_newer(e);
@@ -203,7 +214,7 @@ std::shared_ptr<VolumeEntry> VolumeStore::get(const std::string& id_or_path, std
   {
     std::lock_guard lock(m_);
     for (auto& [_, e] : entries_)
-      if (e->path == resolved) return e;
+      if (e->path == resolved && e->time == 0) return e;
   }
   // A volume's id is never a server path: one asked for by absolute path is known by its path
   // inside the data directory that holds it.
@@ -244,6 +255,57 @@ std::string VolumeStore::without_paths(std::string message, const fs::path& reso
   return message;
 }
 
+std::string VolumeStore::key_of(const std::string& id, int64_t time) {
+  return time == 0 ? id : id + "\x1ft" + std::to_string(time);  // \x1f: never in an id
+}
+
+std::shared_ptr<VolumeEntry> VolumeStore::find_time(const std::string& id, int64_t time) const {
+  return find(key_of(id, time));
+}
+
+std::shared_ptr<VolumeEntry> VolumeStore::at_time(const std::string& id_or_path, int64_t time,
+                                                  std::function<void(double)> progress) {
+  auto base = get(id_or_path, time == 0 ? progress : nullptr);
+  if (time == 0) return base;
+  if (const std::string why = time_refusal(time, base->volume->time_points); !why.empty()) throw SceneError(why);
+  if (auto e = find(key_of(base->id, time))) return e;
+  try {
+    return add(base->id, base->path, false, base->uploaded ? base->name : "", std::move(progress), nullptr, base->owner,
+               time);
+  } catch (const VolumeError& e) {
+    throw VolumeError(base->id,
+                      "time point " + std::to_string(time) + ": " + without_paths(e.what(), base->path, base->id));
+  }
+}
+
+void VolumeStore::read_ahead(const std::string& id, int64_t time, int count) {
+  const auto base = find(id);
+  if (!base || base->volume->time_points < 2 || count < 1) return;
+  const int64_t n = base->volume->time_points;
+  count = int(std::min<int64_t>(count, n - 1));
+  std::set<std::string> window;
+  for (int k = 0; k <= count; ++k) window.insert(key_of(id, (time + k) % n));
+  {
+    std::lock_guard lock(m_);  // the series' time points behind: let go unless viewed
+    const std::string prefix = id + "\x1ft";
+    for (auto it = entries_.begin(); it != entries_.end();)
+      it = it->first.rfind(prefix, 0) == 0 && !window.count(it->first) && it->second.use_count() == 1
+               ? entries_.erase(it)
+               : std::next(it);
+  }
+  for (int k = 1; k <= count; ++k) {
+    const int64_t t = (time + k) % n;
+    if (t == 0 || find(key_of(id, t))) continue;
+    if (residency_.counted_bytes() + base->resident_bytes > residency_.budget()) return;  // the budget is full
+    try {
+      add(base->id, base->path, false, base->uploaded ? base->name : "", {}, nullptr, base->owner, t);
+    } catch (const std::exception& e) {
+      log::warn("a time point could not be read ahead", {{"volume", id}, {"time", t}, {"error", e.what()}});
+      return;
+    }
+  }
+}
+
 std::shared_ptr<VolumeEntry> VolumeStore::find(const std::string& id) const {
   std::lock_guard lock(m_);
   auto it = entries_.find(id);
@@ -260,7 +322,8 @@ std::vector<std::shared_ptr<VolumeEntry>> VolumeStore::list() const {
 nlohmann::json VolumeStore::listing() const {
   std::lock_guard lock(m_);
   nlohmann::json out = nlohmann::json::array();
-  for (auto& [_, e] : entries_) out.push_back(e->info(false));
+  for (auto& [_, e] : entries_)
+    if (e->time == 0) out.push_back(e->info(false));  // a series once, as its time point 0
   for (auto& [id, u] : uploads_)
     if (!entries_.count(id)) out.push_back(u.info);
   return out;
@@ -284,7 +347,8 @@ void VolumeStore::register_upload(const std::string& id, const fs::path& path, c
 void VolumeStore::remove_upload(const std::string& id) {
   std::lock_guard lock(m_);
   uploads_.erase(id);
-  entries_.erase(id);
+  for (auto it = entries_.begin(); it != entries_.end();)  // with its other time points
+    it = it->second->id == id ? entries_.erase(it) : std::next(it);
   if (default_ == id) default_ = entries_.empty() ? "" : entries_.begin()->first;
 }
 

@@ -57,6 +57,7 @@ struct VolumeEntry {
   // phase, reported with the others in info().
   std::atomic<double> upload_ms{-1.0};
   bool preloaded = false;
+  int64_t time = 0;                      // the time point held (Volume::time_point); the store's id is the series'
   bool uploaded = false;                 // sent by a client (POST /api/volumes); `name` is the one it gave
   std::string name;                      // empty: the file's name
   std::string owner;                     // an upload's owner (net/access.h), shown in its info; empty: none
@@ -86,6 +87,16 @@ class VolumeStore {
   // `progress` hears how much of a file being loaded now was read (LoadOptions::progress).
   std::shared_ptr<VolumeEntry> get(const std::string& id_or_path, std::function<void(double)> progress = {});
   std::shared_ptr<VolumeEntry> find(const std::string& id) const;  // nullptr when not loaded
+  // Time point `time` of the volume `id_or_path` (a time series: its info's `times`): held, or
+  // read now, `progress` told. The series' own entry (get) is its time point 0, read first.
+  // SceneError naming `time` past its last point; VolumeError as get.
+  std::shared_ptr<VolumeEntry> at_time(const std::string& id_or_path, int64_t time,
+                                       std::function<void(double)> progress = {});
+  std::shared_ptr<VolumeEntry> find_time(const std::string& id, int64_t time) const;  // held, or nullptr
+  // Reads the `count` time points after `time` (wrapping) that are not held, each only while it
+  // fits in the memory budget beside what is counted there; first lets go of the series' other
+  // time points that nobody views. On the caller's thread (the loader pool); failures are logged.
+  void read_ahead(const std::string& id, int64_t time, int count);
   std::vector<std::shared_ptr<VolumeEntry>> list() const;
   // What /api/volumes lists: every loaded volume's info, and the uploads not loaded now (their
   // info as it was when they were uploaded).
@@ -118,7 +129,10 @@ class VolumeStore {
  private:
   std::shared_ptr<VolumeEntry> add(const std::string& id, const std::filesystem::path& path, bool preloaded,
                                    const std::string& upload_name = "", std::function<void(double)> progress = {},
-                                   const LoadOptions* options = nullptr, const std::string& owner = "");
+                                   const LoadOptions* options = nullptr, const std::string& owner = "",
+                                   int64_t time = 0);
+  // entries_'s key: the id for time point 0, else the id and the time point.
+  static std::string key_of(const std::string& id, int64_t time);
   std::string without_paths(std::string message, const std::filesystem::path& resolved, const std::string& asked) const;
   struct Upload {
     std::filesystem::path path;

@@ -3,8 +3,12 @@
 // playwright-core, against a real server. The probe's answers are checked against POST
 // /api/probe of the same scene, which the server's unit tests check against closed forms.
 import assert from 'node:assert/strict';
+import { spawnSync } from 'node:child_process';
+import { mkdtempSync, rmSync } from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
 import { after, before, test } from 'node:test';
-import { launch, recordTexts, openClient, screenshot, startServer, waitFinal } from './harness.mjs';
+import { ROOT, launch, recordTexts, openClient, screenshot, startServer, waitFinal } from './harness.mjs';
 
 let server, browser;
 before(async () => { server = await startServer(); browser = await launch(); });
@@ -252,4 +256,60 @@ test('clipping: the crop box\'s faces drag in the view', async () => {
   await screenshot(page, 'clip_box_drag');
   assert.deepEqual(page.errors, []);
   await page.close();
+});
+
+test('a time series: a slider, play and a readout; frames in order; the share link keeps the time point', async () => {
+  const dir = mkdtempSync(path.join(os.tmpdir(), 'peakcast-series-'));
+  const made = spawnSync('/usr/bin/python3', [path.join(ROOT, 'scripts/make_time_series.py'), path.join(dir, 'series.zarr'),
+    '--times', '6', '--size', '24']);
+  assert.equal(made.status, 0, String(made.stderr));
+  const s = await startServer(['--data', dir]);
+  try {
+    const page = await openClient(browser, s.url);
+    await waitFinal(page);
+    assert.equal(await page.isVisible('#time'), false, 'heptane is one time point: no time controls');
+    await page.evaluate(() => {
+      window.__times = [];
+      window.peakcast.stream.addEventListener('stats', (e) => window.__times.push(e.detail.time));
+    });
+    await page.fill('#volume-path', 'series.zarr');
+    await page.press('#volume-path', 'Enter');
+    await page.waitForFunction(() => window.peakcast.app.volumeInfo?.id === 'series.zarr', null, { timeout: 30000 });
+    await page.waitForSelector('#time', { state: 'visible' });
+    assert.equal(await page.textContent('#time-readout'), 't 0 of 0…5');
+    await page.$eval('#time-slider', (el) => { el.value = '3'; el.dispatchEvent(new Event('input')); });
+    await page.waitForFunction(() => window.peakcast.timeControls.time === 3, null, { timeout: 30000 });
+    assert.equal(await page.textContent('#time-readout'), 't 3 of 0…5');
+    await waitFinal(page);
+    // Playing at 5 a second for 2 s: the time moves on, and no frame goes back (but to wrap to 0).
+    const start = await page.evaluate(() => window.__times.length);
+    await page.fill('#time-rate', '5');
+    await page.click('#time-play');
+    assert.equal(await page.getAttribute('#time-play', 'aria-pressed'), 'true');
+    await page.waitForTimeout(2000);
+    await page.click('#time-play');
+    const played = (await page.evaluate(() => window.__times)).slice(start);
+    const steps = played.filter((t, i) => i === 0 || t !== played[i - 1]);
+    assert.ok(steps.length >= 3, JSON.stringify(played));
+    for (let i = 1; i < steps.length; i++) assert.ok(steps[i] === (steps[i - 1] + 1) % 6 || steps[i] > steps[i - 1], JSON.stringify(steps));
+    // The share link carries the time point; opening it starts there.
+    await page.$eval('#time-slider', (el) => { el.value = '4'; el.dispatchEvent(new Event('input')); });
+    await page.waitForFunction(() => window.peakcast.timeControls.time === 4, null, { timeout: 30000 });
+    await page.waitForFunction(() => /state=/.test(location.hash));
+    await page.waitForTimeout(400);  // the link is written 300 ms after the last change
+    const link = await page.evaluate(() => location.href);
+    const second = await openClient(browser, link);
+    await second.waitForFunction(() => window.peakcast?.timeControls?.time === 4 && window.peakcast.app.volumeInfo?.id === 'series.zarr',
+      null, { timeout: 30000 });
+    await waitFinal(second);
+    assert.equal(await second.textContent('#time-readout'), 't 4 of 0…5');
+    await screenshot(second, 'time-series');
+    assert.deepEqual(page.errors, []);
+    assert.deepEqual(second.errors, []);
+    await second.close();
+    await page.close();
+  } finally {
+    await s.stop();
+    rmSync(dir, { recursive: true, force: true });
+  }
 });

@@ -149,6 +149,8 @@ TEST(Zarr, TimeAndChannelAxesAndMissingChunks) {
     o.channel = c;
     const Volume v = load_volume(root, o);
     ASSERT_EQ(v.dims(), (Dims{5, 3, 4}));
+    EXPECT_EQ(v.time_point, t);  // a time series: which point, of how many
+    EXPECT_EQ(v.time_points, 2);
     EXPECT_DOUBLE_EQ(v.spacing.x, 0.125);
     EXPECT_DOUBLE_EQ(v.spacing.z, 0.5);
     EXPECT_DOUBLE_EQ(v.origin.x, 1.0);

@@ -1,5 +1,6 @@
 // Units of length (core/length_unit.h, docs/scenes.md "Units"): the spellings files use, the
-// refusal of what is not a length, mixed units per axis, and each reader that carries a unit.
+// refusal of what is not a length, mixed units per axis, and each reader that carries a unit; and
+// a scene's time point ("Time"), held to the volume's.
 #include <gtest/gtest.h>
 
 #include <OpenImageIO/imageio.h>
@@ -194,4 +195,26 @@ TEST(Units, SceneUnitsAreALength) {
   EXPECT_NE(scene_refusal({{"volume", "v"}, {"units", "second"}}).find("units: 'second' is not a unit of length"),
             std::string::npos);
   EXPECT_NE(scene_refusal({{"volume", "v"}, {"units", 3}}).find("units: must be a unit of length"), std::string::npos);
+}
+
+TEST(Time, SceneTimeParsesAndIsHeldToTheVolume) {
+  const Scene s = parse_scene({{"volume", "v"}, {"time", 3}});
+  EXPECT_EQ(s.time, 3);
+  EXPECT_EQ(scene_to_json(s)["time"], 3);
+  EXPECT_FALSE(scene_to_json(parse_scene({{"volume", "v"}})).contains("time"));
+  for (const json& bad : {json(-1), json(1.5), json("2"), json(2000000)})
+    EXPECT_EQ(scene_refusal({{"volume", "v"}, {"time", bad}}).rfind("time: ", 0), 0u) << bad.dump();
+  Volume v = test::anisotropic_blobs(SourceType::U8, {5, 4, 3});
+  EXPECT_NO_THROW(resolve_scene(parse_scene({{"volume", "v"}}), v));
+  try {
+    resolve_scene(s, v);
+    ADD_FAILURE() << "a volume of one time point has no time point 3";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(std::string(e.what()), "time: time point 3 is outside the volume's one time point (0)");
+  }
+  v.time_points = 5;
+  v.time_point = 3;
+  EXPECT_NO_THROW(resolve_scene(s, v));
+  EXPECT_EQ(time_refusal(5, 5), "time: time point 5 is outside the volume's 0..4");
+  EXPECT_EQ(time_refusal(4, 5), "");
 }
