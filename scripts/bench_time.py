@@ -39,7 +39,7 @@ async def run(server, a, harness):
         dt = time.perf_counter() - t0
         print(f"{label}: {a.times} time points in {dt:.2f} s = {a.times / dt:.2f} time points/s; order {order}")
     # Playing: the client's rule (time-controls.js) at --play-rate.
-    shown, asked, start, last = [], None, time.perf_counter(), 0
+    shown, widths, asked, start, last = [], [], None, time.perf_counter(), 0
     while time.perf_counter() - start < 4.0:
         want = int((time.perf_counter() - start) * a.play_rate) % a.times
         if asked is None and want != last:
@@ -52,11 +52,14 @@ async def run(server, a, harness):
         if isinstance(m, dict) and m.get("type") == "stats" and "time" in m:
             if not shown or shown[-1] != m["time"]:
                 shown.append(m["time"])
+                widths.append(m["width"])
             if m["time"] == asked:
                 last, asked = asked, None
     backwards = sum(1 for x, y in zip(shown, shown[1:]) if y < x and not (x == a.times - 1 or y == 0))
+    widths.sort()
     print(f"playing at {a.play_rate}/s for 4 s: {len(shown)} time points shown ({len(shown) / 4:.1f}/s), "
-          f"{backwards} out of order: {shown}")
+          f"{backwards} out of order, frames {widths[len(widths) // 2] if widths else 0} px wide (median; "
+          f"interactive frames shrink to the frame budget as in an orbit): {shown}")
     await c.close()
 
 

@@ -285,18 +285,19 @@ void VolumeStore::read_ahead(const std::string& id, int64_t time, int count) {
   count = int(std::min<int64_t>(count, n - 1));
   std::set<std::string> window;
   for (int k = 0; k <= count; ++k) window.insert(key_of(id, (time + k) % n));
-  {
-    std::lock_guard lock(m_);  // the series' time points behind: let go unless viewed
-    const std::string prefix = id + "\x1ft";
-    for (auto it = entries_.begin(); it != entries_.end();)
-      it = it->first.rfind(prefix, 0) == 0 && !window.count(it->first) && it->second.use_count() == 1
-               ? entries_.erase(it)
-               : std::next(it);
-  }
+  auto fits = [&] { return residency_.counted_bytes() + base->resident_bytes <= residency_.budget(); };
   for (int k = 1; k <= count; ++k) {
     const int64_t t = (time + k) % n;
     if (t == 0 || find(key_of(id, t))) continue;
-    if (residency_.counted_bytes() + base->resident_bytes > residency_.budget()) return;  // the budget is full
+    if (!fits()) {  // let go of the series' time points outside the window that nobody views
+      std::lock_guard lock(m_);
+      const std::string prefix = id + "\x1ft";
+      for (auto it = entries_.begin(); it != entries_.end();)
+        it = it->first.rfind(prefix, 0) == 0 && !window.count(it->first) && it->second.use_count() == 1
+                 ? entries_.erase(it)
+                 : std::next(it);
+    }
+    if (!fits()) return;  // the budget is full of what is viewed or ahead
     try {
       add(base->id, base->path, false, base->uploaded ? base->name : "", {}, nullptr, base->owner, t);
     } catch (const std::exception& e) {

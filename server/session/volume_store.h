@@ -94,8 +94,9 @@ class VolumeStore {
                                        std::function<void(double)> progress = {});
   std::shared_ptr<VolumeEntry> find_time(const std::string& id, int64_t time) const;  // held, or nullptr
   // Reads the `count` time points after `time` (wrapping) that are not held, each only while it
-  // fits in the memory budget beside what is counted there; first lets go of the series' other
-  // time points that nobody views. On the caller's thread (the loader pool); failures are logged.
+  // fits in the memory budget beside what is counted there, letting go of the series' time points
+  // outside that window that nobody views when it does not. On the caller's thread (the `ahead`
+  // pool); failures are logged.
   void read_ahead(const std::string& id, int64_t time, int count);
   std::vector<std::shared_ptr<VolumeEntry>> list() const;
   // What /api/volumes lists: every loaded volume's info, and the uploads not loaded now (their
