@@ -117,6 +117,8 @@ struct NrrdHeader {
   int64_t header_bytes = 0;
   std::array<std::string, 3> units;  // `space units` (or the axes' `units`), as written
   std::string units_field;
+  std::vector<std::string> kinds;  // the axes' kinds, lower case
+  int64_t times = 1;               // a 4-D file's time axis (the slowest): its size
 };
 
 // A field of quoted strings (`space units: "mm" "mm" "µm"`), unquoted.
@@ -138,19 +140,25 @@ void parse_nrrd_field(const fs::path& path, const std::string& field, const std:
     n.type = value;
   } else if (field == "dimension") {
     n.dimension = int(parse_int(path, field, value));
-    if (n.dimension != 3) throw VolumeError(path, "dimension " + value + " is not supported (need a 3D scalar volume)");
+    if (n.dimension != 3 && n.dimension != 4)
+      throw VolumeError(path, "dimension " + value + " is not supported (a 3D volume, or 4D with a time axis last)");
   } else if (field == "sizes") {
     auto parts = split_ws(value);
-    if (parts.size() != 3) throw VolumeError(path, "sizes must list 3 values");
+    if (n.dimension == 0 || int(parts.size()) != n.dimension)
+      throw VolumeError(path, "sizes must list one value per dimension (dimension " + std::to_string(n.dimension) + ")");
     for (int a = 0; a < 3; ++a) h.dims[a] = parse_int(path, field, parts[a]);
+    if (n.dimension == 4) n.times = parse_int(path, field, parts[3]);
     n.have_sizes = true;
+  } else if (field == "kinds") {
+    for (const auto& k : split_ws(value)) n.kinds.push_back(lower(k));
   } else if (field == "spacings") {
     auto parts = split_ws(value);
-    if (parts.size() != 3) throw VolumeError(path, "spacings must list 3 values");
+    if (int(parts.size()) != std::max(n.dimension, 3)) throw VolumeError(path, "spacings must list one value per axis");
     for (int a = 0; a < 3; ++a) h.spacing[a] = lower(parts[a]) == "nan" ? 1.0 : parse_double(path, field, parts[a]);
   } else if (field == "space directions") {
     auto vecs = split_vectors(value);
-    if (vecs.size() != 3) throw VolumeError(path, "space directions must list 3 vectors");
+    if (int(vecs.size()) != std::max(n.dimension, 3))
+      throw VolumeError(path, "space directions must list one vector (or none) per axis");
     for (int a = 0; a < 3; ++a) {
       auto v = parse_vector(path, vecs[a]);
       if (v.empty()) continue;
@@ -170,7 +178,8 @@ void parse_nrrd_field(const fs::path& path, const std::string& field, const std:
       if (lower(parts[a]) != "nan") h.origin[a] = parse_double(path, field, parts[a]);
   } else if (field == "space units" || (field == "units" && n.units_field != "space units")) {
     const auto u = quoted_strings(value);
-    if (u.size() != 3) throw VolumeError(path, "'" + field + "' must list 3 quoted units");
+    if (u.size() != (field == "units" ? size_t(std::max(n.dimension, 3)) : 3))
+      throw VolumeError(path, "'" + field + "' must list a quoted unit per " + (field == "units" ? "axis" : "space axis"));
     n.units = {u[0], u[1], u[2]};
     n.units_field = field;
   } else if (field == "encoding") {
@@ -219,6 +228,15 @@ void check_nrrd_fields(const fs::path& path, NrrdHeader& n) {
   if (n.type.empty()) throw VolumeError(path, "missing field 'type'");
   if (n.dimension == 0) throw VolumeError(path, "missing field 'dimension'");
   if (!n.have_sizes) throw VolumeError(path, "missing field 'sizes'");
+  if (n.dimension == 4) {  // a time series: the 4th axis, the slowest, of kind time
+    const bool leading_channels = !n.kinds.empty() && n.kinds[0] != "domain" && n.kinds[0] != "space";
+    if (leading_channels)
+      throw VolumeError(path, "a 4-D NRRD whose first axis is '" + n.kinds[0] +
+                                  "' holds channels, which peakcast does not read yet (one channel a file: NRRD or OME-Zarr)");
+    if (n.kinds.size() != 4 || n.kinds[3] != "time")
+      throw VolumeError(path, "a 4-D NRRD is read as a time series: its 4th axis needs 'kinds: ... time'");
+    if (n.times < 1) throw VolumeError(path, "the time axis has " + std::to_string(n.times) + " points");
+  }
   try {
     n.h.source = parse_source_type(n.type);
   } catch (const std::invalid_argument& e) {
@@ -268,6 +286,35 @@ void locate_nrrd_data(const fs::path& path, NrrdHeader& n) {
   }
 }
 
+// A 4-D file's time point options.time_point: the box of z from t Z to (t + 1) Z of the volume
+// the file is as X x Y x (Z T) voxels, read as any region is (raw: its rows; gzip: inflated to
+// its last row), and told which time point it is.
+Volume read_time_point(const fs::path& path, const NrrdHeader& n, const LoadOptions& options) {
+  const int64_t t = options.time_point, Z = n.h.dims[2];
+  if (t < 0 || t >= n.times)
+    throw VolumeError(path, "time point " + std::to_string(t) + " is outside 0.." + std::to_string(n.times - 1));
+  VolumeHeader series = n.h;
+  if (__builtin_mul_overflow(Z, n.times, &series.dims[2])) throw VolumeError(path, "sizes overflow 64-bit voxel count");
+  series.time_point = t;
+  series.time_points = n.times;
+  LoadOptions o = options;
+  VoxelRegion r = options.region.value_or(VoxelRegion{{0, 0, 0}, n.h.dims});
+  if (r.hi[2] > Z) throw VolumeError(path, "region past the volume's " + std::to_string(Z) + " slices");
+  r.lo[2] += t * Z;
+  r.hi[2] += t * Z;
+  o.region = r;
+  Volume v = read_payload(path, series, n.payload, o);
+  v.origin.z = n.h.origin.z + double(r.lo[2] - t * Z) * n.h.spacing.z;
+  if (options.region) {
+    v.source_dims = n.h.dims;
+    v.region_lo[2] -= t * Z;
+  } else {
+    v.source_dims = {0, 0, 0};
+    v.region_lo = {0, 0, 0};
+  }
+  return v;
+}
+
 }  // namespace
 
 Volume read_nrrd(const fs::path& path, const LoadOptions& options) {
@@ -279,7 +326,8 @@ Volume read_nrrd(const fs::path& path, const LoadOptions& options) {
   NrrdHeader n = read_nrrd_header(path, in);
   check_nrrd_fields(path, n);
   locate_nrrd_data(path, n);
-  return read_payload(path, n.h, n.payload, options);
+  if (n.dimension == 3) return read_payload(path, n.h, n.payload, options);
+  return read_time_point(path, n, options);
 }
 
 }  // namespace peakcast::detail

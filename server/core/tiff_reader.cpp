@@ -57,19 +57,29 @@ std::unique_ptr<ImageInput> open_image(const fs::path& file) {
   return in;
 }
 
-// ImageJ's geometry (its ImageDescription "ImageJ=...\nunit=micron\nspacing=2.5\n" and the
-// resolution tags in pixels per unit): spacing and unit. Other TIFFs' resolution (72 dpi by
-// default in most writers) says nothing of the voxels and is not read.
+// A field of ImageJ's ImageDescription ("ImageJ=1.54f\nimages=60\nchannels=2\nslices=10\n..."),
+// "" when absent or when the description is not ImageJ's.
+std::string imagej_field(const std::string& d, const std::string& key) {
+  if (d.rfind("ImageJ=", 0) != 0) return "";
+  const size_t at = d.find("\n" + key + "=");
+  if (at == std::string::npos) return "";
+  const size_t b = at + key.size() + 2, e = d.find('\n', b);
+  return d.substr(b, e == std::string::npos ? std::string::npos : e - b);
+}
+
+double positive_number(const std::string& text) {
+  char* end = nullptr;
+  const double v = text.empty() ? 0.0 : std::strtod(text.c_str(), &end);
+  return v > 0 && std::isfinite(v) && end && *end == '\0' ? v : 0.0;
+}
+
+// ImageJ's geometry (its ImageDescription's unit= and spacing=, and the resolution tags in pixels
+// per unit): spacing and unit. Other TIFFs' resolution (72 dpi by default in most writers) says
+// nothing of the voxels and is not read.
 void imagej_geometry(const fs::path& file, const ImageSpec& spec, VolumeHeader& h) {
   const std::string d = spec.get_string_attribute("ImageDescription");
   if (d.rfind("ImageJ=", 0) != 0) return;
-  auto field = [&](const std::string& key) {
-    const size_t at = d.find("\n" + key + "=");
-    if (at == std::string::npos) return std::string();
-    const size_t b = at + key.size() + 2;
-    return d.substr(b, d.find('\n', b) == std::string::npos ? std::string::npos : d.find('\n', b) - b);
-  };
-  std::string unit = field("unit");
+  std::string unit = imagej_field(d, "unit");
   if (const size_t u = unit.find("\\u00B5"); u != std::string::npos) unit.replace(u, 6, "µ");  // "\u00B5m"
   try {
     h.unit = length_symbol(unit, "ImageJ unit");
@@ -79,10 +89,37 @@ void imagej_geometry(const fs::path& file, const ImageSpec& spec, VolumeHeader& 
   const float xr = spec.get_float_attribute("XResolution", 0.f), yr = spec.get_float_attribute("YResolution", 0.f);
   if (xr > 0 && std::isfinite(1.0 / xr)) h.spacing.x = 1.0 / xr;
   if (yr > 0 && std::isfinite(1.0 / yr)) h.spacing.y = 1.0 / yr;
-  const std::string z = field("spacing");
-  char* end = nullptr;
-  const double dz = z.empty() ? 0.0 : std::strtod(z.c_str(), &end);
-  if (dz > 0 && std::isfinite(dz) && end && *end == '\0') h.spacing.z = dz;
+  if (const double dz = positive_number(imagej_field(d, "spacing")); dz > 0) h.spacing.z = dz;
+}
+
+// An ImageJ hyperstack's pages, channels fastest, then slices, then frames (ImageJ's czt order):
+// which page holds slice z of the time point and channel read.
+struct Hyperstack {
+  int64_t channels = 1, slices = 0, frames = 1;
+  int64_t time = 0, channel = 0;
+  int64_t page(int64_t z) const { return channel + channels * (z + slices * time); }
+};
+
+// A multi-page TIFF's pages as a hyperstack: ImageJ's channels= slices= frames= when it says them
+// (checked against the pages), else every page a slice. Refuses a time point or channel not there.
+Hyperstack hyperstack_of(const fs::path& file, const ImageSpec& spec, int64_t pages, const LoadOptions& options) {
+  const std::string d = spec.get_string_attribute("ImageDescription");
+  Hyperstack s;
+  const double c = positive_number(imagej_field(d, "channels")), f = positive_number(imagej_field(d, "frames"));
+  s.channels = c >= 1 && c == std::floor(c) ? int64_t(c) : 1;
+  s.frames = f >= 1 && f == std::floor(f) ? int64_t(f) : 1;
+  s.slices = pages / (s.channels * s.frames);
+  if (s.slices * s.channels * s.frames != pages || s.slices < 1)
+    throw VolumeError(file, "ImageJ says " + std::to_string(s.channels) + " channels x " +
+                                std::to_string(s.frames) + " frames, which does not divide its " +
+                                std::to_string(pages) + " pages");
+  s.time = options.time_point;
+  s.channel = options.channel;
+  if (s.time < 0 || s.time >= s.frames)
+    throw VolumeError(file, "time point " + std::to_string(s.time) + " is outside 0.." + std::to_string(s.frames - 1));
+  if (s.channel < 0 || s.channel >= s.channels)
+    throw VolumeError(file, "channel " + std::to_string(s.channel) + " is outside 0.." + std::to_string(s.channels - 1));
+  return s;
 }
 
 void check_slice(const fs::path& file, const ImageSpec& spec, const VolumeHeader& h) {
@@ -133,10 +170,14 @@ Volume read_tiff(const fs::path& path, const LoadOptions& options) {
   h.dims = {spec0.width, spec0.height, 0};
   h.source = source_from(first, spec0.format);
   imagej_geometry(first, spec0, h);
+  Hyperstack stack;
   if (slices.empty()) {  // multi-page: count the subimages
     int pages = 0;
     while (in->seek_subimage(pages, 0)) ++pages;
-    h.dims[2] = pages;
+    stack = hyperstack_of(path, spec0, pages, options);
+    h.dims[2] = stack.slices;
+    h.time_point = stack.time;
+    h.time_points = stack.frames;
   } else {
     h.dims[2] = int64_t(slices.size());
   }
@@ -147,9 +188,10 @@ Volume read_tiff(const fs::path& path, const LoadOptions& options) {
   for (int64_t z = 0; z < h.dims[2]; ++z) {
     uint8_t* dst = v.data() + size_t(z) * slice_bytes;
     if (slices.empty()) {
-      if (!in->seek_subimage(int(z), 0)) throw VolumeError(path, "cannot seek to page " + std::to_string(z));
+      const int page = int(stack.page(z));
+      if (!in->seek_subimage(page, 0)) throw VolumeError(path, "cannot seek to page " + std::to_string(page));
       check_slice(path, in->spec(), h);
-      read_slice(path, *in, int(z), h, dst);
+      read_slice(path, *in, page, h, dst);
     } else {
       auto slice = z == 0 ? std::move(in) : open_image(slices[z]);
       check_slice(slices[z], slice->spec(), h);

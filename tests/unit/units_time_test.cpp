@@ -8,6 +8,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "chunked/chunk_codec.h"
 #include "chunked/zarr_writer.h"
 #include "core/length_unit.h"
 #include "core/scene.h"
@@ -103,7 +104,7 @@ TEST(Units, NrrdSpaceUnitsAndAxisUnits) {
   EXPECT_EQ(load_volume(nrrd_with(dir.path(), "d.nrrd", "units: \"???\" \"???\" \"???\"")).unit, "");
   const std::string why = refusal(nrrd_with(dir.path(), "e.nrrd", "space units: \"mm\" \"mm\" \"ms\""));
   EXPECT_NE(why.find("'space units': 'ms' is not a unit of length"), std::string::npos) << why;
-  EXPECT_NE(refusal(nrrd_with(dir.path(), "f.nrrd", "space units: \"mm\" \"mm\"")).find("must list 3 quoted units"),
+  EXPECT_NE(refusal(nrrd_with(dir.path(), "f.nrrd", "space units: \"mm\" \"mm\"")).find("must list a quoted unit per space axis"),
             std::string::npos);
   // What peakcast writes it reads back with its unit.
   Volume v = test::anisotropic_blobs(SourceType::U8, {5, 4, 3});
@@ -217,4 +218,95 @@ TEST(Time, SceneTimeParsesAndIsHeldToTheVolume) {
   EXPECT_NO_THROW(resolve_scene(s, v));
   EXPECT_EQ(time_refusal(5, 5), "time: time point 5 is outside the volume's 0..4");
   EXPECT_EQ(time_refusal(4, 5), "");
+}
+
+TEST(Time, ImageJHyperstackTimePointsAndChannels) {
+  using namespace OIIO;
+  test::TempDir dir;
+  // 2 channels x 3 slices x 4 frames, pages in ImageJ's order (channel fastest, then slice, then
+  // frame); page (c, z, t) holds 100 t + 10 z + c.
+  const fs::path p = dir / "hyper.tif";
+  const std::string desc = "ImageJ=1.54f\nimages=24\nchannels=2\nslices=3\nframes=4\nhyperstack=true\nmode=grayscale\n";
+  auto out = ImageOutput::create(p.string());
+  std::vector<ImageSpec> specs(24, ImageSpec(4, 3, 1, TypeDesc::UINT8));
+  for (auto& s : specs) s.attribute("ImageDescription", desc);
+  ASSERT_TRUE(out->open(p.string(), 24, specs.data()));
+  for (int page = 0; page < 24; ++page) {
+    const int c = page % 2, z = page / 2 % 3, t = page / 6;
+    if (page > 0) ASSERT_TRUE(out->open(p.string(), specs[size_t(page)], ImageOutput::AppendSubimage));
+    const std::vector<uint8_t> px(12, uint8_t(100 * t + 10 * z + c));
+    ASSERT_TRUE(out->write_image(TypeDesc::UINT8, px.data()));
+  }
+  out->close();
+  for (auto [t, c] : {std::pair{0, 0}, {2, 1}, {1, 0}}) {
+    LoadOptions o;
+    o.time_point = t;
+    o.channel = c;
+    const Volume v = load_volume(p, o);
+    ASSERT_EQ(v.dims(), (Dims{4, 3, 3}));
+    EXPECT_EQ(v.time_point, t);
+    EXPECT_EQ(v.time_points, 4);
+    for (int z = 0; z < 3; ++z) EXPECT_EQ(v.value(1, 1, z), 100 * t + 10 * z + c) << "t " << t << " c " << c;
+  }
+  LoadOptions bad;
+  bad.time_point = 4;
+  EXPECT_NE(refusal(p, bad).find("time point 4 is outside 0..3"), std::string::npos) << refusal(p, bad);
+  bad = {};
+  bad.channel = 2;
+  EXPECT_NE(refusal(p, bad).find("channel 2 is outside 0..1"), std::string::npos);
+  // A description whose channels and frames do not divide the pages.
+  const fs::path q = dir / "wrong.tif";
+  auto o2 = ImageOutput::create(q.string());
+  std::vector<ImageSpec> s2(5, ImageSpec(4, 3, 1, TypeDesc::UINT8));
+  for (auto& s : s2) s.attribute("ImageDescription", std::string("ImageJ=1.54f\nchannels=2\nframes=2\n"));
+  ASSERT_TRUE(o2->open(q.string(), 5, s2.data()));
+  for (int page = 0; page < 5; ++page) {
+    if (page > 0) ASSERT_TRUE(o2->open(q.string(), s2[size_t(page)], ImageOutput::AppendSubimage));
+    const std::vector<uint8_t> px(12, 1);
+    ASSERT_TRUE(o2->write_image(TypeDesc::UINT8, px.data()));
+  }
+  o2->close();
+  EXPECT_NE(refusal(q).find("does not divide its 5 pages"), std::string::npos) << refusal(q);
+}
+
+TEST(Time, NrrdWithATimeAxisLast) {
+  test::TempDir dir;
+  // 4 x 3 x 2 voxels x 5 time points: voxel i (x fastest) of time point t holds 50 t + i.
+  std::string voxels;
+  for (int t = 0; t < 5; ++t)
+    for (int i = 0; i < 24; ++i) voxels += char(50 * t + i);
+  const std::string head = "NRRD0004\ntype: uint8\ndimension: 4\nsizes: 4 3 2 5\nkinds: domain domain domain time\n"
+                           "spacings: 0.5 0.5 2 nan\nunits: \"um\" \"um\" \"um\" \"s\"\naxis mins: 0 0 10 nan\n";
+  test::write_file(dir / "raw.nrrd", head + "encoding: raw\n\n" + voxels);
+  for (int t : {0, 3, 4}) {
+    LoadOptions o;
+    o.time_point = t;
+    const Volume v = load_volume(dir / "raw.nrrd", o);
+    ASSERT_EQ(v.dims(), (Dims{4, 3, 2}));
+    EXPECT_EQ(v.time_point, t);
+    EXPECT_EQ(v.time_points, 5);
+    EXPECT_EQ(v.unit, "µm");
+    EXPECT_DOUBLE_EQ(v.origin.z, 10.0) << "every time point has the same box";
+    EXPECT_EQ(v.source_dims, (Dims{0, 0, 0})) << "a whole time point, not a region";
+    EXPECT_EQ(v.value(1, 2, 1), 50 * t + 1 + 4 * (2 + 3 * 1));
+  }
+  // gzip: the same voxels.
+  const auto packed = chunked::encode_chunk(chunked::compressor_by_name("gzip"),
+                                            reinterpret_cast<const uint8_t*>(voxels.data()), voxels.size(), 1);
+  test::write_file(dir / "gz.nrrd", head + "encoding: gzip\n\n" + std::string(packed.begin(), packed.end()));
+  LoadOptions o;
+  o.time_point = 2;
+  EXPECT_EQ(load_volume(dir / "gz.nrrd", o).value(3, 0, 0), 100 + 3);
+  o.time_point = 5;
+  EXPECT_NE(refusal(dir / "raw.nrrd", o).find("time point 5 is outside 0..4"), std::string::npos);
+  test::write_file(dir / "list.nrrd",
+                   "NRRD0004\ntype: uint8\ndimension: 4\nsizes: 2 4 3 2\nkinds: list domain domain domain\n"
+                   "encoding: raw\n\n" + std::string(48, '\x01'));
+  EXPECT_NE(refusal(dir / "list.nrrd").find("holds channels, which peakcast does not read yet"), std::string::npos)
+      << refusal(dir / "list.nrrd");
+  test::write_file(dir / "nokinds.nrrd",
+                   "NRRD0004\ntype: uint8\ndimension: 4\nsizes: 4 3 2 2\nencoding: raw\n\n" + std::string(48, '\x01'));
+  EXPECT_NE(refusal(dir / "nokinds.nrrd").find("needs 'kinds: ... time'"), std::string::npos);
+  test::write_file(dir / "sizes.nrrd", "NRRD0004\ntype: uint8\ndimension: 4\nsizes: 4 3 2\nencoding: raw\n\n");
+  EXPECT_NE(refusal(dir / "sizes.nrrd").find("one value per dimension"), std::string::npos);
 }
