@@ -49,13 +49,16 @@ class Client:
         """One volume's info, with its histogram."""
         return self._json("GET", "/api/volumes/" + urllib.parse.quote(volume_id, safe=""))
 
-    def upload(self, array_or_path, spacing=(1.0, 1.0, 1.0), name=None, origin=None, units=None):
+    def upload(self, array_or_path, spacing=(1.0, 1.0, 1.0), name=None, origin=None, units=None, axes=None):
         """Sends a volume; returns its id, usable as a scene's "volume".
 
         An array is indexed [z, y, x] (any memory order) and holds uint8, int8, uint16, int16 or
         float32 (float64 is sent as float32, which the server keeps; other types are refused);
         spacing and origin are in x, y, z order, in `units` (a unit of length: "um", "nm",
-        "mm", "micrometer", ...; None: the server shows lengths in "units"). A path is a file the server reads as one
+        "mm", "micrometer", ...; None: the server shows lengths in "units"). A 4D array is a
+        time series indexed [t, z, y, x] (`axes="tzyx"`, the default for 4D; a scene's "time"
+        picks the point); channel axes ("czyx", "tczyx") are refused until the server draws
+        channels. A path is a file the server reads as one
         file: NRRD (data attached), MetaImage (.mha) or TIFF; its header gives spacing and origin."""
         if isinstance(array_or_path, (str, os.PathLike)):
             path = os.fspath(array_or_path)
@@ -63,20 +66,28 @@ class Client:
             with open(path, "rb") as f:
                 return self._upload(query, f, os.path.getsize(path))["id"]
         a = np.asarray(array_or_path)
-        if a.ndim != 3:
-            raise ValueError(f"a volume is a 3D array indexed [z, y, x]; this one has shape {a.shape}")
+        axes = axes or {3: "zyx", 4: "tzyx"}.get(a.ndim, "")
+        if not isinstance(axes, str) or len(axes) != a.ndim or axes not in ("zyx", "tzyx"):
+            if isinstance(axes, str) and "c" in axes and len(axes) == a.ndim:
+                raise ValueError(f"axes {axes!r}: the server does not draw channels yet; upload one channel "
+                                 f"(e.g. array[:, 0] for 'czyx' as 'zyx') at a time")
+            raise ValueError(f"a volume is indexed [z, y, x] (axes 'zyx'), a time series [t, z, y, x] ('tzyx'); "
+                             f"this array has shape {a.shape}" + (f" and axes {axes!r}" if axes else ""))
+        times = a.shape[0] if axes == "tzyx" else 1
         if a.dtype.kind == "f" and a.dtype.itemsize == 8:
             a = a.astype(np.float32)  # the server keeps floats as float32: numpy's default float goes as one
         if a.dtype.newbyteorder("=") not in _DTYPES:
             raise ValueError(f"dtype {a.dtype} is not one the server keeps (uint8, int8, uint16, int16, float32): "
                              f"convert it first, e.g. array.astype(np.float32)")
-        if any(n < 2 for n in a.shape):
+        if any(n < 2 for n in a.shape[-3:]):
             raise ValueError(f"every dimension must be >= 2 to render (shape {a.shape})")
         # x fastest in memory, little-endian: the raw layout the server reads.
         a = np.ascontiguousarray(a, dtype=a.dtype.newbyteorder("<"))
-        query = {"dims": ",".join(str(n) for n in a.shape[::-1]), "dtype": _DTYPES[a.dtype.newbyteorder("=")],
+        query = {"dims": ",".join(str(n) for n in a.shape[-3:][::-1]), "dtype": _DTYPES[a.dtype.newbyteorder("=")],
                  "spacing": ",".join(repr(float(s)) for s in _three(spacing, "spacing")),
                  "endian": "little", "name": name or "array"}
+        if times > 1:
+            query["times"] = str(times)
         if units is not None:
             if not isinstance(units, str):
                 raise ValueError(f"units must be a unit of length such as 'um' or 'mm', not {units!r}")

@@ -89,6 +89,33 @@ def test_units_travel_with_an_upload(server):
         c.upload(blobs(), units=3)
 
 
+def test_a_time_series_uploads_and_renders_each_time_point(server):
+    c = peakcast.Client(server.url)
+    series = np.stack([blobs(seed=s) for s in (3, 4, 5)])  # [t, z, y, x]
+    vid = c.upload(series, spacing=(1, 1, 1.5), units="um", name="series")
+    single = c.upload(series[2], spacing=(1, 1, 1.5), units="um", name="t2")
+    try:
+        info = c.volume(vid)
+        assert info["times"] == 3 and info["time"] == 0 and info["dims"] == [28, 24, 20], info
+        t2 = c.render(dict(SCENE, volume=vid, time=2))
+        assert np.array_equal(t2, c.render(dict(SCENE, volume=single))), "time point 2 is the third volume sent"
+        assert not np.array_equal(t2, c.render(dict(SCENE, volume=vid, time=0)))
+        with pytest.raises(peakcast.ServerError) as e:
+            c.render(dict(SCENE, volume=vid, time=3))
+        assert e.value.status == 400 and "time: time point 3 is outside the volume's 0..2" in e.value.message
+    finally:
+        c.delete(vid)
+        c.delete(single)
+    with pytest.raises(ValueError, match="does not draw channels yet"):
+        c.upload(series, axes="czyx")
+    with pytest.raises(ValueError, match=r"\[t, z, y, x\]"):
+        c.upload(np.zeros((2, 2, 4, 4, 4), np.uint8))
+    status, answer = raw_post(server, "dims=28,24,20&dtype=uint16&times=2", series.tobytes())
+    assert status == 400 and "need 53760 bytes" in answer["message"], answer  # 2 time points, 3 sent
+    status, answer = raw_post(server, "dims=28,24,20&dtype=uint16&times=0", series[0].tobytes())
+    assert status == 400 and "times must be an integer" in answer["message"], answer
+
+
 def test_memory_order_does_not_change_the_picture(server):
     c = peakcast.Client(server.url)
     a = blobs()

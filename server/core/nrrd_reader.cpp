@@ -145,7 +145,8 @@ void parse_nrrd_field(const fs::path& path, const std::string& field, const std:
   } else if (field == "sizes") {
     auto parts = split_ws(value);
     if (n.dimension == 0 || int(parts.size()) != n.dimension)
-      throw VolumeError(path, "sizes must list one value per dimension (dimension " + std::to_string(n.dimension) + ")");
+      throw VolumeError(path,
+                        "sizes must list one value per dimension (dimension " + std::to_string(n.dimension) + ")");
     for (int a = 0; a < 3; ++a) h.dims[a] = parse_int(path, field, parts[a]);
     if (n.dimension == 4) n.times = parse_int(path, field, parts[3]);
     n.have_sizes = true;
@@ -179,7 +180,8 @@ void parse_nrrd_field(const fs::path& path, const std::string& field, const std:
   } else if (field == "space units" || (field == "units" && n.units_field != "space units")) {
     const auto u = quoted_strings(value);
     if (u.size() != (field == "units" ? size_t(std::max(n.dimension, 3)) : 3))
-      throw VolumeError(path, "'" + field + "' must list a quoted unit per " + (field == "units" ? "axis" : "space axis"));
+      throw VolumeError(path,
+                        "'" + field + "' must list a quoted unit per " + (field == "units" ? "axis" : "space axis"));
     n.units = {u[0], u[1], u[2]};
     n.units_field = field;
   } else if (field == "encoding") {
@@ -231,8 +233,9 @@ void check_nrrd_fields(const fs::path& path, NrrdHeader& n) {
   if (n.dimension == 4) {  // a time series: the 4th axis, the slowest, of kind time
     const bool leading_channels = !n.kinds.empty() && n.kinds[0] != "domain" && n.kinds[0] != "space";
     if (leading_channels)
-      throw VolumeError(path, "a 4-D NRRD whose first axis is '" + n.kinds[0] +
-                                  "' holds channels, which peakcast does not read yet (one channel a file: NRRD or OME-Zarr)");
+      throw VolumeError(
+          path, "a 4-D NRRD whose first axis is '" + n.kinds[0] +
+                    "' holds channels, which peakcast does not read yet (one channel a file: NRRD or OME-Zarr)");
     if (n.kinds.size() != 4 || n.kinds[3] != "time")
       throw VolumeError(path, "a 4-D NRRD is read as a time series: its 4th axis needs 'kinds: ... time'");
     if (n.times < 1) throw VolumeError(path, "the time axis has " + std::to_string(n.times) + " points");
@@ -286,35 +289,6 @@ void locate_nrrd_data(const fs::path& path, NrrdHeader& n) {
   }
 }
 
-// A 4-D file's time point options.time_point: the box of z from t Z to (t + 1) Z of the volume
-// the file is as X x Y x (Z T) voxels, read as any region is (raw: its rows; gzip: inflated to
-// its last row), and told which time point it is.
-Volume read_time_point(const fs::path& path, const NrrdHeader& n, const LoadOptions& options) {
-  const int64_t t = options.time_point, Z = n.h.dims[2];
-  if (t < 0 || t >= n.times)
-    throw VolumeError(path, "time point " + std::to_string(t) + " is outside 0.." + std::to_string(n.times - 1));
-  VolumeHeader series = n.h;
-  if (__builtin_mul_overflow(Z, n.times, &series.dims[2])) throw VolumeError(path, "sizes overflow 64-bit voxel count");
-  series.time_point = t;
-  series.time_points = n.times;
-  LoadOptions o = options;
-  VoxelRegion r = options.region.value_or(VoxelRegion{{0, 0, 0}, n.h.dims});
-  if (r.hi[2] > Z) throw VolumeError(path, "region past the volume's " + std::to_string(Z) + " slices");
-  r.lo[2] += t * Z;
-  r.hi[2] += t * Z;
-  o.region = r;
-  Volume v = read_payload(path, series, n.payload, o);
-  v.origin.z = n.h.origin.z + double(r.lo[2] - t * Z) * n.h.spacing.z;
-  if (options.region) {
-    v.source_dims = n.h.dims;
-    v.region_lo[2] -= t * Z;
-  } else {
-    v.source_dims = {0, 0, 0};
-    v.region_lo = {0, 0, 0};
-  }
-  return v;
-}
-
 }  // namespace
 
 Volume read_nrrd(const fs::path& path, const LoadOptions& options) {
@@ -327,7 +301,7 @@ Volume read_nrrd(const fs::path& path, const LoadOptions& options) {
   check_nrrd_fields(path, n);
   locate_nrrd_data(path, n);
   if (n.dimension == 3) return read_payload(path, n.h, n.payload, options);
-  return read_time_point(path, n, options);
+  return read_time_point(path, n.h, n.times, n.payload, options);
 }
 
 }  // namespace peakcast::detail

@@ -1,6 +1,6 @@
 // Raw voxels with a JSON sidecar: {"dims": [x,y,z], "dtype": "uint16", "spacing": [..],
 // "origin": [..], "endian": "little"|"big", "data_file": "v.raw", "encoding": "raw"|"gzip",
-// "units": "µm"}.
+// "units": "µm", "times": T (T volumes one after another: a time series)}.
 // Open either the .json or the data file (its sidecar is `<file>.json` or `<stem>.json`).
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -22,6 +22,15 @@ void sidecar_units(const nlohmann::json& j, const fs::path& sidecar, VolumeHeade
   std::array<std::string, 3> names;
   for (int a = 0; a < 3; ++a) names[size_t(a)] = (u.is_string() ? u : u[size_t(a)]).get<std::string>();
   h.unit = common_unit(names, h.spacing, h.origin, "'units'");
+}
+
+// The sidecar's "times": how many volumes of its dims the data holds, one after another (1: one).
+int64_t sidecar_times(const nlohmann::json& j, const fs::path& sidecar) {
+  if (!j.contains("times")) return 1;
+  const auto& t = j.at("times");
+  if (!t.is_number_integer() || t.get<int64_t>() < 1 || t.get<int64_t>() > 1000000)
+    throw VolumeError(sidecar, "'times' must be an integer from 1 to 1000000 (time points)");
+  return t.get<int64_t>();
 }
 
 }  // namespace
@@ -49,7 +58,7 @@ Volume read_raw_json(const fs::path& path, const LoadOptions& options) {
   }
   if (!j.is_object()) throw VolumeError(sidecar, "sidecar must be a JSON object");
   static const char* known[] = {"dims",      "dtype",    "spacing",   "origin", "endian",
-                                "data_file", "encoding", "byte_skip", "units"};
+                                "data_file", "encoding", "byte_skip", "units",  "times"};
   for (auto& [key, _] : j.items())
     if (std::find(std::begin(known), std::end(known), key) == std::end(known))
       throw VolumeError(sidecar, "unknown key '" + key + "'");
@@ -64,6 +73,7 @@ Volume read_raw_json(const fs::path& path, const LoadOptions& options) {
   };
   VolumeHeader h;
   PayloadSpec payload;
+  const int64_t times = sidecar_times(j, sidecar);
   try {
     if (!j.contains("dims")) throw VolumeError(sidecar, "missing key 'dims'");
     if (!j.contains("dtype")) throw VolumeError(sidecar, "missing key 'dtype'");
@@ -102,6 +112,7 @@ Volume read_raw_json(const fs::path& path, const LoadOptions& options) {
   } catch (const std::invalid_argument& e) {
     throw VolumeError(sidecar, e.what());
   }
+  if (times > 1) return read_time_point(sidecar, h, times, payload, options);
   return read_payload(sidecar, h, payload, options);
 }
 

@@ -56,6 +56,13 @@ void inflate_file(const std::filesystem::path& path, int64_t skip, Encoding enc,
 Volume read_payload_region(const std::filesystem::path& header_file, const VolumeHeader& h, const PayloadSpec& payload,
                            const LoadOptions& options);
 
+// Time point options.time_point of a file holding `times` volumes of header h one after another
+// (a 4-D NRRD with its time axis last, a raw sidecar's "times"): the box of z from t Z to
+// (t + 1) Z of the file read as X x Y x (Z T) voxels, as any region is (raw: its rows; gzip:
+// inflated to its last row), with options.region inside it, told which time point it is.
+Volume read_time_point(const std::filesystem::path& path, const VolumeHeader& h, int64_t times,
+                       const PayloadSpec& payload, const LoadOptions& options);
+
 // Post-processing shared with the TIFF reader.
 void finish_volume(const std::filesystem::path& file, Volume& v, bool big_endian, const LoadOptions& options);
 

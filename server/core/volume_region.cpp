@@ -125,4 +125,31 @@ Volume read_payload_region(const fs::path& header_file, const VolumeHeader& h, c
   return v;
 }
 
+Volume read_time_point(const fs::path& path, const VolumeHeader& h, int64_t times, const PayloadSpec& payload,
+                       const LoadOptions& options) {
+  const int64_t t = options.time_point, Z = h.dims[2];
+  if (t < 0 || t >= times)
+    throw VolumeError(path, "time point " + std::to_string(t) + " is outside 0.." + std::to_string(times - 1));
+  VolumeHeader series = h;
+  if (__builtin_mul_overflow(Z, times, &series.dims[2])) throw VolumeError(path, "sizes overflow 64-bit voxel count");
+  series.time_point = t;
+  series.time_points = times;
+  LoadOptions o = options;
+  VoxelRegion r = options.region.value_or(VoxelRegion{{0, 0, 0}, h.dims});
+  if (r.hi[2] > Z) throw VolumeError(path, "region past the volume's " + std::to_string(Z) + " slices");
+  r.lo[2] += t * Z;
+  r.hi[2] += t * Z;
+  o.region = r;
+  Volume v = read_payload(path, series, payload, o);
+  v.origin.z = h.origin.z + double(r.lo[2] - t * Z) * h.spacing.z;
+  if (options.region) {
+    v.source_dims = h.dims;
+    v.region_lo[2] -= t * Z;
+  } else {
+    v.source_dims = {0, 0, 0};
+    v.region_lo = {0, 0, 0};
+  }
+  return v;
+}
+
 }  // namespace peakcast::detail

@@ -94,6 +94,10 @@ std::optional<nlohmann::json> raw_header_from_query(const std::string& target) {
   h["dims"] = numbers("dims");
   for (const char* key : {"spacing", "origin"})
     if (!query_param(target, key).empty()) h[key] = numbers(key);
+  if (!query_param(target, "times").empty()) {
+    const nlohmann::json t = numbers("times");
+    h["times"] = t.size() == 1 ? t[0] : t;  // a list is refused by name, as any wrong value
+  }
   for (const char* key : {"dtype", "endian", "units"})
     if (const std::string v = url_decode(query_param(target, key)); !v.empty()) h[key] = v;
   return h;

@@ -124,10 +124,11 @@ UploadFormat sniff_upload(const fs::path& file, bool raw_header_given) {
 
 nlohmann::json raw_sidecar(const nlohmann::json& h, const std::string& data_file) {
   if (!h.is_object()) throw bad("the raw header must be a JSON object");
-  static const char* known[] = {"dims", "dtype", "spacing", "origin", "endian", "units"};
+  static const char* known[] = {"dims", "dtype", "spacing", "origin", "endian", "units", "times"};
   for (auto& [key, _] : h.items())
     if (std::find(std::begin(known), std::end(known), key) == std::end(known))
-      throw bad("raw header: unknown key '" + key.substr(0, 40) + "' (dims, dtype, spacing, origin, endian, units)");
+      throw bad("raw header: unknown key '" + key.substr(0, 40) +
+                "' (dims, dtype, spacing, origin, endian, units, times)");
   auto triple = [&](const char* key, bool positive_int) {
     const auto& v = h.at(key);
     if (!v.is_array() || v.size() != 3) throw bad(std::string("raw header: ") + key + " must be 3 numbers");
@@ -160,6 +161,11 @@ nlohmann::json raw_sidecar(const nlohmann::json& h, const std::string& data_file
       throw bad(e.what());
     }
   }
+  if (h.contains("times")) {  // a time series: that many volumes of dims, one after another
+    if (!h["times"].is_number_integer() || h["times"].get<int64_t>() < 1 || h["times"].get<int64_t>() > 1000000)
+      throw bad("raw header: times must be an integer from 1 to 1000000 (time points)");
+    out["times"] = h["times"];
+  }
   if (h.contains("endian")) {
     if (h["endian"] != "little" && h["endian"] != "big") throw bad("raw header: endian must be little or big");
     out["endian"] = h["endian"];
@@ -182,6 +188,10 @@ void check_raw_body(const nlohmann::json& sidecar, int64_t body_bytes) {
                 ")");
     if (__builtin_mul_overflow(need, n, &need)) throw bad("raw header: dims overflow a 64-bit size");
     dims += (dims.empty() ? "" : "x") + std::to_string(n);
+  }
+  if (const int64_t times = sidecar.value("times", int64_t(1)); times > 1) {
+    if (__builtin_mul_overflow(need, times, &need)) throw bad("raw header: dims overflow a 64-bit size");
+    dims += " x " + std::to_string(times) + " time points";
   }
   if (need != body_bytes)
     throw bad("raw voxels: dims " + dims + " of " + sidecar.at("dtype").get<std::string>() + " need " +

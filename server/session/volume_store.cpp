@@ -259,6 +259,12 @@ std::string VolumeStore::key_of(const std::string& id, int64_t time) {
   return time == 0 ? id : id + "\x1ft" + std::to_string(time);  // \x1f: never in an id
 }
 
+LoadOptions VolumeStore::options_of(const VolumeEntry& base) const {
+  LoadOptions o = options_;
+  o.single_file = base.uploaded;  // an upload is one file (session/upload_store.cpp)
+  return o;
+}
+
 std::shared_ptr<VolumeEntry> VolumeStore::find_time(const std::string& id, int64_t time) const {
   return find(key_of(id, time));
 }
@@ -270,7 +276,8 @@ std::shared_ptr<VolumeEntry> VolumeStore::at_time(const std::string& id_or_path,
   if (const std::string why = time_refusal(time, base->volume->time_points); !why.empty()) throw SceneError(why);
   if (auto e = find(key_of(base->id, time))) return e;
   try {
-    return add(base->id, base->path, false, base->uploaded ? base->name : "", std::move(progress), nullptr, base->owner,
+    const LoadOptions o = options_of(*base);
+    return add(base->id, base->path, false, base->uploaded ? base->name : "", std::move(progress), &o, base->owner,
                time);
   } catch (const VolumeError& e) {
     throw VolumeError(base->id,
@@ -299,7 +306,8 @@ void VolumeStore::read_ahead(const std::string& id, int64_t time, int count) {
     }
     if (!fits()) return;  // the budget is full of what is viewed or ahead
     try {
-      add(base->id, base->path, false, base->uploaded ? base->name : "", {}, nullptr, base->owner, t);
+      const LoadOptions o = options_of(*base);
+      add(base->id, base->path, false, base->uploaded ? base->name : "", {}, &o, base->owner, t);
     } catch (const std::exception& e) {
       log::warn("a time point could not be read ahead", {{"volume", id}, {"time", t}, {"error", e.what()}});
       return;

@@ -134,6 +134,7 @@ class VolumeStore {
                                    int64_t time = 0);
   // entries_'s key: the id for time point 0, else the id and the time point.
   static std::string key_of(const std::string& id, int64_t time);
+  LoadOptions options_of(const VolumeEntry& base) const;  // another time point's read of base's file
   std::string without_paths(std::string message, const std::filesystem::path& resolved, const std::string& asked) const;
   struct Upload {
     std::filesystem::path path;

@@ -104,7 +104,8 @@ TEST(Units, NrrdSpaceUnitsAndAxisUnits) {
   EXPECT_EQ(load_volume(nrrd_with(dir.path(), "d.nrrd", "units: \"???\" \"???\" \"???\"")).unit, "");
   const std::string why = refusal(nrrd_with(dir.path(), "e.nrrd", "space units: \"mm\" \"mm\" \"ms\""));
   EXPECT_NE(why.find("'space units': 'ms' is not a unit of length"), std::string::npos) << why;
-  EXPECT_NE(refusal(nrrd_with(dir.path(), "f.nrrd", "space units: \"mm\" \"mm\"")).find("must list a quoted unit per space axis"),
+  EXPECT_NE(refusal(nrrd_with(dir.path(), "f.nrrd", "space units: \"mm\" \"mm\""))
+                .find("must list a quoted unit per space axis"),
             std::string::npos);
   // What peakcast writes it reads back with its unit.
   Volume v = test::anisotropic_blobs(SourceType::U8, {5, 4, 3});
@@ -275,8 +276,9 @@ TEST(Time, NrrdWithATimeAxisLast) {
   std::string voxels;
   for (int t = 0; t < 5; ++t)
     for (int i = 0; i < 24; ++i) voxels += char(50 * t + i);
-  const std::string head = "NRRD0004\ntype: uint8\ndimension: 4\nsizes: 4 3 2 5\nkinds: domain domain domain time\n"
-                           "spacings: 0.5 0.5 2 nan\nunits: \"um\" \"um\" \"um\" \"s\"\naxis mins: 0 0 10 nan\n";
+  const std::string head =
+      "NRRD0004\ntype: uint8\ndimension: 4\nsizes: 4 3 2 5\nkinds: domain domain domain time\n"
+      "spacings: 0.5 0.5 2 nan\nunits: \"um\" \"um\" \"um\" \"s\"\naxis mins: 0 0 10 nan\n";
   test::write_file(dir / "raw.nrrd", head + "encoding: raw\n\n" + voxels);
   for (int t : {0, 3, 4}) {
     LoadOptions o;
@@ -301,7 +303,8 @@ TEST(Time, NrrdWithATimeAxisLast) {
   EXPECT_NE(refusal(dir / "raw.nrrd", o).find("time point 5 is outside 0..4"), std::string::npos);
   test::write_file(dir / "list.nrrd",
                    "NRRD0004\ntype: uint8\ndimension: 4\nsizes: 2 4 3 2\nkinds: list domain domain domain\n"
-                   "encoding: raw\n\n" + std::string(48, '\x01'));
+                   "encoding: raw\n\n" +
+                       std::string(48, '\x01'));
   EXPECT_NE(refusal(dir / "list.nrrd").find("holds channels, which peakcast does not read yet"), std::string::npos)
       << refusal(dir / "list.nrrd");
   test::write_file(dir / "nokinds.nrrd",
@@ -309,4 +312,25 @@ TEST(Time, NrrdWithATimeAxisLast) {
   EXPECT_NE(refusal(dir / "nokinds.nrrd").find("needs 'kinds: ... time'"), std::string::npos);
   test::write_file(dir / "sizes.nrrd", "NRRD0004\ntype: uint8\ndimension: 4\nsizes: 4 3 2\nencoding: raw\n\n");
   EXPECT_NE(refusal(dir / "sizes.nrrd").find("one value per dimension"), std::string::npos);
+}
+
+TEST(Time, RawSidecarTimes) {
+  test::TempDir dir;
+  std::string voxels;
+  for (int t = 0; t < 3; ++t)
+    for (int i = 0; i < 24; ++i) voxels += char(10 * t + i);
+  test::write_file(dir / "s.raw", voxels);
+  test::write_file(dir / "s.raw.json", R"({"dims":[4,3,2],"dtype":"uint8","times":3})");
+  LoadOptions o;
+  o.time_point = 2;
+  const Volume v = load_volume(dir / "s.raw", o);
+  EXPECT_EQ(v.time_points, 3);
+  EXPECT_EQ(v.time_point, 2);
+  EXPECT_EQ(v.value(3, 2, 1), 20 + 23);
+  o.time_point = 3;
+  EXPECT_NE(refusal(dir / "s.raw", o).find("time point 3 is outside 0..2"), std::string::npos);
+  test::write_file(dir / "s.raw.json", R"({"dims":[4,3,2],"dtype":"uint8","times":0})");
+  EXPECT_NE(refusal(dir / "s.raw").find("'times' must be an integer"), std::string::npos);
+  test::write_file(dir / "s.raw.json", R"({"dims":[4,3,2],"dtype":"uint8","times":4})");
+  EXPECT_NE(refusal(dir / "s.raw").find("truncated"), std::string::npos) << "4 time points promised, 3 held";
 }
