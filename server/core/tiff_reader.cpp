@@ -110,15 +110,15 @@ Hyperstack hyperstack_of(const fs::path& file, const ImageSpec& spec, int64_t pa
   s.frames = f >= 1 && f == std::floor(f) ? int64_t(f) : 1;
   s.slices = pages / (s.channels * s.frames);
   if (s.slices * s.channels * s.frames != pages || s.slices < 1)
-    throw VolumeError(file, "ImageJ says " + std::to_string(s.channels) + " channels x " +
-                                std::to_string(s.frames) + " frames, which does not divide its " +
-                                std::to_string(pages) + " pages");
+    throw VolumeError(file, "ImageJ says " + std::to_string(s.channels) + " channels x " + std::to_string(s.frames) +
+                                " frames, which does not divide its " + std::to_string(pages) + " pages");
   s.time = options.time_point;
   s.channel = options.channel;
   if (s.time < 0 || s.time >= s.frames)
     throw VolumeError(file, "time point " + std::to_string(s.time) + " is outside 0.." + std::to_string(s.frames - 1));
   if (s.channel < 0 || s.channel >= s.channels)
-    throw VolumeError(file, "channel " + std::to_string(s.channel) + " is outside 0.." + std::to_string(s.channels - 1));
+    throw VolumeError(file,
+                      "channel " + std::to_string(s.channel) + " is outside 0.." + std::to_string(s.channels - 1));
   return s;
 }
 
