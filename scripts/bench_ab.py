@@ -12,10 +12,10 @@ samples), differential + adaptive (Marschner-Lobb, dense TF), em (900x500x930 u8
 With --count, instructions are counted instead of time (the machine's timings scatter by 15%,
 instructions do not): each build runs each scene under `valgrind --tool=cachegrind --cache-sim=no`
 with --frames 1 and with --frames 3, and (I3 - I1) / 2 is one frame's instructions, whole process
-(GL: `LP_NUM_THREADS=1`, the shader being llvmpipe's JIT code). GL's programs are compiled once per
-build under valgrind first, into private Mesa and peakcast program caches, so that both valgrind
-runs load the same programs and the subtraction cancels the load (compiling under valgrind takes
-over 15 minutes a scene).
+(GL: `LP_NUM_THREADS=1`, the shader being llvmpipe's JIT code). On GL both program caches are
+off, so that both runs compile the same programs and the subtraction cancels the compile
+(compiling under valgrind takes over 15 minutes a scene; a cache does not help: see
+docs/performance.md, "Counting instructions instead of timing").
 
 Usage: scripts/bench_ab.py --old DIR --new DIR [--size 512] [--frames 5] [--rounds 2]
        [--backends cpu,gl] [--scenes LIST] [--data-dir bench-data/ab] [--count]
@@ -86,21 +86,21 @@ def time_scene(build, shaders, backend, scene, frames):
 
 def count_scene(build, shaders, backend, scene, caches):
     """One frame's instructions (whole process) by cachegrind: (frames 3 - frames 1) / 2."""
-    env = dict(os.environ, PEAKCAST_BACKEND=backend, PEAKCAST_SHADER_DIR=str(shaders), LP_NUM_THREADS="1",
-               MESA_SHADER_CACHE_DIR=str(caches / "mesa"), PEAKCAST_PROGRAM_CACHE=str(caches / "programs"))
-    env.pop("MESA_SHADER_CACHE_DISABLE", None)
+    env = dict(os.environ, PEAKCAST_BACKEND=backend, PEAKCAST_SHADER_DIR=str(shaders), LP_NUM_THREADS="1")
+    # GL: both program caches off, so that both runs compile alike and the difference is frames
+    # alone. A cache warmed outside valgrind is not the one a run under it reads (llvmpipe sees
+    # other CPU features there, 128-bit vectors), and one warmed under it still gained entries
+    # from run to run: counts with caches on came out negative (docs/performance.md).
+    if backend == "gl":
+        env.update(MESA_SHADER_CACHE_DISABLE="true", PEAKCAST_PROGRAM_CACHE="off")
     bench = [build / "server/peakcast-bench", "scene", scene, "--warmup", 0, "--orbit", 0, "--frames"]
     counts = {}
-    # On GL a first run under valgrind compiles (and stores) the programs: under valgrind llvmpipe
-    # sees other CPU features (128-bit vectors, not the host's 256), so its programs and Mesa's
-    # cache keys differ from a run outside valgrind, which would warm nothing the counts use.
-    for frames in ((0, 1, 3) if backend == "gl" else (1, 3)):
+    for frames in (1, 3):
         out = subprocess.run(["valgrind", "--tool=cachegrind", "--cache-sim=no", "--cachegrind-out-file=/dev/null"]
-                             + [str(c) for c in bench + [max(frames, 1)]], env=env, capture_output=True, text=True,
-                             check=True)
+                             + [str(c) for c in bench + [frames]], env=env, capture_output=True, text=True, check=True)
         counts[frames] = int(re.search(r"I\s+refs:\s+([\d,]+)", out.stderr).group(1).replace(",", ""))
     if counts[3] <= counts[1]:
-        raise SystemExit(f"{scene}: 3 frames counted {counts[3]} instructions, 1 frame {counts[1]}: a cache was cold")
+        raise SystemExit(f"{scene}: 3 frames counted {counts[3]} instructions, 1 frame {counts[1]}: not one frame apart")
     return (counts[3] - counts[1]) / 2.0
 
 
