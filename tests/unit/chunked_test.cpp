@@ -278,6 +278,12 @@ TEST(Zarr, Refusals) {
                     })
                 .find("axes must be [t,] [c,] z, y, x"),
             std::string::npos);
+  EXPECT_NE(variant("axisname",  // a name not in NGFF's list, with no type that says what it is
+                    [&](const fs::path& p) {
+                      edit_zattrs(p, [](json& j) { j["multiscales"][0]["axes"][0] = {{"name", "q"}}; });
+                    })
+                .find("axis 'q' is not a time, channel or x/y/z axis"),
+            std::string::npos);
   EXPECT_NE(variant("nojson", [&](const fs::path& p) { test::write_file(p / ".zattrs", "{not json"); })
                 .find("not valid JSON"),
             std::string::npos);
