@@ -77,14 +77,7 @@ void WsSession::volume_removed(const std::string& id) {
     self->send_error("volume_deleted", "the volume '" + id + "' was deleted" +
                                            (fallback.empty() ? std::string() : "; showing '" + fallback + "'"));
     if (fallback.empty() || fallback == id) return self->close(websocket::close_code::going_away, "volume deleted");
-    self->guarded([&] {
-      self->with_volume(fallback, [self](std::shared_ptr<VolumeEntry> entry) {
-        self->session_->set_volume(entry);
-        self->prepare_finest(entry);
-        self->queue_text(protocol::volume_message(entry->info(true), self->session_->state_json()));
-        self->app_.render.notify();
-      });
-    });
+    self->guarded([&] { self->open_volume(fallback); });
   });
 }
 
