@@ -40,11 +40,11 @@ struct MakeVolumeArgs {
 // Which level, time point and channel of a chunked volume (OME-Zarr, Neuroglancer precomputed).
 struct ChunkSelectArgs {
   int level = 0;
-  int64_t time = 0, channel = 0;
+  int64_t time = -1, channel = 0;  // time -1: not given (time point 0; convert: every time point)
   LoadOptions options() const {
     LoadOptions o;
     o.level = level;
-    o.time_point = time;
+    o.time_point = std::max<int64_t>(time, 0);
     o.channel = channel;
     return o;
   }
@@ -53,7 +53,8 @@ struct ChunkSelectArgs {
 void add_chunk_select(CLI::App* cmd, ChunkSelectArgs& a) {
   cmd->add_option("--level", a.level, "chunked volumes: pyramid level (0: full resolution)")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--time", a.time, "chunked volumes: time point (OME-Zarr t axis)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--time", a.time, "a time series: the time point (default 0; convert: every one)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--channel", a.channel, "chunked volumes: channel (OME-Zarr c axis, precomputed channels)")
       ->check(CLI::NonNegativeNumber);
 }
@@ -93,15 +94,17 @@ chunked::ZarrWriteOptions zarr_options(const ConvertArgs& a) {
   return zo;
 }
 
-int convert_by_slabs(const ConvertArgs& a, int64_t budget) {
-  const auto r = chunked::convert_to_ome_zarr_by_slabs(a.in, a.out, a.select.options(), zarr_options(a), budget);
+int convert_by_slabs(const ConvertArgs& a, int64_t budget, bool series) {
+  const auto r =
+      chunked::convert_to_ome_zarr_by_slabs(a.in, a.out, a.select.options(), zarr_options(a), budget, series);
   const Dims& d = r.header.dims;
+  const std::string times = series ? " x " + std::to_string(r.header.time_points) + " time points" : "";
   std::printf(
-      "wrote %s: OME-Zarr, %d level%s, %lld chunks, %.1f MiB (%lldx%lldx%lld %s, read by slabs of %lld "
+      "wrote %s: OME-Zarr, %d level%s, %lld chunks, %.1f MiB (%lldx%lldx%lld %s%s, read by slabs of %lld "
       "planes within %.0f MiB: largest slab %.1f MiB, %d pass%s over the input), peak RSS %.1f MiB\n",
       a.out.c_str(), r.zarr.levels, r.zarr.levels == 1 ? "" : "s", (long long)r.zarr.chunks,
       double(r.zarr.bytes) / 1048576.0, (long long)d[0], (long long)d[1], (long long)d[2], to_string(r.header.source),
-      (long long)r.slab_planes, double(budget) / 1048576.0, double(r.slab_bytes) / 1048576.0, r.passes,
+      times.c_str(), (long long)r.slab_planes, double(budget) / 1048576.0, double(r.slab_bytes) / 1048576.0, r.passes,
       r.passes == 1 ? "" : "es", peak_rss_mib());
   if (2 * r.slab_bytes > budget)
     std::fprintf(stderr,
@@ -173,17 +176,24 @@ int run_convert(const ConvertArgs& ca) {
     throw std::invalid_argument("--pyramid, --chunk and --compressor are for an OME-Zarr output (OUT.zarr)");
   if (zarr && ca.gzip) throw std::invalid_argument("--gzip is for .raw, .nrrd and .nhdr; OME-Zarr takes --compressor");
   if (!zarr && ca.memory_budget_mib > 0) throw std::invalid_argument("--memory-budget-mib is for an OME-Zarr output");
+  const int64_t budget = ca.memory_budget_mib > 0 ? ca.memory_budget_mib << 20 : half_of_memory();
+  const bool all_times = ca.select.time < 0;  // no --time: a series is written whole (OME-Zarr)
   if (zarr) {
-    const int64_t budget = ca.memory_budget_mib > 0 ? ca.memory_budget_mib << 20 : half_of_memory();
     try {
       VolumeHeader h;
       const int64_t bytes = chunked::source_voxel_bytes(ca.in, ca.select.options(), &h);
-      if (chunked::whole_convert_bytes(bytes) > budget || h.voxel_count() > ca.select.options().max_voxels)
-        return convert_by_slabs(ca, budget);
+      const bool series = all_times && h.time_points > 1;
+      if (series || chunked::whole_convert_bytes(bytes) > budget || h.voxel_count() > ca.select.options().max_voxels)
+        return convert_by_slabs(ca, budget, series);
     } catch (const RegionNotReadable&) {  // a TIFF stack: read whole below, whatever its size
     }
   }
   const Volume v = load_volume(ca.in, ca.select.options());
+  if (v.time_points > 1 && all_times) {
+    if (zarr) return convert_by_slabs(ca, budget, true);  // a TIFF hyperstack: a time point at a time
+    throw std::invalid_argument(ca.in + " holds " + std::to_string(v.time_points) + " time points and " +
+                                lower_ext(ca.out) + " one: name it with --time T, or write OME-Zarr (OUT.zarr)");
+  }
   if (!zarr) {
     write_volume(ca.out, v, {ca.gzip});
     std::printf("wrote %s: %s\n", ca.out.c_str(), v.to_string().c_str());
@@ -251,6 +261,8 @@ int run_info(const InfoArgs& ia) {
       "load: %.1f ms (read %.1f ms, range and histogram %.1f ms)\n",
       v.spacing.x, v.spacing.y, v.spacing.z, v.origin.x, v.origin.y, v.origin.z, v.min_value, v.max_value,
       double(v.byte_size()) / 1048576.0, v.load_ms, v.load_ms - v.statistics_ms, v.statistics_ms);
+  if (v.time_points > 1)
+    std::printf("time: point %lld of 0..%lld\n", (long long)v.time_point, (long long)(v.time_points - 1));
   if (v.nonfinite_replaced > 0)
     std::printf("warning: %lld NaN/Inf voxels replaced by the finite range ends\n", (long long)v.nonfinite_replaced);
   print_macrocells(v, ia);

@@ -66,7 +66,7 @@ void write_pyramid(const OutOfCoreArgs& a, const fs::path& path, nlohmann::json&
   zo.compressor = {chunked::Compressor::Zstd, 1};
   auto t = Clock::now();
   const auto written = chunked::write_ome_zarr_levels(
-      path, h, levels, "synthetic", zo, [&](int k, const Dims& lo, const Dims& box, uint8_t* dst) {
+      path, h, levels, "synthetic", zo, [&](int k, int64_t, const Dims& lo, const Dims& box, uint8_t* dst) {
         const auto& tb = tables[size_t(k)];
         for (int64_t z = 0; z < box[2]; ++z)
           for (int64_t y = 0; y < box[1]; ++y) {

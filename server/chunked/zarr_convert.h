@@ -15,7 +15,7 @@ namespace peakcast::chunked {
 
 struct SlabConvertReport {
   ZarrWriteReport zarr;
-  VolumeHeader header;      // level 0's
+  VolumeHeader header;      // level 0's (time_points: those written)
   int64_t slab_planes = 0;  // z-planes per slab read from IN
   int64_t slab_bytes = 0;   // the largest slab's voxel bytes
   int passes = 1;           // reads of IN (2 for a float volume: its finite range first)
@@ -29,12 +29,14 @@ int64_t source_voxel_bytes(const std::filesystem::path& in, const LoadOptions& s
 // copy of it and the pyramid's coarser levels (1/7 more), rounded up.
 inline int64_t whole_convert_bytes(int64_t voxel_bytes) { return voxel_bytes / 4 * 9; }
 
-// Writes `in` (any format with region reads: raw, NRRD, MetaImage, OME-Zarr, precomputed) as
-// OME-Zarr at `out`, reading at most two slabs at a time whose voxels fit `budget_bytes` together
-// (at least one chunk edge of planes each). Throws VolumeError (unreadable input, `out` exists,
-// a TIFF stack) or std::invalid_argument (options).
+// Writes `in` as OME-Zarr at `out`, reading at most two slabs at a time whose voxels fit
+// `budget_bytes` together (at least one chunk edge of planes each) from a format with region reads
+// (raw, NRRD, MetaImage, OME-Zarr, precomputed); a TIFF stack is read a whole time point at a time.
+// `series`: every time point of `in` (a t axis; select.time_point is ignored), else the one
+// selected. Throws VolumeError (unreadable input, `out` exists) or std::invalid_argument
+// (options).
 SlabConvertReport convert_to_ome_zarr_by_slabs(const std::filesystem::path& in, const std::filesystem::path& out,
                                                const LoadOptions& select, const ZarrWriteOptions& options,
-                                               int64_t budget_bytes);
+                                               int64_t budget_bytes, bool series = false);
 
 }  // namespace peakcast::chunked

@@ -71,76 +71,109 @@ void write_json(const fs::path& file, const json& j) {
   write_file(file, s.data(), s.size());
 }
 
-ZarrWriteReport write_levels(const fs::path& out, const fs::path& tmp, const VolumeHeader& h, int levels,
-                             const std::string& name, const ZarrWriteOptions& options, const ChunkFill& fill) {
-  std::error_code ec;
-  const size_t bpv = source_bytes(h.source);
-  ZarrWriteReport report;
-  report.levels = levels;
-  json datasets = json::array();
-  std::atomic<int64_t> chunks{0}, bytes{0};
-  Dims dims = h.dims;
-  for (int k = 0; k < levels; ++k, dims = Dims{(dims[0] + 1) / 2, (dims[1] + 1) / 2, (dims[2] + 1) / 2}) {
-    const fs::path dir = tmp / std::to_string(k);
-    fs::create_directories(dir);
-    Dims e{};  // the chunk edge, no larger than the level (a thin slab gets thin chunks)
-    for (int a = 0; a < 3; ++a) e[a] = std::min(options.chunk, dims[a]);
-    write_json(dir / ".zarray", {{"zarr_format", 2},
-                                 {"shape", {dims[2], dims[1], dims[0]}},
-                                 {"chunks", {e[2], e[1], e[0]}},
-                                 {"dtype", dtype_of(h.source)},
-                                 {"compressor", compressor_json(options.compressor)},
-                                 {"fill_value", 0},
-                                 {"order", "C"},
-                                 {"filters", nullptr},
-                                 {"dimension_separator", "/"}});
-    const Dims grid{(dims[0] + e[0] - 1) / e[0], (dims[1] + e[1] - 1) / e[1], (dims[2] + e[2] - 1) / e[2]};
-    for (int64_t z = 0; z < grid[2]; ++z)
-      for (int64_t y = 0; y < grid[1]; ++y) fs::create_directories(dir / std::to_string(z) / std::to_string(y));
-    parallel_for(size_t(grid[0] * grid[1] * grid[2]), [&](size_t i) {
-      const Dims c{int64_t(i) % grid[0], int64_t(i) / grid[0] % grid[1], int64_t(i) / (grid[0] * grid[1])};
-      Dims lo{}, box{};
-      for (int a = 0; a < 3; ++a) {
-        lo[a] = c[a] * e[a];
-        box[a] = std::min(e[a], dims[a] - lo[a]);
-      }
-      std::vector<uint8_t> part(size_t(box[0] * box[1] * box[2]) * bpv);
-      fill(k, lo, box, part.data());
-      std::vector<uint8_t> whole(size_t(e[0] * e[1] * e[2]) * bpv, 0);  // zarr stores full chunks: 0-padded
-      for (int64_t z = 0; z < box[2]; ++z)
-        for (int64_t y = 0; y < box[1]; ++y)
-          std::memcpy(whole.data() + size_t((z * e[1] + y) * e[0]) * bpv,
-                      part.data() + size_t((z * box[1] + y) * box[0]) * bpv, size_t(box[0]) * bpv);
-      const auto packed = encode_chunk(options.compressor, whole.data(), whole.size(), bpv);
-      write_file(dir / std::to_string(c[2]) / std::to_string(c[1]) / std::to_string(c[0]), packed.data(),
-                 packed.size());
-      ++chunks;
-      bytes += int64_t(packed.size());
-    });
-    const double f = std::ldexp(1.0, k);  // this level's voxel edge in level-0 voxels
-    json scale = json::array(), shift = json::array();
-    for (int a = 2; a >= 0; --a) {
-      scale.push_back(h.spacing[a] * f);
-      shift.push_back(h.origin[a] + 0.5 * (f - 1.0) * h.spacing[a]);  // the mean's centre
-    }
-    datasets.push_back({{"path", std::to_string(k)},
-                        {"coordinateTransformations",
-                         {{{"type", "scale"}, {"scale", scale}}, {{"type", "translation"}, {"translation", shift}}}}});
-  }
+// The multiscales block of the levels written so far (rewritten as each level completes, so the
+// folder being written reads as an OME-Zarr of those levels: zarr_convert reads the level below
+// from it). A series (time_points > 1) has a leading t axis.
+void write_attrs(const fs::path& dir, const VolumeHeader& h, const std::string& name, const json& datasets) {
   json axes = json::array();
+  if (h.time_points > 1) axes.push_back({{"name", "t"}, {"type", "time"}});
   for (const char* n : {"z", "y", "x"}) {
     json ax = {{"name", n}, {"type", "space"}};
     if (const std::string u = ngff_unit_name(h.unit); !u.empty()) ax["unit"] = u;
     axes.push_back(ax);
   }
-  write_json(tmp / ".zgroup", {{"zarr_format", 2}});
-  write_json(tmp / ".zattrs", {{"multiscales",
+  write_json(dir / ".zattrs", {{"multiscales",
                                 {{{"version", "0.4"},
                                   {"name", name},
                                   {"axes", axes},
                                   {"datasets", datasets},
                                   {"type", "mean"},
                                   {"metadata", {{"method", "2x2x2 mean, sizes rounded up"}}}}}}});
+}
+
+// Level k's dataset entry: its scale and the translation of a 2^k block's mean.
+json dataset_entry(const VolumeHeader& h, int k) {
+  const double f = std::ldexp(1.0, k);  // this level's voxel edge in level-0 voxels
+  json scale = json::array(), shift = json::array();
+  if (h.time_points > 1) {
+    scale.push_back(1.0);
+    shift.push_back(0.0);
+  }
+  for (int a = 2; a >= 0; --a) {
+    scale.push_back(h.spacing[a] * f);
+    shift.push_back(h.origin[a] + 0.5 * (f - 1.0) * h.spacing[a]);  // the mean's centre
+  }
+  return {{"path", std::to_string(k)},
+          {"coordinateTransformations",
+           {{{"type", "scale"}, {"scale", scale}}, {{"type", "translation"}, {"translation", shift}}}}};
+}
+
+// One level of `dims` in dir: its .zarray and every chunk (of every time point) from `fill`.
+void write_level(const fs::path& dir, const VolumeHeader& h, int k, const Dims& dims, const ZarrWriteOptions& options,
+                 const ChunkFill& fill, std::atomic<int64_t>& chunks, std::atomic<int64_t>& bytes) {
+  const size_t bpv = source_bytes(h.source);
+  const int64_t times = std::max<int64_t>(h.time_points, 1);
+  const bool series = times > 1;
+  fs::create_directories(dir);
+  Dims e{};  // the chunk edge, no larger than the level (a thin slab gets thin chunks)
+  for (int a = 0; a < 3; ++a) e[a] = std::min(options.chunk, dims[a]);
+  json shape = {dims[2], dims[1], dims[0]}, chunk = {e[2], e[1], e[0]};
+  if (series) {
+    shape.insert(shape.begin(), times);
+    chunk.insert(chunk.begin(), 1);
+  }
+  write_json(dir / ".zarray", {{"zarr_format", 2},
+                               {"shape", shape},
+                               {"chunks", chunk},
+                               {"dtype", dtype_of(h.source)},
+                               {"compressor", compressor_json(options.compressor)},
+                               {"fill_value", 0},
+                               {"order", "C"},
+                               {"filters", nullptr},
+                               {"dimension_separator", "/"}});
+  const Dims grid{(dims[0] + e[0] - 1) / e[0], (dims[1] + e[1] - 1) / e[1], (dims[2] + e[2] - 1) / e[2]};
+  auto time_dir = [&](int64_t t) { return series ? dir / std::to_string(t) : dir; };
+  for (int64_t t = 0; t < times; ++t)
+    for (int64_t z = 0; z < grid[2]; ++z)
+      for (int64_t y = 0; y < grid[1]; ++y) fs::create_directories(time_dir(t) / std::to_string(z) / std::to_string(y));
+  const size_t cells = size_t(grid[0] * grid[1] * grid[2]);
+  parallel_for(cells * size_t(times), [&](size_t n) {  // time point by time point, z slowest
+    const int64_t t = int64_t(n / cells), i = int64_t(n % cells);
+    const Dims c{i % grid[0], i / grid[0] % grid[1], i / (grid[0] * grid[1])};
+    Dims lo{}, box{};
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = c[a] * e[a];
+      box[a] = std::min(e[a], dims[a] - lo[a]);
+    }
+    std::vector<uint8_t> part(size_t(box[0] * box[1] * box[2]) * bpv);
+    fill(k, t, lo, box, part.data());
+    std::vector<uint8_t> whole(size_t(e[0] * e[1] * e[2]) * bpv, 0);  // zarr stores full chunks: 0-padded
+    for (int64_t z = 0; z < box[2]; ++z)
+      for (int64_t y = 0; y < box[1]; ++y)
+        std::memcpy(whole.data() + size_t((z * e[1] + y) * e[0]) * bpv,
+                    part.data() + size_t((z * box[1] + y) * box[0]) * bpv, size_t(box[0]) * bpv);
+    const auto packed = encode_chunk(options.compressor, whole.data(), whole.size(), bpv);
+    write_file(time_dir(t) / std::to_string(c[2]) / std::to_string(c[1]) / std::to_string(c[0]), packed.data(),
+               packed.size());
+    ++chunks;
+    bytes += int64_t(packed.size());
+  });
+}
+
+ZarrWriteReport write_levels(const fs::path& out, const fs::path& tmp, const VolumeHeader& h, int levels,
+                             const std::string& name, const ZarrWriteOptions& options, const ChunkFill& fill) {
+  std::error_code ec;
+  ZarrWriteReport report;
+  report.levels = levels;
+  json datasets = json::array();
+  std::atomic<int64_t> chunks{0}, bytes{0};
+  write_json(tmp / ".zgroup", {{"zarr_format", 2}});
+  Dims dims = h.dims;
+  for (int k = 0; k < levels; ++k, dims = Dims{(dims[0] + 1) / 2, (dims[1] + 1) / 2, (dims[2] + 1) / 2}) {
+    write_level(tmp / std::to_string(k), h, k, dims, options, fill, chunks, bytes);
+    datasets.push_back(dataset_entry(h, k));
+    write_attrs(tmp, h, name, datasets);
+  }
   fs::rename(tmp, out, ec);
   if (ec) throw VolumeError(out, "cannot be put in place: " + ec.message());
   report.chunks = chunks;
@@ -220,7 +253,7 @@ ZarrWriteReport write_ome_zarr(const Volume& volume, const fs::path& out, const 
   h.source = volume.source_type();
   const size_t bpv = source_bytes(h.source);
   return write_ome_zarr_levels(
-      out, h, n, volume.name, options, [&](int k, const Dims& lo, const Dims& box, uint8_t* dst) {
+      out, h, n, volume.name, options, [&](int k, int64_t, const Dims& lo, const Dims& box, uint8_t* dst) {
         const Level& L = levels[size_t(k)];
         for (int64_t z = 0; z < box[2]; ++z)
           for (int64_t y = 0; y < box[1]; ++y) {

@@ -1,4 +1,5 @@
-// Writing OME-Zarr (NGFF 0.4, zarr v2): one array per pyramid level, chunks keyed "z/y/x".
+// Writing OME-Zarr (NGFF 0.4, zarr v2): one array per pyramid level, chunks keyed "z/y/x" (a time
+// series: axes t, z, y, x, chunks of one time point keyed "t/z/y/x").
 #pragma once
 
 #include <cstdint>
@@ -24,13 +25,15 @@ struct ZarrWriteReport {
   int64_t chunks = 0, bytes = 0;  // chunk files written and their bytes
 };
 
-// A level's box [lo, lo + box) of voxels to fill: box voxels, x fastest, in the source type
-// (little-endian; signed types as signed). Called from several threads at once.
-using ChunkFill = std::function<void(int level, const Dims& lo, const Dims& box, uint8_t* out)>;
+// A level's box [lo, lo + box) of voxels at time point t to fill (t is 0 unless the header's
+// time_points > 1): box voxels, x fastest, in the source type (little-endian; signed types as
+// signed). Called from several threads at once, time point by time point, each in z order.
+using ChunkFill = std::function<void(int level, int64_t t, const Dims& lo, const Dims& box, uint8_t* out)>;
 
 // A pyramid written chunk by chunk from `fill`, never whole in memory: level k has dims
 // ceil(dims / 2^k), spacing 2^k times level 0's and its first voxel at the centre of level 0's
-// first 2^k block. `levels` levels (1: no pyramid). Same folder rules as write_ome_zarr.
+// first 2^k block. `levels` levels (1: no pyramid). level0.time_points > 1: a series, every
+// level holding each time point. Same folder rules as write_ome_zarr.
 ZarrWriteReport write_ome_zarr_levels(const std::filesystem::path& out, const VolumeHeader& level0, int levels,
                                       const std::string& name, const ZarrWriteOptions& options, const ChunkFill& fill);
 
@@ -38,7 +41,8 @@ ZarrWriteReport write_ome_zarr_levels(const std::filesystem::path& out, const Vo
 int pyramid_levels(const Dims& dims, int64_t chunk);
 
 // Where write_ome_zarr_levels writes `out` until it is whole: level k lies in partial_path(out)/k,
-// complete (its .zarray and chunks) before level k + 1's first fill.
+// complete (its .zarray and chunks) before level k + 1's first fill, and from then on the folder
+// reads as an OME-Zarr of levels 0..k (its .zattrs rewritten as each level completes).
 std::filesystem::path partial_path(const std::filesystem::path& out);
 
 // The next level's voxels: the 2x2x2 means of `in` (dims `in_dims`, a volume's storage type),

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """OME-Zarr and Neuroglancer precomputed against an independent implementation: Debian's
 python3-zarr reads what `peakcast convert --pyramid` writes (every level, every compressor; read
-whole and by slabs), and
+whole and by slabs; time series), and
 peakcast reads what python3-zarr writes (each compressor and blosc inner codec, both key
 separators, big-endian, missing chunks, t and c axes) and precomputed folders written here.
 
@@ -124,6 +124,72 @@ def peakcast_writes_by_slabs(tmp):
               f"convert {' '.join(map(str, args[2:]))} to {os.path.basename(str(args[1]))} is refused: {r.stderr.strip()}")
 
 
+def write_series(tmp, name, series, extra=None):
+    """A raw time series (t, z, y, x) with its sidecar."""
+    path = os.path.join(tmp, name + ".raw")
+    series.astype(series.dtype.newbyteorder("<")).tofile(path)
+    t, z, y, x = series.shape
+    json.dump({"dims": [x, y, z], "dtype": {"u2": "uint16", "f4": "float32"}[series.dtype.str[1:]], "times": t,
+               **(extra or {})}, open(path + ".json", "w"))
+    return path
+
+
+def peakcast_writes_series(tmp):
+    """convert --pyramid keeps a time series (a t axis, every level holding each time point), its
+    spacing and its unit; each time point is the pyramid of that time point alone."""
+    rng = np.random.default_rng(5)
+    u16 = rng.integers(0, 60000, size=(3, 21, 30, 45)).astype("<u2")
+    f32 = (rng.standard_normal((2, 21, 30, 45)) * 10).astype("<f4")
+    f32[1, 3, 4, 5] = np.nan  # replaced by time point 1's own finite minimum, as a read of it alone
+    for series, name in ((u16, "series-u16"), (f32, "series-f32")):
+        src = write_series(tmp, name, series, {"spacing": [0.5, 1, 2], "units": "um"})
+        out = os.path.join(tmp, name + ".zarr")
+        said = run("convert", src, out, "--pyramid", "--chunk", 16)
+        group = zarr.open_group(out, mode="r")
+        ms = group.attrs["multiscales"][0]
+        axes = [(a["name"], a["type"], a.get("unit")) for a in ms["axes"]]
+        check(axes == [("t", "time", None)] + [(n, "space", "micrometer") for n in "zyx"] and
+              f"x {len(series)} time points" in said, f"{name}: axes t, z, y, x in micrometres ({said.strip()})")
+        for t in range(len(series)):
+            level = series[t]
+            if level.dtype.kind == "f":
+                level = np.where(np.isnan(level), np.nanmin(level), level)
+            for i, d in enumerate(ms["datasets"]):
+                level = level if i == 0 else halve(level)
+                got = group[d["path"]][...]
+                scale = d["coordinateTransformations"][0]["scale"]
+                check(got.shape == (len(series),) + level.shape and np.array_equal(got[t], level) and
+                      scale == [1.0, 2.0 * 2**i, 1.0 * 2**i, 0.5 * 2**i],
+                      f"{name}: time point {t}, level {i} {got.shape[1:]} read by python3-zarr equals its own "
+                      f"{'voxels' if i == 0 else 'mean of the level above'}")
+        back = os.path.join(tmp, name + "-t1.raw")
+        run("convert", out, back, "--time", 1)
+        want = series[1] if series.dtype.kind != "f" else np.where(np.isnan(series[1]), np.nanmin(series[1]), series[1])
+        check(np.array_equal(read_raw(back), want), f"{name}: peakcast reads time point 1 of what it wrote")
+    # --time picks one time point: no t axis.
+    one = os.path.join(tmp, "one.zarr")
+    run("convert", os.path.join(tmp, "series-u16.raw"), one, "--time", 2)
+    g = zarr.open_group(one, mode="r")
+    check([a["name"] for a in g.attrs["multiscales"][0]["axes"]] == ["z", "y", "x"] and np.array_equal(g["0"][...], u16[2]),
+          "convert --time 2 writes that time point alone (axes z, y, x)")
+    # A format of one time point would lose the rest: refused, naming --time, nothing written.
+    nrrd = os.path.join(tmp, "series.nrrd")
+    r = subprocess.run([PEAKCAST, "convert", os.path.join(tmp, "series-u16.raw"), nrrd], capture_output=True, text=True)
+    check(r.returncode != 0 and "holds 3 time points" in r.stderr and "--time" in r.stderr and not os.path.exists(nrrd),
+          f"a series to .nrrd without --time is refused: {r.stderr.strip()}")
+    # An ImageJ hyperstack (read only whole): one time point at a time, ImageJ's page order.
+    from PIL import Image
+    frames = rng.integers(0, 255, size=(2, 3, 12, 10)).astype(np.uint8)  # t, z, y, x
+    tif = os.path.join(tmp, "hyper.tif")
+    pages = [Image.fromarray(frames[t, z]) for t in range(2) for z in range(3)]
+    pages[0].save(tif, save_all=True, append_images=pages[1:],
+                  tiffinfo={270: "ImageJ=1.54f\nimages=6\nslices=3\nframes=2\nhyperstack=true\n"})
+    out = os.path.join(tmp, "hyper.zarr")
+    run("convert", tif, out, "--memory-budget-mib", 1)
+    got = zarr.open_group(out, mode="r")["0"][...]
+    check(np.array_equal(got, frames), f"an ImageJ hyperstack is converted with its time axis {got.shape}")
+
+
 def halve_signed(a):
     """Signed types are kept shifted to unsigned (int8 + 128): the mean is rounded there."""
     bits = a.dtype.itemsize * 8
@@ -210,6 +276,7 @@ def precomputed(tmp):
 with tempfile.TemporaryDirectory() as tmp:
     peakcast_writes(tmp)
     peakcast_writes_by_slabs(tmp)
+    peakcast_writes_series(tmp)
     python_writes(tmp)
     precomputed(tmp)
 print(f"{len(failures)} failed" if failures else "all passed")
