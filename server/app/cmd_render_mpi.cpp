@@ -99,7 +99,8 @@ struct RankBrick {
 RankBrick read_rank_brick(const ParsedSceneFile& parsed) {
   RankBrick b;
   // The file's header: every rank reads one voxel of it, which tells the whole volume's box.
-  const Volume head = distributed::read_head(parsed.volume.string());
+  const Volume head = distributed::read_head(parsed.volume.string(), parsed.scene.time);
+  if (const std::string why = time_refusal(parsed.scene.time, head.time_points); !why.empty()) throw SceneError(why);
   VolumeBox box{head.source_dims, head.spacing, head.origin, 0.0, 1.0, {}};
   b.dims = distributed::Index3{box.dims[0], box.dims[1], box.dims[2]};
   // Ghosts depend on the step, filter and shading, not on the value range.
@@ -110,6 +111,7 @@ RankBrick read_rank_brick(const ParsedSceneFile& parsed) {
   const auto t_load = std::chrono::steady_clock::now();
   distributed::BrickLoadRequest request;
   request.path = parsed.volume.string();
+  request.time_point = parsed.scene.time;
   request.ghost = b.ghost;
   b.read = distributed::read_brick(request);
   if (b.read.failed) throw std::runtime_error(b.read.error);  // names the file (and the rank that failed)

@@ -27,10 +27,20 @@ std::shared_ptr<const MacrocellGrid> reduce_grid(const Volume& v, const Brick& m
   return std::make_shared<const MacrocellGrid>(grid_from_share(s));
 }
 
+// This rank's brick of the request's file (its time point) with its ghosts, NaN/Inf kept: they
+// take the whole volume's finite extremes, as in one process.
+std::shared_ptr<Volume> read_own_brick(const BrickLoadRequest& req, const Brick& mine) {
+  LoadOptions region;
+  region.region = VoxelRegion{mine.read_lo, mine.read_hi};
+  region.time_point = req.time_point;
+  region.nonfinite = NonFinitePolicy::Keep;
+  return std::make_shared<Volume>(load_volume(req.path, region));
+}
+
 }  // namespace
 
 nlohmann::json BrickLoadRequest::to_json() const {
-  nlohmann::json j = {{"path", path}, {"ghost", ghost}, {"refuse_nonfinite", refuse_nonfinite}};
+  nlohmann::json j = {{"path", path}, {"time", time_point}, {"ghost", ghost}, {"refuse_nonfinite", refuse_nonfinite}};
   if (have_range) {
     j["lo"] = lo;
     j["hi"] = hi;
@@ -41,6 +51,7 @@ nlohmann::json BrickLoadRequest::to_json() const {
 BrickLoadRequest BrickLoadRequest::from_json(const nlohmann::json& j) {
   BrickLoadRequest r;
   r.path = j.at("path");
+  r.time_point = j.value("time", int64_t(0));
   r.ghost = j.at("ghost");
   r.refuse_nonfinite = j.value("refuse_nonfinite", false);
   if (j.contains("lo")) {
@@ -51,9 +62,10 @@ BrickLoadRequest BrickLoadRequest::from_json(const nlohmann::json& j) {
   return r;
 }
 
-Volume read_head(const std::string& path) {
+Volume read_head(const std::string& path, int64_t time_point) {
   LoadOptions one;
   one.region = VoxelRegion{{0, 0, 0}, {1, 1, 1}};
+  one.time_point = time_point;
   return load_volume(path, one);
 }
 
@@ -70,17 +82,13 @@ BrickRead read_brick(const BrickLoadRequest& req) {
   // alike, and the job goes on.
   int failed_rank = 0;  // rank + 1 of a rank that failed; the highest such
   try {
-    const Volume head = read_head(req.path);
+    const Volume head = read_head(req.path, req.time_point);
     spacing = head.spacing;
     origin = head.origin;
     b.dims = {head.source_dims[0], head.source_dims[1], head.source_dims[2]};
     b.split = kd_split(b.dims, size, b.ghost);
     b.mine = b.split.bricks[size_t(rank)];
-    LoadOptions region;
-    region.region = VoxelRegion{b.mine.read_lo, b.mine.read_hi};
-    // NaN/Inf voxels take the whole volume's finite extremes, as in one process.
-    region.nonfinite = NonFinitePolicy::Keep;
-    v = std::make_shared<Volume>(load_volume(req.path, region));
+    v = read_own_brick(req, b.mine);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "peakcast: rank %d of %d cannot read its brick: %s\n", rank, size, e.what());
     std::fflush(stderr);

@@ -23,6 +23,7 @@ namespace peakcast::distributed {
 // What every rank reads: the payload rank 0 broadcasts.
 struct BrickLoadRequest {
   std::string path;
+  int64_t time_point = 0;  // a time series' point (every rank reads its brick of that one)
   int ghost = 0;
   // Known from an earlier read (a re-read with wider ghosts): no statistics are reduced.
   bool have_range = false;
@@ -53,9 +54,10 @@ struct BrickRead {
   double statistics_ms = 0.0;  // the reductions after the reads
 };
 
-// The file's header without its voxels: a one-voxel region read, whose source_dims are the
-// whole volume's dims (throws VolumeError, e.g. for a TIFF stack, which has no regions).
-Volume read_head(const std::string& path);
+// The file's header without its voxels: a one-voxel region read (of time point `time_point`),
+// whose source_dims are the whole volume's dims (throws VolumeError, e.g. for a TIFF stack, which
+// has no regions, or a time point the file does not hold).
+Volume read_head(const std::string& path, int64_t time_point = 0);
 
 // Every rank, collectively, in the same order whatever happens: a read that fails on any rank
 // makes every rank return `failed` (the job goes on); the statistics follow only for a first

@@ -90,13 +90,14 @@ LoadedVolume Coordinator::load(const std::filesystem::path& path, const LoadOpti
   // What would fail on a rank fails here first, before any rank is asked (a failure after the
   // broadcast ends the job): a file whose regions cannot be read (TIFF stacks), too many voxels,
   // fewer cells than ranks.
-  const Volume head = read_head(path.string());
+  const Volume head = read_head(path.string(), options.time_point);  // refuses a time point not there
   const Dims dims = head.source_dims;
   if (dims[0] * dims[1] * dims[2] > options.max_voxels)
     throw VolumeError(path, std::to_string(dims[0] * dims[1] * dims[2]) + " voxels exceeds the limit of " +
                                 std::to_string(options.max_voxels));
   BrickLoadRequest req;
   req.path = path.string();
+  req.time_point = options.time_point;
   req.ghost = default_ghost();
   req.refuse_nonfinite = options.nonfinite == NonFinitePolicy::Refuse;
   check_split(path, dims, req.ghost);
@@ -121,6 +122,8 @@ LoadedVolume Coordinator::load(const std::filesystem::path& path, const LoadOpti
   h.origin = head.origin;
   h.unit = head.unit;
   h.source = head.source_type();
+  h.time_point = head.time_point;
+  h.time_points = head.time_points;
   auto whole = std::make_shared<Volume>(Volume::header_only(h));
   whole->min_value = b.box.min_value;
   whole->max_value = b.box.max_value;

@@ -51,10 +51,12 @@ BrickSet make_set(BrickRead&& r, render::Renderer& renderer) {
   return b;
 }
 
-// A re-read of every brick with the range already known (no statistics reduced).
-BrickLoadRequest reread(const std::string& path, const VolumeBox& box, int ghost) {
+// A re-read of every brick of `volume`'s file (its time point) with the range already known (no
+// statistics reduced).
+BrickLoadRequest reread(const Volume& volume, const VolumeBox& box, int ghost) {
   BrickLoadRequest r;
-  r.path = path;
+  r.path = volume.source_path;
+  r.time_point = volume.time_point;
   r.ghost = ghost;
   r.have_range = true;
   r.lo = box.min_value;
@@ -206,14 +208,14 @@ std::unique_ptr<render::ResidentVolume> MpiRenderer::make_resident(std::shared_p
   // A volume read whole (the CLI, tests): every rank reads its brick with the range known.
   // What would fail on a rank fails here first, before any rank is asked: a file whose regions
   // cannot be read (TIFF stacks), one changed since it was read, fewer cells than ranks.
-  const Volume head = read_head(volume->source_path);
+  const Volume head = read_head(volume->source_path, volume->time_point);
   if (head.source_dims != volume->dims())
     throw std::runtime_error(volume->source_path + ": the file changed since it was read (its dims differ)");
   c.check_split(volume->source_path, head.source_dims, default_ghost());
   const VolumeBox box{volume->dims(),    volume->spacing,   volume->origin,
                       volume->min_value, volume->max_value, volume->histogram};
   const int64_t id = c.new_id();
-  BrickRead r = c.read_bricks(held, id, reread(volume->source_path, box, default_ghost()));
+  BrickRead r = c.read_bricks(held, id, reread(*volume, box, default_ghost()));
   try {
     return std::make_unique<Resident>(impl_->coord, id, std::move(volume), make_set(std::move(r), impl_->renderer));
   } catch (...) {
@@ -238,8 +240,7 @@ render::RenderResult MpiRenderer::render(const render::ResidentVolume& v, const 
     // With headroom: a differential step grows as the camera backs away, and a re-read on
     // every frame of a slow zoom-out would cost more than the wider ghosts.
     // A read any rank failed throws: every rank keeps its bricks, this frame fails, the job goes on.
-    BrickRead wider =
-        c.read_bricks(held, res->id(), reread(res->volume().source_path, bricks.box, need + std::max(4, need / 2)));
+    BrickRead wider = c.read_bricks(held, res->id(), reread(res->volume(), bricks.box, need + std::max(4, need / 2)));
     try {
       bricks = make_set(std::move(wider), impl_->renderer);
     } catch (const std::exception& e) {

@@ -238,12 +238,40 @@ def test_ranks_read_their_bricks_of_an_ome_zarr():
               f"of {whole} voxels")
 
 
+def test_a_time_series_reads_the_bricks_of_its_time_point():
+    # Every rank reads its brick of the scene's time point: the picture equals one process's of
+    # that time point, and another time point's picture differs from it.
+    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "scripts"))
+    import make_time_series
+    zarr = make_time_series.write(TMP / "ball.zarr", times=4, n=32)
+    tf = [[0, 0, 0, 0, 0], [20000, 0.2, 0.5, 1, 0.05], [50000, 1, 0.6, 0.2, 0.8], [65535, 1, 1, 1, 1]]
+    pictures = {}
+    for t in (0, 3):
+        s = scene(f"ball_t{t}", zarr, {"step": 0.5}, tf)
+        s.write_text(json.dumps(dict(json.loads(s.read_text()), time=t)))
+        one = TMP / f"ball_t{t}_1.png"
+        run([PEAKCAST, "render", s, "-o", one, "--backend", "cpu"])
+        out = TMP / f"ball_t{t}_2.png"
+        mpi(2, "render", s, "-o", out)
+        e = max_abs(one, out)
+        assert e <= BOUND, f"time point {t} on 2 ranks: max abs {e}"
+        pictures[t] = out
+    moved = max_abs(pictures[0], pictures[3])
+    assert moved > 0.1, f"time points 0 and 3 draw alike on 2 ranks (max abs {moved})"
+    late = scene("ball_t9", zarr, {"step": 0.5}, tf)
+    late.write_text(json.dumps(dict(json.loads(late.read_text()), time=9)))
+    r = mpi(2, "render", late, "-o", TMP / "ball_t9.png", check=False)
+    assert r.returncode != 0 and "time point 9" in r.stderr, r.stderr[-500:]
+    print(f"  time points 0 and 3 on 2 ranks equal one process's; they differ by {moved:.3f}")
+
+
 def main():
     failed = 0
     tests = [test_ranks_equal_one_process, test_each_rank_holds_its_brick_and_ghosts, test_a_rank_that_dies_ends_the_job,
              test_a_rank_that_fails_to_read_ends_the_job,
              test_nonfinite_voxels_take_the_whole_volumes_extremes, test_gl_ranks_equal_one_process,
-             test_ranks_on_different_backends_are_refused, test_ranks_read_their_bricks_of_an_ome_zarr]
+             test_ranks_on_different_backends_are_refused, test_ranks_read_their_bricks_of_an_ome_zarr,
+             test_a_time_series_reads_the_bricks_of_its_time_point]
     for t in tests:
         try:
             t()

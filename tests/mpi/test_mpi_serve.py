@@ -15,6 +15,7 @@ from PIL import Image as PILImage  # noqa: E402
 import nonfinite_volume  # noqa: E402
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "scripts"))
 import bench_memory  # noqa: E402  (each rank's memory under mpirun, as `bench memory --ranks` reads it)
+import make_time_series  # noqa: E402
 
 PEAKCAST = os.environ["PEAKCAST_BIN"]
 MPIRUN = os.environ.get("MPIEXEC", shutil.which("mpirun") or "mpirun")
@@ -251,6 +252,22 @@ def main():
         status, _, cmp = still_against_one_process(srv, nf, tiff_dir / "nonfinite.nrrd", tmp, "nf")
         checks.append(("NaN/Inf voxels take the whole volume's extremes on every rank (REST still = one process)",
                        status == 200 and cmp["max_abs"] <= 1 / 255 + 1e-6, (status, cmp)))
+
+        # A time series: every rank reads its brick of the time point asked (not the first one).
+        make_time_series.write(tiff_dir / "ball.zarr", times=4, n=32)
+        ball = {"volume": "ball.zarr", "time": 3, "image": {"width": 64, "height": 48}, "render": dict(RENDER, step=0.5),
+                "tf": {"points": [[0, 0, 0, 0, 0], [20000, 0.2, 0.5, 1, 0.05], [50000, 1, 0.6, 0.2, 0.8],
+                                  [65535, 1, 1, 1, 1]]}}
+        status, _, cmp = still_against_one_process(srv, ball, tiff_dir / "ball.zarr", tmp, "ball3")
+        status0, _, cmp0 = still_against_one_process(srv, dict(ball, time=0), tiff_dir / "ball.zarr", tmp, "ball0")
+        moved = json.loads(subprocess.run([PEAKCAST, "compare", tmp / "ball3_mpi.png", tmp / "ball0_mpi.png"], check=True,
+                                          capture_output=True, text=True).stdout)["max_abs"]
+        _, _, body = http(srv, "/api/volumes/ball.zarr")
+        times = json.loads(body).get("times")
+        checks.append(("a time series: the still of time point 3 (and of 0) equals one process's, they differ, and "
+                       "the volume lists 4 time points",
+                       status == status0 == 200 and cmp["max_abs"] <= 1 / 255 + 1e-6 and
+                       cmp0["max_abs"] <= 1 / 255 + 1e-6 and moved > 0.1 and times == 4, (status, cmp, cmp0, moved, times)))
 
         interactive, mpi_final = asyncio.run(stream(srv))
         diff = max_level_diff(one_final, mpi_final)
