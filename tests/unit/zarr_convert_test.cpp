@@ -76,7 +76,7 @@ TEST(ZarrConvert, SlabsWriteTheSamePyramidAsTheWholeVolume) {
           SCOPED_TRACE(in.filename().string() + " budget " + std::to_string(budget));
           const fs::path out = tmp / (in.stem().string() + "_" + std::to_string(budget) + ".zarr");
           const auto r = convert_to_ome_zarr_by_slabs(in, out, {}, o, budget);
-          EXPECT_EQ(r.slab_planes, budget == 1 ? edge : 24);
+          EXPECT_EQ(r.slab_planes, budget == 1 ? edge : std::min<int64_t>(24, c.dims[2]));  // never past the volume
           EXPECT_LE(r.slab_bytes, r.slab_planes * plane);
           EXPECT_EQ(r.passes, type == SourceType::F32 ? 2 : 1);
           EXPECT_EQ(r.zarr.levels, c.levels);  // 45 -> 23 -> 12 -> 6 (<= 8); 9 -> 5
