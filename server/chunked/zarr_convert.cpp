@@ -129,20 +129,25 @@ void halve_from_below(const fs::path& partial, const VolumeHeader& h, int k, int
     unshift_voxels(dst + size_t(row * box[0]) * bpv, size_t(box[0]), h.source);
 }
 
+// The header of `v`, a read of the whole volume's `dims` (a region read holds fewer).
+VolumeHeader header_of(const Volume& v, const Dims& dims) {
+  VolumeHeader h;
+  h.dims = dims;
+  h.spacing = v.spacing;
+  h.origin = v.origin;
+  h.unit = v.unit;
+  h.source = v.source_type();
+  h.time_point = v.time_point;
+  h.time_points = v.time_points;
+  return h;
+}
+
 }  // namespace
 
 int64_t source_voxel_bytes(const fs::path& in, const LoadOptions& select, VolumeHeader* header) {
   const Volume head = read_box(in, select, select.time_point, {0, 0, 0}, {1, 1, 1});
   const Dims& d = head.source_dims;
-  if (header) {
-    header->dims = d;
-    header->spacing = head.spacing;
-    header->origin = head.origin;
-    header->unit = head.unit;
-    header->source = head.source_type();
-    header->time_point = head.time_point;
-    header->time_points = head.time_points;
-  }
+  if (header) *header = header_of(head, d);
   return d[0] * d[1] * d[2] * int64_t(voxel_bytes(head.type()));
 }
 
@@ -158,13 +163,7 @@ VolumeHeader input_header(const fs::path& in, const LoadOptions& select, bool& w
   } catch (const RegionNotReadable&) {
     whole = true;
     const Volume v = read_box(in, select, select.time_point, {}, {}, true);
-    h.dims = v.dims();
-    h.spacing = v.spacing;
-    h.origin = v.origin;
-    h.unit = v.unit;
-    h.source = v.source_type();
-    h.time_point = v.time_point;
-    h.time_points = v.time_points;
+    h = header_of(v, v.dims());
   }
   return h;
 }
