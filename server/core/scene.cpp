@@ -280,6 +280,10 @@ ResolvedScene resolve(const Scene& s, const VolumeBox& v, const std::vector<uint
   r.box_max = v.origin + glm::dvec3(v.dims[0] - 1, v.dims[1] - 1, v.dims[2] - 1) * v.spacing;
   r.camera = s.camera ? *s.camera : default_camera(r.box_min, r.box_max);
   const double min_spacing = std::min({v.spacing.x, v.spacing.y, v.spacing.z});
+  // The opacity unit and the automatic TF's ray length follow level 0 of a pyramid: a coarser
+  // level is the same volume drawn with fewer samples, not a thicker one.
+  const glm::dvec3 unit = v.full_spacing.x > 0 ? v.full_spacing : v.spacing;
+  const double unit_spacing = std::min({unit.x, unit.y, unit.z});
   if (s.tf) {
     r.tf = *s.tf;
   } else {
@@ -288,12 +292,12 @@ ResolvedScene resolve(const Scene& s, const VolumeBox& v, const std::vector<uint
     in.lo = v.min_value;
     in.hi = v.max_value;
     const glm::dvec3 extent = r.box_max - r.box_min;
-    in.ray_length = (extent.x + extent.y + extent.z) / 3.0 / min_spacing;
+    in.ray_length = (extent.x + extent.y + extent.z) / 3.0 / unit_spacing;
     in.with_peak = s.render.classification == Classification::Peaks;
     r.tf = derive_transfer_function(in);
     r.tf_derived = true;
   }
-  r.tf.opacity_unit = s.opacity_unit > 0 ? s.opacity_unit : min_spacing;
+  r.tf.opacity_unit = s.opacity_unit > 0 ? s.opacity_unit : unit_spacing;
   r.step = s.render.step > 0 ? s.render.step : min_spacing;
   r.min_spacing = min_spacing;
   if (s.render.ray_texture) {
@@ -321,7 +325,8 @@ ResolvedScene resolve_scene(const Scene& s, const Volume& v) {
   if (s.time != v.time_point)  // a caller's slip: the scene asks for another time point than it was given
     throw SceneError("time: time point " + std::to_string(s.time) + " asked, " + std::to_string(v.time_point) +
                      " held");
-  return resolve(s, VolumeBox{v.dims(), v.spacing, v.origin, v.min_value, v.max_value, {}}, &v.histogram);
+  return resolve(s, VolumeBox{v.dims(), v.spacing, v.origin, v.min_value, v.max_value, {}, v.full_spacing},
+                 &v.histogram);
 }
 
 ResolvedScene resolve_scene(const Scene& s, const VolumeBox& v) { return resolve(s, v, &v.histogram); }

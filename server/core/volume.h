@@ -104,6 +104,9 @@ class Volume {
   // A level of a chunked pyramid (chunked/): which one, of how many, and level 0's dims.
   int pyramid_level = 0, pyramid_levels = 1;
   Dims full_dims{0, 0, 0};
+  // Level 0's spacing for a coarser level ({0, 0, 0}: this volume's own): the default opacity
+  // unit and the automatic TF follow it, so every level of a pyramid draws the same picture.
+  glm::dvec3 full_spacing{0.0};
   double load_ms = 0.0;        // the whole load_volume call
   double statistics_ms = 0.0;  // of it: range and histogram (finalize_statistics)
   std::string name;

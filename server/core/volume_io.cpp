@@ -339,6 +339,7 @@ Volume load_volume(const fs::path& path, const LoadOptions& options) {
     v.pyramid_level = level;
     v.pyramid_levels = int(cv->levels().size());
     v.full_dims = cv->levels()[0].dims;
+    if (level > 0) v.full_spacing = cv->levels()[0].spacing;
   } else if (fs::is_directory(path, ec) || ext == ".tif" || ext == ".tiff") {
     if (options.region)
       throw RegionNotReadable(path, "a region of a TIFF stack cannot be read (use NRRD, MetaImage or raw)");
