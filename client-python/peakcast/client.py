@@ -1,38 +1,42 @@
 """The peakcast REST API from Python: health, volumes, uploads, stills."""
-import http.client
 import json
 import os
-import select
 import urllib.parse
 
 import numpy as np
 
+from ._http import ServerError, Transport  # noqa: F401 (ServerError: peakcast.ServerError)
+from .image import Image, RenderInfo
+
 # The voxel types the server keeps (numpy dtype -> the server's name).
 _DTYPES = {np.dtype(np.uint8): "uint8", np.dtype(np.int8): "int8", np.dtype(np.uint16): "uint16",
            np.dtype(np.int16): "int16", np.dtype(np.float32): "float32"}
-_CHUNK = 1 << 20
-
-
-class ServerError(Exception):
-    """The server refused or failed a request: `status` (HTTP), `code` (proto/'s error codes) and the
-    server's message."""
-
-    def __init__(self, status, code, message):
-        super().__init__(f"{status} {code}: {message}")
-        self.status, self.code, self.message = status, code, message
+_FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
 class Client:
-    """A peakcast server at `url` ("http://host:8080"), with its bearer token if it has one."""
+    """A peakcast server at `url` ("http://host:8080"), with its bearer token if it has one.
 
-    def __init__(self, url="http://localhost:8080", token=None, timeout=300.0):
-        u = urllib.parse.urlsplit(url)
-        if u.scheme not in ("http", "https") or not u.hostname:
-            raise ValueError(f"not an http(s) URL: {url!r}")
-        self._https = u.scheme == "https"
-        self._host, self._port = u.hostname, u.port or (443 if self._https else 80)
-        self._base = u.path.rstrip("/")
-        self.token, self.timeout = token, timeout
+    Thread-safe: each thread keeps one connection alive across calls. A refusal that says when to
+    come back (503 queue_full or uploads_busy, 429 rate_limited, with Retry-After) is waited out up
+    to `retries` times, at most `max_retry_wait` seconds each; `retries=0` raises it at once.
+    `with Client(...) as c:` closes the connections at the end."""
+
+    def __init__(self, url="http://localhost:8080", token=None, timeout=300.0, retries=3, max_retry_wait=30.0):
+        self._http = Transport(url, token, timeout, retries, max_retry_wait)
+
+    token = property(lambda self: self._http.token)
+    retries = property(lambda self: self._http.retries)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def close(self):
+        """Closes the kept connections (a later call opens a new one)."""
+        self._http.close()
 
     # -- the routes ------------------------------------------------------------------------------
 
@@ -49,22 +53,29 @@ class Client:
         """One volume's info, with its histogram."""
         return self._json("GET", "/api/volumes/" + urllib.parse.quote(volume_id, safe=""))
 
-    def upload(self, array_or_path, spacing=(1.0, 1.0, 1.0), name=None, origin=None, units=None, axes=None):
+    def upload(self, array_or_path, spacing=None, name=None, origin=None, units=None, axes=None):
         """Sends a volume; returns its id, usable as a scene's "volume".
 
         An array is indexed [z, y, x] (any memory order) and holds uint8, int8, uint16, int16 or
-        float32 (float64 is sent as float32, which the server keeps; other types are refused);
-        spacing and origin are in x, y, z order, in `units` (a unit of length: "um", "nm",
+        float32 (float16 and float64 are sent as float32, which the server keeps, float64 refused
+        when a value does not fit in float32; other types are refused); spacing (default 1, 1, 1) and origin are in
+        x, y, z order, in `units` (a unit of length: "um", "nm",
         "mm", "micrometer", ...; None: the server shows lengths in "units"). A 4D array is a
         time series indexed [t, z, y, x] (`axes="tzyx"`, the default for 4D; a scene's "time"
         picks the point); channel axes ("czyx", "tczyx") are refused until the server draws
         channels. A path is a file the server reads as one
-        file: NRRD (data attached), MetaImage (.mha) or TIFF; its header gives spacing and origin."""
+        file: NRRD (data attached), MetaImage (.mha) or TIFF; its header gives spacing, origin and
+        units, and giving them here is refused (they would not be used)."""
         if isinstance(array_or_path, (str, os.PathLike)):
             path = os.fspath(array_or_path)
+            given = [k for k, v in (("spacing", spacing), ("origin", origin), ("units", units), ("axes", axes))
+                     if v is not None]
+            if given:
+                raise ValueError(f"{', '.join(given)}: a file's own header gives them, so they would not be used; "
+                                 f"fix the header, or read the file into an array and upload that")
             query = {"name": name or os.path.basename(path)}
             with open(path, "rb") as f:
-                return self._upload(query, f, os.path.getsize(path))["id"]
+                return self._upload(query, f, os.path.getsize(path), rewind=lambda: f.seek(0))["id"]
         a = np.asarray(array_or_path)
         axes = axes or {3: "zyx", 4: "tzyx"}.get(a.ndim, "")
         if not isinstance(axes, str) or len(axes) != a.ndim or axes not in ("zyx", "tzyx"):
@@ -74,8 +85,8 @@ class Client:
             raise ValueError(f"a volume is indexed [z, y, x] (axes 'zyx'), a time series [t, z, y, x] ('tzyx'); "
                              f"this array has shape {a.shape}" + (f" and axes {axes!r}" if axes else ""))
         times = a.shape[0] if axes == "tzyx" else 1
-        if a.dtype.kind == "f" and a.dtype.itemsize == 8:
-            a = a.astype(np.float32)  # the server keeps floats as float32: numpy's default float goes as one
+        if a.dtype.kind == "f" and a.dtype.itemsize != 4:
+            a = _as_float32(a)  # the server keeps floats as float32: numpy's default float goes as one
         if a.dtype.newbyteorder("=") not in _DTYPES:
             raise ValueError(f"dtype {a.dtype} is not one the server keeps (uint8, int8, uint16, int16, float32): "
                              f"convert it first, e.g. array.astype(np.float32)")
@@ -84,7 +95,8 @@ class Client:
         # x fastest in memory, little-endian: the raw layout the server reads.
         a = np.ascontiguousarray(a, dtype=a.dtype.newbyteorder("<"))
         query = {"dims": ",".join(str(n) for n in a.shape[-3:][::-1]), "dtype": _DTYPES[a.dtype.newbyteorder("=")],
-                 "spacing": ",".join(repr(float(s)) for s in _three(spacing, "spacing")),
+                 "spacing": ",".join(repr(float(s)) for s in _three((1.0, 1.0, 1.0) if spacing is None else spacing,
+                                                                    "spacing")),
                  "endian": "little", "name": name or "array"}
         if times > 1:
             query["times"] = str(times)
@@ -101,102 +113,60 @@ class Client:
         self._json("DELETE", "/api/volumes/" + urllib.parse.quote(volume_id, safe=""))
 
     def render(self, scene):
-        """Renders a scene (a dict, as scene files hold it; "volume" may be an id) and returns the
-        image as a numpy uint8 array (height, width, 3), row 0 at the top."""
-        status, headers, body = self._request("POST", "/api/render?format=rgb", json.dumps(scene).encode(),
-                                              {"Content-Type": "application/json"})
-        w, h = int(headers["x-image-width"]), int(headers["x-image-height"])
-        return np.frombuffer(body, np.uint8).reshape(h, w, 3).copy()
+        """Renders a scene (a dict, as scene files hold it; "volume" may be an id; numpy numbers and
+        arrays may stand for numbers and lists) and returns an Image: a numpy uint8 array (height,
+        width, 3), row 0 at the top, whose `info` keeps what the server said (`warnings`,
+        `tf_source`, `level`, `bricks`, `time`, timings)."""
+        _, headers, body = self._render(scene, "rgb")
+        w, h = int(headers["x-image-width"][0]), int(headers["x-image-height"][0])
+        return Image(np.frombuffer(body, np.uint8).reshape(h, w, 3).copy(), RenderInfo(headers))
 
     def render_png(self, scene, path):
-        """Renders a scene and writes the PNG the server encodes to `path`."""
-        _, _, body = self._request("POST", "/api/render?format=png", json.dumps(scene).encode(),
-                                   {"Content-Type": "application/json"})
+        """Renders a scene and writes the PNG the server encodes to `path`; returns its RenderInfo."""
+        _, headers, body = self._render(scene, "png")
         with open(path, "wb") as f:
             f.write(body)
+        return RenderInfo(headers)
+
+    def _render(self, scene, fmt):
+        return self._http.request("POST", "/api/render?format=" + fmt, scene_json(scene),
+                                  {"Content-Type": "application/json"})
 
     # -- HTTP ------------------------------------------------------------------------------------
 
-    def _connection(self):
-        cls = http.client.HTTPSConnection if self._https else http.client.HTTPConnection
-        return cls(self._host, self._port, timeout=self.timeout)
-
-    def _headers(self, extra=None):
-        h = dict(extra or {})
-        if self.token:
-            h["Authorization"] = "Bearer " + self.token
-        return h
-
     def _json(self, method, path):
-        return json.loads(self._request(method, path)[2])
+        return json.loads(self._http.request(method, path)[2])
 
-    def _request(self, method, path, body=None, headers=None):
-        conn = self._connection()
-        try:
-            conn.request(method, self._base + path, body=body, headers=self._headers(headers))
-            r = conn.getresponse()
-            return _checked(r.status, {k.lower(): v for k, v in r.getheaders()}, r.read())
-        finally:
-            conn.close()
-
-    def _upload(self, query, body, length):
-        """POST /api/volumes with Expect: 100-continue: a refusal (size, budget, rate, token)
-        arrives before the body is sent, as with curl."""
-        conn = self._connection()
-        try:
-            conn.putrequest("POST", self._base + "/api/volumes?" + urllib.parse.urlencode(query))
-            for k, v in self._headers({"Content-Type": "application/octet-stream", "Content-Length": str(length),
-                                       "Expect": "100-continue"}).items():
-                conn.putheader(k, v)
-            conn.endheaders()
-            if select.select([conn.sock], [], [], 5.0)[0]:  # else a server that ignores Expect: send anyway
-                status, answer = _read_interim(conn.sock)
-                if status != 100:
-                    return json.loads(_checked(status, {}, answer)[2])
-            if isinstance(body, memoryview):
-                for i in range(0, length, _CHUNK):
-                    conn.sock.sendall(body[i:i + _CHUNK])
-            else:
-                while chunk := body.read(_CHUNK):
-                    conn.sock.sendall(chunk)
-            r = conn.getresponse()
-            return json.loads(_checked(r.status, {}, r.read())[2])
-        finally:
-            conn.close()
+    def _upload(self, query, body, length, rewind=lambda: None):
+        return self._http.upload("/api/volumes?" + urllib.parse.urlencode(query), body, length, rewind)
 
 
-def _read_interim(sock):
-    """The server's answer to the headers alone: (100, b"") to go on, or a whole refusal (status,
-    body), read off the socket directly (http.client would wait past a 100 for the final answer)."""
-    data = b""
-    while b"\r\n\r\n" not in data:
-        chunk = sock.recv(65536)
-        if not chunk:
-            raise ConnectionError("the server closed the connection before answering")
-        data += chunk
-    head, _, rest = data.partition(b"\r\n\r\n")
-    lines = head.decode("latin-1").split("\r\n")
-    status = int(lines[0].split()[1])
-    if status == 100:
-        return 100, b""
-    length = next((int(l.split(":", 1)[1]) for l in lines[1:] if l.lower().startswith("content-length:")), None)
-    while length is not None and len(rest) < length:
-        chunk = sock.recv(65536)
-        if not chunk:
-            break
-        rest += chunk
-    return status, rest if length is None else rest[:length]
+def scene_json(scene):
+    """The scene as JSON bytes; numpy numbers and arrays become JSON numbers and lists."""
+    try:
+        return json.dumps(scene, default=_plain, allow_nan=False).encode()
+    except ValueError as e:
+        raise ValueError(f"a scene holds numbers JSON has (no NaN or infinity): {e}") from None
 
 
-def _checked(status, headers, body):
-    if status >= 400:
-        try:
-            j = json.loads(body)
-            code, message = j.get("error", "error"), j.get("message", "")
-        except ValueError:
-            code, message = "error", body[:500].decode("utf-8", "replace")
-        raise ServerError(status, code, message)
-    return status, headers, body
+def _plain(o):
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    raise TypeError(f"a scene holds numbers, strings, lists and dicts, not {type(o).__name__} ({o!r})")
+
+
+def _as_float32(a):
+    """float64 (or wider) as float32, refused when a finite value does not fit (it would become
+    infinity, which the server replaces, and the data is lost)."""
+    finite = a[np.isfinite(a)]
+    if finite.size:
+        lo, hi = float(finite.min()), float(finite.max())
+        if max(-lo, hi) > _FLOAT32_MAX:
+            raise ValueError(f"values {lo:g}..{hi:g} do not fit in float32 (at most {_FLOAT32_MAX:.4g}), the type "
+                             f"the server keeps floats as: rescale them first (e.g. array / {max(-lo, hi):.0e})")
+    return a.astype(np.float32)
 
 
 def _three(v, what):

@@ -8,6 +8,7 @@ import subprocess
 import sys
 import threading
 
+import numpy as np
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -58,3 +59,22 @@ def guarded(tmp_path_factory):
     s = Server(tmp_path_factory.mktemp("guarded"), "--token", "sesame")
     yield s
     s.stop()
+
+
+def blobs(shape=(20, 24, 28), dtype=np.uint16, seed=3):
+    """A smooth field with structure, indexed [z, y, x]."""
+    z, y, x = np.mgrid[0:shape[0], 0:shape[1], 0:shape[2]].astype(np.float64)
+    rng = np.random.default_rng(seed)
+    f = np.zeros(shape)
+    for _ in range(5):
+        c = rng.uniform(0, 1, 3) * np.array(shape)
+        f += np.exp(-((z - c[0]) ** 2 + (y - c[1]) ** 2 + (x - c[2]) ** 2) / 30.0)
+    f /= f.max()
+    if np.dtype(dtype).kind == "f":
+        return f.astype(dtype)
+    info = np.iinfo(dtype)
+    return (info.min + f * (info.max - info.min)).astype(dtype)
+
+
+def no_uploads_left(server, before):
+    assert server.files() == before, (before, server.files())

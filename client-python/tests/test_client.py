@@ -14,23 +14,8 @@ import time
 import numpy as np
 import pytest
 
-from conftest import DATA, PEAKCAST, ROOT
+from conftest import DATA, PEAKCAST, ROOT, blobs, no_uploads_left
 import peakcast
-
-
-def blobs(shape=(20, 24, 28), dtype=np.uint16, seed=3):
-    """A smooth field with structure, indexed [z, y, x]."""
-    z, y, x = np.mgrid[0:shape[0], 0:shape[1], 0:shape[2]].astype(np.float64)
-    rng = np.random.default_rng(seed)
-    f = np.zeros(shape)
-    for _ in range(5):
-        c = rng.uniform(0, 1, 3) * np.array(shape)
-        f += np.exp(-((z - c[0]) ** 2 + (y - c[1]) ** 2 + (x - c[2]) ** 2) / 30.0)
-    f /= f.max()
-    if np.dtype(dtype).kind == "f":
-        return f.astype(dtype)
-    info = np.iinfo(dtype)
-    return (info.min + f * (info.max - info.min)).astype(dtype)
 
 
 SCENE = {"image": {"width": 96, "height": 80},
@@ -49,10 +34,6 @@ def cli_render(array, spacing, scene):
         subprocess.run([PEAKCAST, "render", tmp / "s.json", "-o", tmp / "s.png"], check=True, capture_output=True)
         from PIL import Image
         return np.asarray(Image.open(tmp / "s.png").convert("RGB"))
-
-
-def no_uploads_left(server, before):
-    assert server.files() == before, (before, server.files())
 
 
 @pytest.mark.parametrize("dtype", [np.uint8, np.int8, np.uint16, np.int16, np.float32])
@@ -230,7 +211,7 @@ def test_no_token_is_refused(guarded):
 
 
 def test_a_client_past_its_rate_is_refused(guarded):
-    c = peakcast.Client(guarded.url, token="sesame")
+    c = peakcast.Client(guarded.url, token="sesame", retries=0)
     before = guarded.files()
     refused = None
     for i in range(14):  # a burst of 10, then 1 a second
@@ -252,7 +233,7 @@ def start_stalled_upload(server, size=1 << 20):
 
 
 def test_concurrent_limit_stall_and_disconnect_leave_nothing(server):
-    c = peakcast.Client(server.url)
+    c = peakcast.Client(server.url, retries=0)
     before = server.files()
     stalled = start_stalled_upload(server)
     time.sleep(0.3)
@@ -299,15 +280,23 @@ def test_examples_run(server, tmp_path, example):
 
 
 def test_pip_installs_the_package(tmp_path):
-    """`pip install ./client-python` (offline here: --no-build-isolation uses Debian's setuptools)."""
+    """The install commands of client-python/README.md, as written (the venv's folder swapped for a
+    temporary one, the checkout for a copy): offline, on Debian 12's externally managed Python."""
+    import re
     import shutil
-    venv, src = tmp_path / "venv", tmp_path / "client-python"
+    src = tmp_path / "client-python"
     # A copy: pip builds in the source folder (build/, *.egg-info), which is not the checkout's.
     shutil.copytree(ROOT / "client-python", src, ignore=shutil.ignore_patterns("tests", "build", "*.egg-info", "__pycache__"))
-    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)], check=True)
-    pip = [str(venv / "bin/python"), "-m", "pip", "install", "--quiet", "--no-index", "--no-build-isolation", str(src)]
-    r = subprocess.run(pip, capture_output=True, text=True)
-    assert r.returncode == 0, r.stderr
+    readme = (ROOT / "client-python/README.md").read_text()
+    block = next(b for b in re.findall(r"```sh\n(.*?)```", readme, re.S) if "pip install" in b)
+    venv = tmp_path / "venv"
+    for line in block.strip().splitlines():
+        line = line.replace("~/peakcast-venv", str(venv)).replace("./client-python", str(src))
+        line = re.sub(r"^python3 ", sys.executable + " ", line)  # Debian's python3: the one running the tests
+        env = {k: v for k, v in os.environ.items() if not k.startswith(("PIP_", "VIRTUAL_ENV"))}
+        env["PIP_NO_INDEX"] = "1"  # no index is reachable here: the line must not need one
+        r = subprocess.run(line, shell=True, capture_output=True, text=True, cwd=tmp_path, env=env)
+        assert r.returncode == 0, (line, r.stderr)
     r = subprocess.run([str(venv / "bin/python"), "-c", "import peakcast, sys; print(peakcast.__file__)"],
                        capture_output=True, text=True, cwd=tmp_path)
     assert r.returncode == 0 and str(venv) in r.stdout, (r.stdout, r.stderr)

@@ -121,7 +121,12 @@ struct InfoArgs {
   int cell = 0;
   std::string nonfinite = "replace";
   int64_t max_voxels = int64_t(1) << 32;
+  int64_t memory_budget_mib = 0;  // 0: kInfoPyramidBudgetMib for a pyramid (unless --level), none for one file
+  bool level_given = false;
 };
+
+// What `info` reads of a pyramid when not told: its finest level within this many MiB of voxels.
+constexpr int64_t kInfoPyramidBudgetMib = 256;
 
 // A chunked volume's levels, from its metadata alone.
 void print_pyramid(const std::string& path) {
@@ -251,7 +256,16 @@ int run_info(const InfoArgs& ia) {
   LoadOptions opt = ia.select.options();
   opt.max_voxels = ia.max_voxels;
   opt.nonfinite = ia.nonfinite == "refuse" ? NonFinitePolicy::Refuse : NonFinitePolicy::Replace;
+  const int64_t budget_mib = ia.memory_budget_mib > 0                                 ? ia.memory_budget_mib
+                             : !ia.level_given && chunked::is_chunked_volume(ia.file) ? kInfoPyramidBudgetMib
+                                                                                      : 0;
+  opt.memory_budget_bytes = budget_mib << 20;
   Volume v = load_volume(ia.file, opt);
+  if (v.pyramid_levels > 1)
+    std::printf("read: level %d of 0..%d%s; what follows is of it\n", v.pyramid_level, v.pyramid_levels - 1,
+                budget_mib > 0
+                    ? (", the finest within " + std::to_string(budget_mib) + " MiB (--memory-budget-mib)").c_str()
+                    : "");
   const auto& d = v.dims();
   std::printf("file: %s\ndims: %lld %lld %lld\ntype: %s (stored as %s, value offset %g)\n", ia.file.c_str(),
               (long long)d[0], (long long)d[1], (long long)d[2], to_string(v.source_type()), to_string(v.type()),
@@ -280,8 +294,15 @@ void add_info_command(CLI::App& app, Runner& run) {
   info->add_option("--nonfinite", ia->nonfinite, "float NaN/Inf voxels: replace | refuse")
       ->check(CLI::IsMember({"replace", "refuse"}));
   info->add_option("--max-voxels", ia->max_voxels, "refuse volumes with more voxels (default 2^32)");
+  info->add_option("--memory-budget-mib", ia->memory_budget_mib,
+                   "read a pyramid's finest level within this many MiB of voxels (default 256); a single file "
+                   "past it is refused (default: no limit)")
+      ->check(CLI::Range(int64_t(1), int64_t(1) << 30));
   add_chunk_select(info, ia->select);
-  info->callback([ia, &run] { run = [ia] { return run_info(*ia); }; });
+  info->callback([ia, info, &run] {
+    ia->level_given = info->get_option("--level")->count() > 0;
+    run = [ia] { return run_info(*ia); };
+  });
 }
 
 }  // namespace

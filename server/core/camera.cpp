@@ -21,7 +21,7 @@ Camera default_camera(const glm::dvec3& lo, const glm::dvec3& hi, double fov_y, 
   Camera c;
   c.fov_y = fov_y;
   c.center = (lo + hi) * 0.5;
-  const double radius = std::max(glm::length(hi - lo) * 0.5, 1e-9);
+  const double radius = glm::length(hi - lo) * 0.5;  // > 0: a volume has two voxels or more on each axis
   const double distance = radius / std::sin(fov_y * M_PI / 360.0);
   // From +z, azimuth turns right-handed about +y, elevation lifts towards +y.
   const double az = azimuth * M_PI / 180.0, el = elevation * M_PI / 180.0;

@@ -108,6 +108,7 @@ void check_header(const fs::path& file, const VolumeHeader& h, const LoadOptions
                                 " voxels exceeds the limit of " + std::to_string(options.max_voxels));
   for (int a = 0; a < 3; ++a)
     if (!(h.spacing[a] > 0) || !std::isfinite(h.spacing[a])) throw VolumeError(file, "spacing must be finite and > 0");
+  if (const std::string why = spacing_refusal(h.spacing, h.origin); !why.empty()) throw VolumeError(file, why);
   const int64_t voxel_mem = count * int64_t(voxel_bytes(storage_type(h.source)));
   if (options.memory_budget_bytes > 0 && !options.region && voxel_mem > options.memory_budget_bytes)
     throw VolumeError(file, std::to_string(voxel_mem >> 20) + " MiB of voxels exceeds the memory budget of " +
@@ -301,6 +302,24 @@ Volume read_payload(const fs::path& header_file, const VolumeHeader& h, const Pa
 }
 
 }  // namespace detail
+
+std::string spacing_refusal(const glm::dvec3& spacing, const glm::dvec3& origin) {
+  char text[320];
+  for (int a = 0; a < 3; ++a) {
+    if (spacing[a] < kMinSpacing || spacing[a] > kMaxSpacing) {
+      std::snprintf(text, sizeof text,
+                    "spacing %g on axis %c is outside %g..%g: give it in a unit where it is nearer 1 (e.g. 4 nm, "
+                    "not 4e-9 m; the unit travels with the volume)",
+                    spacing[a], "xyz"[a], kMinSpacing, kMaxSpacing);
+      return text;
+    }
+    if (!(std::fabs(origin[a]) <= kMaxOrigin)) {
+      std::snprintf(text, sizeof text, "origin %g on axis %c is outside +-%g", origin[a], "xyz"[a], kMaxOrigin);
+      return text;
+    }
+  }
+  return "";
+}
 
 Volume load_volume(const fs::path& path, const LoadOptions& options) {
   using namespace detail;

@@ -78,6 +78,14 @@ struct LoadOptions {
   std::function<void(const VolumeHeader&)> on_header;
 };
 
+// The spacings and origins a volume may have: every spacing within [kMinSpacing, kMaxSpacing] and
+// every origin coordinate within +-kMaxOrigin (world units). Inside, a volume draws the same
+// picture at any scale (measured from 1e-15 to 1e15, tests/unit/refusal_test.cpp); past 1e18 world
+// units, products of coordinates leave float's range on the GPU and pictures break. Returns ""
+// within the bounds, else why, with the way out (another unit).
+constexpr double kMinSpacing = 1e-12, kMaxSpacing = 1e12, kMaxOrigin = 1e15;
+std::string spacing_refusal(const glm::dvec3& spacing, const glm::dvec3& origin);
+
 // Format by name: .nrrd/.nhdr, .mhd/.mha, .json (sidecar) or .raw with a sidecar,
 // .tif/.tiff (multi-page), a directory of numbered 2D TIFFs, or a chunked volume's directory
 // (OME-Zarr, Neuroglancer precomputed: one level of it, options.level).

@@ -26,7 +26,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   void start_upload();
   void read_upload();
   void on_upload_read(beast::error_code ec, std::size_t bytes);
-  void refuse_upload(int status, const std::string& code, const std::string& message);
+  void refuse_upload(int status, const std::string& code, const std::string& message, int retry_after_s = 0);
   void upgrade(Request req);
   void write(Response res);
   bool origin_allowed(const Request& req) const;

@@ -11,7 +11,7 @@
 
 namespace peakcast::net {
 
-void HttpSession::refuse_upload(int status, const std::string& code, const std::string& message) {
+void HttpSession::refuse_upload(int status, const std::string& code, const std::string& message, int retry_after_s) {
   app_.metrics.add("peakcast_uploads_total", "outcome=\"" + code + "\"", 1);
   app_.metrics.add("peakcast_http_requests_total", "route=\"upload\",code=\"" + std::to_string(status) + "\"", 1);
   Request req;
@@ -21,7 +21,8 @@ void HttpSession::refuse_upload(int status, const std::string& code, const std::
   upload_parser_.reset();
   upload_deadline_.cancel();
   auto res = error_response(req, http::status(status), code, message);
-  if (status == 503 || status == 429) res.set(http::field::retry_after, "5");
+  if (retry_after_s > 0 || status == 503 || status == 429)
+    res.set(http::field::retry_after, std::to_string(retry_after_s > 0 ? retry_after_s : 5));
   write(std::move(res));
 }
 
@@ -41,7 +42,7 @@ void HttpSession::start_upload() {
   try {
     upload_ = app_.uploads.begin(client, length);
   } catch (const UploadRefusal& r) {
-    return refuse_upload(r.status, r.code, r.what());
+    return refuse_upload(r.status, r.code, r.what(), r.retry_after_s);
   }
   upload_params_ = UploadParams{};
   upload_start_ = {};
@@ -51,6 +52,11 @@ void HttpSession::start_upload() {
   upload_params_.content_type = std::string(req[http::field::content_type]);
   // Raw voxels: their header as query parameters (dims=X,Y,Z&dtype=uint16&spacing=..&origin=..).
   upload_params_.raw = raw_header_from_query(target);
+  if (upload_params_.raw && length && upload_params_.content_type.rfind("multipart/form-data", 0) != 0) try {
+      app_.uploads.check_raw_header(*upload_params_.raw, *length);
+    } catch (const UploadRefusal& r) {
+      return refuse_upload(r.status, r.code, r.what(), r.retry_after_s);
+    }
   const bool expects_continue = beast::iequals(req[http::field::expect], "100-continue");
   upload_parser_.emplace(std::move(*parser_));
   parser_.reset();

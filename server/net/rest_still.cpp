@@ -75,7 +75,8 @@ std::function<void(StillResult)> still_reply(AppContext& app, const Request& req
   // Of the scene: whether its TF was derived, and what it asks for that it will not get.
   const std::string tf_source = scene.tf_derived ? "auto" : "scene";
   const std::vector<std::string> warnings = scene.warnings;
-  return [&app, send = std::move(send), version, keep_alive, tf_source, warnings, level](StillResult r) {
+  const int64_t time = scene.scene.time;
+  return [&app, send = std::move(send), version, keep_alive, tf_source, warnings, level, time](StillResult r) {
     if (!r.error.empty()) {
       const auto status = r.error_code == "shutting_down" || r.error_code == "cancelled"
                               ? http::status::service_unavailable
@@ -99,7 +100,9 @@ std::function<void(StillResult)> still_reply(AppContext& app, const Request& req
     res.set("X-TF-Source", tf_source);
     res.set("X-Image-Width", std::to_string(r.width));
     res.set("X-Image-Height", std::to_string(r.height));
+    res.set("X-Time", std::to_string(time));  // the time point drawn
     for (const std::string& w : warnings) res.insert("X-Warning", w);
+    for (const std::string& w : r.warnings) res.insert("X-Warning", w);
     res.body().assign(r.bytes.begin(), r.bytes.end());
     res.keep_alive(keep_alive);
     res.prepare_payload();

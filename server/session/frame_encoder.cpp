@@ -125,6 +125,7 @@ void encode_still(encode::JpegEncoder& enc, StillWork& w, Metrics& metrics) {
   r.bands = w.bands;
   r.bricks = w.by_bricks() ? w.bands : 0;
   r.variant = w.variant;
+  r.warnings = w.warnings;
   metrics.add("peakcast_stills_total", "outcome=\"done\"", 1);
   w.job.done(std::move(r));
 }

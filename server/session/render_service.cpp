@@ -1,6 +1,7 @@
 #include "session/render_service.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <deque>
 #include <exception>
 #include <future>
@@ -15,6 +16,23 @@
 #include "session/frame_encoder.h"
 
 namespace peakcast {
+
+namespace {
+
+// A still by bricks whose image buffers and grids left its bricks less than half their share: it
+// held more than the budget, which the script hears (X-Warning) and not only the log.
+std::string budget_warning(const distributed::SequenceResult& r, int64_t budget_bytes) {
+  char text[400];
+  std::snprintf(text, sizeof text,
+                "memory budget: this %dx%d still's image buffers and grids (%.1f MiB) beside its %d bricks left them "
+                "less than half of --memory-budget-mib %lld, so it held more than the budget; a smaller image or a "
+                "larger budget keeps within it",
+                r.image.width, r.image.height, double(r.beside_bytes) / 1048576.0, r.bricks,
+                (long long)(budget_bytes >> 20));
+  return text;
+}
+
+}  // namespace
 
 // The renderer (and GL state) that lives on the render thread only, and the viewers' frames
 // submitted to it and not yet collected (oldest first).
@@ -262,12 +280,14 @@ void RenderService::render_brick(Scheduler::Work& w) {
     metrics_.observe("peakcast_render_ms", "kind=\"still_brick\"", ms);
     if (sw.bricks->done()) {
       distributed::SequenceResult r = sw.bricks->take();
-      if (r.budget_too_small)  // the bricks got half their share: the still held more than the budget
+      if (r.budget_too_small) {  // the bricks got half their share: the still held more than the budget
         log::warn("memory budget too small for a full-resolution still's image buffers beside its bricks",
                   {{"width", r.image.width},
                    {"height", r.image.height},
                    {"bricks", r.bricks},
                    {"beside_mib", double(r.beside_bytes) / 1048576.0}});
+        sw.warnings.push_back(budget_warning(r, full.budget_bytes));
+      }
       sw.image = std::move(r.image);
       sw.variant = "bricks";
       sw.bricks.reset();  // no voxels held while the still is encoded

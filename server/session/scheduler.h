@@ -32,7 +32,8 @@ struct StillResult {
   int bands = 0, width = 0, height = 0;
   int bricks = 0;  // a still of a pyramid's finest level: the bricks drawn (bands is the same)
   std::string variant;
-  std::string error, error_code;  // error: the job failed (message for the client; code from proto/)
+  std::vector<std::string> warnings;  // what the render found on the way (X-Warning), beside the scene's
+  std::string error, error_code;      // error: the job failed (message for the client; code from proto/)
 };
 
 // A scripted still (REST). `done` is called exactly once: with the image, or with an error
@@ -77,6 +78,7 @@ struct StillWork {
   double render_ms = 0, samples_total = 0;
   int64_t rays_hit = 0;
   std::string variant;
+  std::vector<std::string> warnings;  // StillResult::warnings
   // A still of the finest level: one brick per turn instead of a band (job.full_statistics).
   std::shared_ptr<distributed::SequenceRun> bricks;
   bool bricks_done = false;

@@ -1,7 +1,5 @@
 #include "session/upload_formats.h"
 
-#include "core/length_unit.h"
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -10,6 +8,7 @@
 
 #include "core/length_unit.h"
 #include "core/utf8.h"
+#include "core/volume_io.h"
 #include "session/upload_store.h"
 
 namespace fs = std::filesystem;
@@ -153,6 +152,14 @@ nlohmann::json raw_sidecar(const nlohmann::json& h, const std::string& data_file
       if (!(x.get<double>() > 0)) throw bad("raw header: spacing must be > 0");
   }
   if (h.contains("origin")) out["origin"] = triple("origin", false);
+  {  // the scale a volume draws right at: refused here, before any voxel is sent
+    glm::dvec3 spacing{1.0}, origin{0.0};
+    for (int a = 0; a < 3; ++a) {
+      if (out.contains("spacing")) spacing[a] = out["spacing"][a].get<double>();
+      if (out.contains("origin")) origin[a] = out["origin"][a].get<double>();
+    }
+    if (const std::string why = spacing_refusal(spacing, origin); !why.empty()) throw bad("raw header: " + why);
+  }
   if (h.contains("units")) {  // one unit of length for the three axes
     if (!h["units"].is_string()) throw bad("raw header: units must be a unit of length such as um or mm");
     try {

@@ -1,8 +1,10 @@
 #include "session/upload_store.h"
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
-#include <set>
 #include <random>
+#include <set>
 #include <system_error>
 
 #include "core/log.h"
@@ -128,13 +130,18 @@ std::unique_ptr<UploadStore::Ticket> UploadStore::begin(const std::string& clien
   b.tokens =
       std::min(limits_.burst, b.tokens + std::chrono::duration<double>(now - b.last).count() * limits_.per_minute / 60);
   b.last = now;
-  if (b.tokens < 1)
+  if (b.tokens < 1) {
+    // The next token comes when the bucket has refilled to one: that is when to come back.
+    const int wait_s = std::max(1, int(std::ceil((1.0 - b.tokens) * 60.0 / std::max(limits_.per_minute, 1e-9))));
     throw UploadRefusal(429, "rate_limited",
-                        "too many uploads from this client: a burst of at most " + std::to_string(int(limits_.burst)) +
-                            ", then " + std::to_string(int(limits_.per_minute)) + " a minute");
+                        "too many uploads from this client: its burst of " + std::to_string(int(limits_.burst)) +
+                            " is spent, and it refills at " + std::to_string(int(limits_.per_minute)) +
+                            " a minute (--uploads-per-minute); the next may start in " + std::to_string(wait_s) + " s",
+                        wait_s);
+  }
   if (receiving_ >= limits_.max_concurrent)
     throw UploadRefusal(503, "uploads_busy",
-                        std::to_string(limits_.max_concurrent) + " uploads are being received now; retry later");
+                        std::to_string(limits_.max_concurrent) + " uploads are being received now; retry later", 5);
   const int64_t used = used_locked();
   if (length && *length > limits_.max_bytes)
     throw UploadRefusal(413, "too_large",
@@ -149,6 +156,21 @@ std::unique_ptr<UploadStore::Ticket> UploadStore::begin(const std::string& clien
   ++receiving_;
   const std::string id = new_id();
   return std::unique_ptr<Ticket>(new Ticket(*this, id, incoming_ / (id + ".body")));
+}
+
+void UploadStore::check_raw_header(const nlohmann::json& raw, int64_t length) const {
+  const nlohmann::json sidecar = raw_sidecar(raw, "voxels.raw");
+  check_raw_body(sidecar, length);
+  const int64_t budget = volumes_.load_options().memory_budget_bytes;
+  const int64_t times = std::max<int64_t>(1, sidecar.value("times", int64_t(1)));
+  const int64_t held = length / times;  // one time point is held at a time; stored as sent (integers, float32)
+  if (budget > 0 && held > budget)
+    throw UploadRefusal(422, "bad_volume",
+                        std::to_string(held >> 20) + " MiB of voxels" + (times > 1 ? " a time point" : "") +
+                            " exceeds the server's memory budget of " + std::to_string(budget >> 20) +
+                            " MiB (--memory-budget-mib), refused before the body was sent: send it downsampled "
+                            "(e.g. array[::2, ::2, ::2]), or as an OME-Zarr pyramid in one of the server's --data "
+                            "directories (peakcast convert IN OUT.zarr --pyramid), which opens at a level that fits");
 }
 
 std::shared_ptr<VolumeEntry> UploadStore::commit(std::unique_ptr<Ticket> t, const UploadParams& params) {

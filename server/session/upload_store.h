@@ -27,10 +27,11 @@ namespace peakcast {
 // A refused upload or deletion: an HTTP status, a code from proto/ and a message that names no
 // server path.
 struct UploadRefusal : std::runtime_error {
-  UploadRefusal(int status, std::string code, const std::string& message)
-      : std::runtime_error(message), status(status), code(std::move(code)) {}
+  UploadRefusal(int status, std::string code, const std::string& message, int retry_after_s = 0)
+      : std::runtime_error(message), status(status), code(std::move(code)), retry_after_s(retry_after_s) {}
   int status;
   std::string code;
+  int retry_after_s;  // > 0: when to come back (Retry-After), for 429 and 503
 };
 
 struct UploadLimits {
@@ -87,6 +88,10 @@ class UploadStore {
   // Refused (UploadRefusal) when uploads are off, `client` exceeds its rate, too many are being
   // received, or the announced length exceeds the per-upload limit or the budget left.
   std::unique_ptr<Ticket> begin(const std::string& client, std::optional<int64_t> length);
+  // Raw voxels described by the query (`raw`, not multipart): what their header decides, checked
+  // before the body is read: a header the raw reader refuses, a body length that is not what dims
+  // and dtype need, voxels past the memory budget (UploadRefusal, as commit would refuse them).
+  void check_raw_header(const nlohmann::json& raw, int64_t length) const;
   // The body is in the ticket's file: find its format, check it as any volume file is, move it
   // into place and register it. Throws UploadRefusal (the files are gone then).
   std::shared_ptr<VolumeEntry> commit(std::unique_ptr<Ticket> ticket, const UploadParams& params);

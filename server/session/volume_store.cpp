@@ -209,6 +209,9 @@ std::shared_ptr<VolumeEntry> VolumeStore::get(const std::string& id_or_path, std
       lock.unlock();
       return add(id_or_path, up.path, false, up.name, std::move(progress), nullptr, up.owner);
     }
+    if (deleted_.count(id_or_path))
+      throw VolumeError(id_or_path, "this upload was deleted (DELETE /api/volumes/" + id_or_path +
+                                        "); upload the data again for a new id");
   }
   const fs::path resolved = resolve_in_roots(id_or_path, dirs_);
   {
@@ -355,7 +358,10 @@ void VolumeStore::register_upload(const std::string& id, const fs::path& path, c
 
 void VolumeStore::remove_upload(const std::string& id) {
   std::lock_guard lock(m_);
-  uploads_.erase(id);
+  if (uploads_.erase(id)) {
+    if (deleted_.size() >= 65536) deleted_.clear();  // a bound on what is remembered
+    deleted_.insert(id);
+  }
   for (auto it = entries_.begin(); it != entries_.end();)  // with its other time points
     it = it->second->id == id ? entries_.erase(it) : std::next(it);
   if (default_ == id) default_ = entries_.empty() ? "" : entries_.begin()->first;

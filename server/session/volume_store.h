@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <set>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -142,6 +143,7 @@ class VolumeStore {
     nlohmann::json info;
   };
   std::map<std::string, Upload> uploads_;
+  std::set<std::string> deleted_;  // uploads removed: asked for again, they are named as deleted
   std::vector<std::filesystem::path> dirs_;
   Residency& residency_;
   LoadOptions options_;

@@ -10,6 +10,7 @@ separators, big-endian, missing chunks, t and c axes) and precomputed folders wr
 import gzip
 import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -273,7 +274,26 @@ def precomputed(tmp):
           "Neuroglancer precomputed (raw, gzip and .gz chunks): voxels, spacing (nm) and origin (first voxel's centre)")
 
 
+def info_reads_within_a_budget(tmp):
+    """`peakcast info` of a pyramid reads its finest level within --memory-budget-mib (256 MiB when
+    not given), not level 0 whatever its size; --level names a level."""
+    src, out = os.path.join(tmp, "info-blobs.raw"), os.path.join(tmp, "info-blobs.zarr")
+    run("make-volume", "blobs", "--dims", 160, 150, 140, "--type", "uint16", "-o", src)  # 6.4 MiB
+    run("convert", src, out, "--pyramid", "--chunk", 32)
+    rss = lambda text: float(re.search(r"peak RSS: ([\d.]+) MiB", text).group(1))
+    small = run("info", out, "--memory-budget-mib", 1)
+    whole = run("info", out)
+    named = run("info", out, "--level", 2)
+    check("read: level 1 of 0..3, the finest within 1 MiB" in small and "dims: 80 75 70" in small,
+          "info --memory-budget-mib 1 reads level 1 (80x75x70, 0.8 MiB)")
+    check("read: level 0 of 0..3, the finest within 256 MiB" in whole and "dims: 160 150 140" in whole,
+          "info without a budget reads level 0 where it fits in 256 MiB")
+    check("read: level 2 of 0..3;" in named and "dims: 40 38 35" in named, "info --level 2 reads level 2")
+    check(rss(small) < rss(whole), f"info within 1 MiB peaks lower ({rss(small)} MiB) than of level 0 ({rss(whole)} MiB)")
+
+
 with tempfile.TemporaryDirectory() as tmp:
+    info_reads_within_a_budget(tmp)
     peakcast_writes(tmp)
     peakcast_writes_by_slabs(tmp)
     peakcast_writes_series(tmp)
