@@ -121,6 +121,16 @@ class Client:
         w, h = int(headers["x-image-width"][0]), int(headers["x-image-height"][0])
         return Image(np.frombuffer(body, np.uint8).reshape(h, w, 3).copy(), RenderInfo(headers))
 
+    def tf(self, scene):
+        """The TF a scene is drawn with, as a dict to edit and put back into a scene:
+        {"points": [[value, r, g, b, a], ...], "opacity_unit": u}. A scene without "tf" gets the one
+        the server derives from the volume's histogram (with an opacity peak when its
+        render.classification is "peaks"); `.last_tf_source` says "auto" or "scene"."""
+        _, _, body = self._http.request("POST", "/api/tf", scene_json(scene), {"Content-Type": "application/json"})
+        answer = json.loads(body)
+        self.last_tf_source = answer["tf_source"]
+        return answer["tf"]
+
     def render_png(self, scene, path):
         """Renders a scene and writes the PNG the server encodes to `path`; returns its RenderInfo."""
         _, headers, body = self._render(scene, "png")

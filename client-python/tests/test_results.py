@@ -204,3 +204,51 @@ def test_an_upload_past_the_memory_budget_is_refused_before_its_body(tmp_path):
         peakcast.Client(s.url).delete(vid)
     finally:
         s.stop()
+
+
+def test_the_derived_tf_can_be_fetched_edited_and_sent_back(server):
+    """POST /api/tf: the TF a scene without one is drawn with; sent back as the scene's TF it
+    draws the same picture, and edited (opacity halved) it draws another."""
+    c = peakcast.Client(server.url)
+    vid = c.upload(blobs())
+    try:
+        for classification in ("post", "peaks"):
+            scene = dict(SMALL, volume=vid, render={"classification": classification})
+            tf = c.tf(scene)
+            assert c.last_tf_source == "auto" and len(tf["points"]) >= 2 and tf["opacity_unit"] == 1, tf
+            auto = c.render(scene)
+            same = c.render(dict(scene, tf=tf))
+            assert same.tf_source == "scene" and np.abs(np.asarray(auto, int) - same).max() <= 1, classification
+            assert c.tf(dict(scene, tf=tf)) == tf and c.last_tf_source == "scene"
+        faint = dict(tf, points=[[v, r, g, b, a / 2] for v, r, g, b, a in tf["points"]])
+        dimmer = c.render(dict(scene, tf=faint))
+        change = np.abs(np.asarray(dimmer, int) - auto).mean()
+        assert change > 1, change  # the edit is drawn
+        with pytest.raises(peakcast.ServerError) as e:
+            c.tf(dict(scene, volume="no-such.nrrd"))
+        assert e.value.status == 404, e.value
+    finally:
+        c.delete(vid)
+
+
+def test_the_readme_examples_run(server, tmp_path):
+    """Every Python block of client-python/README.md, as written (the URL swapped in), each after a
+    prelude that gives it a client, an array `volume` and an uploaded `vid`."""
+    import re
+    import os
+    import subprocess
+    import sys
+    from conftest import ROOT
+    readme = (ROOT / "client-python/README.md").read_text()
+    blocks = re.findall(r"^```python\n(.*?)^```", readme, re.S | re.M)
+    blocks += [re.sub(r"^  ", "", b, flags=re.M) for b in re.findall(r"^  ```python\n(.*?)^  ```", readme, re.S | re.M)]
+    assert len(blocks) >= 3, blocks
+    np.save(tmp_path / "volume.npy", blobs())
+    prelude = ("import numpy as np, peakcast\nclient = peakcast.Client('http://localhost:8080')\n"
+               "volume = np.load('volume.npy')\nvid = client.upload(volume)\n")
+    env = dict(os.environ, PYTHONPATH=str(ROOT / "client-python"))
+    for code in blocks:
+        code = (prelude + code).replace("http://localhost:8080", server.url)
+        r = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, env=env,
+                           timeout=300)
+        assert r.returncode == 0, (code, r.stderr)

@@ -93,6 +93,41 @@ void probe(AppContext& app, const Request& req, std::function<void(Response)> se
   });
 }
 
+// POST /api/tf: a scene; the TF it is drawn with (the one derived from the histogram when it
+// has none), to edit and send back (docs/rest.md).
+void resolved_tf(AppContext& app, const Request& req, std::function<void(Response)> send) {
+  Scene scene;
+  try {
+    scene = parse_scene(nlohmann::json::parse(req.body()));
+  } catch (const std::exception& e) {
+    count(app, "tf", http::status::bad_request);
+    return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
+  }
+  asio::post(app.loader, [&app, req, scene, send = std::move(send)]() mutable {
+    try {
+      const auto vol = app.volumes.at_time(scene.volume, scene.time);
+      const ResolvedScene r = resolve_scene(scene, *vol->volume);
+      Scene drawn = r.scene;
+      drawn.tf = r.tf;
+      drawn.opacity_unit = r.tf.opacity_unit;
+      const nlohmann::json answer = {{"tf", scene_to_json(drawn)["tf"]},
+                                     {"tf_source", r.tf_derived ? "auto" : "scene"},
+                                     {"range", {vol->volume->min_value, vol->volume->max_value}}};
+      count(app, "tf", http::status::ok);
+      send(json_response(req, http::status::ok, json_text(answer)));
+    } catch (const SceneError& e) {
+      count(app, "tf", http::status::bad_request);
+      send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
+    } catch (const VolumeError& e) {
+      count(app, "tf", http::status::not_found);
+      send(error_response(req, http::status::not_found, "volume_error", e.what()));
+    } catch (const std::exception& e) {
+      count(app, "tf", http::status::internal_server_error);
+      send(error_response(req, http::status::internal_server_error, "internal", e.what()));
+    }
+  });
+}
+
 // DELETE /api/volumes/{id}: an upload, by its owner or the admin (docs/rest.md, Upload ownership).
 // Off the io thread: removing a large file takes a while on some file systems.
 void delete_upload(AppContext& app, const Request& req, const std::string& id, const Principal& who,
@@ -203,6 +238,11 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
       return send(
           error_response(req, http::status::method_not_allowed, "bad_request", "POST a scene with \"pixel\": [x, y]"));
     return probe(app, req, std::move(send));
+  }
+  if (path == "/api/tf") {
+    if (req.method() != http::verb::post)
+      return send(error_response(req, http::status::method_not_allowed, "bad_request", "POST a scene"));
+    return resolved_tf(app, req, std::move(send));
   }
   if (req.method() == http::verb::delete_ && path.rfind("/api/volumes/", 0) == 0)
     return delete_upload(app, req, url_decode(path.substr(std::strlen("/api/volumes/"))), who, std::move(send));
