@@ -95,9 +95,11 @@ def test_refusals_with_retry_after_are_waited_out(tmp_path):
 
         refused = [r for r in burst(peakcast.Client(s.url, retries=0)) if isinstance(r, peakcast.ServerError)]
         assert refused and all((e.status, e.code, e.retry_after) == (503, "queue_full", 5) for e in refused), refused
+        # Honouring Retry-After (5 s) as given: enough for a sanitizer build's seconds-long stills.
         t0 = time.time()
-        waited = burst(peakcast.Client(s.url, retries=8, max_retry_wait=0.5))
-        assert all(isinstance(r, peakcast.Image) for r in waited), waited
+        waited = burst(peakcast.Client(s.url, retries=12, max_retry_wait=5))
+        late = [r for r in waited if not isinstance(r, peakcast.Image)]
+        assert not late, late
         print(f"  {len(refused)} of 8 refused without retries; all 8 with them in {time.time() - t0:.1f} s")
     finally:
         s.stop()
