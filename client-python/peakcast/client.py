@@ -6,6 +6,7 @@ import urllib.parse
 import numpy as np
 
 from ._http import ServerError, Transport  # noqa: F401 (ServerError: peakcast.ServerError)
+from ._png import decode_png
 from .image import Image, RenderInfo
 
 # The voxel types the server keeps (numpy dtype -> the server's name).
@@ -120,6 +121,43 @@ class Client:
         _, headers, body = self._render(scene, "rgb")
         w, h = int(headers["x-image-width"][0]), int(headers["x-image-height"][0])
         return Image(np.frombuffer(body, np.uint8).reshape(h, w, 3).copy(), RenderInfo(headers))
+
+    def render_rgba(self, scene):
+        """The still with alpha and no background: an Image (height, width, 4) uint8, straight
+        (not premultiplied) alpha, 0 where nothing was hit: ready to lay over another picture."""
+        _, headers, body = self._render(scene, "rgba")
+        return Image(decode_png(body), RenderInfo(headers))
+
+    def render_depth(self, scene):
+        """The distance from the eye (the image plane for orthographic views) to where each pixel's
+        ray first passes half opacity, the probe's rule: an Image (height, width) float32 in world
+        units, NaN where nothing was hit. Drawn by the server's reference ray: seconds for 512²."""
+        _, headers, body = self._render(scene, "depth")
+        w, h = int(headers["x-width"][0]), int(headers["x-height"][0])
+        return Image(np.frombuffer(body, "<f4").reshape(h, w).astype(np.float32), RenderInfo(headers))
+
+    def colormaps(self):
+        """The server's named colour maps: {name: (n, 3) float array of sRGB stops in [0, 1],
+        evenly spaced}."""
+        maps = self._json("GET", "/api/colormaps")["colormaps"]
+        return {name: np.asarray(stops, np.float64) for name, stops in maps.items()}
+
+    def colormap_tf(self, name, limits, opacity=(0.0, 0.6)):
+        """A TF from a named colour map (matplotlib's way: `name`, contrast `limits=(vmin, vmax)`
+        in data values) with an opacity ramp from opacity[0] at vmin to opacity[1] at vmax; values
+        below vmin take the first point, above vmax the last. A dict for a scene's "tf"."""
+        maps = self.colormaps()
+        if name not in maps:
+            raise ValueError(f"no colour map {name!r}: the server has {', '.join(sorted(maps))}")
+        lo, hi = (float(v) for v in limits)
+        a0, a1 = (float(v) for v in opacity)
+        if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+            raise ValueError(f"limits must be two finite numbers, the first below the second, not {limits!r}")
+        if not (0 <= a0 <= 1 and 0 <= a1 <= 1):
+            raise ValueError(f"opacity must be two numbers in [0, 1], not {opacity!r}")
+        stops = maps[name]
+        t = np.linspace(0.0, 1.0, len(stops))
+        return {"points": [[lo + f * (hi - lo), *map(float, c), a0 + f * (a1 - a0)] for f, c in zip(t, stops)]}
 
     def tf(self, scene):
         """The TF a scene is drawn with, as a dict to edit and put back into a scene:

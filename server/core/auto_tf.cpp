@@ -1,27 +1,15 @@
 #include "core/auto_tf.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 
 #include <glm/vec3.hpp>
 
+#include "core/colormaps.h"
+
 namespace peakcast {
 
 namespace {
-
-// viridis at t = 0, 0.1, ..., 1 (8-bit sRGB); linear between stops.
-constexpr std::array<std::array<int, 3>, 11> kViridis{{{68, 1, 84},
-                                                       {72, 36, 117},
-                                                       {64, 67, 135},
-                                                       {52, 95, 141},
-                                                       {41, 120, 142},
-                                                       {32, 144, 141},
-                                                       {34, 168, 132},
-                                                       {67, 191, 112},
-                                                       {122, 210, 81},
-                                                       {188, 223, 39},
-                                                       {253, 231, 37}}};
 
 // The value below which `fraction` of the counted voxels lie (bin-linear).
 double percentile(const std::vector<uint64_t>& h, double lo, double hi, double fraction) {
@@ -38,14 +26,7 @@ double percentile(const std::vector<uint64_t>& h, double lo, double hi, double f
 
 }  // namespace
 
-glm::dvec3 viridis(double t) {
-  t = std::clamp(t, 0.0, 1.0) * double(kViridis.size() - 1);
-  const size_t i = std::min(size_t(t), kViridis.size() - 2);
-  const double f = t - double(i);
-  glm::dvec3 c;
-  for (int ch = 0; ch < 3; ++ch) c[ch] = ((1 - f) * kViridis[i][ch] + f * kViridis[i + 1][ch]) / 255.0;
-  return c;
-}
+glm::dvec3 viridis(double t) { return colormap("viridis", t); }
 
 double otsu_threshold(const std::vector<uint64_t>& h, double lo, double hi) {
   double total = 0, sum = 0;

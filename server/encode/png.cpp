@@ -32,16 +32,31 @@ void write_png(const Image& img, const std::filesystem::path& path) {
   out->close();
 }
 
-std::vector<unsigned char> encode_png(const unsigned char* rgb, int width, int height) {
+std::vector<unsigned char> encode_png(const unsigned char* rgb, int width, int height, int channels) {
   std::vector<unsigned char> out;
   Filesystem::IOVecOutput vec(out);
   auto writer = ImageOutput::create("png");
   if (!writer) throw std::runtime_error("no PNG writer");
-  ImageSpec spec(width, height, 3, TypeDesc::UINT8);
+  ImageSpec spec(width, height, channels, TypeDesc::UINT8);
+  if (channels == 4) spec.alpha_channel = 3;
   writer->set_ioproxy(&vec);
   if (!writer->open("memory.png", spec) || !writer->write_image(TypeDesc::UINT8, rgb))
     throw std::runtime_error("PNG encode failed: " + writer->geterror());
   writer->close();
+  return out;
+}
+
+std::vector<unsigned char> to_rgba8_without_background(const Image& image, const float background[3]) {
+  const size_t n = size_t(image.width) * size_t(image.height);
+  std::vector<unsigned char> out(n * 4, 0);
+  auto byte = [](float v) { return (unsigned char)std::lround(std::clamp(v, 0.f, 1.f) * 255.f); };
+  for (size_t p = 0; p < n; ++p) {
+    const float* px = &image.rgba[p * 4];
+    const float a = std::clamp(px[3], 0.f, 1.f);
+    if (!(a > 0.f)) continue;  // nothing hit: transparent black
+    for (int c = 0; c < 3; ++c) out[p * 4 + c] = byte((px[c] - (1.f - a) * background[c]) / a);
+    out[p * 4 + 3] = byte(a);
+  }
   return out;
 }
 

@@ -11,6 +11,7 @@
 #include "session/data_listing.h"
 #include "session/protocol.h"
 #include "session/limits.h"
+#include "core/colormaps.h"
 #include "core/public_text.h"
 #include "core/utf8.h"
 #include "net/ws_session.h"
@@ -252,6 +253,15 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
                        path.rfind("/api/volumes", 0) == 0 ? "GET, POST an upload, or DELETE an upload" : "GET only"));
   if (path == "/api/health") return send(health(app, req));
   if (path == "/api/files") return list_files(app, req, std::move(send));
+  if (path == "/api/colormaps") {  // the named maps' sRGB stops, evenly spaced over [0, 1]
+    nlohmann::json maps = nlohmann::json::object();
+    for (const Colormap& m : colormaps()) {
+      nlohmann::json& stops = maps[m.name] = nlohmann::json::array();
+      for (const auto& c : m.stops) stops.push_back({c[0] / 255.0, c[1] / 255.0, c[2] / 255.0});
+    }
+    count(app, "colormaps", http::status::ok);
+    return send(json_response(req, http::status::ok, json_text(nlohmann::json{{"colormaps", maps}})));
+  }
   if (path == "/api/volumes") {
     const nlohmann::json list = app.volumes.listing();
     count(app, "volumes", http::status::ok);

@@ -1,10 +1,12 @@
 #include "net/rest_still.h"
 
+#include <bit>
 #include <cstdio>
 
 #include <boost/asio/post.hpp>
 
 #include "distributed/brick_sequence.h"
+#include "reference/reference_renderer.h"
 #include "session/limits.h"
 
 namespace asio = boost::asio;
@@ -39,12 +41,14 @@ bool refused_for_cost(AppContext& app, const Request& req, const ResolvedScene& 
 bool read_still_format(AppContext& app, const Request& req, StillJob& job, const std::function<void(Response)>& send) {
   const std::string format = query_param(std::string(req.target()), "format");
   const std::string accept(req[http::field::accept]);
-  if (!format.empty() && format != "png" && format != "jpeg" && format != "jpg" && format != "rgb") {
+  if (!format.empty() && format != "png" && format != "jpeg" && format != "jpg" && format != "rgb" &&
+      format != "rgba") {
     count(app, "render", http::status::bad_request);
-    send(error_response(req, http::status::bad_request, "bad_request", "format must be png, jpeg or rgb"));
+    send(error_response(req, http::status::bad_request, "bad_request", "format must be png, jpeg, rgb, rgba or depth"));
     return false;
   }
   job.raw_rgb = format == "rgb";  // packed 8-bit RGB rows from the top: what a script puts in an array
+  job.rgba = format == "rgba";    // a PNG with alpha, the background taken out
   job.png = !(format == "jpeg" || format == "jpg" ||
               (format.empty() && accept.find("image/jpeg") != std::string::npos &&
                accept.find("image/png") == std::string::npos));
@@ -148,6 +152,49 @@ void submit_still(AppContext& app, const Request& req, const Scene& scene, std::
   if (!app.render.submit_still(std::move(job))) refuse_queued_still(app, req, send);
 }
 
+// ?format=depth: per pixel, the distance from the eye (the image plane for orthographic views)
+// to where the ray's opacity first passes one half, the probe's rule; NaN where it never does.
+// float32 little-endian, rows from the top. The reference ray on the loader pool, at the level
+// held for a pyramid (its voxels are in memory), not on the render thread.
+void depth_still(AppContext& app, const Request& req, Scene scene, std::function<void(Response)> send) {
+  asio::post(app.loader, [&app, req, scene, send = std::move(send)]() mutable {
+    auto refuse = [&](http::status status, const char* code, const std::string& message) {
+      count(app, "render", status);
+      send(error_response(req, status, code, message));
+    };
+    try {
+      scene.render.ray_texture = load_ray_texture_png(scene.render.ray_texture, app.png_locator());
+      const auto vol = app.volumes.at_time(scene.volume, scene.time);
+      if (app.config.ranks > 1 || !vol->volume->has_voxels())
+        return refuse(http::status::unprocessable_entity, "not_supported",
+                      "a depth image needs the volume's voxels; under mpirun they live in the ranks' bricks");
+      const ResolvedScene r = resolve_scene(scene, *vol->volume);
+      if (refused_for_cost(app, req, r, send)) return;
+      const std::vector<float> depth = reference::depth_reference(*vol->volume, r);
+      static_assert(std::endian::native == std::endian::little, "the depth image's bytes are little-endian");
+      Response res{http::status::ok, req.version()};
+      res.set(http::field::content_type, "application/octet-stream");
+      for (const char* name : {"X-Width", "X-Image-Width"}) res.set(name, std::to_string(r.scene.width));
+      for (const char* name : {"X-Height", "X-Image-Height"}) res.set(name, std::to_string(r.scene.height));
+      res.set("X-Level", std::to_string(vol->volume->pyramid_level));
+      res.set("X-Time", std::to_string(scene.time));
+      res.set("X-TF-Source", r.tf_derived ? "auto" : "scene");
+      for (const std::string& w : r.warnings) res.insert("X-Warning", w);
+      res.body().assign(reinterpret_cast<const char*>(depth.data()), depth.size() * sizeof(float));
+      res.keep_alive(req.keep_alive());
+      res.prepare_payload();
+      count(app, "render", http::status::ok);
+      send(std::move(res));
+    } catch (const SceneError& e) {
+      refuse(http::status::bad_request, "bad_scene", e.what());
+    } catch (const VolumeError& e) {
+      refuse(http::status::not_found, "volume_error", e.what());
+    } catch (const std::exception& e) {
+      refuse(http::status::internal_server_error, "internal", e.what());
+    }
+  });
+}
+
 }  // namespace
 
 std::string without_volume_path(const VolumeEntry& entry, std::string message) {
@@ -166,6 +213,7 @@ void render_still(AppContext& app, const Request& req, std::function<void(Respon
     count(app, "render", http::status::bad_request);
     return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
   }
+  if (query_param(std::string(req.target()), "format") == "depth") return depth_still(app, req, scene, std::move(send));
   const bool png = scene.render.ray_texture && !scene.render.ray_texture->png.empty();
   // A pyramid held coarser than its finest level draws the finest by bricks, unless the script
   // asks for the level held (?resolution=held, a quick look).

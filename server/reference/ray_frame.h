@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 #include "core/camera.h"
 #include "core/clip.h"
@@ -71,6 +72,12 @@ struct Accum {
     alpha += w;
   }
 };
+
+// The reference ray of a frame's method for one pixel, behind std::function (probe.cpp): its tables
+// are built once, before `body` runs; `pixel` may be called from several threads at once.
+using PixelRay =
+    std::function<void(const Ray& r, double t_box, double t0, double t1, Accum& acc, double& samples, int x, int y)>;
+void with_reference_ray(const Frame& fr, const std::function<void(const PixelRay&)>& body);
 
 template <typename PixelFn>
 Image for_each_pixel(const Frame& fr, PixelFn fn) {

@@ -359,35 +359,15 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
   return run_reference(fr, opt, [&](const auto& pixel) { return for_each_pixel(fr, pixel); });
 }
 
-ProbeResult probe_reference(const Volume& v, const ResolvedScene& scene, int x, int y) {
-  if (!v.has_voxels())
-    throw std::invalid_argument("probing needs the volume's voxels, which this process does not hold");
-  if (x < 0 || y < 0 || x >= scene.scene.width || y >= scene.scene.height)
-    throw std::invalid_argument("pixel [" + std::to_string(x) + ", " + std::to_string(y) + "] is outside the " +
-                                std::to_string(scene.scene.width) + " x " + std::to_string(scene.scene.height) +
-                                " image");
-  // Adaptive sampling would build the whole volume's macrocells for one ray:
-  // the scene's uniform lattice instead (the half-opacity point moves by less
-  // than a step).
-  ResolvedScene s = scene;
-  s.scene.render.adaptive = false;
-  const Frame fr(v, s);
-  return run_reference(fr, ReferenceOptions{}, [&](const auto& pixel) {
-    ProbeResult out;
-    const Ray r = make_ray(fr.view, x, y);
-    double t_box, t0, t1, samples = 0.0;
-    bool missed;
-    Accum acc;
-    if (!fr.span(r, t_box, t0, t1, missed)) return out;
-    pixel(r, t_box, t0, t1, acc, samples, x, y);
-    out.opacity = acc.alpha;
-    if (std::isnan(acc.half_t)) return out;
-    out.hit = true;
-    out.position = r.o + acc.half_t * r.d + (s.box_min + s.box_max) * 0.5;
-    out.value = acc.half_value;
-    out.distance = acc.half_t - r.t_eye;
-    return out;
+namespace detail {
+
+void with_reference_ray(const Frame& fr, const std::function<void(const PixelRay&)>& body) {
+  run_reference(fr, ReferenceOptions{}, [&](const auto& pixel) {
+    body(PixelRay(pixel));
+    return 0;
   });
 }
+
+}  // namespace detail
 
 }  // namespace peakcast::reference

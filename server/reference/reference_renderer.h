@@ -37,6 +37,9 @@ struct ProbeResult {
   double opacity = 0.0;   // the ray's whole accumulated opacity
 };
 ProbeResult probe_reference(const Volume& v, const ResolvedScene& s, int x, int y);
+// The probe's answer for every pixel (REST ?format=depth): `distance` where the ray's opacity
+// passes one half, NaN where it never does; width * height floats, row 0 at the top.
+std::vector<float> depth_reference(const Volume& v, const ResolvedScene& s);
 
 enum class OpticalModel { Dvr, Peaks };
 

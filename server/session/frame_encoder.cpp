@@ -105,10 +105,17 @@ void encode_still(encode::JpegEncoder& enc, StillWork& w, Metrics& metrics) {
   StillResult r;
   const auto t0 = Clock::now();
   try {
-    auto rgb = encode::to_rgb8(w.image);
-    r.bytes = w.job.raw_rgb ? std::move(rgb)
-                            : encode_image(enc, rgb, w.image.width, w.image.height, w.job.png, w.job.quality,
-                                           encode::Subsampling::S444);
+    if (w.job.rgba) {
+      const glm::vec3 bg(w.job.scene.scene.background);
+      const float background[3] = {bg.x, bg.y, bg.z};
+      const auto rgba = encode::to_rgba8_without_background(w.image, background);
+      r.bytes = encode::encode_png(rgba.data(), w.image.width, w.image.height, 4);
+    } else {
+      auto rgb = encode::to_rgb8(w.image);
+      r.bytes = w.job.raw_rgb ? std::move(rgb)
+                              : encode_image(enc, rgb, w.image.width, w.image.height, w.job.png, w.job.quality,
+                                             encode::Subsampling::S444);
+    }
   } catch (const std::exception& e) {
     r.error = e.what();
     r.error_code = "encode_failed";
