@@ -38,7 +38,10 @@ std::vector<unsigned char> encode_png(const unsigned char* rgb, int width, int h
   auto writer = ImageOutput::create("png");
   if (!writer) throw std::runtime_error("no PNG writer");
   ImageSpec spec(width, height, channels, TypeDesc::UINT8);
-  if (channels == 4) spec.alpha_channel = 3;
+  if (channels == 4) {
+    spec.alpha_channel = 3;
+    spec.attribute("oiio:UnassociatedAlpha", 1);  // straight already: OIIO would divide by alpha again
+  }
   writer->set_ioproxy(&vec);
   if (!writer->open("memory.png", spec) || !writer->write_image(TypeDesc::UINT8, rgb))
     throw std::runtime_error("PNG encode failed: " + writer->geterror());

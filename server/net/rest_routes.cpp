@@ -94,6 +94,17 @@ void probe(AppContext& app, const Request& req, std::function<void(Response)> se
   });
 }
 
+// GET /api/colormaps: the named maps' sRGB stops, evenly spaced over [0, 1].
+Response colormap_list(AppContext& app, const Request& req) {
+  nlohmann::json maps = nlohmann::json::object();
+  for (const Colormap& m : colormaps()) {
+    nlohmann::json& stops = maps[m.name] = nlohmann::json::array();
+    for (const auto& c : m.stops) stops.push_back({c[0] / 255.0, c[1] / 255.0, c[2] / 255.0});
+  }
+  count(app, "colormaps", http::status::ok);
+  return json_response(req, http::status::ok, json_text(nlohmann::json{{"colormaps", maps}}));
+}
+
 // POST /api/tf: a scene; the TF it is drawn with (the one derived from the histogram when it
 // has none), to edit and send back (docs/rest.md).
 void resolved_tf(AppContext& app, const Request& req, std::function<void(Response)> send) {
@@ -253,15 +264,7 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
                        path.rfind("/api/volumes", 0) == 0 ? "GET, POST an upload, or DELETE an upload" : "GET only"));
   if (path == "/api/health") return send(health(app, req));
   if (path == "/api/files") return list_files(app, req, std::move(send));
-  if (path == "/api/colormaps") {  // the named maps' sRGB stops, evenly spaced over [0, 1]
-    nlohmann::json maps = nlohmann::json::object();
-    for (const Colormap& m : colormaps()) {
-      nlohmann::json& stops = maps[m.name] = nlohmann::json::array();
-      for (const auto& c : m.stops) stops.push_back({c[0] / 255.0, c[1] / 255.0, c[2] / 255.0});
-    }
-    count(app, "colormaps", http::status::ok);
-    return send(json_response(req, http::status::ok, json_text(nlohmann::json{{"colormaps", maps}})));
-  }
+  if (path == "/api/colormaps") return send(colormap_list(app, req));
   if (path == "/api/volumes") {
     const nlohmann::json list = app.volumes.listing();
     count(app, "volumes", http::status::ok);
