@@ -303,24 +303,6 @@ Volume read_payload(const fs::path& header_file, const VolumeHeader& h, const Pa
 
 }  // namespace detail
 
-std::string spacing_refusal(const glm::dvec3& spacing, const glm::dvec3& origin) {
-  char text[320];
-  for (int a = 0; a < 3; ++a) {
-    if (spacing[a] < kMinSpacing || spacing[a] > kMaxSpacing) {
-      std::snprintf(text, sizeof text,
-                    "spacing %g on axis %c is outside %g..%g: give it in a unit where it is nearer 1 (e.g. 4 nm, "
-                    "not 4e-9 m; the unit travels with the volume)",
-                    spacing[a], "xyz"[a], kMinSpacing, kMaxSpacing);
-      return text;
-    }
-    if (!(std::fabs(origin[a]) <= kMaxOrigin)) {
-      std::snprintf(text, sizeof text, "origin %g on axis %c is outside +-%g", origin[a], "xyz"[a], kMaxOrigin);
-      return text;
-    }
-  }
-  return "";
-}
-
 Volume load_volume(const fs::path& path, const LoadOptions& options) {
   using namespace detail;
   const auto t0 = std::chrono::steady_clock::now();
