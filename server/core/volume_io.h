@@ -80,9 +80,9 @@ struct LoadOptions {
 
 // The spacings and origins a volume may have: every spacing within [kMinSpacing, kMaxSpacing] and
 // every origin coordinate within +-kMaxOrigin (world units). Inside, a volume draws the same
-// picture at any scale (measured from 1e-15 to 1e15; held by client-python/tests/test_results.py); past 1e18 world
-// units, products of coordinates leave float's range on the GPU and pictures break. Returns ""
-// within the bounds, else why, with the way out (another unit).
+// picture at any scale (measured from 1e-15 to 1e15; held by client-python/tests/test_results.py);
+// past 1e18 world units, products of coordinates leave float's range on the GPU and pictures
+// break. Returns "" within the bounds, else why, with the way out (another unit).
 constexpr double kMinSpacing = 1e-12, kMaxSpacing = 1e12, kMaxOrigin = 1e15;
 std::string spacing_refusal(const glm::dvec3& spacing, const glm::dvec3& origin);
 
