@@ -13,6 +13,7 @@ export class Stream extends EventTarget {
   #retryMs = 500;
   #timer = 0;
   #shownId = 0;         // the newest frame handed on: an older one decoded late is not drawn over it
+  #newestId = 0;        // the newest frame received: stats of an older one are not passed on
   #video;
   codec = 'jpeg';       // interactive frames: jpeg or a video codec (asked for after every welcome)
   kbps = null;          // the video bit-rate ceiling asked for (null: the server's)
@@ -44,7 +45,7 @@ export class Stream extends EventTarget {
     this.#ws = ws;
     ws.onopen = () => {
       this.#retryMs = 500;
-      this.#shownId = 0;  // a new session counts its frames from 1
+      this.#shownId = this.#newestId = 0;  // a new session counts its frames from 1
       this.#video.close();
       ws.send(JSON.stringify(this.helloFor()));
     };
@@ -75,12 +76,16 @@ export class Stream extends EventTarget {
       if (this.codec !== 'jpeg' && msg.capabilities?.codecs?.includes(this.codec)) this.setCodec(this.codec);
     }
     if (msg.type === 'error' && msg.code === 'unauthorized') this.refused = 'unauthorized';
+    // The server sends no stats of a frame older than one it sent (docs/streaming.md); kept here
+    // too, so a time readout never steps back.
+    if (msg.type === 'stats' && msg.frame < this.#newestId) return;
     this.#emit(msg.type, msg);
   }
 
   #onFrame(buffer) {
     const frame = parseFrame(buffer);
     frame.receivedAt = performance.now();
+    this.#newestId = Math.max(this.#newestId, frame.id);
     if (frame.video) return this.#video.push(frame, this.codec);
     // Newest id wins: a frame the server encoded late can arrive after a newer one.
     if (this.#pending && frame.id < this.#pending.id) return this.send({ type: 'ack', frame: frame.id });

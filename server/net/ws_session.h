@@ -5,6 +5,7 @@
 
 #include <deque>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,7 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   // FrameSink: called from encode threads.
   void deliver_frame(std::vector<uint8_t> bytes, uint32_t frame_id, bool final, bool video) override;
   void deliver_text(std::string text) override;
+  void deliver_stats(std::string text, uint32_t frame_id) override;
 
  private:
   struct Outgoing {
@@ -42,6 +44,7 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
     uint32_t frame_id = 0;
     bool final = false;
     bool video = false;  // a video stream's frame: the next one refers to it, so it is never replaced
+    std::optional<uint32_t> stats_of;  // a text: that frame's stats
   };
   void read();
   void on_message();
@@ -92,6 +95,7 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
   bool probing_ = false;
   std::optional<protocol::ProbeMsg> next_probe_;
   std::deque<Outgoing> queue_;
+  uint32_t newest_frame_ = 0;  // the newest frame id queued (sent or waiting)
   asio::steady_timer idle_, pace_, write_timer_, auth_;
   std::shared_ptr<ConnectionSlot> slot_;
   double tokens_;  // message-rate bucket (limits::kMessageBurst at most)

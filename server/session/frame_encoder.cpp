@@ -56,8 +56,9 @@ void send_viewer_frame(encode::JpegEncoder& enc, const RenderedFrame& f, std::op
   h.t_encode_done_us = micros(encoded);
   const size_t image_bytes = bytes.size();
   sink.deliver_frame(protocol::encode_frame(h, bytes), job.frame_id, job.final, bool(video));
-  sink.deliver_text(
-      protocol::stats_message(job.frame_id, job.final, f.width, f.height, stats, ms_between(t0, encoded), image_bytes));
+  sink.deliver_stats(
+      protocol::stats_message(job.frame_id, job.final, f.width, f.height, stats, ms_between(t0, encoded), image_bytes),
+      job.frame_id);
 }
 
 }  // namespace
@@ -98,7 +99,7 @@ void deliver_refined_frame(FrameSink& sink, uint32_t frame_id, const FrameJob& j
                                 {"bricks", r.bricks}};
   const size_t bytes = r.bytes.size();
   sink.deliver_frame(protocol::encode_frame(h, r.bytes), frame_id, true, false);
-  sink.deliver_text(protocol::stats_message(frame_id, true, r.width, r.height, stats, r.encode_ms, bytes));
+  sink.deliver_stats(protocol::stats_message(frame_id, true, r.width, r.height, stats, r.encode_ms, bytes), frame_id);
 }
 
 void encode_still(encode::JpegEncoder& enc, StillWork& w, Metrics& metrics) {

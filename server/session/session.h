@@ -38,6 +38,9 @@ class FrameSink {
   // replaced by a newer frame once encoded (docs/streaming.md).
   virtual void deliver_frame(std::vector<uint8_t> bytes, uint32_t frame_id, bool final, bool video) = 0;
   virtual void deliver_text(std::string text) = 0;
+  // A frame's stats, after its frame: a sink that drops a frame as older than one it already has
+  // drops these too, so stats never go back to an older frame.
+  virtual void deliver_stats(std::string text, uint32_t /*frame_id*/) { deliver_text(std::move(text)); }
 };
 
 struct Quality {

@@ -281,7 +281,8 @@ test('a time series: a slider, play and a readout; frames in order; the share li
     await page.waitForFunction(() => window.peakcast.timeControls.time === 3, null, { timeout: 30000 });
     assert.equal(await page.textContent('#time-readout'), 't 3 of 0…5');
     await waitFinal(page);
-    // Playing at 5 a second for 2 s: the time moves on, and no frame goes back (but to wrap to 0).
+    // Playing at 5 a second for 2 s: the time moves on, and no frame goes back; the clock may skip
+    // a time point or two the server could not draw in time, across the wrap too (5 -> 1).
     const start = await page.evaluate(() => window.__times.length);
     await page.fill('#time-rate', '5');
     await page.click('#time-play');
@@ -291,7 +292,10 @@ test('a time series: a slider, play and a readout; frames in order; the share li
     const played = (await page.evaluate(() => window.__times)).slice(start);
     const steps = played.filter((t, i) => i === 0 || t !== played[i - 1]);
     assert.ok(steps.length >= 3, JSON.stringify(played));
-    for (let i = 1; i < steps.length; i++) assert.ok(steps[i] === (steps[i - 1] + 1) % 6 || steps[i] > steps[i - 1], JSON.stringify(steps));
+    for (let i = 1; i < steps.length; i++) {
+      const ahead = (steps[i] - steps[i - 1] + 6) % 6;  // 5 would be one back
+      assert.ok(ahead >= 1 && ahead <= 3, JSON.stringify(steps));
+    }
     // The share link carries the time point; opening it starts there.
     await page.$eval('#time-slider', (el) => { el.value = '4'; el.dispatchEvent(new Event('input')); });
     await page.waitForFunction(() => window.peakcast.timeControls.time === 4, null, { timeout: 30000 });
