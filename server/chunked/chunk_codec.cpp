@@ -65,6 +65,11 @@ Bytes unzstd(const Bytes& in, size_t expected, const std::filesystem::path& file
   int window_log = 10;  // ZSTD_WINDOWLOG_ABSOLUTEMIN (zstd.h states it only for static linking)
   while (window_log < 31 && (size_t(1) << window_log) < expected) ++window_log;
   ZSTD_DCtx_setParameter(d.get(), ZSTD_d_windowLogMax, window_log);
+  // Only the current frame format: libzstd's legacy decoders (v0.1-v0.7 magics) ignore that cap
+  // and allocate the window a 14-byte frame claims (64 MiB, found by the same fuzz target).
+  // numcodecs and every zstd since 1.0 write the current magic, 0xFD2FB528 little-endian.
+  if (in.size() < 4 || in[0] != 0x28 || in[1] != 0xb5 || in[2] != 0x2f || in[3] != 0xfd)
+    throw VolumeError(file, "corrupt compressed chunk (zstd: not a zstd frame, or a pre-1.0 legacy one)");
   Bytes out(expected);
   uint8_t spill = 0;
   bool spilling = false;

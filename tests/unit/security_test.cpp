@@ -264,6 +264,20 @@ TEST(ChunkBudget, ZstdWindowLargerThanTheChunkIsRefused) {
   EXPECT_EQ(chunked::decode_chunk(zstd, packed, voxels.size(), "chunk"), voxels);
 }
 
+// Found by fuzz_chunk_codecs: a 14-byte frame with zstd v0.7's legacy magic (0xFD2FB527), whose
+// decoder ignores the window cap, allocated the 64 MiB window it claims. Refused by its magic.
+TEST(ChunkBudget, LegacyZstdFramesAreRefused) {
+  const std::vector<uint8_t> legacy = {0x27, 0xb5, 0x2f, 0xfd, 0x00, 0x80, 0x00, 0x0e, 0x00, 0x00, 0x25, 0x00};
+  chunked::CompressorSpec zstd;
+  zstd.id = chunked::Compressor::Zstd;
+  try {
+    chunked::decode_chunk(zstd, legacy, 248, "chunk");
+    ADD_FAILURE() << "decoded";
+  } catch (const VolumeError& e) {
+    EXPECT_NE(std::string(e.what()).find("legacy"), std::string::npos) << e.what();
+  }
+}
+
 // Found by fuzz_data_listing: a folder name with a NUL byte was cut there by the system calls
 // and listed the data directory's root.
 TEST(Listing, FolderNameWithNulIsRefused) {
