@@ -1,8 +1,12 @@
-// NRRD (teem's format): attached .nrrd and detached .nhdr headers, raw and gzip encodings,
-// `spacings` or axis-aligned `space directions`, single, LIST and printf-style `data file`s.
+// NRRD (teem's format): attached .nrrd and detached .nhdr headers, every encoding (raw, txt,
+// hex, gzip, bzip2), `spacings` or axis-aligned `space directions`, single, LIST and
+// printf-style `data file`s; line and byte skips by the format's rules (nrrd_data.cpp).
 #include <cctype>
 #include <cmath>
 #include <algorithm>
+#include <array>
+#include <bit>
+#include <optional>
 #include <cstdio>
 #include <fstream>
 
@@ -245,14 +249,22 @@ void check_nrrd_fields(const fs::path& path, NrrdHeader& n) {
   } catch (const std::invalid_argument& e) {
     throw VolumeError(path, e.what());
   }
-  if (n.encoding == "raw") {
+  const std::string& e = n.encoding;
+  if (e == "raw") {
     n.payload.encoding = Encoding::Raw;
-  } else if (n.encoding == "gzip" || n.encoding == "gz") {
+  } else if (e == "gzip" || e == "gz") {
     n.payload.encoding = Encoding::Gzip;
+  } else if (e == "bzip2" || e == "bz2") {
+    n.payload.encoding = Encoding::Bzip2;
+  } else if (e == "txt" || e == "text" || e == "ascii") {
+    n.payload.encoding = Encoding::Text;
+    n.payload.text_type = n.h.source;
+    n.h.big_endian = std::endian::native == std::endian::big;  // numbers as text: no byte order
+  } else if (e == "hex") {
+    n.payload.encoding = Encoding::Hex;
   } else {
-    throw VolumeError(path, "unsupported encoding '" + n.encoding + "' (supported: raw, gzip)");
+    throw VolumeError(path, "unsupported encoding '" + n.encoding + "' (NRRD's: raw, txt, hex, gzip, bzip2)");
   }
-  if (n.line_skip != 0) throw VolumeError(path, "'line skip' is not supported");
   try {
     n.h.unit = common_unit(n.units, n.h.spacing, n.h.origin, "'" + n.units_field + "'");
   } catch (const std::invalid_argument& e) {
@@ -261,32 +273,59 @@ void check_nrrd_fields(const fs::path& path, NrrdHeader& n) {
 }
 
 // The files the voxels are in: attached after the header, or the detached header's `data file`
-// (one file, a LIST, or a printf-style pattern over a range).
-void locate_nrrd_data(const fs::path& path, NrrdHeader& n) {
-  PayloadSpec& payload = n.payload;
+// (one file, a LIST, or a printf-style pattern over a range), each with an optional subdimension
+// (each file then holds the first `subdim` axes), resolved by NRRD's rules (nrrd_data.cpp).
+void locate_nrrd_data(const fs::path& path, NrrdHeader& n, const LoadOptions& options) {
+  NrrdLayout l;
   const fs::path dir = path.parent_path();
+  std::optional<int64_t> subdim;
+  const auto parts = split_ws(n.data_file);
   if (n.data_file.empty()) {
-    payload.files = {path};
-    if (payload.byte_skip == -1 && payload.encoding == Encoding::Raw) {
-      // data is the last bytes of the file
-    } else {
-      payload.byte_skip = n.header_bytes + std::max<int64_t>(payload.byte_skip, 0);
-    }
+    l.files = {path};
+    l.attached_offset = n.header_bytes;
   } else if (n.list_mode) {
-    for (auto& f : n.list_files) payload.files.push_back(dir / f);
+    for (auto& f : n.list_files) l.files.push_back(dir / f);
+    if (parts.size() >= 2) subdim = parse_int(path, "data file", parts[1]);
+  } else if (parts.size() >= 4) {  // printf-style: fmt min max step [subdim]
+    long long lo = parse_int(path, "data file", parts[1]), hi = parse_int(path, "data file", parts[2]);
+    long long step = parse_int(path, "data file", parts[3]);
+    if (step == 0 || (hi - lo) / step < 0 || (hi - lo) / step > 1000000)
+      throw VolumeError(path, "data file: bad range '" + n.data_file + "'");
+    for (long long i = lo; step > 0 ? i <= hi : i >= hi; i += step)
+      l.files.push_back(dir / format_name(path, parts[0], i));
+    if (parts.size() >= 5) subdim = parse_int(path, "data file", parts[4]);
   } else {
-    auto parts = split_ws(n.data_file);
-    if (parts.size() >= 4) {  // printf-style: fmt min max step [subdim]
-      long long lo = parse_int(path, "data file", parts[1]), hi = parse_int(path, "data file", parts[2]);
-      long long step = parse_int(path, "data file", parts[3]);
-      if (step == 0 || (hi - lo) / step < 0 || (hi - lo) / step > 1000000)
-        throw VolumeError(path, "data file: bad range '" + n.data_file + "'");
-      for (long long i = lo; step > 0 ? i <= hi : i >= hi; i += step)
-        payload.files.push_back(dir / format_name(path, parts[0], i));
-    } else {
-      payload.files = {dir / n.data_file};
-    }
+    l.files = {dir / n.data_file};
   }
+  const std::array<int64_t, 4> sizes = {n.h.dims[0], n.h.dims[1], n.h.dims[2], n.times};
+  if (subdim) {
+    if (*subdim < 1 || *subdim > n.dimension)
+      throw VolumeError(
+          path, "data file: subdimension " + std::to_string(*subdim) + " is not in 1.." + std::to_string(n.dimension));
+    // A slab of every axis: the slowest axis is split evenly among the files; fewer axes: a file
+    // for each index of the others.
+    const int64_t slowest = sizes[size_t(n.dimension - 1)], count = int64_t(l.files.size());
+    if (*subdim == n.dimension && (count == 0 || slowest % count != 0))
+      throw VolumeError(path, "data file: " + std::to_string(count) + " slabs cannot split the slowest axis' " +
+                                  std::to_string(slowest) + " evenly");
+    l.files_expected = *subdim == n.dimension ? count : 1;
+    for (int a = int(*subdim); a < n.dimension; ++a)
+      if (__builtin_mul_overflow(l.files_expected, std::max<int64_t>(sizes[a], 0), &l.files_expected))
+        throw VolumeError(path, "sizes overflow");
+  }
+  check_header(path, n.h, options);  // sizes >= 1 and within the limits, before their product
+  l.total_bytes = int64_t(source_bytes(n.h.source));
+  for (int a = 0; a < 4; ++a)
+    if (__builtin_mul_overflow(l.total_bytes, sizes[a], &l.total_bytes))
+      throw VolumeError(path, "sizes overflow 64-bit byte count");
+  l.encoding = n.payload.encoding;
+  l.line_skip = n.line_skip;
+  l.byte_skip = n.payload.byte_skip;
+  n.payload.files = l.files;
+  n.payload.byte_skip = 0;
+  // Nothing of a data file is looked at before the files' places are checked.
+  check_payload_files(path, n.payload, options);
+  n.payload.parts = nrrd_parts(path, l);
 }
 
 }  // namespace
@@ -299,7 +338,8 @@ Volume read_nrrd(const fs::path& path, const LoadOptions& options) {
   if (line.rfind("NRRD000", 0) != 0) throw VolumeError(path, "not a NRRD file (no NRRD000x magic)");
   NrrdHeader n = read_nrrd_header(path, in);
   check_nrrd_fields(path, n);
-  locate_nrrd_data(path, n);
+  in.close();
+  locate_nrrd_data(path, n, options);
   if (n.dimension == 3) return read_payload(path, n.h, n.payload, options);
   return read_time_point(path, n.h, n.times, n.payload, options);
 }

@@ -13,12 +13,28 @@
 
 namespace peakcast::detail {
 
-enum class Encoding { Raw, Gzip, Zlib };
+// Text: numbers in decimal separated by white space or commas (NRRD's txt/text/ascii); Hex: two
+// hex digits a byte, white space between allowed.
+enum class Encoding { Raw, Gzip, Zlib, Bzip2, Text, Hex };
+
+// One data file's share of a payload, resolved by a reader that knows its format's rules (NRRD:
+// nrrd_data.cpp): where the encoded data starts, what of the decoded data comes before the
+// voxels, and exactly how many voxel bytes it holds (decoded data longer or shorter is refused).
+struct DataPart {
+  std::filesystem::path path;
+  int64_t offset = 0;        // file bytes before the encoded data (an attached header, skipped lines)
+  int64_t decoded_skip = 0;  // decoded bytes before the voxels; -1: the voxels are its last `bytes`
+  int64_t bytes = 0;
+};
 
 struct PayloadSpec {
   std::vector<std::filesystem::path> files;  // concatenated in order
   Encoding encoding = Encoding::Raw;
   int64_t byte_skip = 0;  // in the first file (raw: -1 = the data is the last bytes)
+  // When not empty: the files resolved one by one (files lists the same paths), each yielding
+  // exactly its bytes; byte_skip is then unused.
+  std::vector<DataPart> parts;
+  SourceType text_type = SourceType::U8;  // Encoding::Text: what the numbers are converted to
 };
 
 // Counts the bytes a reader has placed and tells options.progress each new whole percent
@@ -41,6 +57,11 @@ class LoadProgress {
 // Checks dims and the voxel limit (overflow-safe); throws VolumeError naming `file`.
 void check_header(const std::filesystem::path& file, const VolumeHeader& h, const LoadOptions& options);
 
+// Refuses data files outside the server's roots, or other than the header's own for an upload
+// (options.single_file), before any of them is looked at.
+void check_payload_files(const std::filesystem::path& header_file, const PayloadSpec& payload,
+                         const LoadOptions& options);
+
 // Allocates the volume and streams the payload into it (raw: straight in; compressed: through a
 // 1 MiB buffer), then byte swaps, shifts signed types, applies the non-finite policy and
 // computes the statistics.
@@ -51,6 +72,27 @@ Volume read_payload(const std::filesystem::path& header_file, const VolumeHeader
 // stop early. Concatenated gzip members are read as one stream. Throws VolumeError when corrupt.
 void inflate_file(const std::filesystem::path& path, int64_t skip, Encoding enc,
                   const std::function<bool(const uint8_t*, size_t)>& sink);
+
+// Reads up to `want` bytes of raw data at `skip` (-1: the file's last `want` bytes) into dst;
+// returns the count read. `last`: the only or last file, refused when short.
+size_t read_raw(const std::filesystem::path& path, int64_t skip, uint8_t* dst, size_t want, bool last,
+                LoadProgress& progress);
+// Inflates into dst up to `want` bytes; returns the count.
+size_t read_compressed(const std::filesystem::path& path, int64_t skip, Encoding enc, uint8_t* dst, size_t want,
+                       LoadProgress& progress);
+
+// The decoded bytes of a file from `offset` in `enc` (Text: numbers as text_type's bytes, host
+// byte order), 1 MiB at a time into `sink`, which returns false to stop. Throws VolumeError naming
+// the file and where when the data is corrupt (data_decoders.cpp).
+void decode_file(const std::filesystem::path& path, int64_t offset, Encoding enc, SourceType text_type,
+                 const std::function<bool(const uint8_t*, size_t)>& sink);
+// A part's voxel bytes (its decoded_skip dropped), 1 MiB at a time into `sink`; refuses decoded
+// data shorter or longer than part.bytes with both sizes (not checked when sink stops early).
+void stream_part(const DataPart& part, Encoding enc, SourceType text_type,
+                 const std::function<bool(const uint8_t*, size_t)>& sink);
+
+// payload.parts one after another into dst (raw: read in place; the rest decoded), exactly total bytes.
+void read_parts(const PayloadSpec& payload, uint8_t* dst, size_t total, LoadProgress& progress);
 
 // read_payload's path for options.region (volume_region.cpp): the region's rows only.
 Volume read_payload_region(const std::filesystem::path& header_file, const VolumeHeader& h, const PayloadSpec& payload,
@@ -65,6 +107,17 @@ Volume read_time_point(const std::filesystem::path& path, const VolumeHeader& h,
 
 // Post-processing shared with the TIFF reader.
 void finish_volume(const std::filesystem::path& file, Volume& v, bool big_endian, const LoadOptions& options);
+
+// What a NRRD header says of where its voxels are (nrrd_data.cpp resolves it by the format's rules).
+struct NrrdLayout {
+  std::vector<std::filesystem::path> files;
+  Encoding encoding = Encoding::Raw;
+  int64_t attached_offset = 0;  // attached data: the header's bytes before it
+  int64_t line_skip = 0, byte_skip = 0;
+  int64_t total_bytes = 0;     // every voxel of every time point
+  int64_t files_expected = 0;  // what the data file's subdimension asks for (0: not given)
+};
+std::vector<DataPart> nrrd_parts(const std::filesystem::path& header, const NrrdLayout& layout);
 
 Volume read_nrrd(const std::filesystem::path& path, const LoadOptions& options);
 Volume read_metaimage(const std::filesystem::path& path, const LoadOptions& options);

@@ -49,7 +49,11 @@ void read_raw_rows(const PayloadSpec& payload, int64_t total, const Rows& rows, 
   };
   std::vector<Part> parts;
   int64_t at = 0;
-  for (size_t i = 0; i < payload.files.size() && at < total; ++i) {
+  for (const DataPart& p : payload.parts) {  // resolved by the reader: offsets and sizes checked
+    parts.push_back({p.path, at, at + p.bytes, p.offset});
+    at += p.bytes;
+  }
+  for (size_t i = 0; payload.parts.empty() && i < payload.files.size() && at < total; ++i) {
     std::error_code ec;
     const int64_t size = int64_t(fs::file_size(payload.files[i], ec));
     int64_t skip = i == 0 ? payload.byte_skip : 0;
@@ -77,17 +81,19 @@ void read_raw_rows(const PayloadSpec& payload, int64_t total, const Rows& rows, 
   }
 }
 
-// Compressed payload: inflate in chunks, keep the rows' bytes, stop after the last row.
+// Compressed or text payload: decode in chunks, keep the rows' bytes, stop after the last row.
 void read_compressed_rows(const PayloadSpec& payload, const Rows& rows, uint8_t* dst) {
   const int64_t last_byte = rows.start(rows.count() - 1) + rows.bytes();
   int64_t at = 0, k = 0;
-  for (size_t i = 0; i < payload.files.size() && at < last_byte; ++i)
-    inflate_file(payload.files[i], i == 0 ? payload.byte_skip : 0, payload.encoding,
-                 [&](const uint8_t* chunk, size_t n) {
-                   copy_rows(rows, k, at, chunk, int64_t(n), dst);
-                   at += int64_t(n);
-                   return at < last_byte;
-                 });
+  auto keep = [&](const uint8_t* chunk, size_t n) {
+    copy_rows(rows, k, at, chunk, int64_t(n), dst);
+    at += int64_t(n);
+    return at < last_byte;
+  };
+  for (size_t i = 0; i < payload.parts.size() && at < last_byte; ++i)
+    stream_part(payload.parts[i], payload.encoding, payload.text_type, keep);
+  for (size_t i = 0; payload.parts.empty() && i < payload.files.size() && at < last_byte; ++i)
+    inflate_file(payload.files[i], i == 0 ? payload.byte_skip : 0, payload.encoding, keep);
   if (at < last_byte)
     throw VolumeError(payload.files.back(), "truncated: the region ends at data byte " + std::to_string(last_byte) +
                                                 ", the data holds " + std::to_string(at));

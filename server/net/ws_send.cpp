@@ -74,9 +74,10 @@ void WsSession::enqueue(Outgoing out) {
     }
     newest_frame_ = std::max(newest_frame_, out.frame_id);
     // Stats already waiting for a frame now older than this one go with it.
-    queue_.erase(std::remove_if(queue_.begin() + (writing_ ? 1 : 0), queue_.end(),
-                                [&](const Outgoing& o) { return o.stats_of && stats_are_stale(*o.stats_of, newest_frame_); }),
-                 queue_.end());
+    queue_.erase(
+        std::remove_if(queue_.begin() + (writing_ ? 1 : 0), queue_.end(),
+                       [&](const Outgoing& o) { return o.stats_of && stats_are_stale(*o.stats_of, newest_frame_); }),
+        queue_.end());
   } else if (out.stats_of && stats_are_stale(*out.stats_of, newest_frame_)) {
     return;
   } else if (queue_.size() >= limits::kMaxQueuedTextMessages) {

@@ -43,7 +43,7 @@ class WsSession : public FrameSink, public std::enable_shared_from_this<WsSessio
     std::shared_ptr<const std::vector<uint8_t>> frame;
     uint32_t frame_id = 0;
     bool final = false;
-    bool video = false;  // a video stream's frame: the next one refers to it, so it is never replaced
+    bool video = false;                // a video stream's frame: the next one refers to it, so it is never replaced
     std::optional<uint32_t> stats_of;  // a text: that frame's stats
   };
   void read();
