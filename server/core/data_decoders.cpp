@@ -121,17 +121,17 @@ void decode_hex(const fs::path& path, int64_t offset, const Sink& sink) {
 }
 
 // One number of a text payload as `type`'s bytes: integers must be whole and in range.
-void put_number(const fs::path& path, const std::string& token, int64_t index, SourceType type,
+void put_number(const fs::path& path, const std::string& word, int64_t index, SourceType type,
                 std::vector<uint8_t>& out) {
-  const char* b = token.data() + (token[0] == '+' ? 1 : 0);
+  const char* b = word.data() + (word[0] == '+' ? 1 : 0);
   double v = 0;
-  const auto [end, ec] = std::from_chars(b, token.data() + token.size(), v);
-  if (ec != std::errc() || end != token.data() + token.size())
+  const auto [end, ec] = std::from_chars(b, word.data() + word.size(), v);
+  if (ec != std::errc() || end != word.data() + word.size())
     throw VolumeError(path,
-                      "text data: value " + std::to_string(index) + " '" + token.substr(0, 40) + "' is not a number");
+                      "text data: value " + std::to_string(index) + " '" + word.substr(0, 40) + "' is not a number");
   auto whole = [&](double lo, double hi) {
     if (!(v == std::floor(v) && v >= lo && v <= hi))
-      throw VolumeError(path, "text data: value " + std::to_string(index) + " (" + token.substr(0, 40) +
+      throw VolumeError(path, "text data: value " + std::to_string(index) + " (" + word.substr(0, 40) +
                                   ") does not fit " + to_string(type));
   };
   auto append = [&](auto x) {
@@ -151,13 +151,13 @@ void put_number(const fs::path& path, const std::string& token, int64_t index, S
 void decode_text(const fs::path& path, int64_t offset, SourceType type, const Sink& sink) {
   std::vector<uint8_t> out;
   out.reserve(kPiece + 8);
-  std::string token;
+  std::string word;
   int64_t index = 0;
   bool more = true;
-  auto flush_token = [&] {
-    if (token.empty()) return;
-    put_number(path, token, index++, type, out);
-    token.clear();
+  auto flush_word = [&] {
+    if (word.empty()) return;
+    put_number(path, word, index++, type, out);
+    word.clear();
     if (out.size() >= kPiece) {
       more = sink(out.data(), out.size());
       out.clear();
@@ -166,16 +166,16 @@ void decode_text(const fs::path& path, int64_t offset, SourceType type, const Si
   each_chunk(path, offset, [&](const uint8_t* data, size_t n) {
     for (size_t i = 0; i < n && more; ++i) {
       if (is_space(data[i]) || data[i] == ',') {
-        flush_token();
-      } else if (token.size() >= 64) {
+        flush_word();
+      } else if (word.size() >= 64) {
         throw VolumeError(path, "text data: value " + std::to_string(index) + " is longer than 64 characters");
       } else {
-        token += char(data[i]);
+        word += char(data[i]);
       }
     }
     return more;
   });
-  if (more) flush_token();
+  if (more) flush_word();
   if (more && !out.empty()) sink(out.data(), out.size());
 }
 
