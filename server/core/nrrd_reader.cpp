@@ -1,6 +1,6 @@
 // NRRD (teem's format): attached .nrrd and detached .nhdr headers, every encoding (raw, txt,
 // hex, gzip, bzip2), `spacings` or axis-aligned `space directions`, single, LIST and
-// printf-style `data file`s; line and byte skips by the format's rules (nrrd_data.cpp).
+// printf-style `data file`s; line and byte skips by the format's rules (data_parts.cpp).
 #include <cctype>
 #include <cmath>
 #include <algorithm>
@@ -52,61 +52,6 @@ std::vector<std::string> split_vectors(const std::string& s) {
   }
   if (!cur.empty()) out.push_back(cur);
   return out;
-}
-
-// The `data file: <pattern> <min> <max> <step>` form names slices with a printf-style pattern.
-// File text never reaches a format function: the pattern is parsed here and must hold exactly one
-// integer conversion `%[flags][width]d` (or `i`; flags from "-+ 0#", width at most 32), with `%%` for
-// a literal percent sign. Anything else is refused naming the pattern.
-std::string format_name(const fs::path& file, const std::string& pattern, long long value) {
-  auto refuse = [&](const std::string& why) {
-    throw VolumeError(file, "data file pattern '" + pattern.substr(0, 200) + "': " + why +
-                                " (allowed: one %d with optional flags and width, and %%)");
-  };
-  std::string prefix, suffix, flags;
-  int width = 0;
-  bool seen = false;
-  for (size_t i = 0; i < pattern.size(); ++i) {
-    std::string& out = seen ? suffix : prefix;
-    if (pattern[i] != '%') {
-      out += pattern[i];
-      continue;
-    }
-    if (++i >= pattern.size()) refuse("ends in a lone %");
-    if (pattern[i] == '%') {
-      out += '%';
-      continue;
-    }
-    if (seen) refuse("more than one conversion");
-    while (i < pattern.size() && std::string("-+ 0#").find(pattern[i]) != std::string::npos) flags += pattern[i++];
-    while (i < pattern.size() && std::isdigit(static_cast<unsigned char>(pattern[i]))) {
-      width = width * 10 + (pattern[i++] - '0');
-      if (width > 32) refuse("field width over 32");
-    }
-    if (i >= pattern.size() || (pattern[i] != 'd' && pattern[i] != 'i'))
-      refuse("only the integer conversions %d and %i are allowed");
-    seen = true;
-  }
-  if (!seen) refuse("no %d conversion");
-  // Format the number ourselves: sign, zero or space padding, left alignment.
-  const bool left = flags.find('-') != std::string::npos;
-  const bool zero = !left && flags.find('0') != std::string::npos;
-  std::string digits = std::to_string(value < 0 ? -(value + 1) + 1ull : static_cast<unsigned long long>(value));
-  std::string sign = value < 0                              ? "-"
-                     : flags.find('+') != std::string::npos ? "+"
-                     : flags.find(' ') != std::string::npos ? " "
-                                                            : "";
-  std::string number;
-  const size_t len = sign.size() + digits.size();
-  if (size_t(width) > len) {
-    const size_t pad = size_t(width) - len;
-    number = left   ? sign + digits + std::string(pad, ' ')
-             : zero ? sign + std::string(pad, '0') + digits
-                    : std::string(pad, ' ') + sign + digits;
-  } else {
-    number = sign + digits;
-  }
-  return prefix + number + suffix;
 }
 
 // What a NRRD header says, as its fields are read.
@@ -274,9 +219,9 @@ void check_nrrd_fields(const fs::path& path, NrrdHeader& n) {
 
 // The files the voxels are in: attached after the header, or the detached header's `data file`
 // (one file, a LIST, or a printf-style pattern over a range), each with an optional subdimension
-// (each file then holds the first `subdim` axes), resolved by NRRD's rules (nrrd_data.cpp).
+// (each file then holds the first `subdim` axes), resolved by NRRD's rules (data_parts.cpp).
 void locate_nrrd_data(const fs::path& path, NrrdHeader& n, const LoadOptions& options) {
-  NrrdLayout l;
+  DataLayout l;
   const fs::path dir = path.parent_path();
   std::optional<int64_t> subdim;
   const auto parts = split_ws(n.data_file);
@@ -287,12 +232,7 @@ void locate_nrrd_data(const fs::path& path, NrrdHeader& n, const LoadOptions& op
     for (auto& f : n.list_files) l.files.push_back(dir / f);
     if (parts.size() >= 2) subdim = parse_int(path, "data file", parts[1]);
   } else if (parts.size() >= 4) {  // printf-style: fmt min max step [subdim]
-    long long lo = parse_int(path, "data file", parts[1]), hi = parse_int(path, "data file", parts[2]);
-    long long step = parse_int(path, "data file", parts[3]);
-    if (step == 0 || (hi - lo) / step < 0 || (hi - lo) / step > 1000000)
-      throw VolumeError(path, "data file: bad range '" + n.data_file + "'");
-    for (long long i = lo; step > 0 ? i <= hi : i >= hi; i += step)
-      l.files.push_back(dir / format_name(path, parts[0], i));
+    l.files = pattern_files(path, parts[0], parts[1], parts[2], parts[3]);
     if (parts.size() >= 5) subdim = parse_int(path, "data file", parts[4]);
   } else {
     l.files = {dir / n.data_file};
@@ -325,10 +265,77 @@ void locate_nrrd_data(const fs::path& path, NrrdHeader& n, const LoadOptions& op
   n.payload.byte_skip = 0;
   // Nothing of a data file is looked at before the files' places are checked.
   check_payload_files(path, n.payload, options);
-  n.payload.parts = nrrd_parts(path, l);
+  n.payload.parts = resolve_parts(path, l);
 }
 
 }  // namespace
+
+// The `data file: <pattern> <min> <max> <step>` form names slices with a printf-style pattern.
+// File text never reaches a format function: the pattern is parsed here and must hold exactly one
+// integer conversion `%[flags][width]d` (or `i`; flags from "-+ 0#", width at most 32), with `%%` for
+// a literal percent sign. Anything else is refused naming the pattern.
+std::string format_name(const fs::path& file, const std::string& pattern, long long value) {
+  auto refuse = [&](const std::string& why) {
+    throw VolumeError(file, "data file pattern '" + pattern.substr(0, 200) + "': " + why +
+                                " (allowed: one %d with optional flags and width, and %%)");
+  };
+  std::string prefix, suffix, flags;
+  int width = 0;
+  bool seen = false;
+  for (size_t i = 0; i < pattern.size(); ++i) {
+    std::string& out = seen ? suffix : prefix;
+    if (pattern[i] != '%') {
+      out += pattern[i];
+      continue;
+    }
+    if (++i >= pattern.size()) refuse("ends in a lone %");
+    if (pattern[i] == '%') {
+      out += '%';
+      continue;
+    }
+    if (seen) refuse("more than one conversion");
+    while (i < pattern.size() && std::string("-+ 0#").find(pattern[i]) != std::string::npos) flags += pattern[i++];
+    while (i < pattern.size() && std::isdigit(static_cast<unsigned char>(pattern[i]))) {
+      width = width * 10 + (pattern[i++] - '0');
+      if (width > 32) refuse("field width over 32");
+    }
+    if (i >= pattern.size() || (pattern[i] != 'd' && pattern[i] != 'i'))
+      refuse("only the integer conversions %d and %i are allowed");
+    seen = true;
+  }
+  if (!seen) refuse("no %d conversion");
+  // Format the number ourselves: sign, zero or space padding, left alignment.
+  const bool left = flags.find('-') != std::string::npos;
+  const bool zero = !left && flags.find('0') != std::string::npos;
+  std::string digits = std::to_string(value < 0 ? -(value + 1) + 1ull : static_cast<unsigned long long>(value));
+  std::string sign = value < 0                              ? "-"
+                     : flags.find('+') != std::string::npos ? "+"
+                     : flags.find(' ') != std::string::npos ? " "
+                                                            : "";
+  std::string number;
+  const size_t len = sign.size() + digits.size();
+  if (size_t(width) > len) {
+    const size_t pad = size_t(width) - len;
+    number = left   ? sign + digits + std::string(pad, ' ')
+             : zero ? sign + std::string(pad, '0') + digits
+                    : std::string(pad, ' ') + sign + digits;
+  } else {
+    number = sign + digits;
+  }
+  return prefix + number + suffix;
+}
+
+std::vector<fs::path> pattern_files(const fs::path& header, const std::string& pattern, const std::string& min,
+                                    const std::string& max, const std::string& step) {
+  const long long lo = parse_int(header, "data file", min), hi = parse_int(header, "data file", max);
+  const long long by = parse_int(header, "data file", step);
+  if (by == 0 || (hi - lo) / by < 0 || (hi - lo) / by > 1000000)
+    throw VolumeError(header, "data file pattern: bad range " + min + " " + max + " " + step);
+  std::vector<fs::path> files;
+  for (long long i = lo; by > 0 ? i <= hi : i >= hi; i += by)
+    files.push_back(header.parent_path() / format_name(header, pattern, i));
+  return files;
+}
 
 Volume read_nrrd(const fs::path& path, const LoadOptions& options) {
   std::ifstream in(path, std::ios::binary);

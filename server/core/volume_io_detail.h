@@ -6,6 +6,7 @@
 #include <atomic>
 #include <functional>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,7 +19,7 @@ namespace peakcast::detail {
 enum class Encoding { Raw, Gzip, Zlib, Bzip2, Text, Hex };
 
 // One data file's share of a payload, resolved by a reader that knows its format's rules (NRRD:
-// nrrd_data.cpp): where the encoded data starts, what of the decoded data comes before the
+// data_parts.cpp): where the encoded data starts, what of the decoded data comes before the
 // voxels, and exactly how many voxel bytes it holds (decoded data longer or shorter is refused).
 struct DataPart {
   std::filesystem::path path;
@@ -108,16 +109,40 @@ Volume read_time_point(const std::filesystem::path& path, const VolumeHeader& h,
 // Post-processing shared with the TIFF reader.
 void finish_volume(const std::filesystem::path& file, Volume& v, bool big_endian, const LoadOptions& options);
 
-// What a NRRD header says of where its voxels are (nrrd_data.cpp resolves it by the format's rules).
-struct NrrdLayout {
+// Where a header says its voxels are, resolved by resolve_parts (data_parts.cpp) by NRRD's rules
+// (MetaImage's are the same with its HeaderSize always in the file's bytes).
+struct DataLayout {
   std::vector<std::filesystem::path> files;
   Encoding encoding = Encoding::Raw;
   int64_t attached_offset = 0;  // attached data: the header's bytes before it
   int64_t line_skip = 0, byte_skip = 0;
-  int64_t total_bytes = 0;     // every voxel of every time point
-  int64_t files_expected = 0;  // what the data file's subdimension asks for (0: not given)
+  bool skip_in_file = false;                   // byte_skip counts file bytes whatever the encoding (MetaImage)
+  std::string last_bytes = "'byte skip: -1'";  // how the header says "the data is the last bytes"
+  int64_t total_bytes = 0;                     // every voxel of every time point
+  int64_t files_expected = 0;                  // what the data file's subdimension asks for (0: not given)
 };
-std::vector<DataPart> nrrd_parts(const std::filesystem::path& header, const NrrdLayout& layout);
+std::vector<DataPart> resolve_parts(const std::filesystem::path& header, const DataLayout& layout);
+
+// A printf-style data file pattern (NRRD's `data file`, MetaImage's ElementDataFile) for one
+// index: exactly one %d or %i with flags "-+ 0#" and a width up to 32, %% a percent sign; file
+// text never reaches a format function. Anything else is refused naming the pattern.
+std::string format_name(const std::filesystem::path& file, const std::string& pattern, long long value);
+// The names of a pattern over min..max by step (step != 0, at most a million files).
+std::vector<std::filesystem::path> pattern_files(const std::filesystem::path& header, const std::string& pattern,
+                                                 const std::string& min, const std::string& max,
+                                                 const std::string& step);
+
+// A MetaImage element type converted when read (metaimage_wide.cpp states the rule).
+struct WideType {
+  std::string name;  // as MetaImage spells it
+  int bytes = 8;
+  bool floating = false, is_signed = true;
+};
+std::optional<WideType> wide_metaimage_type(const std::string& element_type);
+// Reads payload.parts as `w` values and converts them to the kept type the rule picks; a region is
+// cut from the whole.
+Volume read_converted(const std::filesystem::path& path, const VolumeHeader& h, const WideType& w,
+                      const PayloadSpec& payload, const LoadOptions& options);
 
 Volume read_nrrd(const std::filesystem::path& path, const LoadOptions& options);
 Volume read_metaimage(const std::filesystem::path& path, const LoadOptions& options);

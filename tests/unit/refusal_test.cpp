@@ -86,7 +86,7 @@ TEST(Refusal, UnknownTypeOrEncoding) {
   expect_refused(d / "ty.nrrd", "unsupported voxel type 'double'");
   test::write_file(d / "en.nrrd", nrrd("type: uint8\ndimension: 3\nsizes: 2 2 2\nencoding: lzma"));
   expect_refused(d / "en.nrrd", "unsupported encoding 'lzma'");
-  test::write_file(d / "ty.mhd", "NDims = 3\nDimSize = 2 2 2\nElementType = MET_DOUBLE\nElementDataFile = x.raw\n");
+  test::write_file(d / "ty.mhd", "NDims = 3\nDimSize = 2 2 2\nElementType = MET_COMPLEX\nElementDataFile = x.raw\n");
   expect_refused(d / "ty.mhd", "unsupported voxel type");
   test::write_file(d / "ty.raw", "12345678");
   test::write_file(d / "ty.raw.json", R"({"dims":[2,2,2],"dtype":"complex64"})");

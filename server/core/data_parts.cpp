@@ -1,4 +1,5 @@
-// NRRD's data rules (teem's format specification, "line skip", "byte skip", "data file"): every
+// NRRD's data rules (teem's format specification, "line skip", "byte skip", "data file"), which
+// MetaImage's LIST and patterns follow too (HeaderSize in each file's bytes): every
 // data file holds an equal share of the voxels; in each, `line skip` lines of the file are skipped
 // first, then `byte skip` bytes, of the file for raw, txt and hex, of the decoded data for gzip
 // and bzip2; -1 (the only negative allowed) puts the voxels at the end of the decoded data. A file
@@ -32,7 +33,7 @@ int64_t after_lines(const fs::path& path, int64_t offset, int64_t lines) {
 
 }  // namespace
 
-std::vector<DataPart> nrrd_parts(const fs::path& header, const NrrdLayout& l) {
+std::vector<DataPart> resolve_parts(const fs::path& header, const DataLayout& l) {
   if (l.byte_skip < -1)
     throw VolumeError(header, "byte skip " + std::to_string(l.byte_skip) +
                                   ": the only negative byte skip NRRD allows is -1 (the data is the last bytes)");
@@ -55,8 +56,10 @@ std::vector<DataPart> nrrd_parts(const fs::path& header, const NrrdLayout& l) {
     if (!fs::is_regular_file(p.path, ec))
       throw VolumeError(p.path, "no such file (data of " + header.filename().string() + ")");
     p.offset = after_lines(p.path, i == 0 ? l.attached_offset : 0, l.line_skip);
-    if (in_file && l.byte_skip > 0)
+    if ((in_file || l.skip_in_file) && l.byte_skip > 0)
       p.offset += l.byte_skip;
+    else if (l.skip_in_file && l.byte_skip == -1 && l.encoding != Encoding::Raw)
+      throw VolumeError(header, "a header size of -1 (the data at the end of the file) needs raw data");
     else
       p.decoded_skip = l.byte_skip;
     if (l.encoding == Encoding::Raw) {  // sizes known now: checked before anything is allocated
@@ -73,7 +76,7 @@ std::vector<DataPart> nrrd_parts(const fs::path& header, const NrrdLayout& l) {
         throw VolumeError(p.path, "the file holds " + std::to_string(holds) +
                                       " data bytes after its skips, the header " + header.filename().string() +
                                       " promises " + std::to_string(p.bytes) + " (" + std::to_string(holds - p.bytes) +
-                                      " too many; 'byte skip: -1' reads the last bytes)");
+                                      " too many; " + l.last_bytes + " reads the last bytes)");
       }
     }
     parts.push_back(std::move(p));
