@@ -20,6 +20,7 @@ import { TimeControls } from './time-controls.js';
 import { ClipControls } from './clip-controls.js';
 import { Annotations } from './annotations.js';
 import { bindTfTools } from './tf-tools.js';
+import { loadColormaps } from './tf-model.js';
 
 const $ = (id) => document.getElementById(id);
 const disposer = new Disposer();
@@ -120,7 +121,15 @@ function applyState(state, volumeInfo, volumes) {
   writeState(share());
 }
 
+// The colour-map presets are the server's maps (GET /api/colormaps), asked for once the session
+// is let in (a server with tokens answers only then).
+const fetchJson = async (url) => {
+  const res = await fetch(url, { headers: token ? { Authorization: `Bearer ${token}` } : {} });
+  if (!res.ok) throw new Error(`${url}: ${res.status}`);
+  return res.json();
+};
 disposer.listen(stream, 'welcome', (e) => {
+  loadColormaps(fetchJson);
   const w = e.detail;
   applyState(w.state, w.volume, w.volumes);
   app.volumes = w.volumes;

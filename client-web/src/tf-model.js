@@ -36,24 +36,29 @@ function hu(lo, hi, values) {
   return values.map((v, k) => (inHu ? v : lo + ((k + 1) / (values.length + 1)) * (hi - lo)));
 }
 
-// Perceptual colour maps (sRGB stops, evenly spaced): matplotlib's viridis and magma, Moreland's
-// cool-warm, and grey.
-export const COLORMAPS = {
-  viridis: [[68, 1, 84], [72, 36, 117], [64, 67, 135], [52, 95, 141], [41, 120, 142], [32, 144, 141], [34, 168, 132],
-    [67, 191, 112], [122, 210, 81], [188, 223, 39], [253, 231, 37]],
-  magma: [[0, 0, 4], [28, 16, 68], [79, 18, 123], [129, 37, 129], [181, 54, 122], [229, 80, 100], [251, 135, 97],
-    [254, 194, 135], [252, 253, 191]],
-  coolwarm: [[59, 76, 192], [98, 130, 234], [141, 176, 254], [184, 208, 249], [221, 221, 221], [245, 196, 173],
-    [244, 154, 123], [222, 96, 77], [180, 4, 38]],
-  grey: [[0, 0, 0], [255, 255, 255]],
-};
+// The named colour maps (sRGB stops in [0, 1], evenly spaced): the server's, from
+// GET /api/colormaps (loadColormaps), so the viewer's presets and the automatic TF (viridis)
+// are one source; empty until they arrive.
+export const COLORMAPS = {};
+
+// Fills COLORMAPS from the server once; false when it could not be asked (no token yet, offline).
+export async function loadColormaps(fetchJson) {
+  if (Object.keys(COLORMAPS).length) return true;
+  try {
+    const { colormaps } = await fetchJson('/api/colormaps');
+    Object.assign(COLORMAPS, colormaps);
+    return true;
+  } catch {
+    return false;
+  }
+}
 
 // A colour map over [lo, hi] with opacity rising from 0 to `top` (an opacity ramp, DVR).
 export function colormapTf(name, lo, hi, top = 0.6) {
   const stops = COLORMAPS[name];
   return stops.map((c, k) => {
     const t = k / (stops.length - 1);
-    return [lo + t * (hi - lo), c[0] / 255, c[1] / 255, c[2] / 255, top * t];
+    return [lo + t * (hi - lo), c[0], c[1], c[2], top * t];
   });
 }
 

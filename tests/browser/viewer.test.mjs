@@ -306,6 +306,11 @@ test('the TF toolkit: colour maps, modality presets, window/level, histogram axi
   let p = await tf(page);
   assert.equal(p.length, 11);
   assert.deepEqual(p.at(-1).slice(1, 4).map((c) => Math.round(c * 255)), [253, 231, 37]);
+  // The presets are the server's maps (GET /api/colormaps), not a copy of them.
+  const maps = (await (await fetch(`${server.url}/api/colormaps`)).json()).colormaps;
+  assert.deepEqual(p.map((q) => q.slice(1, 4)), maps.viridis);
+  await page.selectOption('#tf-preset', 'coolwarm');
+  assert.deepEqual((await tf(page)).map((q) => q.slice(1, 4)), maps.coolwarm);
   await page.selectOption('#tf-preset', 'ct-bone');
   assert.equal(await page.inputValue('select[name=classification]'), 'preint');
   assert.ok(await page.isChecked('input[name=shading]'));
