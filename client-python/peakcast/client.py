@@ -128,6 +128,14 @@ class Client:
         _, headers, body = self._render(scene, "rgba")
         return Image(decode_png(body), RenderInfo(headers))
 
+    def render_float(self, scene):
+        """The still as the renderer drew it, before 8-bit rounding: an Image (height, width, 4)
+        float32, rgb the colour over the scene's background in [0, 1] (sRGB values, as the PNG's
+        / 255), a the ray's opacity."""
+        _, headers, body = self._render(scene, "float")
+        w, h = int(headers["x-width"][0]), int(headers["x-height"][0])
+        return Image(np.frombuffer(body, "<f4").reshape(h, w, 4).astype(np.float32), RenderInfo(headers))
+
     def render_depth(self, scene):
         """The distance from the eye (the image plane for orthographic views) to where each pixel's
         ray first passes half opacity, the probe's rule: an Image (height, width) float32 in world

@@ -35,6 +35,24 @@ def test_rgba_laid_over_its_background_is_the_rgb_still(server, render):
         c.delete(vid)
 
 
+def test_the_float_image_is_the_still_before_rounding(server):
+    c = peakcast.Client(server.url)
+    vid = c.upload(blobs())
+    try:
+        scene = dict(SCENE, volume=vid, render={"classification": "peaks", "shading": True})
+        rgb = np.asarray(c.render(scene), np.float64)
+        f = c.render_float(scene)
+        rgba = c.render_rgba(scene)
+        assert f.shape == (48, 64, 4) and f.dtype == np.float32 and f.tf_source == "auto", f.shape
+        # The 8-bit still is the float image rounded; its alpha is the RGBA still's.
+        assert np.abs(np.clip(f[..., :3], 0, 1) * 255 - rgb).max() <= 0.5 + 1e-3
+        assert np.abs(np.clip(f[..., 3], 0, 1) * 255 - rgba[..., 3]).max() <= 0.5 + 1e-3
+        assert f[0, 0, 3] == 0 and np.allclose(f[0, 0, :3], SCENE["background"])  # a miss: the background
+        assert len(np.unique(f[..., 0])) > len(np.unique(rgb[..., 0]))  # finer than 8 bits
+    finally:
+        c.delete(vid)
+
+
 def test_depth_is_the_probe_distance_of_every_pixel(server):
     c = peakcast.Client(server.url)
     vid = c.upload(blobs())
@@ -70,7 +88,7 @@ def test_an_unknown_format_names_the_known_ones(server):
                                  data=json.dumps({"volume": "heptane_151.nrrd"}).encode())
     with pytest.raises(urllib.error.HTTPError) as e:
         urllib.request.urlopen(req)
-    assert e.value.code == 400 and b"png, jpeg, rgb, rgba or depth" in e.value.read()
+    assert e.value.code == 400 and b"png, jpeg, rgb, rgba, float or depth" in e.value.read()
 
 
 def test_the_png_reader_matches_pil(server, tmp_path):

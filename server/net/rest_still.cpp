@@ -42,13 +42,15 @@ bool read_still_format(AppContext& app, const Request& req, StillJob& job, const
   const std::string format = query_param(std::string(req.target()), "format");
   const std::string accept(req[http::field::accept]);
   if (!format.empty() && format != "png" && format != "jpeg" && format != "jpg" && format != "rgb" &&
-      format != "rgba") {
+      format != "rgba" && format != "float") {
     count(app, "render", http::status::bad_request);
-    send(error_response(req, http::status::bad_request, "bad_request", "format must be png, jpeg, rgb, rgba or depth"));
+    send(error_response(req, http::status::bad_request, "bad_request",
+                        "format must be png, jpeg, rgb, rgba, float or depth"));
     return false;
   }
-  job.raw_rgb = format == "rgb";  // packed 8-bit RGB rows from the top: what a script puts in an array
-  job.rgba = format == "rgba";    // a PNG with alpha, the background taken out
+  job.raw_rgb = format == "rgb";      // packed 8-bit RGB rows from the top: what a script puts in an array
+  job.rgba = format == "rgba";        // a PNG with alpha, the background taken out
+  job.raw_float = format == "float";  // float32 RGBA as drawn: rows from the top, X-Width x X-Height
   job.png = !(format == "jpeg" || format == "jpg" ||
               (format.empty() && accept.find("image/jpeg") != std::string::npos &&
                accept.find("image/png") == std::string::npos));
@@ -102,8 +104,8 @@ std::function<void(StillResult)> still_reply(AppContext& app, const Request& req
     res.set("X-Level", std::to_string(level));  // the pyramid level drawn (0: the finest)
     if (r.bricks > 0) res.set("X-Bricks", std::to_string(r.bricks));
     res.set("X-TF-Source", tf_source);
-    res.set("X-Image-Width", std::to_string(r.width));
-    res.set("X-Image-Height", std::to_string(r.height));
+    for (const char* name : {"X-Image-Width", "X-Width"}) res.set(name, std::to_string(r.width));
+    for (const char* name : {"X-Image-Height", "X-Height"}) res.set(name, std::to_string(r.height));
     res.set("X-Time", std::to_string(time));  // the time point drawn
     for (const std::string& w : warnings) res.insert("X-Warning", w);
     for (const std::string& w : r.warnings) res.insert("X-Warning", w);

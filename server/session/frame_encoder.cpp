@@ -1,5 +1,7 @@
 #include "session/frame_encoder.h"
 
+#include <bit>
+
 #include "encode/png.h"
 
 namespace peakcast {
@@ -106,7 +108,11 @@ void encode_still(encode::JpegEncoder& enc, StillWork& w, Metrics& metrics) {
   StillResult r;
   const auto t0 = Clock::now();
   try {
-    if (w.job.rgba) {
+    if (w.job.raw_float) {  // the renderer's own numbers: colour over the background, and opacity
+      static_assert(std::endian::native == std::endian::little, "format=float is sent little-endian");
+      const auto* f = reinterpret_cast<const uint8_t*>(w.image.rgba.data());
+      r.bytes.assign(f, f + w.image.rgba.size() * sizeof(float));
+    } else if (w.job.rgba) {
       const glm::vec3 bg(w.job.scene.scene.background);
       const float background[3] = {bg.x, bg.y, bg.z};
       const auto rgba = encode::to_rgba8_without_background(w.image, background);
@@ -123,7 +129,9 @@ void encode_still(encode::JpegEncoder& enc, StillWork& w, Metrics& metrics) {
     metrics.add("peakcast_stills_total", "outcome=\"failed\"", 1);
     return w.job.done(std::move(r));
   }
-  r.content_type = w.job.raw_rgb ? "application/octet-stream" : w.job.png ? "image/png" : "image/jpeg";
+  r.content_type = w.job.raw_rgb || w.job.raw_float ? "application/octet-stream"
+                   : w.job.png                      ? "image/png"
+                                                    : "image/jpeg";
   r.width = w.image.width;
   r.height = w.image.height;
   r.encode_ms = ms_between(t0, Clock::now());

@@ -42,8 +42,9 @@ struct StillJob {
   std::shared_ptr<VolumeEntry> volume;
   ResolvedScene scene;
   bool png = true;
-  bool raw_rgb = false;  // the 8-bit RGB bytes themselves (format=rgb), no encoding
-  bool rgba = false;     // a PNG with alpha and no background (format=rgba)
+  bool raw_rgb = false;    // the 8-bit RGB bytes themselves (format=rgb), no encoding
+  bool rgba = false;       // a PNG with alpha and no background (format=rgba)
+  bool raw_float = false;  // the float RGBA image as drawn, float32 little-endian (format=float)
   int quality = 95;
   // Set for a pyramid held coarser than its finest level (VolumeEntry::full): the still draws the
   // finest level brick after brick, `scene` resolved against these statistics' box.

@@ -3,7 +3,7 @@
 it opens at the finest level that fits, while stills and the viewer's view at rest draw the finest
 level brick after brick, equal to the in-core render of the full-resolution file. A viewer sees
 the bricks' progress, and new input drops a finest-level frame that became stale."""
-import asyncio, json, pathlib, shutil, subprocess, sys, tempfile
+import asyncio, io, json, pathlib, shutil, struct, subprocess, sys, tempfile
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from harness import *  # noqa: F401,F403
@@ -108,6 +108,39 @@ def test_every_level_draws_the_same_volume():
         said = headers.get("X-Warning", "")  # the only warning here (the harness keeps one of each header)
         assert status == 200 and said.startswith("memory budget: this 512x512 still"), (status, said)
         assert headers["X-Time"] == "0", headers
+
+
+def test_float_rgba_and_depth_of_a_pyramid_held_coarser():
+    """More than RGB of a pyramid the budget holds coarser: the float image and the RGBA still are
+    drawn brick by brick at the finest level, as the PNG is (the PNG is the float image rounded,
+    the RGBA laid over the background gives it back); depth is of the level held (X-Level 1)."""
+    with Server("--data", TMP.name, "--memory-budget-mib", "1", volumes=()) as s:
+        scene = {"volume": "blobs.zarr", "image": {"width": 64, "height": 48}, "background": [0.9, 0.8, 0.7],
+                 "render": {"step": 1, "classification": "peaks", "shading": True}}
+        body = json.dumps(scene).encode()
+        status, headers, png = http(s, "/api/render?format=png", "POST", body)
+        assert status == 200 and headers["X-Level"] == "0" and int(headers["X-Bricks"]) > 1, headers
+        rgb = decode_image(png).convert("RGB")
+        status, headers, raw = http(s, "/api/render?format=float", "POST", body)
+        assert status == 200 and headers["X-Level"] == "0" and int(headers["X-Bricks"]) > 1, headers
+        w, h = int(headers["X-Width"]), int(headers["X-Height"])
+        f = struct.unpack(f"<{w * h * 4}f", raw)
+        rounded = bytes(int(min(max(f[p * 4 + c], 0.0), 1.0) * 255 + 0.5) for p in range(w * h) for c in range(3))  # lround
+        worst = max(abs(a - b) for a, b in zip(rounded, rgb.tobytes()))
+        print(f"  float by {headers['X-Bricks']} bricks, rounded, against the PNG: max abs {worst}/255")
+        assert (w, h) == (64, 48) and worst <= 1, worst  # measured 1: each still cuts its own bricks
+        status, headers, rgba_png = http(s, "/api/render?format=rgba", "POST", body)
+        assert status == 200 and headers["X-Level"] == "0" and int(headers["X-Bricks"]) > 1, headers
+        rgba = Image.open(io.BytesIO(rgba_png))
+        assert rgba.mode == "RGBA", rgba.mode
+        under = Image.new("RGBA", rgba.size, tuple(round(c * 255) for c in scene["background"]) + (255,))
+        worst = max_abs(Image.alpha_composite(under, rgba), rgb)
+        print(f"  rgba by bricks over its background against the PNG: max abs {worst}/255")
+        assert worst <= 2, worst
+        status, headers, depth = http(s, "/api/render?format=depth", "POST", body)
+        d = struct.unpack(f"<{64 * 48}f", depth)
+        hits = sum(1 for v in d if v == v)
+        assert status == 200 and headers["X-Level"] == "1" and 0 < hits < len(d), (status, headers, hits)
 
 
 async def test_a_viewer_sees_the_finest_level_after_the_level_held():
@@ -233,6 +266,7 @@ if __name__ == "__main__":
     # 1 MiB holds level 1 (80x75x70x2 = 0.8 MiB), not level 0 (6.4 MiB).
     run_tests([test_pyramid_opens_at_the_level_the_memory_budget_holds,
                test_every_level_draws_the_same_volume,
+               test_float_rgba_and_depth_of_a_pyramid_held_coarser,
                test_a_viewer_sees_the_finest_level_after_the_level_held,
                test_a_preview_level_first_then_the_level_within_the_budget,
                test_a_finest_level_that_cannot_be_read_is_refused_by_name])
