@@ -108,10 +108,15 @@ def gl_ranks_check(tmp):
         status, variant, cmp = still_against_one_process(srv, scene, DATA / "heptane_151.nrrd", tmp, "gl", "gl")
         # A probe needs the voxels, which the serving rank does not hold: refused by name.
         pstatus, _, pbody = http(srv, "/api/probe", "POST", json.dumps(dict(scene, pixel=[60, 45])).encode())
-        return ("GL ranks: a REST still equals peakcast render --backend gl within 1/255; a probe gets 422",
+        # So does a depth image (the probe's rule per pixel); the float image is composited as the PNG is.
+        dstatus, _, dbody = http(srv, "/api/render?format=depth", "POST", json.dumps(scene).encode())
+        fstatus, fheaders, fbody = http(srv, "/api/render?format=float", "POST", json.dumps(scene).encode())
+        return ("GL ranks: a REST still equals peakcast render --backend gl within 1/255; a probe and a depth "
+                "image get 422; the float image composites",
                 status == 200 and "brick" in variant and "2ranks" in variant and cmp["max_abs"] <= 1 / 255 + 1e-6
-                and pstatus == 422 and b"not_supported" in pbody,
-                (status, variant, cmp, pstatus, pbody[:200]))
+                and pstatus == 422 and b"not_supported" in pbody and dstatus == 422 and b"not_supported" in dbody
+                and fstatus == 200 and len(fbody) == 120 * 90 * 16 and fheaders.get("X-Width") == "120",
+                (status, variant, cmp, pstatus, pbody[:200], dstatus, dbody[:200], fstatus, len(fbody)))
     finally:
         srv.stop()
 
