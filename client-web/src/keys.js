@@ -1,10 +1,10 @@
 // The keyboard and the layout around the view: the 3D view takes keys when focused (arrows
-// orbit, Shift+arrows pan, + and - zoom, R resets, S shows or hides the stats, M measures, F
-// fullscreen, ? the help); the
+// orbit, Shift+arrows pan, + and - zoom, R resets, S shows or hides the stats, M measures (Esc
+// ends it), F fullscreen, ? the help); the
 // help overlay lists them; the side panel collapses (a button, or the narrow layout's default).
 const ORBIT_PX = 24, PAN_PX = 24, ZOOM = 0.9;
 
-export function bindViewKeys({ canvas, camera, help, toggleStats, measure, fullscreen }, disposer) {
+export function bindViewKeys({ canvas, camera, help, toggleStats, measure, measuring, fullscreen }, disposer) {
   disposer.listen(canvas, 'keydown', (e) => {
     const k = e.key;
     if (k.startsWith('Arrow')) {
@@ -19,6 +19,7 @@ export function bindViewKeys({ canvas, camera, help, toggleStats, measure, fulls
     else if (k === 'm' || k === 'M') measure();
     else if (k === 'f' || k === 'F') fullscreen();
     else if (k === 'Escape' && !help.hidden) help.hidden = true;
+    else if (k === 'Escape' && measuring()) measure();
     else return;
     e.preventDefault();
   });

@@ -284,7 +284,7 @@ const probe = new Probe({ canvas, readout: $('probe-readout'), measure: $('measu
 disposer.listen(probe, 'points', (e) => annotations.update({ marks: e.detail }));
 disposer.listen($('fullscreen'), 'click', () => toggleFullscreen());
 bindViewKeys({ canvas, camera, help: $('help'), toggleStats: () => showStats($('stats').hidden),
-  measure: () => probe.setMeasuring(!probe.measuring), fullscreen: toggleFullscreen }, disposer);
+  measure: () => probe.setMeasuring(!probe.measuring), measuring: () => probe.measuring, fullscreen: toggleFullscreen }, disposer);
 disposer.listen($('help-button'), 'click', () => toggle($('help')));
 disposer.listen($('help'), 'click', () => { $('help').hidden = true; });
 disposer.listen($('show-stats'), 'change', () => showStats($('show-stats').checked));

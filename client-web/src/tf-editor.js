@@ -128,8 +128,15 @@ export class TfEditor extends EventTarget {
   }
 
   // Keyboard: PageDown/PageUp (or n/p) select the next/previous point, arrows move it (value by
-  // 1% of the range, opacity by 0.02; Shift: 10x), Delete/Backspace remove it.
+  // 1% of the range, opacity by 0.02; Shift: 10x), Delete/Backspace remove it, Ctrl+Z undoes and
+  // Ctrl+Shift+Z or Ctrl+Y redoes (Cmd on a Mac).
   #key(e) {
+    if ((e.ctrlKey || e.metaKey) && (e.key === 'z' || e.key === 'Z' || e.key === 'y')) {  // as the buttons
+      const redo = e.key === 'y' || e.shiftKey;
+      this.#restore(redo ? this.#history.redo(this.points) : this.#history.undo(this.points));
+      e.preventDefault();
+      return;
+    }
     const n = this.points.length;
     if (!n) return;
     const big = e.shiftKey ? 10 : 1;

@@ -176,6 +176,13 @@ test('the TF editor works from the keyboard', async () => {
   assert.deepEqual(tfs.at(-1).tf.points, points);
   await page.keyboard.press('PageDown');
   assert.match(await page.textContent('#tf-point'), /point 2 of 2/);
+  // Ctrl+Z undoes the last move (Shift+ArrowRight), as the undo button does; Ctrl+Shift+Z redoes it.
+  await page.keyboard.press('Control+z');
+  const undone = await page.evaluate(() => window.peakcast.tfEditor.points);
+  assert.ok(Math.abs(undone[0][0] - before_[0][0]) < 1e-6 * span && Math.abs(undone[0][4] - points[0][4]) < 1e-9,
+    JSON.stringify(undone));
+  await page.keyboard.press('Control+Shift+Z');
+  assert.deepEqual(await page.evaluate(() => window.peakcast.tfEditor.points), points);
   await page.close();
 });
 

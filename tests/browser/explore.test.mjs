@@ -89,6 +89,11 @@ test('measure: two clicks give the distance between the surfaces under them, dra
   await page.keyboard.press('m');
   assert.equal(await page.getAttribute('#measure', 'aria-pressed'), 'false');
   assert.equal(await page.evaluate(() => window.peakcast.probe.points.length), 0);
+  // Esc ends measuring too, as it leaves a mode anywhere.
+  await page.keyboard.press('m');
+  assert.equal(await page.getAttribute('#measure', 'aria-pressed'), 'true');
+  await page.keyboard.press('Escape');
+  assert.equal(await page.getAttribute('#measure', 'aria-pressed'), 'false');
   assert.deepEqual(page.errors, []);
   await page.close();
 });
