@@ -23,7 +23,8 @@ export class DropUpload extends EventTarget {
       depth = 0;
       overlay.hidden = true;
       const file = e.dataTransfer?.files?.[0];
-      if (file) this.upload(file);
+      // The refusal is shown in the volume panel; nothing more waits on it.
+      if (file) this.upload(file).catch(() => {});
     });
     disposer.add(() => this.#xhr?.abort());
   }

@@ -63,6 +63,9 @@ test('a file the server cannot read shows why, and nothing is opened', async () 
     { timeout: 20000 });
   assert.match(await page.textContent('#volume-progress'), /neither NRRD/);
   assert.equal(await page.evaluate(() => window.peakcast.app.volumeInfo.id), first);
+  // The refusal is shown, and nothing is left unhandled (an uncaught rejection before).
+  await page.waitForTimeout(200);
+  assert.deepEqual(page.errors, []);
   await page.close();
 });
 
