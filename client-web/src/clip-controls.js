@@ -16,11 +16,16 @@ export class ClipControls extends EventTarget {
   unit = 'units';  // lengths' unit (units.js), in the readout
   #raf = 0;
   #drag = null;
+  #kept = null;  // the box turned off, shown (disabled) and back when turned on again
 
   constructor(ui, { camera, canvas, project }, disposer) {
     super();
     Object.assign(this, { ui, camera, canvas, project });
-    disposer.listen(ui.boxOn, 'change', () => { this.box = ui.boxOn.checked ? this.#bounds() : null; this.#sync(); });
+    disposer.listen(ui.boxOn, 'change', () => {
+      if (!ui.boxOn.checked) this.#kept = this.box;  // off keeps the sliders where they are, to compare
+      this.box = ui.boxOn.checked ? (this.#kept ?? this.#bounds()) : null;
+      this.#sync();
+    });
     for (const input of ui.sliders) disposer.listen(input, 'input', () => this.#fromSliders());
     disposer.listen(ui.planeOn, 'change', () => this.setPlane(ui.planeOn.checked ? this.#facing() : null));
     disposer.listen(ui.facing, 'click', () => this.setPlane(this.#facing()));
@@ -75,6 +80,7 @@ export class ClipControls extends EventTarget {
     const d = this.#diagonal() / 2;
     Object.assign(this.ui.offset, { min: -d, max: d, step: d / 200 || 1 });
     this.box = clip?.box ?? null;
+    this.#kept = null;
     this.plane = null;
     if (clip?.plane) {
       const n = normalize(clip.plane.normal);
@@ -161,7 +167,7 @@ export class ClipControls extends EventTarget {
     const { ui } = this;
     ui.boxOn.checked = !!this.box;
     ui.planeOn.checked = !!this.plane;
-    const box = this.box ?? this.#bounds();
+    const box = this.box ?? this.#kept ?? this.#bounds();
     ui.sliders.forEach((s, k) => { s.value = box[k & 1][k >> 1]; });
     for (const el of [...ui.sliders]) el.disabled = !this.box;
     for (const el of [ui.offset, ui.flip]) el.disabled = !this.plane;

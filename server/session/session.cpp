@@ -115,6 +115,9 @@ void Session::set_volume(std::shared_ptr<VolumeEntry> volume) {
   scene_.camera.reset();
   scene_.tf.reset();
   scene_.opacity_unit = 0.0;
+  // A crop box or plane is in the old volume's world units: it goes with that volume, as the
+  // camera and TF do (the client drops it from its controls and share link with the state).
+  if (render_json_.is_object() && render_json_.erase("clip")) render_version_++;
   const ResolvedScene r = resolve();
   scene_.camera = r.camera;
   scene_.tf = r.tf;

@@ -263,6 +263,36 @@ test('clipping: the crop box\'s faces drag in the view', async () => {
   await page.close();
 });
 
+test('clipping: the crop box turned off and on comes back where it was; a new volume starts without it', async () => {
+  const page = await openClient(browser, server.url);
+  await waitFinal(page);
+  await page.check('#clip-box');
+  await page.$eval('.clip-sliders input', (s) => { s.value = String((+s.min + +s.max) / 2); s.dispatchEvent(new Event('input')); });
+  await page.waitForFunction(() => window.peakcast.app.render.clip?.box?.[0]?.[0] > 70);
+  const box = await page.evaluate(() => window.peakcast.clip.box);
+  const sliders = () => page.$$eval('.clip-sliders input', (s) => s.map((x) => +x.value));
+  const set = await sliders();
+  // Off: no clip sent, the sliders stay (disabled) where they were; on again: the same box.
+  await page.uncheck('#clip-box');
+  await page.waitForFunction(() => !window.peakcast.app.render.clip);
+  assert.deepEqual(await sliders(), set);
+  await page.check('#clip-box');
+  await page.waitForFunction(() => window.peakcast.app.render.clip?.box);
+  assert.deepEqual(await page.evaluate(() => window.peakcast.clip.box), box);
+  // Another volume: the box was in the old one's world units; it goes, from the controls, the
+  // state the server sends, and the share link.
+  await page.fill('#volume-path', 'nucleon.nhdr');
+  await page.press('#volume-path', 'Enter');
+  await page.waitForFunction(() => window.peakcast.app.volumeInfo?.id === 'nucleon.nhdr', null, { timeout: 30000 });
+  await waitFinal(page);
+  assert.equal(await page.isChecked('#clip-box'), false);
+  assert.equal(await page.evaluate(() => window.peakcast.app.render.clip), undefined);
+  await page.waitForTimeout(400);  // the link is written 300 ms after the last change
+  assert.ok(!decodeURIComponent(await page.evaluate(() => location.hash)).includes('clip'), 'the share link keeps no clip');
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
 test('a time series: a slider, play and a readout; frames in order; the share link keeps the time point', async () => {
   const dir = mkdtempSync(path.join(os.tmpdir(), 'peakcast-series-'));
   const made = spawnSync('/usr/bin/python3', [path.join(ROOT, 'scripts/make_time_series.py'), path.join(dir, 'series.zarr'),
