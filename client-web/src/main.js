@@ -139,10 +139,14 @@ disposer.listen(stream, 'welcome', (e) => {
   app.welcomed = true;
   document.title = titleOf(w.volume);
 });
+// Each volume's camera and TF as last left: choosing it again from the menu brings them back
+// (the server derives a TF and a view for every volume it opens), as a tabbed viewer keeps each tab.
+const kept = new Map();
 disposer.listen(stream, 'volume', (e) => {
   document.title = titleOf(e.detail.volume);  // the tab follows the volume
   // A new volume brings a new TF (derived from its histogram): said, and undo gives the old one back.
   const before = app.tf;
+  if (app.volume && app.tf) kept.set(app.volume, { camera: structuredClone(app.camera), tf: structuredClone(app.tf) });
   // A volume opened by path or uploaded stays in the menu after switching to another.
   if (!app.volumes.some((v) => v.id === e.detail.volume.id)) app.volumes = [...app.volumes, e.detail.volume];
   applyState(e.detail.state, e.detail.volume, app.volumes);
@@ -150,8 +154,15 @@ disposer.listen(stream, 'volume', (e) => {
   brush.volumeChanged(e.detail.state);
   probe.reset();
   if (before) tfEditor.remember(before);
-  $('tf-note').textContent = `TF derived from ${e.detail.volume.uploaded ? e.detail.volume.name : e.detail.volume.id}'s ` +
-    'histogram (undo brings back the previous one)';
+  const name = e.detail.volume.uploaded ? e.detail.volume.name : e.detail.volume.id;
+  const back = kept.get(e.detail.volume.id);
+  if (back) {  // sent as edits: the server draws them, the share link keeps them
+    camera.set(back.camera);
+    tfEditor.set(back.tf, { silent: false });
+    $('tf-note').textContent = `${name}: the view and TF you left it with (undo brings back the previous TF)`;
+    return;
+  }
+  $('tf-note').textContent = `TF derived from ${name}'s histogram (undo brings back the previous one)`;
 });
 disposer.listen(stream, 'loading', (e) => picker.loading(e.detail));
 disposer.listen(stream, 'stroke_ack', (e) => brush.sync.onAck(e.detail));

@@ -220,6 +220,34 @@ test('switching volume says the TF changed, and undo brings the old one back', a
   await page.close();
 });
 
+test('a volume chosen again from the menu comes back with the camera and TF it was left with', async () => {
+  const page = await openClient(browser, server.url);
+  await waitFinal(page);
+  const first = await page.evaluate(() => window.peakcast.app.volumeInfo.id);
+  await greyRamp(page);
+  await page.focus('#frame');
+  for (let i = 0; i < 3; i++) await page.keyboard.press('ArrowLeft');
+  await page.waitForTimeout(300);
+  const ramp = await tf(page), eye = await page.evaluate(() => window.peakcast.app.camera.eye);
+  await page.fill('#volume-path', 'nucleon.nhdr');
+  await page.press('#volume-path', 'Enter');
+  await page.waitForFunction(() => window.peakcast.app.volumeInfo?.id === 'nucleon.nhdr', null, { timeout: 30000 });
+  await waitFinal(page);
+  await page.evaluate(() => {
+    window.__sources = [];
+    window.peakcast.stream.addEventListener('stats', (e) => window.__sources.push(e.detail.tf_source));
+  });
+  await page.selectOption('#volume-select', first);
+  await page.waitForFunction((id) => window.peakcast.app.volumeInfo?.id === id, first, { timeout: 30000 });
+  assert.deepEqual(await tf(page), ramp);
+  assert.deepEqual(await page.evaluate(() => window.peakcast.app.camera.eye), eye);
+  assert.match(await page.textContent('#tf-note'), /the view and TF you left it with/);
+  // The server draws them: the frames end with the client's own TF, not one it derived.
+  await page.waitForFunction(() => window.__sources.at(-1) === 'scene', null, { timeout: 30000 });
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
 test('at 800 px the panel starts collapsed and the view keeps its width; at 1280x800 the view controls show', async () => {
   const narrow = await openClient(browser, server.url, { width: 800, height: 900 });
   await waitFinal(narrow);
