@@ -4,18 +4,37 @@
 import { windowLevel } from './tf-model.js';
 
 export function bindTfTools(editor, ui, disposer) {
+  // A window/level that cannot apply is marked on its field and said, and changes nothing (so undo
+  // still undoes the last edit that did).
+  const mark = (input, why) => {
+    input.setAttribute('aria-invalid', String(!!why));
+    input.classList.toggle('invalid', !!why);
+    input.title = why;
+  };
   const show = () => {
     const p = editor.points;
     if (!p.length) return;
     const a = p[0][0], b = p[p.length - 1][0];
-    if (document.activeElement !== ui.window) ui.window.value = +(b - a).toPrecision(5);
-    if (document.activeElement !== ui.level) ui.level.value = +((a + b) / 2).toPrecision(5);
+    // Unfocused fields show the TF's own window and level (a refused entry gives way to them).
+    if (document.activeElement !== ui.window) ui.window.value = +(b - a).toPrecision(5), mark(ui.window, '');
+    if (document.activeElement !== ui.level) ui.level.value = +((a + b) / 2).toPrecision(5), mark(ui.level, '');
   };
   disposer.listen(editor, 'change', show);
   disposer.listen(editor, 'drawn', show);
   const wl = () => {
     const w = parseFloat(ui.window.value), l = parseFloat(ui.level.value);
-    if (!(w > 0) || !Number.isFinite(l) || editor.points.length < 2) return;
+    if (editor.points.length < 2) return;
+    const { lo, hi } = editor, fmt = (v) => +v.toPrecision(5);
+    const badWindow = !(w > 0) ? 'the window must be a number > 0' : '';
+    const badLevel = !Number.isFinite(l) ? 'the level must be a number'
+      : !badWindow && (l + w / 2 < lo || l - w / 2 > hi)
+        ? `the window ${fmt(l - w / 2)}…${fmt(l + w / 2)} misses the data's range ${fmt(lo)}…${fmt(hi)}` : '';
+    mark(ui.window, badWindow);
+    mark(ui.level, badLevel);
+    if (badWindow || badLevel) {
+      ui.note.textContent = `⚠ ${badWindow || badLevel}`;
+      return;
+    }
     editor.apply(windowLevel(editor.points, w, l));
   };
   disposer.listen(ui.window, 'change', wl);

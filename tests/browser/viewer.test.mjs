@@ -349,6 +349,22 @@ test('the TF toolkit: colour maps, modality presets, window/level, histogram axi
   await page.locator('#tf-level').dispatchEvent('change');
   p = await tf(page);
   assert.deepEqual([p[0][0], p.at(-1)[0]], [100, 200]);
+  // A window/level that cannot apply is marked and said, and changes nothing; undo still undoes
+  // the window/level that did apply.
+  for (const [field, value, why] of [['#tf-window', '-50', /window must be a number > 0/], ['#tf-window', '0', /> 0/],
+    ['#tf-level', '100000', /misses the data's range/]]) {
+    await page.fill('#tf-window', field === '#tf-window' ? value : '100');
+    await page.fill('#tf-level', field === '#tf-level' ? value : '150');
+    await page.locator(field).dispatchEvent('change');
+    assert.equal(await page.getAttribute(field, 'aria-invalid'), 'true', `${field} ${value}`);
+    assert.match(await page.textContent('#tf-note'), why);
+    assert.deepEqual(await tf(page), p);
+  }
+  await page.click('#tf-undo');
+  const undone = await tf(page);
+  assert.notDeepEqual([undone[0][0], undone.at(-1)[0]], [100, 200]);
+  await page.click('#tf-redo');
+  assert.deepEqual(await tf(page), p);
   // The histogram's axis: linear draws less of the rare values than log.
   const ink = () => page.evaluate(() => {
     const c = document.querySelector('#tf-canvas'), d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
