@@ -35,7 +35,8 @@ export function bindTfTools(editor, ui, disposer) {
       ui.note.textContent = `⚠ ${badWindow || badLevel}`;
       return;
     }
-    editor.apply(windowLevel(editor.points, w, l));
+    const next = windowLevel(editor.points, w, l);
+    if (JSON.stringify(next) !== JSON.stringify(editor.points)) editor.apply(next);  // no empty undo steps
   };
   disposer.listen(ui.window, 'change', wl);
   disposer.listen(ui.level, 'change', wl);
