@@ -288,7 +288,10 @@ disposer.listen(files, 'pick', (e) => picker.pick(e.detail.path, e.detail.bytes)
 bindTfTools(tfEditor, { window: $('tf-window'), level: $('tf-level'), log: $('tf-log'), save: $('tf-save'),
   load: $('tf-load'), note: $('tf-note') }, disposer);
 // A preset that needs a classification (the isosurface: peak finding, shaded) sets it.
-disposer.listen(tfEditor, 'preset', (e) => controls.set(e.detail));
+disposer.listen(tfEditor, 'preset', (e) => {
+  const { unlessNot, ...needs } = e.detail;  // unlessNot: only when the classification is that one
+  if (!unlessNot || app.render.classification === unlessNot) controls.set(needs);
+});
 // The keyboard in the 3D view, the help overlay, the stats toggle, the collapsible panel.
 const showStats = (show) => { toggle($('stats'), show); $('show-stats').checked = show; };
 const probe = new Probe({ canvas, readout: $('probe-readout'), measure: $('measure'), stream }, disposer);

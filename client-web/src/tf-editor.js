@@ -2,7 +2,7 @@
 // opacity curve; add, drag, delete points, a colour per point, detected peaks marked, presets,
 // undo/redo, keyboard control. Every edit emits the full TF with a new version; a drag emits at
 // most one per animation frame (the newest), however fast the pointer moves.
-import { findPeaks, interpolate, preset, PRESET_NEEDS, TfHistory } from './tf-model.js';
+import { COLORMAPS, findPeaks, interpolate, preset, PRESET_NEEDS, TfHistory } from './tf-model.js';
 
 const hex = (rgb) => '#' + rgb.map((c) => Math.round(c * 255).toString(16).padStart(2, '0')).join('');
 const rgbOf = (h) => [1, 3, 5].map((i) => parseInt(h.slice(i, i + 2), 16) / 255);
@@ -73,7 +73,9 @@ export class TfEditor extends EventTarget {
     this.#history.push(this.points);
     this.set(p, { silent: false });
     this.ui.preset.value = name;
-    const needs = PRESET_NEEDS[name];
+    // A colour map is an opacity ramp, with no peak to find: peak finding gives way to
+    // pre-integration (other classifications stay).
+    const needs = PRESET_NEEDS[name] ?? (COLORMAPS[name] ? { classification: 'preint', unlessNot: 'peaks' } : null);
     if (needs) this.dispatchEvent(new CustomEvent('preset', { detail: needs }));
   }
 

@@ -339,6 +339,14 @@ test('the TF toolkit: colour maps, modality presets, window/level, histogram axi
   assert.deepEqual(p.map((q) => q.slice(1, 4)), maps.viridis);
   await page.selectOption('#tf-preset', 'coolwarm');
   assert.deepEqual((await tf(page)).map((q) => q.slice(1, 4)), maps.coolwarm);
+  // A colour map over peak finding (an opacity ramp has no peak): pre-integrated instead, no warning.
+  await page.selectOption('select[name=classification]', 'peaks');
+  await page.waitForFunction(() => window.peakcast.app.render.classification === 'peaks');
+  await page.selectOption('#tf-preset', 'magma');
+  assert.equal(await page.inputValue('select[name=classification]'), 'preint');
+  await page.selectOption('select[name=classification]', 'post');
+  await page.selectOption('#tf-preset', 'grey');
+  assert.equal(await page.inputValue('select[name=classification]'), 'post', 'other classifications stay');
   await page.selectOption('#tf-preset', 'ct-bone');
   assert.equal(await page.inputValue('select[name=classification]'), 'preint');
   assert.ok(await page.isChecked('input[name=shading]'));
