@@ -147,6 +147,11 @@ disposer.listen(stream, 'volume', (e) => {
   // A new volume brings a new TF (derived from its histogram): said, and undo gives the old one back.
   const before = app.tf;
   if (app.volume && app.tf) kept.set(app.volume, { camera: structuredClone(app.camera), tf: structuredClone(app.tf) });
+  // The old volume's picture goes now (not under the new box and colour bar until the new volume's
+  // first frame), and a frame of it still on its way is not drawn.
+  app.framesFrom = e.detail.state.versions;
+  ctx2d.clearRect(0, 0, canvas.width, canvas.height);
+  canvas.dataset.final = 'false';
   // A volume opened by path or uploaded stays in the menu after switching to another.
   if (!app.volumes.some((v) => v.id === e.detail.volume.id)) app.volumes = [...app.volumes, e.detail.volume];
   applyState(e.detail.state, e.detail.volume, app.volumes);
@@ -213,6 +218,8 @@ disposer.listen(errorEl, 'click', () => { errorEl.hidden = true; });
 
 disposer.listen(stream, 'frame', (e) => {
   const { frame, bitmap } = e.detail;
+  const from = app.framesFrom;  // versions the volume shown started at
+  if (from && (frame.cameraVersion < from.camera || frame.tfVersion < from.tf)) return bitmap.close();
   const vp = viewport();
   const w = Math.round(vp.width * vp.dpr), h = Math.round(vp.height * vp.dpr);
   if (canvas.width !== w || canvas.height !== h) {  // resizing reallocates and clears: only on change
