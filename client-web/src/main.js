@@ -43,6 +43,7 @@ const tfEditor = new TfEditor({ canvas: $('tf-canvas'), color: $('tf-color'), re
 const controls = new RenderControls($('controls'), disposer);
 const picker = new VolumePicker({ select: $('volume-select'), path: $('volume-path'), open: $('volume-open'),
   progress: $('volume-progress'), info: $('volume-info') }, disposer);
+const deleteButton = $('volume-delete');
 
 function viewport() {
   const r = canvas.getBoundingClientRect();
@@ -111,6 +112,7 @@ function applyState(state, volumeInfo, volumes) {
   tfEditor.set(state.tf.points);
   clip.setVolume(volumeInfo, render.clip);
   if (volumes) picker.show(volumes, volumeInfo);
+  deleteButton.hidden = !volumeInfo.uploaded;
   const unit = lengthUnit(volumeInfo, state);
   probe.unit = unit;
   clip.unit = unit;
@@ -290,6 +292,18 @@ disposer.listen(controls, 'change', (e) => {
   writeState(share());
 });
 disposer.listen(picker, 'pick', (e) => stream.send({ type: 'volume', volume: e.detail }));
+// An upload can be deleted from the viewer (DELETE /api/volumes/ID): the server moves every viewer
+// of it to its default volume; the menu forgets it.
+disposer.listen(deleteButton, 'click', async () => {
+  const info = app.volumeInfo;
+  if (!info?.uploaded) return;
+  const res = await fetch(`/api/volumes/${encodeURIComponent(info.id)}`,
+    { method: 'DELETE', headers: token ? { Authorization: `Bearer ${token}` } : {} });
+  if (!res.ok) return picker.failed(`${info.name}: ${(await res.json().catch(() => ({}))).message ?? `HTTP ${res.status}`}`);
+  app.volumes = app.volumes.filter((v) => v.id !== info.id);
+  kept.delete(info.id);
+  if (app.volumeInfo) picker.show(app.volumes.some((v) => v.id === app.volumeInfo.id) ? app.volumes : [...app.volumes, app.volumeInfo], app.volumeInfo);
+});
 const files = new FileBrowser({ button: $('volume-browse'), list: $('files') }, { token: () => token }, disposer);
 disposer.listen(files, 'pick', (e) => picker.pick(e.detail.path, e.detail.bytes));
 bindTfTools(tfEditor, { window: $('tf-window'), level: $('tf-level'), log: $('tf-log'), save: $('tf-save'),

@@ -50,6 +50,18 @@ test('a dropped NRRD is uploaded, opened and kept in the volume menu', async () 
   await page.waitForFunction((id) => window.peakcast.app.volumeInfo?.id === id, first, { timeout: 30000 });
   const again = await page.$$eval('#volume-select option', (o) => o.map((x) => x.value));
   assert.ok(again.includes(info.id), again.join(' | '));
+  assert.equal(await page.isVisible('#volume-delete'), false, 'a volume of the data directories has no delete');
+  // Deleted from the viewer: the server lets it go, the viewer moves off it, the menu forgets it.
+  await page.selectOption('#volume-select', info.id);
+  await page.waitForFunction((id) => window.peakcast.app.volumeInfo?.id === id, info.id, { timeout: 30000 });
+  assert.ok(await page.isVisible('#volume-delete'));
+  await page.click('#volume-delete');
+  await page.waitForFunction((id) => window.peakcast.app.volumeInfo?.id !== id, info.id, { timeout: 30000 });
+  await page.waitForFunction((id) => ![...document.querySelectorAll('#volume-select option')].some((o) => o.value === id),
+    info.id, { timeout: 10000 });
+  const listed = await (await fetch(`${server.url}/api/volumes`)).json();
+  assert.ok(!listed.volumes.some((v) => v.id === info.id), 'still on the server');
+  assert.equal(await page.isVisible('#volume-delete'), false);
   assert.deepEqual(page.errors, []);
   await page.close();
 });
