@@ -59,12 +59,19 @@ export class Annotations {
     const g = cv.getContext('2d');
     g.setTransform(dpr, 0, 0, dpr, 0, 0);
     g.clearRect(0, 0, w, h);
+    this.paint(g, w, h);
+  }
+
+  // The annotations shown, onto context g of a w x h (CSS pixel) picture: the view's overlay, or a
+  // screenshot's (scaled by its context's transform). `still`: no measure marks nor clip handles.
+  paint(g, w, h, { still = false } = {}) {
     if (!this.camera || !this.volume || !w || !h) return;
     g.font = '11px system-ui, sans-serif';
     if (this.show.box) this.#box(g, w, h);
     if (this.show.triad) this.#triad(g, w, h);
     if (this.show.scale) this.#scaleBar(g, w, h);
     if (this.show.colorbar && this.tf) this.#colorBar(g, w, h);
+    if (still) return;
     if (this.marks.length) this.#marks(g, w, h);
     if (this.clip) this.#clip(g, w, h);
   }

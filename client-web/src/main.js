@@ -336,6 +336,8 @@ disposer.listen(window, 'resize', () => {
   resizeTimer = setTimeout(() => stream.send({ type: 'viewport', ...viewport() }), 150);
 });
 
+// The screenshot: the server's still at the size asked for, with the annotations shown in the
+// view (triad, box, scale bar, colour bar) drawn over it at the view's proportions, unless unticked.
 disposer.listen($('shot'), 'click', async () => {
   const width = +$('shot-w').value, height = +$('shot-h').value;
   const scene = { volume: app.volume, camera: app.camera, tf: { points: app.tf }, render: { ...app.render, ...brush.sceneRender() }, image: { width, height } };
@@ -343,7 +345,18 @@ disposer.listen($('shot'), 'click', async () => {
   if (token) headers.Authorization = `Bearer ${token}`;
   const res = await fetch('/api/render?format=png', { method: 'POST', headers, body: JSON.stringify(scene) });
   if (!res.ok) return alert(`screenshot failed: ${(await res.json()).message}`);
-  const url = URL.createObjectURL(await res.blob());
+  let blob = await res.blob();
+  if ($('shot-overlays').checked) {
+    const still = await createImageBitmap(blob), out = document.createElement('canvas');
+    Object.assign(out, { width, height });
+    const g = out.getContext('2d'), s = height / Math.max(1, canvas.clientHeight);  // the view's text size, in proportion
+    g.drawImage(still, 0, 0);
+    still.close();
+    g.setTransform(s, 0, 0, s, 0, 0);
+    annotations.paint(g, width / s, height / s, { still: true });
+    blob = await new Promise((resolve) => out.toBlob(resolve, 'image/png'));
+  }
+  const url = URL.createObjectURL(blob);
   const a = Object.assign(document.createElement('a'), { href: url, download: `peakcast-${app.volume}-${width}x${height}.png` });
   a.click();
   setTimeout(() => URL.revokeObjectURL(url), 1000);

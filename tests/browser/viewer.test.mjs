@@ -220,6 +220,38 @@ test('switching volume says the TF changed, and undo brings the old one back', a
   await page.close();
 });
 
+test('a screenshot carries the annotations shown in the view, or the bare still when unticked', async () => {
+  const page = await openClient(browser, server.url);
+  await waitFinal(page);
+  await page.fill('#shot-w', '320');
+  await page.fill('#shot-h', '240');
+  const shoot = async () => {
+    const [download] = await Promise.all([page.waitForEvent('download'), page.click('#shot')]);
+    return Buffer.concat(await (await download.createReadStream()).toArray()).toString('base64');
+  };
+  // Pixels that differ from the REST still of the same scene (fetched in the page) by more than 40 levels.
+  const differing = (b64) => page.evaluate(async (b64) => {
+    const { app } = window.peakcast;
+    const scene = { volume: app.volume, camera: app.camera, tf: { points: app.tf }, render: app.render, image: { width: 320, height: 240 } };
+    const res = await fetch('/api/render?format=png', { method: 'POST', body: JSON.stringify(scene) });
+    const pixels = async (blob) => {
+      const bmp = await createImageBitmap(blob), c = new OffscreenCanvas(bmp.width, bmp.height), g = c.getContext('2d');
+      g.drawImage(bmp, 0, 0);
+      return g.getImageData(0, 0, bmp.width, bmp.height).data;
+    };
+    const a = await pixels(await res.blob()), b = await pixels(new Blob([Uint8Array.from(atob(b64), (c) => c.charCodeAt(0))]));
+    let n = 0;
+    for (let i = 0; i < a.length; i += 4) n += Math.max(...[0, 1, 2].map((c) => Math.abs(a[i + c] - b[i + c]))) > 40;
+    return n;
+  }, b64);
+  const withOverlays = await differing(await shoot());
+  assert.ok(withOverlays > 500, `the annotations drew ${withOverlays} pixels`);
+  await page.uncheck('#shot-overlays');
+  assert.equal(await differing(await shoot()), 0, 'unticked: the bare still');
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
 test('switching volume takes the old picture away at once and draws no frame of it after', async () => {
   const page = await openClient(browser, server.url);
   await waitFinal(page);
