@@ -17,17 +17,11 @@ struct FramePlacement {
 };
 
 // `queue`'s entries have .binary, .video and .frame_id; those before `first_waiting` are being
-// written; `newest`: the newest frame id queued so far (sent or waiting), 0 for none. A video
-// frame is never replaced nor dropped (the next one is coded against it); it waits behind a newer
-// frame, which the client draws over it anyway (it draws newer ids only).
+// written. A video frame is never replaced nor dropped (the next one is coded against it); it
+// waits behind a newer frame, which the client draws over it anyway (it draws newer ids only).
 template <typename Queue>
-FramePlacement place_frame(const Queue& queue, size_t first_waiting, uint32_t frame_id, bool video,
-                           uint32_t newest = 0) {
+FramePlacement place_frame(const Queue& queue, size_t first_waiting, uint32_t frame_id, bool video) {
   FramePlacement p;
-  if (!video && frame_id < newest) {  // a newer one was already sent or is waiting
-    p.drop = true;
-    return p;
-  }
   for (size_t k = first_waiting; k < queue.size(); ++k) {
     const auto& waiting = queue[k];
     if (!waiting.binary || waiting.video) continue;
@@ -41,8 +35,8 @@ FramePlacement place_frame(const Queue& queue, size_t first_waiting, uint32_t fr
   return p;
 }
 
-// A frame's stats message goes only while no newer frame has been queued: the stats of a frame
-// dropped or replaced as older never reach the client.
+// A frame's stats message goes only while no newer frame has been queued (`newest`, sent or
+// waiting): the stats of a frame dropped, replaced or overtaken never reach the client.
 inline bool stats_are_stale(uint32_t stats_frame, uint32_t newest) { return stats_frame < newest; }
 
 }  // namespace peakcast

@@ -1,6 +1,7 @@
 // A viewer's send queue: frames and texts from encode threads and the strand, written one at a
-// time; a newer frame replaces one waiting and an older one is dropped with its stats
-// (net/frame_queue.h, docs/streaming.md "Key frames, acks and dropped frames").
+// time; a newer frame replaces one waiting, an older one is dropped, and the stats of a frame
+// older than the newest queued never go (net/frame_queue.h, docs/streaming.md "Key frames, acks
+// and dropped frames").
 #include <algorithm>
 #include <chrono>
 
@@ -64,8 +65,8 @@ void WsSession::enqueue(Outgoing out) {
     // The newest frame replaces a frame still waiting (not the one being written); an older one
     // is dropped instead (net/frame_queue.h). The flow control before rendering (at most
     // kMaxFramesInFlight un-acknowledged) bounds what waits.
-    // A frame older than one already sent is dropped too, and stats of dropped frames with it.
-    const FramePlacement p = place_frame(queue_, writing_ ? 1 : 0, out.frame_id, out.video, newest_frame_);
+    // Stats of a frame older than the newest queued are dropped (below, and as they arrive).
+    const FramePlacement p = place_frame(queue_, writing_ ? 1 : 0, out.frame_id, out.video);
     if (p.replace || p.drop) {
       if (session_) session_->frame_dropped(p.drop ? out.frame_id : queue_[*p.replace].frame_id);
       app_.metrics.add("peakcast_frames_dropped_total", "", 1);

@@ -43,22 +43,12 @@ TEST(FrameQueue, TheFrameBeingWrittenIsNeverReplaced) {
   const FramePlacement written = place_frame(q, 1, 5, false);
   EXPECT_FALSE(written.replace);
   EXPECT_FALSE(written.drop);
-  // Older than the one being written: not sent (the client would draw over it), nor its stats.
-  const FramePlacement late = place_frame(q, 1, 3, false, 4);
+  // Older than the one being written: still sent (the client draws over it), but not its stats.
+  const FramePlacement late = place_frame(q, 1, 3, false);
   EXPECT_FALSE(late.replace);
-  EXPECT_TRUE(late.drop);
+  EXPECT_FALSE(late.drop);
   EXPECT_TRUE(stats_are_stale(3, 4));
   EXPECT_FALSE(stats_are_stale(4, 4));
-}
-
-TEST(FrameQueue, AFrameOlderThanOneAlreadySentIsDropped) {
-  // Frame 5 went out and left the queue; frame 4 (a slow final) arrives: dropped, and its stats
-  // are stale. A video frame that old still goes (the next delta refers to it).
-  const std::deque<Entry> q{text()};
-  EXPECT_TRUE(place_frame(q, 0, 4, false, 5).drop);
-  EXPECT_FALSE(place_frame(q, 0, 4, true, 5).drop);
-  EXPECT_FALSE(place_frame(q, 0, 6, false, 5).drop);
-  EXPECT_TRUE(stats_are_stale(4, 5));
 }
 
 TEST(FrameQueue, VideoFramesAreNeverReplacedNorDropped) {
