@@ -22,24 +22,10 @@ namespace {
 using Sink = std::function<bool(const uint8_t*, size_t)>;
 constexpr size_t kPiece = size_t(1) << 20;
 
-struct FileCloser {
-  void operator()(FILE* f) const { std::fclose(f); }
-};
-using File = std::unique_ptr<FILE, FileCloser>;
-
-File open_at(const fs::path& path, int64_t offset) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) throw VolumeError(path, "no such file");
-  File f(std::fopen(path.c_str(), "rb"));
-  if (!f) throw VolumeError(path, std::string("cannot open: ") + std::strerror(errno));
-  if (offset > 0 && std::fseek(f.get(), long(offset), SEEK_SET) != 0) throw VolumeError(path, "cannot seek");
-  return f;
-}
-
 // Calls each(chunk, n) for the file's bytes from `offset`, 1 MiB at a time, until it returns false.
 template <typename Each>
 void each_chunk(const fs::path& path, int64_t offset, Each&& each) {
-  File f = open_at(path, offset);
+  File f = open_file(path, offset);
   std::vector<uint8_t> in(kPiece);
   for (;;) {
     const size_t n = std::fread(in.data(), 1, in.size(), f.get());

@@ -17,9 +17,7 @@ namespace {
 // The offset just past `lines` newlines from `offset` in the file.
 int64_t after_lines(const fs::path& path, int64_t offset, int64_t lines) {
   if (lines == 0) return offset;
-  std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(path.c_str(), "rb"), std::fclose);
-  if (!f) throw VolumeError(path, "cannot open");
-  if (offset > 0) std::fseek(f.get(), long(offset), SEEK_SET);
+  const File f = open_file(path, offset);
   for (int64_t seen = 0; seen < lines;) {
     const int c = std::fgetc(f.get());
     if (c == EOF)

@@ -17,22 +17,15 @@
 namespace fs = std::filesystem;
 
 namespace peakcast::detail {
-namespace {
 
-struct FileCloser {
-  void operator()(FILE* f) const { std::fclose(f); }
-};
-using File = std::unique_ptr<FILE, FileCloser>;
-
-File open_file(const fs::path& path) {
+File open_file(const fs::path& path, int64_t offset) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw VolumeError(path, "no such file");
   File f(std::fopen(path.c_str(), "rb"));
   if (!f) throw VolumeError(path, std::string("cannot open: ") + std::strerror(errno));
+  if (offset > 0 && std::fseek(f.get(), long(offset), SEEK_SET) != 0) throw VolumeError(path, "cannot seek");
   return f;
 }
-
-}  // namespace
 
 void LoadProgress::add(size_t bytes) {
   if (!tell_ || total_ == 0) return;

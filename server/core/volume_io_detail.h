@@ -2,6 +2,8 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
+#include <memory>
 #include <filesystem>
 #include <atomic>
 #include <functional>
@@ -73,6 +75,13 @@ Volume read_payload(const std::filesystem::path& header_file, const VolumeHeader
 // stop early. Concatenated gzip members are read as one stream. Throws VolumeError when corrupt.
 void inflate_file(const std::filesystem::path& path, int64_t skip, Encoding enc,
                   const std::function<bool(const uint8_t*, size_t)>& sink);
+
+struct FileCloser {
+  void operator()(FILE* f) const { std::fclose(f); }
+};
+using File = std::unique_ptr<FILE, FileCloser>;
+// Opens a data file for reading at `offset`; refuses one that is missing or cannot be opened.
+File open_file(const std::filesystem::path& path, int64_t offset = 0);
 
 // Reads up to `want` bytes of raw data at `skip` (-1: the file's last `want` bytes) into dst;
 // returns the count read. `last`: the only or last file, refused when short.

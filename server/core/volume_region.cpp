@@ -25,10 +25,6 @@ struct Rows {
   }
 };
 
-struct FileCloser {
-  void operator()(FILE* f) const { std::fclose(f); }
-};
-
 // Copies the part of payload bytes [c0, c0 + n) that falls into rows, from row `k` on; advances k
 // past rows that are complete.
 void copy_rows(const Rows& rows, int64_t& k, int64_t c0, const uint8_t* chunk, int64_t n, uint8_t* dst) {
@@ -65,8 +61,7 @@ void read_raw_rows(const PayloadSpec& payload, int64_t total, const Rows& rows, 
   const int64_t first = rows.start(0), last = rows.start(rows.count() - 1) + rows.bytes();
   for (const Part& p : parts) {
     if (p.end <= first || p.begin >= last) continue;  // a slice file outside the region
-    std::unique_ptr<FILE, FileCloser> f(std::fopen(p.path.c_str(), "rb"));
-    if (!f) throw VolumeError(p.path, "cannot open");
+    const File f = open_file(p.path);
     const int fd = fileno(f.get());
     for (int64_t r = 0; r < rows.count(); ++r) {
       const int64_t s = rows.start(r), e = s + rows.bytes();

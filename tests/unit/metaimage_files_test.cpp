@@ -1,4 +1,4 @@
-// MetaImage as ITK writes it (issue 48): ElementDataFile = LIST and printf patterns of slice
+// MetaImage as ITK writes it: ElementDataFile = LIST and printf patterns of slice
 // files (HeaderSize in each), and MET_DOUBLE and the 32/64-bit integer types converted by the
 // stated rule (metaimage_wide.cpp), refused when the values do not fit.
 #include <gtest/gtest.h>
@@ -11,6 +11,7 @@
 
 namespace fs = std::filesystem;
 using namespace peakcast;
+using test::expect_refused;
 
 namespace {
 
@@ -30,15 +31,6 @@ std::vector<uint16_t> ramp(size_t n) {
 }
 
 const std::string kHead = "ObjectType = Image\nNDims = 3\nDimSize = 4 3 5\nElementSpacing = 1 1 2\n";
-
-void expect_refused(const fs::path& file, const std::string& reason) {
-  try {
-    load_volume(file);
-    ADD_FAILURE() << file << " loaded, expected refusal: " << reason;
-  } catch (const VolumeError& e) {
-    EXPECT_NE(std::string(e.what()).find(reason), std::string::npos) << "'" << e.what() << "' lacks '" << reason << "'";
-  }
-}
 
 }  // namespace
 
@@ -66,6 +58,16 @@ TEST(MetaImageFiles, ListAndPatternOfSlicesReadAsOneVolume) {
   expect_refused(d / "few.mhd", "asks for 5 files, the header names 4");
   test::write_file(d / "rows.mhd", kHead + type + "ElementDataFile = LIST 1D\n" + list);
   expect_refused(d / "rows.mhd", "asks for 15 files, the header names 5");
+  // A header size below -1, a file dimension MetaImage has not, and -1 on compressed data.
+  test::write_file(d / "hs.mhd",
+                   kHead + "ElementType = MET_USHORT\nHeaderSize = -3\nElementDataFile = s%d.raw 1 5 1\n");
+  expect_refused(d / "hs.mhd", "HeaderSize -3: -1 or >= 0");
+  test::write_file(d / "dim.mhd", kHead + type + "ElementDataFile = s%d.raw 1 5 1 4D\n");
+  expect_refused(d / "dim.mhd", "a file dimension of 4D (need 1, 2 or 3)");
+  test::write_file(d / "zl.mhd", kHead +
+                                     "ElementType = MET_USHORT\nCompressedData = True\nHeaderSize = -1\n"
+                                     "ElementDataFile = s%d.raw 1 5 1\n");
+  expect_refused(d / "zl.mhd", "a header size of -1 (the data at the end of the file) needs raw data");
   test::write_file(d / "gone.mhd", kHead + type + "ElementDataFile = LIST\ns1.raw\ns2.raw\ns3.raw\ns4.raw\ns9.raw\n");
   expect_refused(d / "gone.mhd", "no such file");
   test::write_file(d / "long.mhd", kHead + type + "ElementDataFile = s%d.raw 1 5 1 2\n");

@@ -1,4 +1,4 @@
-// NRRD by the format's rules (issue 48): the rows of an outside NRRD test set, each written here
+// NRRD by the format's rules (teem's): the rows of an outside NRRD test set, each written here
 // byte for byte: a 30^3 int16 ball (range 0..257) in every encoding, with line and byte skips,
 // detached single, LIST and %d data files, and the refusals (size mismatch with both numbers, a
 // byte skip below -1, bad text and hex, a bzip2 bomb stopped early).
@@ -16,6 +16,7 @@
 
 namespace fs = std::filesystem;
 using namespace peakcast;
+using test::expect_refused;
 
 namespace {
 
@@ -91,15 +92,6 @@ void expect_ball(const fs::path& file, LoadOptions opt = {}) {
   const auto* got = reinterpret_cast<const uint16_t*>(v.data());
   for (size_t i = 0; i < want.size(); ++i)
     if (int(got[i]) - 32768 != want[i]) return ADD_FAILURE() << file << ": voxel " << i << " differs";
-}
-
-void expect_refused(const fs::path& file, const std::string& reason) {
-  try {
-    load_volume(file);
-    ADD_FAILURE() << file << " loaded, expected refusal: " << reason;
-  } catch (const VolumeError& e) {
-    EXPECT_NE(std::string(e.what()).find(reason), std::string::npos) << "'" << e.what() << "' lacks '" << reason << "'";
-  }
 }
 
 // A 352-byte NIfTI-like header before the voxels, gzipped as one stream (a .nii.gz).
@@ -230,17 +222,40 @@ TEST(NrrdConformance, BadTextAndHexAreRefusedWhereTheyAre) {
 }
 
 TEST(NrrdConformance, ABzip2BombIsStoppedEarly) {
-  // 64 MiB of zeros in a few hundred bytes, for a 2x2x2 volume: refused before it is all decoded.
+  // 64 MiB of zeros in a few hundred bytes, for a 2x2x2 volume: refused before it is all decoded,
+  // with or without a byte skip of -1 (which counts the decoded data first).
   test::TempDir d;
-  test::write_file(d / "bomb.nrrd", "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 2\nencoding: bzip2\n\n" +
-                                        bzip2(std::string(size_t(64) << 20, '\0')));
-  const auto t0 = std::chrono::steady_clock::now();
-  expect_refused(d / "bomb.nrrd", "the decoded data holds more than");
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
-  test::write_file(d / "bomb1.nrrd",
-                   "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 2\nencoding: bzip2\nbyte skip: -1\n\n" +
-                       bzip2(std::string(size_t(64) << 20, '\0')));
-  expect_refused(d / "bomb1.nrrd", "byte skip -1: the decoded data runs past");
+  const std::string bomb = bzip2(std::string(size_t(64) << 20, '\0'));
+  for (const auto& [skip, why] : {std::pair<std::string, std::string>{"", "the decoded data holds more than"},
+                                  {"byte skip: -1\n", "byte skip -1: the decoded data runs past"}}) {
+    test::write_file(d / "bomb.nrrd",
+                     "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 2\nencoding: bzip2\n" + skip + "\n" + bomb);
+    const auto t0 = std::chrono::steady_clock::now();
+    expect_refused(d / "bomb.nrrd", why);
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0) << skip;
+  }
+}
+
+TEST(NrrdConformance, EveryOtherRefusalSaysWhy) {
+  test::TempDir d;
+  const std::string f = "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 2\n";
+  const std::string eight = std::string(8, '\x07');
+  test::write_file(d / "s0.raw", eight);
+  test::write_file(d / "s1.raw", eight);
+  const std::pair<std::string, std::string> cases[] = {
+      {f + "encoding: raw\nline skip: -1\n\n" + eight, "line skip must be >= 0"},
+      {f + "encoding: raw\ndata file: s%d.raw 0 1 1 4\n", "subdimension 4 is not in 1..3"},
+      {"NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 3\nencoding: raw\ndata file: s%d.raw 0 1 1 3\n",
+       "2 slabs cannot split the slowest axis' 3 evenly"},
+      {f + "encoding: bzip2\n\nBZh9 this is not bzip2 at all", "bzip2 stream corrupt"},
+      {f + "encoding: bzip2\n\n" + bzip2(eight).substr(0, 30), "truncated: the bzip2 stream does not end"},
+      {f + "encoding: txt\n\n1 2 3 " + std::string(70, '4') + " 5 6 7 8\n", "value 3 is longer than 64 characters"},
+  };
+  for (size_t k = 0; k < std::size(cases); ++k) {
+    const fs::path file = d / ("r" + std::to_string(k) + ".nhdr");
+    test::write_file(file, cases[k].first);
+    expect_refused(file, cases[k].second);
+  }
 }
 
 TEST(NrrdConformance, ARegionOfAnyEncodingIsTheCropOfTheWhole) {

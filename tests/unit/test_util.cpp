@@ -4,6 +4,7 @@
 #include <random>
 
 #include "core/generators.h"
+#include "core/volume_io.h"
 
 namespace fs = std::filesystem;
 
@@ -76,6 +77,17 @@ Volume anisotropic_blobs(SourceType type, const Dims& dims) {
   Volume v = generate_volume(s);
   v.origin = {-3.0, 4.5, 0.25};
   return v;
+}
+
+void expect_refused(const fs::path& file, const std::string& reason) {
+  try {
+    load_volume(file);
+    ADD_FAILURE() << file << " loaded, expected refusal: " << reason;
+  } catch (const VolumeError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(reason), std::string::npos) << "'" << what << "' lacks '" << reason << "'";
+    EXPECT_EQ(what.find('\n'), std::string::npos) << "one line: " << what;
+  }
 }
 
 }  // namespace peakcast::test

@@ -30,6 +30,8 @@ std::filesystem::path data_dir();  // tests/data
 Volume anisotropic_blobs(SourceType type, const Dims& dims);
 uint64_t fnv1a(const void* data, size_t bytes);
 void write_file(const std::filesystem::path& p, const std::string& bytes);
+// Expects load_volume(file) to be refused with a one-line VolumeError containing `reason`.
+void expect_refused(const std::filesystem::path& file, const std::string& reason);
 // True when both volumes hold the same dims, spacing, origin, types and physical values.
 ::testing::AssertionResult same_volume(const Volume& a, const Volume& b);
 // A float32 volume with value f(i, j, k) at each voxel, statistics computed.
