@@ -13,22 +13,24 @@ PEAKCAST_BUILD_PACKAGES=(
   libopenimageio-dev libturbojpeg0-dev libboost1.74-dev
   nlohmann-json3-dev libglm-dev libcli11-dev libspdlog-dev zlib1g-dev libhwy-dev
   libavcodec-dev libavutil-dev libswscale-dev libblosc-dev libzstd-dev libbz2-dev
+  libgdcm-dev libzip-dev
 )
 # What the built server needs at run time and nothing more: the container's runtime stage
 # (docker/Dockerfile). The container test checks the binary finds every library in that image.
 PEAKCAST_RUNTIME_PACKAGES=(
   libepoxy0 libegl1 libopengl0 libegl-mesa0 libgl1-mesa-dri libopenimageio2.4 libturbojpeg0
   libspdlog1.10 libfmt9 zlib1g libhwy1
-  libavcodec59 libavutil57 libswscale6 libblosc1 libzstd1 libbz2-1.0
+  libavcodec59 libavutil57 libswscale6 libblosc1 libzstd1 libbz2-1.0 libgdcm3.0 libzip4
 )
 # The README's commands: building plus the scripts' own tools.
 PEAKCAST_PACKAGES=("${PEAKCAST_BUILD_PACKAGES[@]}" git python3 python3-jsonschema python3-websockets python3-pil)
 # Only the test command needs these (browser tests: Debian's chromium + playwright-core;
 # clang-format: the unit label's format check; the container label: buildah and debootstrap;
 # manifests: python3-yaml; the mpi label: OpenMPI and IceT from ParaView's packages;
-# python3-zarr reads and writes the OME-Zarr the tests check).
+# python3-zarr reads and writes the OME-Zarr the tests check; python3-pydicom writes the DICOM
+# series the tests read).
 PEAKCAST_TEST_PACKAGES=(chromium nodejs python3-vtk9 xvfb xauth clang clang-format libclang-rt-14-dev
-  buildah debootstrap python3-yaml python3-pytest python3-numpy python3-venv python3-zarr
+  buildah debootstrap python3-yaml python3-pytest python3-numpy python3-venv python3-zarr python3-pydicom
   libopenmpi-dev openmpi-bin paraview-dev)
 # paraview-dev brings IceT (the mpi label). --no-install-recommends matters for it: with
 # recommends it pulls python3-paraview, which removes python3-vtk9.

@@ -50,8 +50,11 @@ export class FileBrowser extends EventTarget {
     for (const e of entries) {
       if (e.kind === 'folder') items.push(button(`📁 ${e.name}/`, `look into ${e.path}`, () => this.open(e.path)));
       else {
-        const what = e.kind === 'stack' ? 'a folder that opens as one volume' : formatBytes(e.bytes);
-        items.push(button(`${e.kind === 'stack' ? '🗂' : '▦'} ${e.name}`, `open ${e.path} (${what})`, () => {
+        // A DICOM series: its modality, size and description (never a patient's name: the server sends none).
+        const what = e.format === 'dicom' ? `a DICOM ${e.modality || ''} series, ${e.dims.join('×')}`
+          : e.kind === 'stack' ? 'a folder that opens as one volume' : formatBytes(e.bytes);
+        const label = e.format === 'dicom' && e.description && !e.name.endsWith(e.description) ? `${e.name} — ${e.description}` : e.name;
+        items.push(button(`${e.kind === 'stack' ? '🗂' : '▦'} ${label}`, `open ${e.path} (${what})`, () => {
           this.close();
           this.dispatchEvent(new CustomEvent('pick', { detail: { path: e.path, bytes: e.bytes } }));
         }));

@@ -42,6 +42,7 @@ export class TfEditor extends EventTarget {
     this.lo = info.range[0];
     this.hi = info.range[1] > info.range[0] ? info.range[1] : info.range[0] + 1;
     this.histogram = info.histogram || [];
+    this.inHu = info.value_unit === 'HU';  // the CT presets' values are Hounsfield units
     this.ui.iso.value = ((this.lo + this.hi) / 2).toPrecision(5);
   }
 
@@ -65,7 +66,7 @@ export class TfEditor extends EventTarget {
   // The preset stays shown in its menu until the TF is edited by hand. A preset that needs a
   // classification says so ('preset' event: {classification, shading}).
   applyPreset(name) {
-    const p = preset(name, this.lo, this.hi, parseFloat(this.ui.iso.value));
+    const p = preset(name, this.lo, this.hi, parseFloat(this.ui.iso.value), this.inHu);
     if (!p) {
       this.ui.preset.value = '';
       return;

@@ -29,11 +29,11 @@ export const PRESET_NEEDS = {
   em: { classification: 'post', shading: false },
 };
 
-// Hounsfield values clamped into the volume's range (a CT preset on data that is not in HU
-// still spreads over it).
-function hu(lo, hi, values) {
-  const inHu = lo <= -900 && hi >= 500;
-  return values.map((v, k) => (inHu ? v : lo + ((k + 1) / (values.length + 1)) * (hi - lo)));
+// Hounsfield values where the volume says it holds them (its info's value_unit: a CT series, a
+// sidecar's "values": "HU"), clamped into its range; on other data the preset's points spread
+// over the data's range in their order.
+function hu(lo, hi, values, inHu) {
+  return values.map((v, k) => (inHu ? Math.min(Math.max(v, lo), hi) : lo + ((k + 1) / (values.length + 1)) * (hi - lo)));
 }
 
 // The named colour maps (sRGB stops in [0, 1], evenly spaced): the server's, from
@@ -70,16 +70,16 @@ export function windowLevel(points, window, level) {
   return points.map((p) => [lo + ((p[0] - a) / span) * window, ...p.slice(1)]);
 }
 
-export function preset(name, lo, hi, iso) {
+export function preset(name, lo, hi, iso, inHu = false) {
   const at = (r) => lo + r * (hi - lo);
   if (COLORMAPS[name]) return colormapTf(name, lo, hi);
   switch (name) {
     case 'ct-bone': {  // CT in Hounsfield units: bone above ~300 HU, soft tissue faint
-      const [s0, s1, b0] = hu(lo, hi, [-100, 200, 300]);
+      const [s0, s1, b0] = hu(lo, hi, [-100, 200, 300], inHu);
       return [[lo, 0, 0, 0, 0], [s0, 0.7, 0.4, 0.3, 0], [s1, 0.85, 0.55, 0.45, 0.05], [b0, 1, 0.95, 0.85, 0.6], [hi, 1, 1, 0.95, 0.9]];
     }
     case 'ct-soft': {  // CT soft tissue: fat to muscle (-100..100 HU), bone dim
-      const [f0, m0, m1] = hu(lo, hi, [-150, 20, 150]);
+      const [f0, m0, m1] = hu(lo, hi, [-150, 20, 150], inHu);
       return [[lo, 0, 0, 0, 0], [f0, 0.9, 0.7, 0.55, 0], [m0, 0.85, 0.35, 0.3, 0.15], [m1, 0.95, 0.75, 0.65, 0.25], [hi, 1, 1, 1, 0.3]];
     }
     case 'em':  // electron microscopy: membranes and organelles are dark; they become opaque

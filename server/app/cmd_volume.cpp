@@ -275,6 +275,9 @@ int run_info(const InfoArgs& ia) {
       "load: %.1f ms (read %.1f ms, range and histogram %.1f ms)\n",
       v.spacing.x, v.spacing.y, v.spacing.z, v.origin.x, v.origin.y, v.origin.z, v.min_value, v.max_value,
       double(v.byte_size()) / 1048576.0, v.load_ms, v.load_ms - v.statistics_ms, v.statistics_ms);
+  if (!v.value_unit.empty()) std::printf("values: %s\n", v.value_unit.c_str());
+  if (!v.modality.empty() || !v.description.empty())
+    std::printf("series: %s '%s'\n", v.modality.c_str(), v.description.c_str());
   if (v.time_points > 1)
     std::printf("time: point %lld of 0..%lld\n", (long long)v.time_point, (long long)(v.time_points - 1));
   if (v.nonfinite_replaced > 0)

@@ -4,6 +4,7 @@
 #include <mutex>
 #include <shared_mutex>
 
+#include "core/dicom.h"
 #include "core/volume_io.h"
 
 namespace fs = std::filesystem;
@@ -117,7 +118,7 @@ fs::path resolve_in_roots(const fs::path& requested, const std::vector<fs::path>
     fs::path candidate = requested.is_absolute() ? requested : r / requested;
     fs::path c = fs::weakly_canonical(candidate, ec);  // resolves .. and symlinks
     if (ec || !inside(c, r)) continue;
-    if (fs::exists(c, ec)) return c;
+    if (fs::exists(c, ec) || fs::is_directory(dicom::split_series_path(c).folder, ec)) return c;  // or FOLDER#SERIES
   }
   for (const auto& root : roots) {
     std::error_code ec;

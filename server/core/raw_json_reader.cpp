@@ -1,6 +1,6 @@
 // Raw voxels with a JSON sidecar: {"dims": [x,y,z], "dtype": "uint16", "spacing": [..],
 // "origin": [..], "endian": "little"|"big", "data_file": "v.raw", "encoding": "raw"|"gzip",
-// "units": "µm", "times": T (T volumes one after another: a time series)}.
+// "units": "µm", "values": "HU", "times": T (T volumes one after another: a time series)}.
 // Open either the .json or the data file (its sidecar is `<file>.json` or `<stem>.json`).
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -14,7 +14,9 @@ namespace peakcast::detail {
 namespace {
 
 // The sidecar's "units": one unit, or one per axis (x, y, z); spacing and origin in the finest.
+void sidecar_values(const nlohmann::json& j, const fs::path& sidecar, VolumeHeader& h);
 void sidecar_units(const nlohmann::json& j, const fs::path& sidecar, VolumeHeader& h) {
+  sidecar_values(j, sidecar, h);  // and what the values are
   if (!j.contains("units")) return;
   const auto& u = j.at("units");
   if (!u.is_string() && !(u.is_array() && u.size() == 3))
@@ -31,6 +33,13 @@ int64_t sidecar_times(const nlohmann::json& j, const fs::path& sidecar) {
   if (!t.is_number_integer() || t.get<int64_t>() < 1 || t.get<int64_t>() > 1000000)
     throw VolumeError(sidecar, "'times' must be an integer from 1 to 1000000 (time points)");
   return t.get<int64_t>();
+}
+
+// The sidecar's "values": "HU" says the values are Hounsfield units (the viewer's CT presets).
+void sidecar_values(const nlohmann::json& j, const fs::path& sidecar, VolumeHeader& h) {
+  if (!j.contains("values")) return;
+  if (j.at("values") != "HU") throw VolumeError(sidecar, "'values' must be \"HU\" (Hounsfield units) or absent");
+  h.value_unit = "HU";
 }
 
 }  // namespace
@@ -57,8 +66,8 @@ Volume read_raw_json(const fs::path& path, const LoadOptions& options) {
     throw VolumeError(sidecar, std::string("invalid JSON: ") + e.what());
   }
   if (!j.is_object()) throw VolumeError(sidecar, "sidecar must be a JSON object");
-  static const char* known[] = {"dims",      "dtype",    "spacing",   "origin", "endian",
-                                "data_file", "encoding", "byte_skip", "units",  "times"};
+  static const char* known[] = {"dims",     "dtype",     "spacing", "origin", "endian", "data_file",
+                                "encoding", "byte_skip", "units",   "times",  "values"};
   for (auto& [key, _] : j.items())
     if (std::find(std::begin(known), std::end(known), key) == std::end(known))
       throw VolumeError(sidecar, "unknown key '" + key + "'");

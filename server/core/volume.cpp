@@ -70,6 +70,7 @@ Volume::Volume(const VolumeHeader& h)
       origin(h.origin),
       value_offset(storage_offset(h.source)),
       unit(h.unit),
+      value_unit(h.value_unit),
       time_point(h.time_point),
       time_points(h.time_points),
       dims_(h.dims),
@@ -85,6 +86,7 @@ Volume Volume::header_only(const VolumeHeader& h) {
   v.origin = h.origin;
   v.value_offset = storage_offset(h.source);
   v.unit = h.unit;
+  v.value_unit = h.value_unit;
   v.time_point = h.time_point;
   v.time_points = h.time_points;
   v.dims_ = h.dims;

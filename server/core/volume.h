@@ -37,7 +37,8 @@ struct VolumeHeader {
   glm::dvec3 origin{0.0, 0.0, 0.0};
   SourceType source = SourceType::U8;
   bool big_endian = false;
-  std::string unit;  // the spacing's unit, an SI symbol (core/length_unit.h); "": the file names none
+  std::string unit;        // the spacing's unit, an SI symbol (core/length_unit.h); "": the file names none
+  std::string value_unit;  // Volume::value_unit
   int64_t time_point = 0, time_points = 1;  // a time series: the point read, of how many
   int64_t voxel_count() const { return dims[0] * dims[1] * dims[2]; }
 };
@@ -74,6 +75,11 @@ class Volume {
   glm::dvec3 origin{0.0, 0.0, 0.0};
   double value_offset = 0.0;  // physical value = stored value + value_offset
   std::string unit;           // spacing and origin's unit ("µm"; core/length_unit.h); "": unknown
+  // What the values are: "HU" (Hounsfield units: a CT series, or a file that says so), "": the
+  // data's own units, unknown. The viewer's CT presets place their values in HU only then.
+  std::string value_unit;
+  // A DICOM series' modality ("CT", "MR") and SeriesDescription; "" for other formats.
+  std::string modality, description;
   // A time series (an OME-Zarr with a t axis): the time point these voxels are, of how many.
   int64_t time_point = 0, time_points = 1;
 

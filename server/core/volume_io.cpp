@@ -15,6 +15,7 @@
 #include <memory>
 
 #include "chunked/chunked_volume.h"
+#include "core/dicom.h"
 #include "core/parallel.h"
 #include "core/volume_io_detail.h"
 
@@ -236,60 +237,78 @@ Volume read_payload(const fs::path& header_file, const VolumeHeader& h, const Pa
 
 }  // namespace detail
 
-Volume load_volume(const fs::path& path, const LoadOptions& options) {
+namespace {
+
+// The one volume header of a folder of slices it describes (headsq/quarter.nhdr); none when the
+// folder holds TIFF slices (the stack) or no header; several are refused.
+std::optional<fs::path> folder_header(const fs::path& path) {
+  std::error_code ec;
+  std::vector<fs::path> headers;
+  bool tiffs = false;
+  for (const auto& e : fs::directory_iterator(path, ec)) {
+    const std::string x = detail::lower(e.path().extension().string());
+    tiffs |= x == ".tif" || x == ".tiff";
+    if (x == ".nhdr" || x == ".nrrd" || x == ".mhd" || x == ".mha") headers.push_back(e.path());
+  }
+  if (tiffs || headers.empty()) return std::nullopt;
+  if (headers.size() > 1)
+    throw VolumeError(path, "a folder with " + std::to_string(headers.size()) + " volume headers: open one of them (" +
+                                headers[0].filename().string() + ", ...)");
+  return headers[0];
+}
+
+Volume read_chunked(const fs::path& path, const LoadOptions& options) {
+  const auto cv = chunked::open_chunked(path, {options.time_point, options.channel});
+  const int level = options.memory_budget_bytes > 0 && !options.region
+                        ? chunked::finest_level_within(*cv, options.level, options.memory_budget_bytes)
+                        : options.level;
+  Volume v = chunked::read_level(*cv, level, options);
+  v.pyramid_level = level;
+  v.pyramid_levels = int(cv->levels().size());
+  v.full_dims = cv->levels()[0].dims;
+  if (level > 0) v.full_spacing = cv->levels()[0].spacing;
+  return v;
+}
+
+Volume read_by_format(const fs::path& path, const LoadOptions& options) {
   using namespace detail;
+  std::error_code ec;
+  const std::string ext = lower(path.extension().string());
+  if (!dicom::split_series_path(path).series.empty()) return dicom::read_series(path, options);
+  if (chunked::is_chunked_volume(path)) return read_chunked(path, options);
+  // A folder named .dcm (an uploaded ZIP's slices) is a series whatever it holds: refused as one.
+  if (fs::is_directory(path, ec) && (ext == ".dcm" || dicom::is_dicom_folder(path)))
+    return dicom::read_series(path, options);
+  if (fs::is_directory(path, ec) || ext == ".tif" || ext == ".tiff") {
+    if (options.region)
+      throw RegionNotReadable(path, "a region of a TIFF stack cannot be read (use NRRD, MetaImage or raw)");
+    return read_tiff(path, options);
+  }
+  if (ext == ".nrrd" || ext == ".nhdr") return read_nrrd(path, options);
+  if (ext == ".mhd" || ext == ".mha") return read_metaimage(path, options);
+  if (ext == ".json" || ext == ".raw" || ext == ".gz") return read_raw_json(path, options);
+  throw VolumeError(path, "unknown volume format '" + ext +
+                              "' (expected .nrrd .nhdr .mhd .mha .raw+.json .tif, a directory of TIFF slices, "
+                              "a folder of DICOM slices, an OME-Zarr or a Neuroglancer precomputed folder)");
+}
+
+}  // namespace
+
+Volume load_volume(const fs::path& path, const LoadOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   std::error_code ec;
   file_roots::check(path);
-  if (!fs::exists(path, ec)) throw VolumeError(path, "no such file");
-  const std::string ext = lower(path.extension().string());
-  Volume v;
-  const bool chunked = chunked::is_chunked_volume(path);
-  if (!chunked && fs::is_directory(path, ec)) {
-    // A folder of slices described by one header (headsq/quarter.nhdr): that header. TIFF slices
-    // without one: the stack.
-    std::vector<fs::path> headers;
-    bool tiffs = false;
-    for (const auto& e : fs::directory_iterator(path, ec)) {
-      const std::string x = lower(e.path().extension().string());
-      tiffs |= x == ".tif" || x == ".tiff";
-      if (x == ".nhdr" || x == ".nrrd" || x == ".mhd" || x == ".mha") headers.push_back(e.path());
-    }
-    if (!tiffs && headers.size() == 1) {
-      Volume h = load_volume(headers[0], options);
+  if (!fs::exists(dicom::split_series_path(path).folder, ec)) throw VolumeError(path, "no such file");
+  if (fs::is_directory(path, ec) && path.extension() != ".dcm" && !chunked::is_chunked_volume(path) &&
+      !dicom::is_dicom_folder(path))
+    if (const auto header = folder_header(path)) {
+      Volume h = load_volume(*header, options);
       h.name = path.filename().string();
       return h;
     }
-    if (!tiffs && headers.size() > 1)
-      throw VolumeError(path, "a folder with " + std::to_string(headers.size()) +
-                                  " volume headers: open one of them (" + headers[0].filename().string() + ", ...)");
-  }
-  if (chunked) {
-    const auto cv = chunked::open_chunked(path, {options.time_point, options.channel});
-    const int level = options.memory_budget_bytes > 0 && !options.region
-                          ? chunked::finest_level_within(*cv, options.level, options.memory_budget_bytes)
-                          : options.level;
-    v = chunked::read_level(*cv, level, options);
-    v.pyramid_level = level;
-    v.pyramid_levels = int(cv->levels().size());
-    v.full_dims = cv->levels()[0].dims;
-    if (level > 0) v.full_spacing = cv->levels()[0].spacing;
-  } else if (fs::is_directory(path, ec) || ext == ".tif" || ext == ".tiff") {
-    if (options.region)
-      throw RegionNotReadable(path, "a region of a TIFF stack cannot be read (use NRRD, MetaImage or raw)");
-    v = read_tiff(path, options);
-  } else if (ext == ".nrrd" || ext == ".nhdr") {
-    v = read_nrrd(path, options);
-  } else if (ext == ".mhd" || ext == ".mha") {
-    v = read_metaimage(path, options);
-  } else if (ext == ".json" || ext == ".raw" || ext == ".gz") {
-    v = read_raw_json(path, options);
-  } else {
-    throw VolumeError(path, "unknown volume format '" + ext +
-                                "' (expected .nrrd .nhdr .mhd .mha .raw+.json .tif, a "
-                                "directory of TIFF slices, an OME-Zarr or a Neuroglancer precomputed folder)");
-  }
-  v.name = path.filename().string();
+  Volume v = read_by_format(path, options);
+  const fs::path named = dicom::split_series_path(path).folder;  // a series: its folder's name
+  v.name = (named.filename().empty() ? named.parent_path() : named).filename().string();
   v.source_path = path.string();
   v.load_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return v;

@@ -103,6 +103,7 @@ SlabWriter::SlabWriter(const fs::path& path, const VolumeHeader& h, WriteOptions
                         {"origin", {h.origin.x, h.origin.y, h.origin.z}},
                         {"endian", "little"},
                         {"encoding", gzip ? "gzip" : "raw"}};
+    if (!h.value_unit.empty()) j["values"] = h.value_unit;
     write_text(path.string() + ".json", j.dump(2) + "\n");
   } else {
     throw std::invalid_argument(path.string() + ": unknown output format (use .raw .nrrd .nhdr .mhd .mha)");
@@ -161,6 +162,7 @@ void write_volume(const fs::path& path, const Volume& v, WriteOptions options) {
   h.spacing = v.spacing;
   h.origin = v.origin;
   h.unit = v.unit;
+  h.value_unit = v.value_unit;
   h.source = v.source_type();
   SlabWriter w(path, h, options);
   const size_t slice = size_t(h.dims[0] * h.dims[1]) * voxel_bytes(v.type());

@@ -1,5 +1,6 @@
 #include "net/rest_routes.h"
 #include "net/rest_still.h"
+#include "net/rest_slice.h"
 
 #include <cstdio>
 #include <cstring>
@@ -251,6 +252,7 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
           error_response(req, http::status::method_not_allowed, "bad_request", "POST a scene with \"pixel\": [x, y]"));
     return probe(app, req, std::move(send));
   }
+  if (path == "/api/slice") return slice_still(app, req, std::move(send));  // POST only: it says so
   if (path == "/api/tf") {
     if (req.method() != http::verb::post)
       return send(error_response(req, http::status::method_not_allowed, "bad_request", "POST a scene"));

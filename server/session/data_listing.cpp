@@ -5,6 +5,7 @@
 #include <map>
 
 #include "chunked/chunked_volume.h"
+#include "core/dicom.h"
 #include "core/volume_io.h"
 
 namespace fs = std::filesystem;
@@ -50,6 +51,31 @@ bool opens_as_stack(const fs::path& dir) {
   return (tiffs && headers == 0) || (!tiffs && headers == 1);
 }
 
+// A folder of DICOM slices: one entry per series (its description, modality and size), the
+// path naming the series (FOLDER#UID) when the folder holds several. Empty when none is found.
+std::vector<nlohmann::json> dicom_entries(const fs::path& dir, const std::string& name, const std::string& path) {
+  std::vector<dicom::SeriesSummary> series;
+  try {
+    series = dicom::list_series(dir);
+  } catch (const VolumeError&) {
+    return {};  // too many files, unreadable: listed as a folder
+  }
+  std::vector<nlohmann::json> out;
+  for (const dicom::SeriesSummary& s : series) {
+    const bool one = series.size() == 1;
+    nlohmann::json e = {{"name", one ? name : name + "#" + (s.description.empty() ? s.uid : s.description)},
+                        {"path", one ? path : path + "#" + s.uid},
+                        {"kind", "volume"},
+                        {"format", "dicom"},
+                        {"bytes", 0},
+                        {"dims", {s.cols, s.rows, s.slices}},
+                        {"modality", s.modality},
+                        {"description", s.description}};
+    out.push_back(std::move(e));
+  }
+  return out;
+}
+
 }  // namespace
 
 nlohmann::json list_data_dir(const std::vector<fs::path>& roots, const std::string& dir, size_t max_entries) {
@@ -79,6 +105,21 @@ nlohmann::json list_data_dir(const std::vector<fs::path>& roots, const std::stri
       const std::string ext = lower(e.path().extension().string());
       std::string kind;
       int64_t bytes = 0;
+      const std::string path = dir.empty() ? name : (fs::path(dir) / name).lexically_normal().string();
+      if (e.is_directory(ec) && dicom::is_dicom_folder(e.path())) {
+        bool listed = false;
+        for (nlohmann::json& s : dicom_entries(e.path(), name, path)) {
+          if (entries.size() >= max_entries) {
+            truncated = true;
+            break;
+          }
+          const std::string key = s["name"].get<std::string>();  // before s is moved from
+          entries[key] = std::move(s);
+          listed = true;
+        }
+        if (truncated) break;
+        if (listed) continue;  // else: no series found, a folder
+      }
       if (e.is_directory(ec)) {
         kind = opens_as_stack(e.path()) ? "stack" : "folder";
       } else if (e.is_regular_file(ec)) {
@@ -91,7 +132,6 @@ nlohmann::json list_data_dir(const std::vector<fs::path>& roots, const std::stri
         truncated = true;
         break;
       }
-      const std::string path = dir.empty() ? name : (fs::path(dir) / name).lexically_normal().string();
       entries[name] = {{"name", name}, {"path", path}, {"kind", kind}, {"bytes", bytes}};
     }
   }

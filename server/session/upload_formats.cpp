@@ -79,6 +79,7 @@ const char* extension_of(UploadFormat f) {
     case UploadFormat::MetaImage: return ".mha";
     case UploadFormat::Tiff: return ".tif";
     case UploadFormat::Raw: return ".raw";
+    case UploadFormat::DicomZip: return ".dcm";
   }
   return ".raw";
 }
@@ -101,6 +102,8 @@ UploadFormat sniff_upload(const fs::path& file, bool raw_header_given) {
       (head.compare(0, 4, std::string("II*\0", 4)) == 0 || head.compare(0, 4, std::string("MM\0*", 4)) == 0 ||
        head.compare(0, 4, std::string("II+\0", 4)) == 0))
     return UploadFormat::Tiff;
+  if (head.size() >= 4 && (head.compare(0, 4, "PK\x03\x04") == 0 || head.compare(0, 4, "PK\x05\x06") == 0))
+    return UploadFormat::DicomZip;  // a ZIP: of a DICOM series' slices (refused by the reader when it is not)
   if (is_metaimage(head)) {
     for (const std::string& line : header_lines(head, false)) {
       const auto eq = line.find('=');
@@ -117,8 +120,8 @@ UploadFormat sniff_upload(const fs::path& file, bool raw_header_given) {
     return UploadFormat::MetaImage;
   }
   throw unsupported(
-      "the body is neither NRRD (data attached), MetaImage (.mha), TIFF, nor raw voxels with their "
-      "header (dims and dtype as query parameters or a JSON part)");
+      "the body is neither NRRD (data attached), MetaImage (.mha), TIFF, a ZIP of a DICOM series, nor raw "
+      "voxels with their header (dims and dtype as query parameters or a JSON part)");
 }
 
 nlohmann::json raw_sidecar(const nlohmann::json& h, const std::string& data_file) {

@@ -13,8 +13,9 @@
 
 namespace peakcast {
 
-enum class UploadFormat { Nrrd, MetaImage, Tiff, Raw };
-const char* extension_of(UploadFormat f);  // ".nrrd", ".mha", ".tif", ".raw"
+// DicomZip: a ZIP of a DICOM series' slices, kept as a folder of them (session/upload_zip.h).
+enum class UploadFormat { Nrrd, MetaImage, Tiff, Raw, DicomZip };
+const char* extension_of(UploadFormat f);  // ".nrrd", ".mha", ".tif", ".raw", ".dcm" (a folder)
 
 // Throws UploadRefusal (415) for a body of no known format, or a header naming another file.
 UploadFormat sniff_upload(const std::filesystem::path& file, bool raw_header_given);

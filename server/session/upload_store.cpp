@@ -10,6 +10,7 @@
 #include "core/log.h"
 #include "core/utf8.h"
 #include "session/upload_formats.h"
+#include "session/upload_zip.h"
 
 namespace fs = std::filesystem;
 
@@ -34,7 +35,7 @@ void remove_files(const fs::path& dir, const std::string& id) {
   std::vector<fs::path> gone;
   for (const auto& e : fs::directory_iterator(dir, ec))
     if (e.path().filename().string().rfind(id + ".", 0) == 0) gone.push_back(e.path());
-  for (const auto& p : gone) fs::remove(p, ec);
+  for (const auto& p : gone) fs::remove_all(p, ec);  // a DICOM series' folder too
 }
 
 bool inside(const fs::path& child, const fs::path& parent) {
@@ -99,7 +100,7 @@ UploadStore::UploadStore(fs::path dir, UploadLimits limits, VolumeStore& volumes
     const std::string id = f.substr(0, f.find('.'));
     if (listed.count(id)) continue;
     log::warn("upload files without their meta file removed: " + f);
-    fs::remove(e.path(), ec);
+    fs::remove_all(e.path(), ec);
   }
 }
 
@@ -189,7 +190,8 @@ std::shared_ptr<VolumeEntry> UploadStore::commit(std::unique_ptr<Ticket> t, cons
     body = data;
   }
   const UploadFormat format = sniff_upload(body, raw.has_value());
-  const int64_t bytes = int64_t(fs::file_size(body));
+  int64_t bytes = int64_t(fs::file_size(body));
+  if (format == UploadFormat::DicomZip) body = unzip_series(id, body, bytes);
   // Into place: the data file, and for raw voxels the sidecar the raw reader takes.
   const fs::path file = dir_ / (id + extension_of(format));
   fs::path open = file;
@@ -233,6 +235,25 @@ std::shared_ptr<VolumeEntry> UploadStore::commit(std::unique_ptr<Ticket> t, cons
   if (entry->volume) charged = std::max(charged, int64_t(entry->volume->byte_size()));
   keep(*t, *entry, name, open, charged, params.owner);
   return entry;
+}
+
+fs::path UploadStore::unzip_series(const std::string& id, const fs::path& zip, int64_t& bytes) {
+  const fs::path folder = incoming_ / (id + extension_of(UploadFormat::DicomZip));
+  int64_t left = 0;
+  {
+    std::lock_guard lock(m_);
+    left = limits_.budget_bytes - used_locked();
+  }
+  std::error_code ec;
+  try {
+    bytes = extract_zip(zip, folder, std::min(left, limits_.max_bytes * 8), 100000);
+  } catch (...) {
+    fs::remove_all(folder, ec);
+    fs::remove(zip, ec);
+    throw;
+  }
+  fs::remove(zip, ec);
+  return folder;
 }
 
 // The budget counts what the upload costs the server: its file, or the voxels it decodes to when

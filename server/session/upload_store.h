@@ -104,6 +104,9 @@ class UploadStore {
  private:
   void release(Ticket& t);
   LoadOptions charged_load(int64_t file_bytes, int64_t& charged);
+  // A ZIP of a DICOM series: its files into the incoming folder `id`.dcm, within what the budget
+  // leaves; returns that folder, `bytes` set to what it holds. `zip` is removed either way.
+  std::filesystem::path unzip_series(const std::string& id, const std::filesystem::path& zip, int64_t& bytes);
   void keep(Ticket& t, const VolumeEntry& entry, const std::string& name, const std::filesystem::path& open,
             int64_t charged, const std::string& owner);
   std::filesystem::path dir_, incoming_;

@@ -45,6 +45,12 @@ nlohmann::json VolumeEntry::info(bool with_histogram) const {
     j["full_dims"] = {v.full_dims[0], v.full_dims[1], v.full_dims[2]};
   }
   if (!owner.empty()) j["owner"] = owner;
+  if (!v.value_unit.empty()) j["value_unit"] = v.value_unit;  // "HU": the CT presets' values are these
+  if (!v.modality.empty()) j["modality"] = v.modality;        // a DICOM series': "CT", "MR", ...
+  if (!v.description.empty()) {                               // and its SeriesDescription
+    j["description"] = v.description;
+    if (name.empty()) j["name"] = v.name + " (" + v.description + ")";
+  }
   if (with_histogram) j["histogram"] = v.histogram;
   return j;
 }

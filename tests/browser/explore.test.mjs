@@ -352,3 +352,51 @@ test('a time series: a slider, play and a readout; frames in order; the share li
     rmSync(dir, { recursive: true, force: true });
   }
 });
+
+test('a DICOM series: listed with its description, opened from the data browser, CT presets in HU only where the volume says so', async () => {
+  const dir = mkdtempSync(path.join(os.tmpdir(), 'peakcast-dicom-'));
+  // A CT series (HU -1000..1000 over z) and the same values as a raw int16 volume that names no unit.
+  const made = spawnSync('/usr/bin/python3', ['-c', `
+import sys, os, json, numpy as np
+sys.path.insert(0, ${JSON.stringify(path.join(ROOT, 'tests/unit'))})
+from dicom_fixtures import write_series
+d = sys.argv[1]
+k, j, i = np.meshgrid(np.arange(12), np.arange(16), np.arange(16), indexing='ij')
+hu = (-1000 + (2000 * k) // 11 + 0 * (j + i)).astype(np.int16)
+write_series(os.path.join(d, 'chest'), (hu + 1024).astype(np.int16), positions=[(0, 0, 2.0 * z) for z in range(12)],
+             series_uid='1.2.3.7.1', description='Chest bone', intercept=-1024)
+hu.tofile(os.path.join(d, 'plain.raw'))
+json.dump({'dims': [16, 16, 12], 'dtype': 'int16'}, open(os.path.join(d, 'plain.raw.json'), 'w'))
+`, dir]);
+  assert.equal(made.status, 0, String(made.stderr));
+  const s = await startServer(['--data', dir]);
+  try {
+    const page = await openClient(browser, s.url);
+    await waitFinal(page);
+    await page.click('#volume-browse');
+    await page.waitForSelector('#files li button');
+    const entries = await page.$$eval('#files li button', (b) => b.map((e) => [e.textContent, e.title]));
+    const chest = entries.find(([t]) => t.includes('chest'));
+    assert.ok(chest && chest[0].includes('Chest bone') && /DICOM CT series, 16×16×12/.test(chest[1]), JSON.stringify(entries));
+    await page.click('#files button:has-text("chest")');
+    await page.waitForFunction(() => window.peakcast.app.volumeInfo?.id === 'chest', null, { timeout: 30000 });
+    assert.equal(await page.evaluate(() => window.peakcast.app.volumeInfo.value_unit), 'HU');
+    await waitFinal(page);
+    const points = () => page.evaluate(() => window.peakcast.tfEditor.points.map((p) => p[0]));
+    await page.selectOption('#tf-preset', 'ct-bone');
+    assert.deepEqual((await points()).slice(1, 4), [-100, 200, 300], 'ct-bone at its HU values');
+    // The same values in a file that does not say HU: the preset spreads over the range.
+    await page.fill('#volume-path', 'plain.raw');
+    await page.press('#volume-path', 'Enter');
+    await page.waitForFunction(() => window.peakcast.app.volumeInfo?.id === 'plain.raw', null, { timeout: 30000 });
+    await waitFinal(page);
+    assert.equal(await page.evaluate(() => window.peakcast.app.volumeInfo.value_unit), undefined);
+    await page.selectOption('#tf-preset', 'ct-bone');
+    assert.deepEqual((await points()).slice(1, 4), [-500, 0, 500], 'ct-bone spread over -1000..1000');
+    assert.deepEqual(page.errors, []);
+    await page.close();
+  } finally {
+    await s.stop();
+    rmSync(dir, { recursive: true, force: true });
+  }
+});

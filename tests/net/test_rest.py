@@ -287,6 +287,40 @@ def test_data_directory_listing():
                 assert status == 404 and words in body["message"] and tmp not in body["message"], (bad, body)
 
 
+def test_slices_are_the_voxels_seen_from_the_axis_side():
+    """POST /api/slice against the voxels `peakcast convert` writes: with the window 0..255 a
+    uint8 volume's grey is its value; a z slice seen from +z with +y up, an x slice from +x."""
+    import numpy as np
+    with tempfile.TemporaryDirectory() as tmp:
+        raw = pathlib.Path(tmp) / "h.raw"
+        subprocess.run([PEAKCAST, "convert", str(DATA / "heptane_151.nrrd"), str(raw)], check=True, capture_output=True)
+        meta = json.loads(raw.with_name("h.raw.json").read_text())
+        nx, ny, nz = meta["dims"]
+        vox = np.fromfile(raw, dtype=np.uint8).reshape(nz, ny, nx)
+    for sl, expect in (({"axis": "z", "index": 70}, vox[70, ::-1, :]), ({"axis": "x", "index": 80}, vox[::-1, ::-1, 80].T)):
+        body = {"volume": "heptane_151", "slice": dict(sl, window=[0, 255])}
+        status, headers, png = http(SERVER, "/api/slice", "POST", json.dumps(body).encode())
+        assert status == 200 and headers["Content-Type"] == "image/png", (status, png[:200])
+        img = np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))[:, :, 0]
+        assert img.shape == expect.shape and (int(headers["X-Width"]), int(headers["X-Height"])) == img.shape[::-1]
+        assert np.array_equal(img, expect), f"{sl}: {np.abs(img.astype(int) - expect).max()} off"
+        assert headers["X-TF-Source"] == "window" and headers["X-Index"] == str(sl["index"])
+    # With an image: fitted into it; with the TF's colours (the automatic TF).
+    body = {"volume": "heptane_151", "image": {"width": 64, "height": 32}, "slice": {"axis": "y", "index": 10}}
+    status, headers, png = http(SERVER, "/api/slice", "POST", json.dumps(body).encode())
+    assert status == 200 and Image.open(io.BytesIO(png)).size == (64, 32) and headers["X-TF-Source"] == "auto"
+    assert http(SERVER, "/api/slice")[0] == 405
+    for sl, code, words in (({"axis": "z", "index": nz}, 400, b"outside 0..%d" % (nz - 1)),
+                            ({"axis": "q", "index": 1}, 400, b"slice.axis"),
+                            ({"plane": {"point": [0, 0, 0], "normal": [0, 0, 0]}}, 400, b"must not be zero"),
+                            (None, 400, b"slice")):
+        body = {"volume": "heptane_151", **({"slice": sl} if sl else {})}
+        status, _, answer = http(SERVER, "/api/slice", "POST", json.dumps(body).encode())
+        assert status == code and words in answer, (sl, status, answer)
+    status, _, answer = http(SERVER, "/api/slice", "POST", b'{"volume": "nope", "slice": {"axis": "x", "index": 0}}')
+    assert status == 404, answer
+
+
 if __name__ == "__main__":
     with Server("--max-sessions", "20") as s:
         SERVER = s
@@ -294,4 +328,5 @@ if __name__ == "__main__":
                    test_rest_stills_honour_the_clip,
                    test_sixteen_sessions_share_one_gpu_copy, test_metrics_parse_as_prometheus_text,
                    test_static_client_is_served, test_probe_over_rest_and_websocket, test_probe_refusals,
-                   test_probes_answer_after_both_filters_have_drawn, test_data_directory_listing])
+                   test_probes_answer_after_both_filters_have_drawn, test_data_directory_listing,
+                   test_slices_are_the_voxels_seen_from_the_axis_side])

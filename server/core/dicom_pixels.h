@@ -1,0 +1,19 @@
+// A DICOM series' pixels into one volume (dicom_pixels.cpp): decoded slice by slice through
+// GDCM, rescaled, and kept in the narrowest type that holds the values exactly.
+#pragma once
+
+#include <filesystem>
+#include <vector>
+
+#include "core/dicom.h"
+
+namespace peakcast::dicom {
+
+// The kept type (docs/scenes.md, "DICOM"): physical = stored x slope + intercept, per slice.
+// 8-bit slices without a rescale stay uint8; integer slopes and intercepts whose values fit
+// int16 give int16 (CT in HU), else uint16 when they fit it; anything else float32. MONOCHROME1
+// (bright is low) is inverted over the series' range: lo + hi - value.
+Volume read_pixels(const std::filesystem::path& dir, const std::vector<SliceHeader>& slices, const SeriesGeometry& g,
+                   const LoadOptions& options);
+
+}  // namespace peakcast::dicom
