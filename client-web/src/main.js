@@ -21,6 +21,7 @@ import { ClipControls } from './clip-controls.js';
 import { Annotations } from './annotations.js';
 import { bindTfTools } from './tf-tools.js';
 import { loadColormaps } from './tf-model.js';
+import { SlicePanes } from './slice-panes.js';
 
 const $ = (id) => document.getElementById(id);
 const disposer = new Disposer();
@@ -85,6 +86,15 @@ const timeControls = new TimeControls({ root: $('time'), slider: $('time-slider'
 disposer.listen(timeControls, 'time', (e) => stream.send({ type: 'time', time: e.detail }));
 
 const annotations = new Annotations($('annotations'), disposer);
+// Slice views beside the 3D view (the "3D + slices" layout): drawn by POST /api/slice.
+const slices = new SlicePanes({ root: $('slices'), panes: ['x', 'y', 'z'].map((a) => ({ canvas: $(`slice-${a}`), caption: $(`slice-${a}-caption`) })) },
+  { fetchSlice: (body) => fetch('/api/slice', { method: 'POST', body: JSON.stringify(body),
+    headers: { 'Content-Type': 'application/json', ...(token ? { Authorization: `Bearer ${token}` } : {}) } }),
+  scene: () => ({ volume: app.volume, tf: { points: app.tf }, time: app.time }) }, disposer);
+disposer.listen($('layout-slices'), 'change', () => {
+  slices.show($('layout-slices').checked);
+  window.dispatchEvent(new Event('resize'));  // the 3D view's size changed: the server is told
+});
 const clip = new ClipControls({ boxOn: $('clip-box'), sliders: [...document.querySelectorAll('.clip-sliders input')],
   planeOn: $('clip-plane'), facing: $('clip-facing'), axes: [...document.querySelectorAll('.clip-axis')], flip: $('clip-flip'),
   offset: $('clip-offset'), readout: $('clip-readout') },
@@ -120,6 +130,8 @@ function applyState(state, volumeInfo, volumes) {
   app.time = state.time ?? 0;
   timeControls.setVolume(volumeInfo, app.time);
   annotations.update({ camera: app.camera, volume: volumeInfo, tf: app.tf, clip: render.clip ?? null, unit });
+  if (slices.info?.id !== volumeInfo.id) slices.setVolume(volumeInfo);
+  else slices.refreshSoon();
   writeState(share());
 }
 
@@ -193,6 +205,7 @@ disposer.listen(stream, 'stats', (e) => {
   stats.stats(e.detail);
   if (e.detail.time !== undefined && e.detail.time !== app.time) {
     app.time = e.detail.time;
+    slices.refreshSoon();
     writeState(share());
   }
   timeControls.drawn(e.detail.time);
@@ -283,6 +296,7 @@ disposer.listen(tfEditor, 'change', (e) => {
   app.tf = e.detail.points;
   annotations.update({ tf: app.tf });
   $('tf-note').textContent = '';
+  slices.refreshSoon();
   stream.send({ type: 'tf', tf: { points: e.detail.points }, version: e.detail.version });
   writeState(share());
 });
@@ -317,6 +331,8 @@ disposer.listen(tfEditor, 'preset', (e) => {
 const showStats = (show) => { toggle($('stats'), show); $('show-stats').checked = show; };
 const probe = new Probe({ canvas, readout: $('probe-readout'), measure: $('measure'), stream }, disposer);
 disposer.listen(probe, 'points', (e) => annotations.update({ marks: e.detail }));
+probe.picking = () => slices.shown;  // a click in the 3D view moves the slices' point to what it hit
+disposer.listen(probe, 'pick', (e) => slices.setPoint(e.detail));
 disposer.listen($('fullscreen'), 'click', () => toggleFullscreen());
 bindViewKeys({ canvas, camera, help: $('help'), toggleStats: () => showStats($('stats').hidden),
   measure: () => probe.setMeasuring(!probe.measuring), measuring: () => probe.measuring, fullscreen: toggleFullscreen }, disposer);
@@ -367,5 +383,5 @@ disposer.listen($('share'), 'click', async () => {
 });
 
 disposer.listen(window, 'pagehide', () => disposer.dispose());
-window.peakcast = { app, stats, stream, camera, tfEditor, controls, brush, disposer, uploads, panel, annotations, probe, files, clip, timeControls };  // for tests and the console
+window.peakcast = { app, stats, stream, camera, tfEditor, controls, brush, disposer, uploads, panel, annotations, probe, files, clip, timeControls, slices };  // for tests and the console
 stream.connect();

@@ -14,6 +14,8 @@ export class Probe extends EventTarget {
   #at = null;           // the pointer's device pixel, to probe at the next animation frame
   #hover = 0;           // id of the newest hover probe
   #clicks = new Set();  // ids of probes that fix a measure point
+  #picks = new Set();   // ids of probes that pick a point for the slice views
+  picking = () => false;  // whether a click, not measuring, picks a point ('pick' event)
   #down = null;
   #unavailable = '';
   last = null;          // the newest hover answer
@@ -83,12 +85,17 @@ export class Probe extends EventTarget {
   #up(e) {
     const d = this.#down;
     this.#down = null;
-    if (!this.measuring || !d || Math.hypot(e.clientX - d.x, e.clientY - d.y) >= CLICK_PX) return;
+    if (!d || Math.hypot(e.clientX - d.x, e.clientY - d.y) >= CLICK_PX) return;
+    if (!this.measuring && !this.picking()) return;
     const id = this.#ask(this.pixelOf(e));
-    if (id) this.#clicks.add(id);
+    if (id) (this.measuring ? this.#clicks : this.#picks).add(id);
   }
 
   #answer(a) {
+    if (this.#picks.delete(a.id)) {
+      if (a.hit) this.dispatchEvent(new CustomEvent('pick', { detail: a.position }));
+      return;
+    }
     if (this.#clicks.delete(a.id)) {
       if (!a.hit) return this.#note('nothing opaque there to measure from');
       this.points = this.points.length >= 2 ? [a.position] : [...this.points, a.position];

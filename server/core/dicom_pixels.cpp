@@ -99,7 +99,7 @@ struct Kept {
 
 Kept kept_type(const std::vector<const SliceHeader*>& in_box, const Stored& st) {
   Kept k{SourceType::F32, std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
-  bool ints = true, plain8 = true;
+  bool ints = true, plain8 = true, signed_source = false;
   for (size_t i = 0; i < in_box.size(); ++i) {
     const SliceHeader& s = *in_box[i];
     const double a = s.slope * st.lo[i] + s.intercept, b = s.slope * st.hi[i] + s.intercept;
@@ -107,9 +107,12 @@ Kept kept_type(const std::vector<const SliceHeader*>& in_box, const Stored& st) 
     k.hi = std::max({k.hi, a, b});
     ints &= integral(s.slope) && integral(s.intercept);
     plain8 &= s.bits_allocated == 8 && !s.is_signed && s.slope == 1.0 && s.intercept == 0.0;
+    signed_source |= s.is_signed;
   }
   if (plain8)
     k.type = SourceType::U8;
+  else if (ints && !signed_source && k.lo >= 0 && k.hi <= 65535)
+    k.type = SourceType::U16;
   else if (ints && k.lo >= -32768 && k.hi <= 32767)
     k.type = SourceType::I16;
   else if (ints && k.lo >= 0 && k.hi <= 65535)

@@ -3,7 +3,8 @@
 values: order by position along the normal (shuffled file names, instance numbers against it),
 spacing from PixelSpacing (rows, columns) and the positions, origin from the first position,
 rescale applied (HU kept as int16, signed and unsigned, masked to BitsStored), float32 for a
-fractional slope, MONOCHROME1 inverted, RLE compression decoded, a choice among two series, and
+fractional slope, MONOCHROME1 inverted, RLE, JPEG lossless, JPEG-LS and JPEG 2000 decoded, a
+choice among two series, and
 refusals: uneven spacing (with the gap), gantry tilt, two slices at one place, no choice. No patient
 identifier appears in anything peakcast prints.
 
@@ -108,6 +109,22 @@ def monochrome1(tmp):
           "MONOCHROME1 inverted over the series' range, kept uint8")
 
 
+def compressed(tmp):
+    """JPEG lossless, JPEG-LS and JPEG 2000 (gdcmconv, Debian's libgdcm-tools, compresses the
+    pydicom-written slices): decoded to the very values; an unsigned MR series stays uint16."""
+    stored = stack_of(3, 32, 40, lambda k, j, i: (37 * (1280 * k + 40 * j + i)) % 4000, np.uint16)
+    plain = os.path.join(tmp, "mr")
+    write_series(plain, stored, positions=[(0, 0, k) for k in range(3)], series_uid="1.2.3.4.8", modality="MR",
+                 bits_stored=12)
+    for flag, name in (("-J", "JPEG lossless"), ("-L", "JPEG-LS"), ("-K", "JPEG 2000")):
+        folder = os.path.join(tmp, "mr" + flag)
+        os.makedirs(folder)
+        for f in os.listdir(plain):
+            subprocess.run(["gdcmconv", flag, os.path.join(plain, f), os.path.join(folder, f)], check=True)
+        a, meta = convert(folder, tmp)
+        check(meta["dtype"] == "uint16" and np.array_equal(a, stored), f"{name}: the values exactly, uint16")
+
+
 def refusals(tmp):
     one = np.zeros((2, 2), np.int16)
     for name, positions, words in [
@@ -144,6 +161,7 @@ def main():
         check("values: HU" in r.stdout and "series: CT 'Chest 2.5'" in r.stdout, "info names the series and HU")
         signed_and_float(tmp)
         monochrome1(tmp)
+        compressed(tmp)
         refusals(tmp)
         two_series(tmp)
     said = "\n".join(printed)
