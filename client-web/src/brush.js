@@ -203,14 +203,21 @@ export class Brush extends EventTarget {
     this.sync.added();
   }
 
+  // Strokes as the user made them: a drag is one (undo takes it back whole), whatever dabs it
+  // painted along its path; dabs from before the first drag (restored from the session) one each.
+  #strokeCount(n) {
+    const starts = [...new Set(this.#drags.filter((s) => s < n))];
+    return (starts.length ? starts[0] : n) + starts.length;
+  }
+
   #redrawSoon() { if (!this.#raf) this.#raf = requestAnimationFrame(() => { this.#raf = 0; this.#redraw(); }); }
 
   #redraw() {
     const m = this.model, s = this.controls.settings, ui = this.ui;
     ui.previewBox.hidden = !m || !this.caps;
     this.preview.draw(m, s.channel);
-    const n = m?.strokes.length ?? 0, sync = this.sync;
-    const count = `${strokes(n)} · ${sync.pending} pending`;
+    const n = m?.strokes.length ?? 0, sync = this.sync, shown = this.#strokeCount(n);
+    const count = `${strokes(shown)}${shown !== n ? ` (${n} dabs)` : ''} · ${sync.pending} pending`;
     const status = !m ? 'no ray texture' : [`${m.mapping} ${m.width}×${m.height}`, count,
       sync.queued ? `${sync.queued} queued` : '', sync.failed ? `refused: ${sync.failed}` : '', this.note].filter(Boolean).join(' · ');
     ui.status.textContent = status;

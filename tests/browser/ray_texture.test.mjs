@@ -197,6 +197,8 @@ test('a stroke changes the image inside its disk only; undo and clear restore it
   const n = await page.evaluate(() => window.peakcast.brush.model.strokes.length);
   assert.ok(n >= 3, `a 120-px drag at radius ${disk.rx.toFixed(0)} px painted ${n} strokes`);
   await settled(page, n);
+  // The status counts the drag as one stroke (what one undo takes back), its dabs beside it.
+  assert.match(await page.textContent('#rt-status'), new RegExp(`· 1 stroke \\(${n} dabs\\) · 0 pending`));
   await finalPng(page);
   await snap(page, 'D');
   assert.ok((await compare(page, 'A', 'D')).changed > 1000);
