@@ -214,7 +214,7 @@ export class Brush extends EventTarget {
 
   #redraw() {
     const m = this.model, s = this.controls.settings, ui = this.ui;
-    ui.previewBox.hidden = !m || !this.caps;
+    ui.previewBox.hidden = !m || !this.caps || !m.strokes.length;  // nothing painted: nothing to preview
     this.preview.draw(m, s.channel);
     const n = m?.strokes.length ?? 0, sync = this.sync, shown = this.#strokeCount(n);
     const count = `${strokes(shown)}${shown !== n ? ` (${n} dabs)` : ''} · ${sync.pending} pending`;

@@ -171,6 +171,11 @@ test('a stroke changes the image inside its disk only; undo and clear restore it
       texel: window.peakcast.brush.model.at(Math.floor(s.center[0] * window.peakcast.brush.model.width), Math.floor(s.center[1] * window.peakcast.brush.model.height), 'termination') };
   }, strokes[0].stroke);
   assert.ok(preview.visible);
+  // Clear of the colour bar and its labels (the bar's left edge is 30 px from the view's right, its
+  // top label right-aligned 4 px left of it, about 30 px wide) and of the corner buttons.
+  const [pbox, view] = await page.evaluate(() => [document.querySelector('#rt-preview-box'), document.querySelector('#view')]
+    .map((e) => e.getBoundingClientRect().toJSON()));
+  assert.ok(pbox.right <= view.right - 70 && pbox.top >= view.top + 36, `the preview at ${JSON.stringify(pbox)}`);
   assert.equal(preview.texel, 0);
   assert.ok(preview.centre[0] < 20 && preview.corner[0] > 240, `preview ${JSON.stringify(preview)}`);
   assert.match(await page.textContent('#rt-legend'), /1 stroke · 0 pending/);
@@ -207,6 +212,7 @@ test('a stroke changes the image inside its disk only; undo and clear restore it
   await finalPng(page);
   await snap(page, 'E');
   assert.equal((await compare(page, 'A', 'E')).changed, 0, 'clear did not restore the image');
+  assert.ok(await page.isHidden('#rt-preview-box'), 'the preview goes with the last stroke');
   const corner = await page.evaluate(() => [...document.querySelector('#rt-preview').getContext('2d').getImageData(64, 50, 1, 1).data]);
   assert.ok(corner[0] > 240, 'the preview still shows a stroke after clear');
   assert.deepEqual(page.errors, []);
