@@ -75,6 +75,20 @@ test('the first picture has a derived TF, and peak finding without a peak warns'
   await waitFinal(page, { afterFrames: n + 1, current: true });
   await page.waitForSelector('#warning:not([hidden])', { timeout: 20000 });
   assert.match(await page.textContent('#warning'), /no opacity peak/);
+  // The stats, the warning and the probe's readout never lie over each other, at 800x600 too.
+  const frame = await page.locator('#frame').boundingBox();
+  await page.mouse.move(frame.x + frame.width / 2, frame.y + frame.height / 2);
+  await page.waitForSelector('#probe-readout:not([hidden])');
+  for (const size of [null, { width: 800, height: 600 }]) {
+    if (size) await page.setViewportSize(size);
+    const rects = await page.$$eval('#stats, #warning, #probe-readout', (els) => els.map((e) => e.getBoundingClientRect().toJSON()));
+    for (let i = 0; i < rects.length; i++)
+      for (let j = i + 1; j < rects.length; j++) {
+        const [a, b] = [rects[i], rects[j]];
+        const overlap = a.left < b.right && b.left < a.right && a.top < b.bottom && b.top < a.bottom;
+        assert.ok(!overlap && a.width > 0 && b.width > 0, `overlays ${i} and ${j} collide at ${JSON.stringify(size)}: ${JSON.stringify(rects)}`);
+      }
+  }
   await screenshot(page, 'peaks_without_a_peak');
   // Back to postclassification: the warning goes.
   n = await frameCount(page);
