@@ -90,6 +90,15 @@ test('the first picture has a derived TF, and peak finding without a peak warns'
       }
   }
   await screenshot(page, 'peaks_without_a_peak');
+  // A volume with a long name stays inside the panel.
+  const inside = await page.evaluate(() => {
+    const s = document.querySelector('#volume-select');
+    s.add(new Option('a volume with a very long name, as an upload or a DICOM series description has it '.repeat(3)));
+    s.selectedIndex = s.options.length - 1;
+    const r = s.getBoundingClientRect(), p = document.querySelector('#panel').getBoundingClientRect();
+    return r.right <= p.right + 0.5 && r.left >= p.left;
+  });
+  assert.ok(inside, 'the volume menu overflows the panel');
   // Back to postclassification: the warning goes.
   n = await frameCount(page);
   await page.selectOption('select[name=classification]', 'post');
