@@ -1,6 +1,7 @@
 // A volume file dropped on the view is uploaded (POST /api/volumes), opened, and stays in the
 // volume menu; a file the server cannot read shows its reason.
 import assert from 'node:assert/strict';
+import { spawnSync } from 'node:child_process';
 import { mkdtempSync, readFileSync, rmSync } from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
@@ -138,4 +139,37 @@ test('lengths show in the volume\'s unit: scale bar, probe, measure, crop box, s
   assert.deepEqual(page.errors, []);
   await screenshot(page, 'units');
   await page.close();
+});
+
+test('a dropped ZIP of a DICOM series opens as the series, in Hounsfield units', async () => {
+  const dir = mkdtempSync(path.join(os.tmpdir(), 'peakcast-dicom-zip-'));
+  const made = spawnSync('/usr/bin/python3', ['-c', `
+import sys, os, zipfile, numpy as np
+sys.path.insert(0, ${JSON.stringify(path.join(ROOT, 'tests/unit'))})
+from dicom_fixtures import write_series
+d = sys.argv[1]
+k, j, i = np.meshgrid(np.arange(5), np.arange(12), np.arange(10), indexing='ij')
+write_series(os.path.join(d, 's'), (24 + 100 * k + j + i).astype(np.int16), positions=[(0, 0, 1.5 * z) for z in range(5)],
+             series_uid='1.2.3.8.1', description='Head', intercept=-1024, spacing=(0.5, 0.5))
+with zipfile.ZipFile(os.path.join(d, 'head.zip'), 'w', zipfile.ZIP_DEFLATED) as z:
+    for f in sorted(os.listdir(os.path.join(d, 's'))):
+        z.write(os.path.join(d, 's', f), 'series/' + f)
+`, dir]);
+  assert.equal(made.status, 0, String(made.stderr));
+  try {
+    const page = await openClient(browser, server.url);
+    await waitFinal(page);
+    const first = await page.evaluate(() => window.peakcast.app.volumeInfo.id);
+    await drop(page, 'head.zip', readFileSync(path.join(dir, 'head.zip')));
+    await page.waitForFunction((id) => window.peakcast.app.volumeInfo?.id !== id, first, { timeout: 30000 });
+    const info = await page.evaluate(() => window.peakcast.app.volumeInfo);
+    assert.ok(info.uploaded && info.name === 'head.zip', JSON.stringify(info));
+    assert.deepEqual([info.dims, info.spacing, info.range, info.value_unit, info.modality, info.dtype],
+      [[10, 12, 5], [0.5, 0.5, 1.5], [-1000, -580], 'HU', 'CT', 'int16']);
+    await waitFinal(page);
+    assert.deepEqual(page.errors, []);
+    await page.close();
+  } finally {
+    rmSync(dir, { recursive: true, force: true });
+  }
 });
