@@ -179,6 +179,11 @@ bool is_dicom_folder(const fs::path& dir) {
        it.increment(ec)) {
     if (!it->is_regular_file(ec) || it->path().filename().string().front() == '.') continue;
     ++looked;
+    try {
+      file_roots::check(it->path());  // a link out of the data directories is not looked into
+    } catch (const VolumeError&) {
+      continue;
+    }
     char mark[4] = {};
     FILE* f = std::fopen(it->path().c_str(), "rb");
     if (!f) continue;

@@ -23,6 +23,15 @@ def ct_stack():
     return (1024 + 200 * k + 10 * j + i - 500).astype(np.int16)  # HU -500 .. 577 after the intercept -1024
 
 
+def make_links(root, outside):
+    """A folder of the data directory whose slices are links to a series outside it."""
+    write_series(os.path.join(outside, "secret"), ct_stack()[:2], positions=[(0, 0, k) for k in range(2)],
+                 series_uid="1.2.3.6.9", description="Outside")
+    os.makedirs(os.path.join(root, "leak"))
+    for f in os.listdir(os.path.join(outside, "secret")):
+        os.symlink(os.path.join(outside, "secret", f), os.path.join(root, "leak", f))
+
+
 def make_data(root):
     write_series(os.path.join(root, "chest"), ct_stack(), positions=[(0, 0, 2.0 * k) for k in range(6)],
                  series_uid="1.2.3.6.1", description="Chest 2.0", intercept=-1024, spacing=(0.5, 0.5))
@@ -50,8 +59,10 @@ def no_identifiers(texts):
 
 
 def test_series_listed_rendered_uploaded_and_anonymous():
-    with tempfile.TemporaryDirectory() as data, tempfile.TemporaryDirectory() as up:
+    with tempfile.TemporaryDirectory() as data, tempfile.TemporaryDirectory() as up, \
+            tempfile.TemporaryDirectory() as outside:
         make_data(data)
+        make_links(data, outside)
         with serve("--data", data, "--upload-dir", up, "--upload-budget-mib", "4") as s:
             said = []
             status, _, body = http(s, "/api/files?dir=")
@@ -63,6 +74,14 @@ def test_series_listed_rendered_uploaded_and_anonymous():
             assert chest["description"] == "Chest 2.0" and chest["dims"] == [8, 8, 6], chest
             assert entries["two#Bone"]["path"] == "two#1.2.3.6.3", entries.keys()
             assert entries["two#Soft tissue"]["path"] == "two#1.2.3.6.2", entries.keys()
+            # Slices that are links out of the data directories: not listed as a series, not read.
+            assert entries.get("leak", {}).get("format") != "dicom", entries.get("leak")
+            for vol in ("leak", "leak#1.2.3.6.9"):
+                status, _, body = render(s, vol)
+                said.append((f"render {vol}", body))
+                assert status == 404 and b"Outside" not in body, (vol, status, body[:300])
+            status, _, body = render(s, "leak#1.2.3.6.9")
+            assert b"outside the data directories" in body, body[:300]
             for vol in ("chest", "two#1.2.3.6.3", "two#Soft tissue"):
                 status, _, body = render(s, vol)
                 said.append((f"render {vol}", body))
