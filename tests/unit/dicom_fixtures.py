@@ -14,7 +14,7 @@ PATIENT_ID = "PID-77310452"
 
 def write_slice(path, pixels, *, series_uid, description="", modality="CT", position=(0, 0, 0),
                 orientation=(1, 0, 0, 0, 1, 0), spacing=(1.0, 1.0), slope=1, intercept=0, bits_stored=None,
-                photometric="MONOCHROME2", instance=1, rle=False):
+                photometric="MONOCHROME2", instance=1, rle=False, extra=None):
     """One slice: pixels[row, column], uint8/uint16/int16."""
     meta = FileMetaDataset()
     meta.MediaStorageSOPClassUID = CTImageStorage
@@ -42,6 +42,8 @@ def write_slice(path, pixels, *, series_uid, description="", modality="CT", posi
     ds.HighBit = ds.BitsStored - 1
     ds.PixelRepresentation = 1 if pixels.dtype.kind == "i" else 0
     ds.RescaleSlope, ds.RescaleIntercept = slope, intercept
+    for key, value in (extra or {}).items():  # a header that says otherwise than the pixels (refusals)
+        setattr(ds, key, value)
     ds.PixelData = np.ascontiguousarray(pixels).astype(pixels.dtype.newbyteorder("<")).tobytes()
     if rle:
         ds.compress(RLELossless)

@@ -135,6 +135,14 @@ def refusals(tmp):
         folder = os.path.join(tmp, name)
         write_series(folder, [one] * len(positions), positions=positions, series_uid="1.2.3.9")
         refused(folder, *words)
+    for name, pixels, extra, words in [
+        ("wide", np.zeros((2, 2), np.uint32), {}, ("32 bits a pixel", "8 and 16")),
+        ("colour", one, {"SamplesPerPixel": 3}, ("holds colour (3 samples a pixel)",)),
+        ("frames", one, {"NumberOfFrames": 2}, ("multi-frame file (2 frames)",)),
+    ]:
+        folder = os.path.join(tmp, name)
+        write_series(folder, [pixels] * 2, positions=[(0, 0, 0), (0, 0, 1)], series_uid="1.2.3.10", extra=extra)
+        refused(folder, *words)
 
 
 def two_series(tmp):
