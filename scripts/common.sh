@@ -12,7 +12,7 @@ PEAKCAST_BUILD_PACKAGES=(
   libepoxy-dev libegl-dev libegl-mesa0 libgl1-mesa-dri libgl-dev
   libopenimageio-dev libturbojpeg0-dev libboost1.74-dev
   nlohmann-json3-dev libglm-dev libcli11-dev libspdlog-dev zlib1g-dev libhwy-dev
-  libavcodec-dev libavutil-dev libswscale-dev libblosc-dev libzstd-dev libbz2-dev
+  libavcodec-dev libavformat-dev libavutil-dev libswscale-dev libblosc-dev libzstd-dev libbz2-dev
   libgdcm-dev libzip-dev
 )
 # What the built server needs at run time and nothing more: the container's runtime stage
@@ -20,7 +20,7 @@ PEAKCAST_BUILD_PACKAGES=(
 PEAKCAST_RUNTIME_PACKAGES=(
   libepoxy0 libegl1 libopengl0 libegl-mesa0 libgl1-mesa-dri libopenimageio2.4 libturbojpeg0
   libspdlog1.10 libfmt9 zlib1g libhwy1
-  libavcodec59 libavutil57 libswscale6 libblosc1 libzstd1 libbz2-1.0 libgdcm3.0 libzip4
+  libavcodec59 libavformat59 libavutil57 libswscale6 libblosc1 libzstd1 libbz2-1.0 libgdcm3.0 libzip4
 )
 # The README's commands: building plus the scripts' own tools.
 PEAKCAST_PACKAGES=("${PEAKCAST_BUILD_PACKAGES[@]}" git python3 python3-jsonschema python3-websockets python3-pil)

@@ -1,9 +1,12 @@
 #!/usr/bin/env python3
-"""An orbit around a volume, written as numbered PNGs (orbit_000.png, ...), ready for a video tool:
+"""An orbit around a volume, made by the server (POST /api/movie): a video file, or with --out a
+folder of numbered PNGs (orbit_000.png, ...), ready for a video tool of one's own:
+    python3 orbit.py --url http://localhost:8080 --volume heptane_151 --frames 36 --movie orbit.mp4
     python3 orbit.py --url http://localhost:8080 --volume heptane_151 --frames 36 --out orbit/"""
 import argparse
-import math
 import os
+import tempfile
+import zipfile
 
 import peakcast
 
@@ -15,24 +18,31 @@ def main():
     ap.add_argument("--volume", required=True, help="a volume id (see Client.volumes())")
     ap.add_argument("--frames", type=int, default=36)
     ap.add_argument("--size", type=int, default=512)
-    ap.add_argument("--out", default="orbit")
+    ap.add_argument("--degrees", type=float, default=360)
+    ap.add_argument("--movie", help="a .mp4, .webm or .zip (of PNGs) to write")
+    ap.add_argument("--out", help="a folder for one PNG a frame")
     a = ap.parse_args()
     client = peakcast.Client(a.url, token=a.token)
-    info = client.volume(a.volume)
-    # The box from the info: centre, and a distance that frames it (VTK's ResetCamera).
-    box = [(n - 1) * s for n, s in zip(info["dims"], info["spacing"])]
-    center = [o + b / 2 for o, b in zip(info["origin"], box)]
-    distance = math.dist(box, (0, 0, 0)) / 2 / math.sin(math.radians(15))
-    os.makedirs(a.out, exist_ok=True)
-    for i in range(a.frames):
-        angle = 2 * math.pi * i / a.frames
-        eye = [center[0] + distance * math.sin(angle), center[1] + distance * 0.35, center[2] + distance * math.cos(angle)]
-        scene = {"volume": a.volume, "image": {"width": a.size, "height": a.size},
-                 "camera": {"eye": eye, "center": center, "up": [0, 1, 0]},
-                 "render": {"classification": "peaks", "shading": True}}
-        path = os.path.join(a.out, f"orbit_{i:03d}.png")
-        client.render_png(scene, path)
-        print(path)
+    # The server's default camera (a three-quarter view that frames the box, as VTK's), turned
+    # about its view up through its focal point, the box's centre.
+    scene = {"volume": a.volume, "image": {"width": a.size, "height": a.size},
+             "render": {"classification": "peaks", "shading": True}}
+    orbit = {"degrees": a.degrees}
+    if a.movie:
+        info = client.movie(scene, a.movie, orbit=orbit, frames=a.frames)
+        print(f"{a.movie}: {info.frames} frames, {info.bytes} bytes ({info.encoder})")
+    if a.out or not a.movie:
+        out = a.out or "orbit"
+        os.makedirs(out, exist_ok=True)
+        with tempfile.TemporaryDirectory() as tmp:
+            pngs = os.path.join(tmp, "frames.zip")
+            client.movie(scene, pngs, orbit=orbit, frames=a.frames, format="png-zip")
+            with zipfile.ZipFile(pngs) as z:
+                for i, name in enumerate(sorted(z.namelist())):
+                    path = os.path.join(out, f"orbit_{i:03d}.png")
+                    with open(path, "wb") as f:
+                        f.write(z.read(name))
+                    print(path)
 
 
 if __name__ == "__main__":

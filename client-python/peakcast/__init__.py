@@ -11,6 +11,7 @@ and origin are given in x, y, z order, as in scene files. Only the standard libr
 """
 from .client import Client, ServerError
 from .image import Image, RenderInfo
+from .movie import MovieInfo
 
-__all__ = ["Client", "ServerError", "Image", "RenderInfo"]
+__all__ = ["Client", "ServerError", "Image", "RenderInfo", "MovieInfo"]
 __version__ = "0.1.0"

@@ -104,6 +104,21 @@ class Transport:
                 self._drop()
             return checked(r.status, header_lists(r.getheaders()), data)
 
+    def stream(self, method, path, body=None, headers=None):
+        """A response read as it arrives, on a connection of its own: (headers, an iterator of its
+        body's pieces). A refusal raises ServerError before any piece; a body the server cut short
+        (an error after its header) raises ConnectionError when the iterator reaches the cut."""
+        conn = self.new_connection()
+        try:
+            conn.request(method, self.base + path, body=body, headers=self.headers(headers))
+            r = conn.getresponse()
+            if r.status != 200:
+                checked(r.status, header_lists(r.getheaders()), r.read())
+        except BaseException:
+            conn.close()
+            raise
+        return header_lists(r.getheaders()), _pieces(conn, r)
+
     def upload(self, target, body, length, rewind):
         """POST with Expect: 100-continue on a connection of its own: a refusal (size, budget, rate,
         token) arrives before the body is sent, as with curl. `rewind()` before each retry."""
@@ -134,6 +149,23 @@ class Transport:
             return checked(r.status, header_lists(r.getheaders()), r.read())
         finally:
             conn.close()
+
+
+def _pieces(conn, r):
+    got = 0
+    try:
+        while True:
+            try:
+                piece = r.read1(_CHUNK)
+            except http.client.IncompleteRead as e:
+                raise ConnectionError(f"the server ended the response after {got + len(e.partial)} bytes, before its "
+                                      "end (its log says why)") from None
+            if not piece:
+                return
+            got += len(piece)
+            yield piece
+    finally:
+        conn.close()
 
 
 def header_lists(pairs):

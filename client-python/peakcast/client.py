@@ -8,6 +8,7 @@ import numpy as np
 from ._http import ServerError, Transport  # noqa: F401 (ServerError: peakcast.ServerError)
 from ._png import decode_png
 from .image import Image, RenderInfo
+from .movie import MovieInfo, movie_body, rgb_frames
 
 # The voxel types the server keeps (numpy dtype -> the server's name).
 _DTYPES = {np.dtype(np.uint8): "uint8", np.dtype(np.int8): "int8", np.dtype(np.uint16): "uint16",
@@ -176,6 +177,36 @@ class Client:
         answer = json.loads(body)
         self.last_tf_source = answer["tf_source"]
         return answer["tf"]
+
+    def movie(self, scene, path, orbit=None, keys=None, frames=60, fps=30, format=None, quality=None):
+        """Renders a movie on the server and writes it to `path` as it streams in; returns a
+        MovieInfo. The camera follows `orbit` ({"axis": [x, y, z], "degrees": d}: about the focal
+        point; axis default the view up, degrees 360) or `keys` (a list of {"camera", "tf", "time"},
+        each optional, spread evenly over the frames and interpolated). `format` "mp4" (H.264),
+        "webm" (VP9), "png-zip" (lossless frames) or "rgb" (the frames' bytes one after the
+        other); default from the path's suffix (.webm, .zip, .rgb), else mp4. `quality` 10..100
+        as a JPEG's (default 90)."""
+        if format is None:
+            suffix = os.path.splitext(str(path))[1].lower()
+            format = {".webm": "webm", ".zip": "png-zip", ".rgb": "rgb"}.get(suffix, "mp4")
+        headers, pieces = self._movie(scene, orbit, keys, frames, fps, format, quality)
+        size = 0
+        with open(path, "wb") as f:
+            for piece in pieces:
+                f.write(piece)
+                size += len(piece)
+        return MovieInfo(headers, size)
+
+    def movie_frames(self, scene, orbit=None, keys=None, frames=60, quality=None):
+        """The frames of a movie (as `movie` makes it) as Images (height, width, 3) uint8, each
+        yielded as soon as the server has drawn it, exactly the stills of their cameras: a camera
+        path without a loop in Python. Stop iterating (or close the iterator) to end the movie."""
+        headers, pieces = self._movie(scene, orbit, keys, frames, 30, "rgb", quality)
+        return rgb_frames(headers, pieces)
+
+    def _movie(self, scene, orbit, keys, frames, fps, fmt, quality):
+        body = scene_json(movie_body(scene, orbit, keys, frames, fps, fmt, quality))
+        return self._http.stream("POST", "/api/movie", body, {"Content-Type": "application/json"})
 
     def render_png(self, scene, path):
         """Renders a scene and writes the PNG the server encodes to `path`; returns its RenderInfo."""

@@ -69,7 +69,7 @@ void HttpSession::on_read(beast::error_code ec) {
           self->write(std::move(res));
         });
       },
-      cancelled);
+      cancelled, [self, cancelled] { return self->open_stream(cancelled); });
   if (pending_) watch_for_close(cancelled);
 }
 

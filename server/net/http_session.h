@@ -4,11 +4,13 @@
 
 #include <atomic>
 #include <chrono>
+#include <deque>
 #include <memory>
 #include <optional>
 
 #include "net/app_context.h"
 #include "net/beast.h"
+#include "net/response_stream.h"
 #include "net/rest_routes.h"
 
 namespace peakcast::net {
@@ -32,6 +34,12 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   bool origin_allowed(const Request& req) const;
   bool host_allowed(const Request& req);  // false: refused (403 forbidden_host), answered here
   void watch_for_close(std::shared_ptr<std::atomic<bool>> cancelled);
+  // A response written as it is made (http_stream.cpp): the request's ResponseStream.
+  class Stream;
+  std::shared_ptr<ResponseStream> open_stream(std::shared_ptr<std::atomic<bool>> cancelled);
+  void stream_begin(StreamHeader header);
+  void stream_pump();
+  void stream_failed(beast::error_code ec);
 
   beast::tcp_stream stream_;
   beast::flat_buffer buffer_;
@@ -48,6 +56,19 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   bool deadline_passed_ = false;
   std::shared_ptr<ConnectionSlot> slot_;
   bool pending_ = false;  // a request is being answered (on the strand)
+  // The streamed response (on the strand): its header and serializer, what waits to be written
+  // (`last`: the end; `abort`: close without it), whether a write is under way.
+  struct StreamItem {
+    std::string bytes;
+    bool last = false, abort = false;
+  };
+  std::optional<StreamHeader> stream_head_;
+  std::optional<http::response_serializer<http::empty_body>> stream_serializer_;
+  std::deque<StreamItem> stream_queue_;
+  std::vector<std::function<void()>> stream_drained_;
+  std::shared_ptr<std::atomic<size_t>> stream_queued_;
+  std::shared_ptr<std::atomic<bool>> stream_cancelled_;
+  bool stream_writing_ = false, stream_chunked_ = true, stream_dead_ = false;
 };
 
 }  // namespace peakcast::net

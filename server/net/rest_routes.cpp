@@ -1,6 +1,7 @@
 #include "net/rest_routes.h"
 #include "net/rest_still.h"
 #include "net/rest_slice.h"
+#include "net/rest_movie.h"
 
 #include <cstdio>
 #include <cstring>
@@ -181,6 +182,19 @@ void list_files(AppContext& app, const Request& req, std::function<void(Response
   });
 }
 
+// POST /api/render: a still (net/rest_still.h), unless the method is wrong or the server stops.
+void render_route(AppContext& app, const Request& req, std::function<void(Response)> send,
+                  std::shared_ptr<std::atomic<bool>> cancelled) {
+  if (req.method() != http::verb::post)
+    return send(error_response(req, http::status::method_not_allowed, "bad_request", "POST a scene"));
+  if (app.stopping.load()) {
+    auto res = error_response(req, http::status::service_unavailable, "shutting_down", "the server is shutting down");
+    res.set(http::field::retry_after, std::to_string(limits::kStillRetryAfter.count()));
+    return send(std::move(res));
+  }
+  render_still(app, req, std::move(send), std::move(cancelled));
+}
+
 // GET /api/health: open to all (docs/security.md, "Not covered").
 Response health(AppContext& app, const Request& req) {
   const bool stopping = app.stopping.load();
@@ -225,7 +239,7 @@ Response error_response(const Request& req, http::status status, const std::stri
 }
 
 void handle_request(AppContext& app, Request req, std::function<void(Response)> send,
-                    std::shared_ptr<std::atomic<bool>> cancelled) {
+                    std::shared_ptr<std::atomic<bool>> cancelled, OpenStream open_stream) {
   const std::string path = path_of(std::string(req.target()));
   const bool api = path.rfind("/api/", 0) == 0 || path == "/metrics";
   const Principal who =
@@ -236,16 +250,8 @@ void handle_request(AppContext& app, Request req, std::function<void(Response)> 
     res.set(http::field::www_authenticate, "Bearer");
     return send(std::move(res));
   }
-  if (path == "/api/render") {
-    if (req.method() != http::verb::post)
-      return send(error_response(req, http::status::method_not_allowed, "bad_request", "POST a scene"));
-    if (app.stopping.load()) {
-      auto res = error_response(req, http::status::service_unavailable, "shutting_down", "the server is shutting down");
-      res.set(http::field::retry_after, std::to_string(limits::kStillRetryAfter.count()));
-      return send(std::move(res));
-    }
-    return render_still(app, req, std::move(send), std::move(cancelled));
-  }
+  if (path == "/api/render") return render_route(app, req, std::move(send), std::move(cancelled));
+  if (path == "/api/movie") return movie(app, req, std::move(send), std::move(cancelled), std::move(open_stream));
   if (path == "/api/probe") {
     if (req.method() != http::verb::post)
       return send(

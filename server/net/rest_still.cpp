@@ -17,23 +17,12 @@ namespace {
 // Answers 422 when the still's estimated samples exceed the server's cost cap; true when it did.
 bool refused_for_cost(AppContext& app, const Request& req, const ResolvedScene& scene,
                       const std::function<void(Response)>& send) {
-  // The cost cap: a still whose estimated samples exceed it would hold the render thread for
-  // minutes; refused before it queues, naming the limit.
-  const double cost = estimated_still_samples(scene);
-  if (cost > app.config.max_still_samples) {
-    count(app, "render", http::status::unprocessable_entity);
-    app.metrics.add("peakcast_stills_total", "outcome=\"refused_cost\"", 1);
-    char text[256];
-    std::snprintf(text, sizeof text,
-                  "this still needs about %.3g samples (%d x %d pixels x %.0f samples per ray); the server's limit "
-                  "max_still_samples is %.3g: use a smaller image or a larger render.step",
-                  cost, scene.scene.width, scene.scene.height, estimated_samples_per_ray(scene),
-                  app.config.max_still_samples);
-    auto res = error_response(req, http::status::unprocessable_entity, "too_costly", text);
-    send(std::move(res));
-    return true;
-  }
-  return false;
+  const std::string why = still_cost_refusal(app, scene);
+  if (why.empty()) return false;
+  count(app, "render", http::status::unprocessable_entity);
+  app.metrics.add("peakcast_stills_total", "outcome=\"refused_cost\"", 1);
+  send(error_response(req, http::status::unprocessable_entity, "too_costly", why));
+  return true;
 }
 
 // Reads the image format (?format=, else the Accept header) and ?quality= into the job; false when it
@@ -198,6 +187,20 @@ void depth_still(AppContext& app, const Request& req, Scene scene, std::function
 }
 
 }  // namespace
+
+// The cost cap: a still whose estimated samples exceed it would hold the render thread for
+// minutes; refused before it queues, naming the limit.
+std::string still_cost_refusal(const AppContext& app, const ResolvedScene& scene) {
+  const double cost = estimated_still_samples(scene);
+  if (cost <= app.config.max_still_samples) return "";
+  char text[256];
+  std::snprintf(text, sizeof text,
+                "this still needs about %.3g samples (%d x %d pixels x %.0f samples per ray); the server's limit "
+                "max_still_samples is %.3g: use a smaller image or a larger render.step",
+                cost, scene.scene.width, scene.scene.height, estimated_samples_per_ray(scene),
+                app.config.max_still_samples);
+  return text;
+}
 
 std::string without_volume_path(const VolumeEntry& entry, std::string message) {
   const std::string from = entry.path.string();
