@@ -183,7 +183,8 @@ class VideoMovieWriter final : public MovieWriter {
 bool movie_format_available(MovieFormat f) {
   if (f == MovieFormat::PngZip || f == MovieFormat::Rgb) return true;
   const char* name = f == MovieFormat::Mp4 ? "libx264" : "libvpx-vp9";
-  return avcodec_find_encoder_by_name(name) && av_guess_format(f == MovieFormat::Mp4 ? "mp4" : "webm", nullptr, nullptr);
+  return avcodec_find_encoder_by_name(name) &&
+         av_guess_format(f == MovieFormat::Mp4 ? "mp4" : "webm", nullptr, nullptr);
 }
 
 std::unique_ptr<MovieWriter> open_video_movie_writer(const MovieSettings& s) {

@@ -17,7 +17,7 @@ enum class MovieFormat { Mp4, Webm, PngZip, Rgb };
 
 std::optional<MovieFormat> movie_format_from_name(std::string_view name);  // "mp4", "webm", "png-zip", "rgb"
 const char* to_string(MovieFormat f);
-const char* content_type(MovieFormat f);  // video/mp4, video/webm, application/zip, application/octet-stream
+const char* content_type(MovieFormat f);    // video/mp4, video/webm, application/zip, application/octet-stream
 const char* file_extension(MovieFormat f);  // mp4, webm, zip, rgb
 // Whether this build writes the format (mp4 and webm need libavformat).
 bool movie_format_available(MovieFormat f);

@@ -12,7 +12,8 @@ class HttpSession::Stream final : public ResponseStream {
       : s_(std::move(s)), queued_(std::move(queued)) {}
 
   void begin(StreamHeader header) override {
-    asio::post(s_->stream_.get_executor(), [s = s_, h = std::move(header)]() mutable { s->stream_begin(std::move(h)); });
+    asio::post(s_->stream_.get_executor(),
+               [s = s_, h = std::move(header)]() mutable { s->stream_begin(std::move(h)); });
   }
   void write(std::string bytes) override {
     if (bytes.empty()) return;  // an empty chunk would end the body
@@ -59,11 +60,12 @@ void HttpSession::stream_begin(StreamHeader header) {
   stream_serializer_.emplace(*stream_head_);
   stream_writing_ = true;
   stream_.expires_after(limits::kHttpWriteTimeout);
-  http::async_write_header(stream_, *stream_serializer_, [self = shared_from_this()](beast::error_code ec, std::size_t) {
-    self->stream_writing_ = false;
-    if (ec) return self->stream_failed(ec);
-    self->stream_pump();
-  });
+  http::async_write_header(stream_, *stream_serializer_,
+                           [self = shared_from_this()](beast::error_code ec, std::size_t) {
+                             self->stream_writing_ = false;
+                             if (ec) return self->stream_failed(ec);
+                             self->stream_pump();
+                           });
 }
 
 void HttpSession::stream_pump() {

@@ -19,8 +19,8 @@ class ResponseStream {
   virtual ~ResponseStream() = default;
   virtual void begin(StreamHeader header) = 0;  // once, first; the request's send() is not called after
   virtual void write(std::string bytes) = 0;
-  virtual void end() = 0;    // the body is whole (the last chunk)
-  virtual void abort() = 0;  // an error after the header: the connection closes without the last chunk
+  virtual void end() = 0;                   // the body is whole (the last chunk)
+  virtual void abort() = 0;                 // an error after the header: the connection closes without the last chunk
   virtual size_t queued_bytes() const = 0;  // given to write() and not yet on the socket
   // Called (on the strand) once what is queued has been written, or at once when nothing is; or
   // when the connection failed (the client went away: the request's `cancelled` is set first).

@@ -50,7 +50,7 @@ ResolvedScene resolve_for(const Scene& scene, const FrameVolume& v) {
 // once), encoded in order as they come back (on the encode pool), the file's bytes streamed.
 struct Movie : std::enable_shared_from_this<Movie> {
   Movie(AppContext& a, MovieRequest r, std::vector<Scene> f, bool fin)
-      : app(a), request(std::move(r)), frames(std::move(f)), finest(fin), retry(a.loader.get_executor()) {}
+      : app(a), request(std::move(r)), frames(std::move(f)), finest(fin) {}
 
   AppContext& app;
   MovieRequest request;
@@ -60,7 +60,6 @@ struct Movie : std::enable_shared_from_this<Movie> {
   std::unique_ptr<encode::MovieWriter> writer;
   std::shared_ptr<ResponseStream> stream;
   std::shared_ptr<std::atomic<bool>> cancelled;
-  asio::steady_timer retry;
   std::chrono::steady_clock::time_point started = std::chrono::steady_clock::now();
   std::mutex m;
   int next_submit = 0, next_write = 0, in_flight = 0;
@@ -116,10 +115,10 @@ struct Movie : std::enable_shared_from_this<Movie> {
     job.done = [self = shared_from_this(), i](StillResult r) { self->on_frame(i, std::move(r)); };
     if (app.render.submit_still(std::move(job))) return;
     if (app.stopping.load()) return finish_with_error("the server is shutting down");
-    // The still queue is full (other scripts' stills): this frame waits its turn, never fails.
-    std::lock_guard lock(m);
-    retry.expires_after(kQueueFullRetry);
-    retry.async_wait([self = shared_from_this(), i](const boost::system::error_code& ec) {
+    // The still queue is full (other scripts' stills): this frame waits its turn, never fails. A
+    // timer of its own: both frames in flight may wait at once.
+    auto timer = std::make_shared<asio::steady_timer>(app.loader.get_executor(), kQueueFullRetry);
+    timer->async_wait([self = shared_from_this(), i, timer](const boost::system::error_code& ec) {
       if (!ec) self->submit(i);
     });
   }
@@ -161,8 +160,12 @@ struct Movie : std::enable_shared_from_this<Movie> {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     const char* outcome = error.empty() ? "ok" : cancelled->load() ? "cancelled" : "failed";
     app.metrics.add("peakcast_movies_total", std::string("outcome=\"") + outcome + "\"", 1);
-    log::info("movie", {{"volume", request.scene.volume}, {"frames", next_write}, {"of", frames.size()},
-                        {"format", encode::to_string(request.format)}, {"seconds", seconds}, {"error", error}});
+    log::info("movie", {{"volume", request.scene.volume},
+                        {"frames", next_write},
+                        {"of", frames.size()},
+                        {"format", encode::to_string(request.format)},
+                        {"seconds", seconds},
+                        {"error", error}});
     if (error.empty()) return stream->end();
     stream->abort();
   }
@@ -215,14 +218,16 @@ void movie(AppContext& app, const Request& req, std::function<void(Response)> se
   };
   if (req.method() != http::verb::post)
     return refuse(req, http::status::method_not_allowed, "bad_request", "POST a scene with \"path\"");
-  if (app.stopping.load()) return refuse(req, http::status::service_unavailable, "shutting_down", "the server is shutting down");
+  if (app.stopping.load())
+    return refuse(req, http::status::service_unavailable, "shutting_down", "the server is shutting down");
   MovieRequest m;
   try {
     m = parse_movie_text(req.body());
     const bool video = m.format == encode::MovieFormat::Mp4 || m.format == encode::MovieFormat::Webm;
     if (video && (m.scene.width % 2 || m.scene.height % 2))
-      throw SceneError("image: an " + std::string(encode::to_string(m.format)) + " movie needs an even width and height (" +
-                       "4:2:0 video), not " + std::to_string(m.scene.width) + "x" + std::to_string(m.scene.height));
+      throw SceneError("image: an " + std::string(encode::to_string(m.format)) +
+                       " movie needs an even width and height (" + "4:2:0 video), not " +
+                       std::to_string(m.scene.width) + "x" + std::to_string(m.scene.height));
   } catch (const SceneError& e) {
     return refuse(req, http::status::bad_request, "bad_scene", e.what());
   }
@@ -233,48 +238,48 @@ void movie(AppContext& app, const Request& req, std::function<void(Response)> se
     return refuse(req, http::status::bad_request, "bad_request", "resolution must be full or held");
   auto stream = open_stream ? open_stream() : nullptr;  // on this strand, before anything is posted
   if (!stream) return refuse(req, http::status::internal_server_error, "internal", "this connection cannot stream");
-  asio::post(app.loader, [&app, req, m = std::move(m), finest = resolution != "held", send, cancelled,
-                          stream]() mutable {
-    auto refuse = [&](const Request& r, http::status status, const char* code, const std::string& message) {
-      refuse_movie(app, r, send, status, code, message);
-    };
-    try {
-      m.scene.render.ray_texture = load_ray_texture_png(m.scene.render.ray_texture, app.png_locator());
-      FrameVolume v = frame_volume(app, m.scene, finest);
-      const ResolvedScene first = resolve_for(m.scene, v);
-      if (const std::string why = still_cost_refusal(app, first); !why.empty())
-        return refuse(req, http::status::unprocessable_entity, "too_costly", why);
-      std::vector<Scene> frames = movie_frames(m, first);
-      for (Scene& s : frames) {
-        if (const std::string why = time_refusal(s.time, v.entry->volume->time_points); !why.empty())
-          throw SceneError(why);
-        if (!s.tf) s.tf = first.tf, s.opacity_unit = first.tf.opacity_unit;  // derived once, not per frame
-        validate_camera(*s.camera);
-      }
-      const double most = double(m.scene.width) * m.scene.height * 3.0 * double(frames.size()) + 1e6;
-      if (m.format == encode::MovieFormat::PngZip && most > 4.0e9)
-        return refuse(req, http::status::unprocessable_entity, "too_large",
-                      "a png-zip movie stays under 4 GB: this one could take " + std::to_string(int(most / 1e9)) +
-                          " GB; use mp4 or webm, or fewer or smaller frames");
-      auto mv = std::make_shared<Movie>(app, std::move(m), std::move(frames), finest);
-      mv->volume = std::move(v);
-      mv->writer = encode::open_movie_writer(
-          {mv->request.format, mv->request.scene.width, mv->request.scene.height, mv->request.fps, mv->request.quality});
-      mv->stream = stream;
-      mv->cancelled = cancelled;
-      count(app, "movie", http::status::ok);
-      stream->begin(movie_header(req, *mv, first));
-      mv->pump();
-    } catch (const SceneError& e) {
-      refuse(req, http::status::bad_request, "bad_scene", e.what());
-    } catch (const std::invalid_argument& e) {  // a camera the path turned degenerate
-      refuse(req, http::status::bad_request, "bad_scene", e.what());
-    } catch (const VolumeError& e) {
-      refuse(req, http::status::not_found, "volume_error", e.what());
-    } catch (const std::exception& e) {
-      refuse(req, http::status::internal_server_error, "internal", e.what());
-    }
-  });
+  asio::post(
+      app.loader, [&app, req, m = std::move(m), finest = resolution != "held", send, cancelled, stream]() mutable {
+        auto refuse = [&](const Request& r, http::status status, const char* code, const std::string& message) {
+          refuse_movie(app, r, send, status, code, message);
+        };
+        try {
+          m.scene.render.ray_texture = load_ray_texture_png(m.scene.render.ray_texture, app.png_locator());
+          FrameVolume v = frame_volume(app, m.scene, finest);
+          const ResolvedScene first = resolve_for(m.scene, v);
+          if (const std::string why = still_cost_refusal(app, first); !why.empty())
+            return refuse(req, http::status::unprocessable_entity, "too_costly", why);
+          std::vector<Scene> frames = movie_frames(m, first);
+          for (Scene& s : frames) {
+            if (const std::string why = time_refusal(s.time, v.entry->volume->time_points); !why.empty())
+              throw SceneError(why);
+            if (!s.tf) s.tf = first.tf, s.opacity_unit = first.tf.opacity_unit;  // derived once, not per frame
+            validate_camera(*s.camera);
+          }
+          const double most = double(m.scene.width) * m.scene.height * 3.0 * double(frames.size()) + 1e6;
+          if (m.format == encode::MovieFormat::PngZip && most > 4.0e9)
+            return refuse(req, http::status::unprocessable_entity, "too_large",
+                          "a png-zip movie stays under 4 GB: this one could take " + std::to_string(int(most / 1e9)) +
+                              " GB; use mp4 or webm, or fewer or smaller frames");
+          auto mv = std::make_shared<Movie>(app, std::move(m), std::move(frames), finest);
+          mv->volume = std::move(v);
+          mv->writer = encode::open_movie_writer({mv->request.format, mv->request.scene.width, mv->request.scene.height,
+                                                  mv->request.fps, mv->request.quality});
+          mv->stream = stream;
+          mv->cancelled = cancelled;
+          count(app, "movie", http::status::ok);
+          stream->begin(movie_header(req, *mv, first));
+          mv->pump();
+        } catch (const SceneError& e) {
+          refuse(req, http::status::bad_request, "bad_scene", e.what());
+        } catch (const std::invalid_argument& e) {  // a camera the path turned degenerate
+          refuse(req, http::status::bad_request, "bad_scene", e.what());
+        } catch (const VolumeError& e) {
+          refuse(req, http::status::not_found, "volume_error", e.what());
+        } catch (const std::exception& e) {
+          refuse(req, http::status::internal_server_error, "internal", e.what());
+        }
+      });
 }
 
 }  // namespace peakcast::net

@@ -99,7 +99,8 @@ std::vector<Scene> orbit_frames(const MovieRequest& m, const ResolvedScene& firs
 }  // namespace
 
 MovieRequest parse_movie(const json& body) {
-  if (!body.is_object()) fail("movie", "the body must be a JSON object: a scene plus \"path\", \"frames\", \"fps\", \"format\"");
+  if (!body.is_object())
+    fail("movie", "the body must be a JSON object: a scene plus \"path\", \"frames\", \"fps\", \"format\"");
   MovieRequest m;
   json scene = body;
   for (const char* k : {"path", "frames", "fps", "format", "quality"}) scene.erase(k);
@@ -145,7 +146,8 @@ TransferFunction blend_tfs(const TransferFunction& a, const TransferFunction& b,
 
 Camera blend_cameras(const Camera& a, const Camera& b, double u) {
   if (a.orthographic != b.orthographic)
-    throw SceneError("path.keys: one key's camera is perspective and the next's orthographic: a path keeps one projection");
+    throw SceneError(
+        "path.keys: one key's camera is perspective and the next's orthographic: a path keeps one projection");
   Camera c = a;
   c.center = a.center + (b.center - a.center) * u;
   const glm::dvec3 da = a.eye - a.center, db = b.eye - b.center;

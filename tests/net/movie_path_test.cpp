@@ -89,9 +89,11 @@ TEST(MoviePath, AnOrbitOfWholeTurnsLoopsAndAPartOneEndsWhereItSays) {
 
 TEST(MoviePath, KeysAreReachedExactlyAndBlendedBetween) {
   const json key0 = {{"camera", {{"eye", {0, 0, 10}}, {"center", {0, 0, 0}}}},
-                     {"tf", {{"points", {{0, 1, 0, 0, 0}, {1, 1, 0, 0, 1}}}}}, {"time", 0}};
+                     {"tf", {{"points", {{0, 1, 0, 0, 0}, {1, 1, 0, 0, 1}}}}},
+                     {"time", 0}};
   const json key1 = {{"camera", {{"eye", {40, 0, 0}}, {"center", {2, 0, 0}}, {"fov_y", 50}}},
-                     {"tf", {{"points", {{0.5, 0, 0, 1, 0.5}}}, {"opacity_unit", 4}}}, {"time", 3}};
+                     {"tf", {{"points", {{0.5, 0, 0, 1, 0.5}}}, {"opacity_unit", 4}}},
+                     {"time", 3}};
   MovieRequest m = parse_movie({{"volume", "v"}, {"frames", 5}, {"path", {{"keys", {key0, key1}}}}});
   const std::vector<Scene> f = movie_frames(m, first_of(m));
   ASSERT_EQ(f.size(), 5u);
@@ -115,14 +117,15 @@ TEST(MoviePath, KeysAreReachedExactlyAndBlendedBetween) {
   EXPECT_DOUBLE_EQ(tf.points[1].value, 0.5);
   EXPECT_DOUBLE_EQ(tf.points[1].r, 0.5);  // red 1 against blue 0 at 0.5
   EXPECT_DOUBLE_EQ(tf.points[1].b, 0.5);
-  EXPECT_DOUBLE_EQ(tf.points[1].a, 0.5);  // 0.5 and 0.5
+  EXPECT_DOUBLE_EQ(tf.points[1].a, 0.5);   // 0.5 and 0.5
   EXPECT_DOUBLE_EQ(tf.opacity_unit, 3.0);  // 2 (the volume's, first_of) to 4
   EXPECT_DOUBLE_EQ(f[2].opacity_unit, 3.0);
 }
 
 TEST(MoviePath, KeysKeepWhatTheyLeaveOutAndRefuseAMixedProjection) {
   const json cam = {{"eye", {0, 0, 5}}, {"center", {0, 0, 0}}};
-  MovieRequest m = parse_movie({{"volume", "v"}, {"frames", 3}, {"path", {{"keys", {json::object(), {{"camera", cam}}}}}}});
+  MovieRequest m =
+      parse_movie({{"volume", "v"}, {"frames", 3}, {"path", {{"keys", {json::object(), {{"camera", cam}}}}}}});
   std::vector<Scene> f = movie_frames(m, first_of(m));
   EXPECT_EQ(f[0].camera->eye, glm::dvec3(0, 0, 10));  // key 0 without a camera: the scene's
   EXPECT_NEAR(glm::length(f[2].camera->eye - glm::dvec3(0, 0, 5)), 0, 1e-9);

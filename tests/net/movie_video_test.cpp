@@ -60,8 +60,8 @@ std::vector<std::vector<uint8_t>> decode_file(const std::string& file, int& w, i
     while (avcodec_receive_frame(ctx, frame) == 0) {
       w = frame->width;
       h = frame->height;
-      sws = sws_getCachedContext(sws, w, h, AVPixelFormat(frame->format), w, h, AV_PIX_FMT_RGB24, SWS_BILINEAR,
-                                 nullptr, nullptr, nullptr);
+      sws = sws_getCachedContext(sws, w, h, AVPixelFormat(frame->format), w, h, AV_PIX_FMT_RGB24, SWS_BILINEAR, nullptr,
+                                 nullptr, nullptr);
       const int* bt709 = sws_getCoefficients(SWS_CS_ITU709);
       sws_setColorspaceDetails(sws, bt709, 0, bt709, 1, 0, 1 << 16, 1 << 16);
       std::vector<uint8_t> rgb(size_t(w) * h * 3 + 64);

@@ -166,8 +166,21 @@ def test_a_client_that_hangs_up_ends_the_movie():
     assert still(dict(SCENE, camera=CAMERA)).shape == (64, 96, 3), "the server serves on"
 
 
+def test_a_full_still_queue_makes_frames_wait_not_fail():
+    global SERVER
+    main, body = SERVER, dict(SCENE, camera=CAMERA, path={"orbit": {"degrees": 60}}, frames=6, format="png-zip")
+    with Server("--max-queued-stills", "1") as SERVER:  # the movie's second frame finds the queue full
+        try:
+            status, _, data = post_movie(body)
+            assert status == 200, data[:300]
+            assert len(frames_of(data)[0]) == 6
+        finally:
+            SERVER = main
+
+
 if __name__ == "__main__":
     with Server() as SERVER:
         run_tests([test_an_orbit_is_the_stills_of_its_cameras, test_keys_reach_each_key_and_blend_between,
                    test_the_movie_streams_while_it_is_made, test_video_containers_are_what_they_say,
-                   test_refusals_are_clear_and_cost_nothing, test_a_client_that_hangs_up_ends_the_movie])
+                   test_refusals_are_clear_and_cost_nothing, test_a_client_that_hangs_up_ends_the_movie,
+                   test_a_full_still_queue_makes_frames_wait_not_fail])
