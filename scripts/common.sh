@@ -27,10 +27,11 @@ PEAKCAST_PACKAGES=("${PEAKCAST_BUILD_PACKAGES[@]}" git python3 python3-jsonschem
 # Only the test command needs these (browser tests: Debian's chromium + playwright-core;
 # clang-format: the unit label's format check; the container label: buildah and debootstrap;
 # manifests: python3-yaml; the mpi label: OpenMPI and IceT from ParaView's packages;
-# python3-zarr reads and writes the OME-Zarr the tests check; python3-pydicom writes the DICOM
+# python3-zarr reads and writes the OME-Zarr the tests check; python3-dask: a dask array the
+# client's chunked upload sends; python3-pydicom writes the DICOM
 # series the tests read, libgdcm-tools' gdcmconv compresses them to JPEG, JPEG-LS and JPEG 2000).
 PEAKCAST_TEST_PACKAGES=(chromium nodejs python3-vtk9 xvfb xauth clang clang-format libclang-rt-14-dev
-  buildah debootstrap python3-yaml python3-pytest python3-numpy python3-venv python3-zarr python3-pydicom libgdcm-tools
+  buildah debootstrap python3-yaml python3-pytest python3-numpy python3-venv python3-zarr python3-dask python3-pydicom libgdcm-tools
   libopenmpi-dev openmpi-bin paraview-dev)
 # paraview-dev brings IceT (the mpi label). --no-install-recommends matters for it: with
 # recommends it pulls python3-paraview, which removes python3-vtk9.

@@ -9,9 +9,10 @@
 Arrays are indexed [z, y, x] (the numpy imaging convention of tifffile, zarr and napari); spacing
 and origin are given in x, y, z order, as in scene files. Only the standard library and numpy.
 """
+from .chunked import UploadInterrupted
 from .client import Client, ServerError
 from .image import Image, RenderInfo
 from .movie import MovieInfo
 
-__all__ = ["Client", "ServerError", "Image", "RenderInfo", "MovieInfo"]
+__all__ = ["Client", "ServerError", "Image", "RenderInfo", "MovieInfo", "UploadInterrupted"]
 __version__ = "0.1.0"

@@ -8,6 +8,7 @@ import numpy as np
 from ._http import ServerError, Transport  # noqa: F401 (ServerError: peakcast.ServerError)
 from ._png import decode_png
 from .image import Image, RenderInfo
+from .chunked import upload_chunked
 from .movie import MovieInfo, movie_body, rgb_frames
 
 # The voxel types the server keeps (numpy dtype -> the server's name).
@@ -109,6 +110,18 @@ class Client:
         if origin is not None:
             query["origin"] = ",".join(repr(float(o)) for o in _three(origin, "origin"))
         return self._upload(query, memoryview(a).cast("B"), a.nbytes)["id"]
+
+    def upload_chunked(self, array, spacing=None, name=None, origin=None, units=None, chunk=None, progress=None,
+                       resume=None):
+        """Sends an array larger than memory, or than the server's budget, chunk by chunk; returns
+        its volume id once the server has built its pyramid. `array` is anything indexed [z, y, x]
+        with `.shape`, `.dtype` and slicing (a zarr or dask array, a numpy memmap): one chunk at a
+        time is read from it. `chunk` (z, y, x): the array's own chunks by default, at most 16 MiB.
+        `progress(done, total, stage)` hears each chunk ("sending"), the build ("building") and the
+        end ("done"). An interruption raises peakcast.UploadInterrupted; `resume=e.upload_id` with
+        the same array sends only the chunks that did not arrive. The volume opens at the finest
+        level of its pyramid that the server's memory budget holds."""
+        return upload_chunked(self._http, array, spacing, name, origin, units, chunk, progress, resume)
 
     def delete(self, volume_id):
         """Removes an uploaded volume (a volume from the server's data directories cannot be)."""

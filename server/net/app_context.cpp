@@ -33,6 +33,7 @@ AppContext::AppContext(ServerConfig c)
       residency(config.gpu_budget_bytes),
       volumes(config.data_dirs, residency, load_options(config), config.volume_loader),
       uploads(config.upload_dir, config.upload_limits, volumes),
+      chunked_uploads(uploads, config.memory_budget_bytes),
       render(residency, metrics,
              RenderServiceOptions{config.shader_dir, config.encode_threads,
                                   SchedulerOptions{config.max_queued_stills, config.still_band_samples,

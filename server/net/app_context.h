@@ -18,6 +18,7 @@
 #include "net/http_text.h"
 #include "net/static_files.h"
 #include "net/session_registry.h"
+#include "session/chunked_upload.h"
 #include "session/residency.h"
 #include "session/limits.h"
 #include "session/render_service.h"
@@ -71,6 +72,7 @@ struct AppContext {
   Residency residency;  // the GPU budget's one owner
   VolumeStore volumes;
   UploadStore uploads;
+  ChunkedUploads chunked_uploads;  // arrays sent chunk by chunk (session/chunked_upload.h)
   RenderService render;
   SessionRegistry ws_sessions;
   ConnectionCounter connections{limits::kMaxConnections, limits::kMaxConnectionsPerAddress};
@@ -92,6 +94,10 @@ struct AppContext {
   // A time series' next time points, read ahead of a viewer stepping through them: apart from the
   // loader, so that a volume asked for waits for no read-ahead.
   boost::asio::thread_pool ahead{1};
+  // Chunked uploads: their chunks written to disk, and their pyramids built (minutes for
+  // gigabytes), each apart from the io threads and every other pool.
+  boost::asio::thread_pool chunk_writes{1};
+  boost::asio::thread_pool builds{1};
 
   explicit AppContext(ServerConfig c);
   // Ray-texture PNGs, like volumes given by path, are read only from inside the data directories.

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "net/connection_slot.h"
+#include "net/rest_uploads.h"
 #include "net/ws_session.h"
 
 namespace peakcast::net {
@@ -36,8 +37,13 @@ void HttpSession::on_header(beast::error_code ec) {
   const auto& req = parser_->get();
   if (!host_allowed(req)) return;
   if (req.method() == http::verb::post && path_of(std::string(req.target())) == "/api/volumes") return start_upload();
-  if (auto n = parser_->content_length(); n && *n > limits::kMaxHttpBodyBytes) return on_read(http::error::body_limit);
-  parser_->body_limit(limits::kMaxHttpBodyBytes);  // a chunked body is counted as it arrives
+  // A chunk of a chunked upload (PUT /api/uploads/{id}/chunks/...) may hold more than a request.
+  const bool chunk =
+      req.method() == http::verb::put && path_of(std::string(req.target())).rfind("/api/uploads/", 0) == 0;
+  const uint64_t most = chunk ? uint64_t(ChunkedUploads::kMaxChunkBytes) : limits::kMaxHttpBodyBytes;
+  if (auto n = parser_->content_length(); n && *n > most) return on_read(http::error::body_limit);
+  parser_->body_limit(most);                                    // a chunked body is counted as it arrives
+  if (chunk) stream_.expires_after(limits::kHttpWriteTimeout);  // 16 MiB from a slow link takes a while
   http::async_read(stream_, buffer_, *parser_,
                    [self = shared_from_this()](beast::error_code ec, std::size_t) { self->on_read(ec); });
 }
@@ -60,16 +66,26 @@ void HttpSession::on_read(beast::error_code ec) {
   auto self = shared_from_this();
   auto cancelled = std::make_shared<std::atomic<bool>>(false);
   pending_ = true;
-  handle_request(
-      app_, std::move(req),
-      [self](Response res) {
-        asio::post(self->stream_.get_executor(), [self, res = std::move(res)]() mutable {
-          self->pending_ = false;
-          self->stream_.socket().cancel();  // ends watch_for_close's wait before the write starts
-          self->write(std::move(res));
-        });
-      },
-      cancelled, [self, cancelled] { return self->open_stream(cancelled); });
+  auto send = [self](Response res) {
+    asio::post(self->stream_.get_executor(), [self, res = std::move(res)]() mutable {
+      self->pending_ = false;
+      self->stream_.socket().cancel();  // ends watch_for_close's wait before the write starts
+      self->write(std::move(res));
+    });
+  };
+  if (path_of(std::string(req.target())).rfind("/api/uploads", 0) == 0) {  // chunked uploads: by the client's address
+    if (!origin_allowed(req)) {  // as POST /api/volumes: no other web page writes into the upload folder
+      app_.metrics.add("peakcast_http_requests_total", "route=\"uploads\",code=\"403\"", 1);
+      return send(error_response(req, http::status::forbidden, "forbidden_origin",
+                                 "Origin " + std::string(req[http::field::origin]) + " is not allowed"));
+    }
+    beast::error_code ec;
+    const std::string client = stream_.socket().remote_endpoint(ec).address().to_string();
+    uploads_route(app_, std::move(req), client, std::move(send));
+  } else {
+    handle_request(app_, std::move(req), std::move(send), cancelled,
+                   [self, cancelled] { return self->open_stream(cancelled); });
+  }
   if (pending_) watch_for_close(cancelled);
 }
 

@@ -105,7 +105,7 @@ UploadStore::UploadStore(fs::path dir, UploadLimits limits, VolumeStore& volumes
 }
 
 int64_t UploadStore::used_locked() const {
-  int64_t used = 0;
+  int64_t used = reserved_;
   for (const auto& [_, k] : kept_) used += k.bytes;
   return used;
 }
@@ -120,10 +120,9 @@ void UploadStore::release(Ticket&) {
   --receiving_;
 }
 
-std::unique_ptr<UploadStore::Ticket> UploadStore::begin(const std::string& client, std::optional<int64_t> length) {
-  if (!enabled())
-    throw UploadRefusal(403, "uploads_off", "this server takes no uploads: start it with --upload-dir DIR");
-  std::lock_guard lock(m_);
+// `client`'s bucket, refilled for the time since its last request, holding a token (the caller
+// takes it once the upload is accepted), or 429 saying when the next comes (m_ held).
+UploadStore::Bucket& UploadStore::rate_locked(const std::string& client) {
   const auto now = std::chrono::steady_clock::now();
   if (rate_.size() > 4096) rate_.clear();  // forget idle clients now and then: a full bucket each
   auto it = rate_.try_emplace(client, Bucket{limits_.burst, now}).first;
@@ -140,23 +139,57 @@ std::unique_ptr<UploadStore::Ticket> UploadStore::begin(const std::string& clien
                             " a minute (--uploads-per-minute); the next may start in " + std::to_string(wait_s) + " s",
                         wait_s);
   }
-  if (receiving_ >= limits_.max_concurrent)
-    throw UploadRefusal(503, "uploads_busy",
-                        std::to_string(limits_.max_concurrent) + " uploads are being received now; retry later", 5);
+  return b;
+}
+
+// 413 past the per-upload limit, 507 past what the budget leaves (m_ held).
+void UploadStore::check_size_locked(int64_t length) const {
   const int64_t used = used_locked();
-  if (length && *length > limits_.max_bytes)
+  if (length > limits_.max_bytes)
     throw UploadRefusal(413, "too_large",
                         "an upload may hold " + std::to_string(limits_.max_bytes >> 20) +
-                            " MiB (--max-upload-mib); this one has " + std::to_string(*length) + " bytes");
-  if (length && used + *length > limits_.budget_bytes)
+                            " MiB (--max-upload-mib); this one has " + std::to_string(length) + " bytes");
+  if (used + length > limits_.budget_bytes)
     throw UploadRefusal(507, "upload_budget",
                         "the uploads kept hold " + std::to_string(used >> 20) + " of " +
                             std::to_string(limits_.budget_bytes >> 20) +
                             " MiB (--upload-budget-mib): delete some first");
+}
+
+std::unique_ptr<UploadStore::Ticket> UploadStore::begin(const std::string& client, std::optional<int64_t> length) {
+  if (!enabled())
+    throw UploadRefusal(403, "uploads_off", "this server takes no uploads: start it with --upload-dir DIR");
+  std::lock_guard lock(m_);
+  Bucket& b = rate_locked(client);
+  if (receiving_ >= limits_.max_concurrent)
+    throw UploadRefusal(503, "uploads_busy",
+                        std::to_string(limits_.max_concurrent) + " uploads are being received now; retry later", 5);
+  if (length) check_size_locked(*length);
   b.tokens -= 1;
   ++receiving_;
   const std::string id = new_id();
   return std::unique_ptr<Ticket>(new Ticket(*this, id, incoming_ / (id + ".body")));
+}
+
+std::string UploadStore::reserve(const std::string& client, int64_t bytes, int64_t budget_bytes) {
+  if (!enabled())
+    throw UploadRefusal(403, "uploads_off", "this server takes no uploads: start it with --upload-dir DIR");
+  std::lock_guard lock(m_);
+  Bucket& b = rate_locked(client);
+  check_size_locked(bytes);
+  if (used_locked() + budget_bytes > limits_.budget_bytes)
+    throw UploadRefusal(507, "upload_budget",
+                        "this array and the pyramid built from it take about " + std::to_string(budget_bytes >> 20) +
+                            " MiB; with the uploads kept that exceeds " + std::to_string(limits_.budget_bytes >> 20) +
+                            " MiB (--upload-budget-mib)");
+  b.tokens -= 1;
+  reserved_ += budget_bytes;
+  return new_id();
+}
+
+void UploadStore::unreserve(int64_t bytes) {
+  std::lock_guard lock(m_);
+  reserved_ -= bytes;
 }
 
 void UploadStore::check_raw_header(const nlohmann::json& raw, int64_t length) const {
@@ -233,7 +266,8 @@ std::shared_ptr<VolumeEntry> UploadStore::commit(std::unique_ptr<Ticket> t, cons
     throw UploadRefusal(500, "upload_failed", why);
   }
   if (entry->volume) charged = std::max(charged, int64_t(entry->volume->byte_size()));
-  keep(*t, *entry, name, open, charged, params.owner);
+  keep(id, *entry, name, open, charged, params.owner);
+  t->committed_ = true;
   return entry;
 }
 
@@ -282,9 +316,8 @@ LoadOptions UploadStore::charged_load(int64_t file_bytes, int64_t& charged) {
 
 // A registered upload's meta file, then its count: a failure takes it out again, whole (no
 // volume without its files, no files without their meta).
-void UploadStore::keep(Ticket& t, const VolumeEntry& entry, const std::string& name, const fs::path& open,
+void UploadStore::keep(const std::string& id, const VolumeEntry& entry, const std::string& name, const fs::path& open,
                        int64_t charged, const std::string& owner) {
-  const std::string& id = t.id();
   try {
     const nlohmann::json meta = {{"id", id},         {"name", name},   {"file", open.filename().string()},
                                  {"bytes", charged}, {"owner", owner}, {"info", entry.info(false)}};
@@ -296,7 +329,6 @@ void UploadStore::keep(Ticket& t, const VolumeEntry& entry, const std::string& n
     fs::rename(dir_ / (id + ".upload.tmp"), dir_ / (id + kMetaSuffix));
     std::lock_guard lock(m_);
     kept_[id] = Kept{charged, owner};
-    t.committed_ = true;
   } catch (const std::exception& e) {
     volumes_.remove_upload(id);
     remove_files(dir_, id);
@@ -322,6 +354,29 @@ void UploadStore::remove(const std::string& id, const std::optional<std::string>
   }
   volumes_.remove_upload(id);
   remove_files(dir_, id);
+}
+
+std::shared_ptr<VolumeEntry> UploadStore::commit_folder(const std::string& id, const fs::path& folder,
+                                                        const std::string& name, const std::string& owner) {
+  std::error_code ec;
+  const fs::path open = dir_ / (id + folder.extension().string());
+  int64_t bytes = 0;
+  for (const auto& e : fs::recursive_directory_iterator(folder, ec))
+    if (e.is_regular_file(ec)) bytes += int64_t(e.file_size(ec));
+  fs::rename(folder, open, ec);
+  if (ec) {
+    remove_files(dir_, id);
+    throw UploadRefusal(507, "upload_failed", "the upload could not be stored on the server");
+  }
+  std::shared_ptr<VolumeEntry> entry;
+  try {
+    entry = volumes_.add_upload(id, open, name, owner, volumes_.load_options());
+  } catch (const std::exception& e) {
+    remove_files(dir_, id);
+    throw UploadRefusal(422, "bad_volume", std::string("the pyramid built from the chunks did not open: ") + e.what());
+  }
+  keep(id, *entry, name, open, bytes, owner);
+  return entry;
 }
 
 int64_t UploadStore::used_bytes() const {

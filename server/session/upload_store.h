@@ -101,19 +101,35 @@ class UploadStore {
   void remove(const std::string& id, const std::optional<std::string>& as_owner = std::nullopt);
   int64_t used_bytes() const;
 
+  // Chunked uploads (session/chunked_upload.h): a new upload id, `budget_bytes` reserved in the
+  // budget (what the array and its pyramid take) after the checks begin() makes of `bytes` (the
+  // array's voxels) and of the client's rate; unreserve gives it back.
+  std::string reserve(const std::string& client, int64_t bytes, int64_t budget_bytes);
+  void unreserve(int64_t bytes);
+  // Where an upload's files are made before it is whole.
+  std::filesystem::path incoming(const std::string& file) const { return incoming_ / file; }
+  // A folder made in the incoming area (a pyramid) moved into place as upload `id`, read and
+  // kept. UploadRefusal (the files are gone then).
+  std::shared_ptr<VolumeEntry> commit_folder(const std::string& id, const std::filesystem::path& folder,
+                                             const std::string& name, const std::string& owner);
+
  private:
+  struct Bucket;
+  Bucket& rate_locked(const std::string& client);
+  void check_size_locked(int64_t length) const;
   void release(Ticket& t);
   LoadOptions charged_load(int64_t file_bytes, int64_t& charged);
   // A ZIP of a DICOM series: its files into the incoming folder `id`.dcm, within what the budget
   // leaves; returns that folder, `bytes` set to what it holds. `zip` is removed either way.
   std::filesystem::path unzip_series(const std::string& id, const std::filesystem::path& zip, int64_t& bytes);
-  void keep(Ticket& t, const VolumeEntry& entry, const std::string& name, const std::filesystem::path& open,
+  void keep(const std::string& id, const VolumeEntry& entry, const std::string& name, const std::filesystem::path& open,
             int64_t charged, const std::string& owner);
   std::filesystem::path dir_, incoming_;
   UploadLimits limits_;
   VolumeStore& volumes_;
   mutable std::mutex m_;
   int receiving_ = 0;
+  int64_t reserved_ = 0;  // chunked uploads' bytes while they are received and built
   struct Kept {
     int64_t bytes;  // what the budget counts: the file, or the voxels it decodes to when more
     std::string owner;
