@@ -7,7 +7,7 @@ seconds and rates, the server's peak RSS (VmHWM) and the client's, and the still
 
 Usage: scripts/bench_upload.py [--build build] [--gib 2] [--budget-mib 256] [--dir bench-data/upload]
 """
-import argparse, os, pathlib, re, resource, shutil, subprocess, sys, threading, time
+import argparse, os, pathlib, re, shutil, subprocess, sys, threading, time
 
 import numpy as np
 
@@ -16,11 +16,34 @@ sys.path.insert(0, str(ROOT / "client-python"))
 import peakcast  # noqa: E402
 
 
-def vm_hwm_mib(pid):
+def status_mib(pid, field):
     for line in open(f"/proc/{pid}/status"):
-        if line.startswith("VmHWM:"):
+        if line.startswith(field + ":"):
             return int(line.split()[1]) / 1024
     return float("nan")
+
+
+def reset_peak(pid):
+    """VmHWM from now on (the kernel's clear_refs 5); False where it cannot be reset."""
+    try:
+        with open(f"/proc/{pid}/clear_refs", "w") as f:
+            f.write("5")
+        return True
+    except OSError:
+        return False
+
+
+class AnonPeak(threading.Thread):
+    """The client's own memory (RssAnon: the memmap's file pages it maps are not its heap), sampled."""
+
+    def __init__(self):
+        super().__init__(daemon=True)
+        self.peak, self.running = 0.0, True
+
+    def run(self):
+        while self.running:
+            self.peak = max(self.peak, status_mib(os.getpid(), "RssAnon"))
+            time.sleep(0.05)
 
 
 def make_array(path, n):
@@ -45,7 +68,7 @@ def main():
     a = ap.parse_args()
     n = int(round((a.gib * (1 << 30) / 2) ** (1 / 3)))
     a.dir.mkdir(parents=True, exist_ok=True)
-    uploads = a.dir / "uploads"
+    uploads = a.dir.parent / (a.dir.name + "-uploads")  # never inside a --data directory
     shutil.rmtree(uploads, ignore_errors=True)
     array = make_array(a.dir / "big.npy", n)
     cmd = [str(a.build / "server/peakcast"), "serve", "--port", "0", "--data", str(a.dir), "--upload-dir", str(uploads),
@@ -53,11 +76,15 @@ def main():
            "--upload-budget-mib", str(int(a.gib * 1024 * 3)), "--max-still-samples", "1e12"]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     url = None
+    log = []
     for line in proc.stdout:
+        log.append(line)
         m = re.search(r"serving on (http://[\d.]+:\d+)", line)
         if m:
             url = m.group(1)
             break
+    if url is None:
+        raise SystemExit("the server did not start:\n" + "".join(log))
     threading.Thread(target=lambda: [None for _ in proc.stdout], daemon=True).start()
     try:
         c = peakcast.Client(url, timeout=3600)
@@ -65,9 +92,17 @@ def main():
 
         def progress(done, total, stage):
             marks.setdefault(stage, time.perf_counter())
+        c.health()
+        idle = status_mib(proc.pid, "VmRSS")
+        reset_peak(proc.pid)
+        anon = AnonPeak()
+        anon.start()
         t0 = time.perf_counter()
         vid = c.upload_chunked(array, name="big", progress=progress)
         t1 = time.perf_counter()
+        anon.running = False
+        upload_peak = status_mib(proc.pid, "VmHWM")
+        reset_peak(proc.pid)
         sent = marks.get("building", t1) - t0
         info = c.volume(vid)
         scene = {"volume": vid, "image": {"width": 512, "height": 512}}
@@ -83,8 +118,10 @@ def main():
         print("|---|---|")
         print(f"| chunks sent | {sent:.1f} s ({gib * 1024 / sent:.0f} MiB/s) |")
         print(f"| pyramid built | {t1 - t0 - sent:.1f} s ({info['levels']} levels, held at level {info['level']}) |")
-        print(f"| server peak RSS (VmHWM) | {vm_hwm_mib(proc.pid):.0f} MiB |")
-        print(f"| client peak RSS | {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024:.0f} MiB |")
+        print(f"| server RSS idle, before the upload | {idle:.0f} MiB |")
+        print(f"| server peak RSS (VmHWM), upload and build | {upload_peak:.0f} MiB |")
+        print(f"| server peak RSS (VmHWM), the two stills | {status_mib(proc.pid, 'VmHWM'):.0f} MiB |")
+        print(f"| client peak RssAnon (its own memory; the memmap's pages are the file's) | {anon.peak:.0f} MiB |")
         print(f"| still 512², level held | {t_held:.2f} s ({len(held[2])} bytes) |")
         print(f"| still 512², full resolution (bricks: {full.bricks}) | {t_full:.2f} s, mean {full.mean():.1f} |")
         c.delete(vid)
@@ -92,6 +129,7 @@ def main():
         proc.terminate()
         proc.wait(60)
         os.remove(a.dir / "big.npy")
+        shutil.rmtree(uploads, ignore_errors=True)
 
 
 if __name__ == "__main__":

@@ -66,14 +66,15 @@ int render_within_budget(const RenderArgs& a) {
                  (long long)a.memory_budget_mib, r.image.width, r.image.height, double(r.beside_bytes) / 1048576.0);
   const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   std::printf(
-      "wrote %s: %dx%d by %d bricks (ghost %d, largest %.1f MiB; budget %lld MiB for %.1f MiB of voxels), "
-      "statistics %.0f ms, read %.0f ms, render %.0f ms, wall %.0f ms, %s\n",
-      a.out.c_str(), r.image.width, r.image.height, r.bricks, r.ghost, double(r.largest_brick_bytes) / 1048576.0,
-      (long long)a.memory_budget_mib, double(bytes) / 1048576.0, stats.ms, r.read_ms, r.render_ms, wall,
-      b.description().c_str());
+      "wrote %s: %dx%d by %d bricks in %d band%s (ghost %d, largest %.1f MiB; budget %lld MiB for %.1f MiB of "
+      "voxels), statistics %.0f ms, read %.0f ms, render %.0f ms, wall %.0f ms, %s\n",
+      a.out.c_str(), r.image.width, r.image.height, r.bricks, r.tiles, r.tiles == 1 ? "" : "s", r.ghost,
+      double(r.largest_brick_bytes) / 1048576.0, (long long)a.memory_budget_mib, double(bytes) / 1048576.0, stats.ms,
+      r.read_ms, r.render_ms, wall, b.description().c_str());
   if (!a.stats.empty()) {
     const nlohmann::json j = {{"bricks", r.bricks},
                               {"ghost", r.ghost},
+                              {"tiles", r.tiles},
                               {"largest_brick_bytes", r.largest_brick_bytes},
                               {"statistics_bricks", stats.bricks},
                               {"bytes_read", stats.bytes_read + r.bytes_read},

@@ -219,9 +219,26 @@ SequenceStatistics sequence_statistics(const std::string& path, const LoadOption
   return run.take();
 }
 
+int image_tiles(const ResolvedScene& scene, int64_t budget_bytes) {
+  const double row_bytes = 8.0 * double(scene.scene.width) * 4.0 * double(sizeof(float));
+  const double rows = std::max(1.0, std::floor(double(std::max<int64_t>(budget_bytes, 1)) / 4.0 / row_bytes));
+  const int needed = int(std::min<double>(scene.scene.height, std::ceil(double(scene.scene.height) / rows)));
+  return needed <= kMaxImageTiles ? needed : 1;
+}
+
+render::PixelRect image_tile(const ResolvedScene& scene, int t, int tiles) {
+  const int64_t h = scene.scene.height;
+  const int y0 = int(h * t / tiles), y1 = int(h * (t + 1) / tiles);
+  return {0, y0, scene.scene.width, y1 - y0};
+}
+
 SequenceRun::SequenceRun(std::string path, LoadOptions base, std::shared_ptr<const SequenceStatistics> stats,
-                         ResolvedScene scene, int64_t budget_bytes)
-    : path_(std::move(path)), base_(std::move(base)), stats_(std::move(stats)), scene_(std::move(scene)) {
+                         ResolvedScene scene, int64_t budget_bytes, std::optional<render::PixelRect> rect)
+    : path_(std::move(path)),
+      base_(std::move(base)),
+      stats_(std::move(stats)),
+      scene_(std::move(scene)),
+      rect_(rect ? *rect : render::PixelRect{0, 0, scene_.scene.width, scene_.scene.height}) {
   const Index3& dims = stats_->box.dims;
   r_.ghost = brick_ghost(scene_);
   const size_t bpv = voxel_bytes(storage_type(stats_->source));
@@ -229,7 +246,7 @@ SequenceRun::SequenceRun(std::string path, LoadOptions base, std::shared_ptr<con
   // layer, the composite being made, the renderer's own buffers and what the allocator keeps of
   // them. Measured (bench outofcore --size 1024 --budget-mib 256 --image 1024): 130 MiB beyond
   // the two bricks at 1024², eight RGBA float images. The whole volume's two grids stay beside.
-  const int64_t image_bytes = 8 * int64_t(scene_.scene.width) * scene_.scene.height * 4 * int64_t(sizeof(float));
+  const int64_t image_bytes = 8 * int64_t(rect_.w) * rect_.h * 4 * int64_t(sizeof(float));
   const int64_t grid_bytes = 2 * macrocell_count(dims) * kGridCellBytes;
   r_.beside_bytes = image_bytes + grid_bytes;
   const int64_t share = bricks_share(budget_bytes, r_.beside_bytes, r_.budget_too_small);
@@ -239,7 +256,7 @@ SequenceRun::SequenceRun(std::string path, LoadOptions base, std::shared_ptr<con
   const glm::dvec3 eye = (scene_.camera.eye - stats_->box.origin) / stats_->box.spacing;
   const glm::dvec3 dir = glm::normalize((scene_.camera.center - scene_.camera.eye) / stats_->box.spacing);
   order_ = visibility_order(split_, eye, dir, scene_.camera.orthographic);
-  acc_.assign(size_t(scene_.scene.width) * size_t(scene_.scene.height) * 4, 0.f);
+  acc_.assign(size_t(rect_.w) * size_t(rect_.h) * 4, 0.f);
   next_ = read_ahead(order_[0]);
 }
 
@@ -276,7 +293,7 @@ void SequenceRun::step(render::Renderer& renderer) {
   resident->drop_host_voxels();
   render::Brick b = frame_brick(split_.bricks[size_t(order_[i])], stats_->box.dims);
   if (scene_.ray_texture) b.front_opacity = front_;
-  const Image layer = renderer.render_brick(*resident, scene_, b);
+  const Image layer = renderer.render_brick(*resident, scene_, b, nullptr, rect_);
   resident.reset();
   if (scene_.ray_texture) front_ = std::make_shared<const std::vector<float>>(opacity_over(front_.get(), layer));
   acc_ = composite_over({acc_, layer.rgba}, {0, 1});
@@ -285,19 +302,40 @@ void SequenceRun::step(render::Renderer& renderer) {
 
 SequenceResult SequenceRun::take() {
   if (!done()) throw std::logic_error("SequenceRun::take before the last brick");
-  r_.image = finish_composite(acc_, scene_.scene.width, scene_.scene.height, scene_.scene.background);
+  r_.image = finish_composite(acc_, rect_.w, rect_.h, scene_.scene.background);
   return std::move(r_);
+}
+
+void add_tile(SequenceResult& all, SequenceResult tile, const render::PixelRect& rect, const ResolvedScene& scene) {
+  if (all.image.width == 0) all.image = Image(scene.scene.width, scene.scene.height);
+  render::place_tile(all.image, rect, tile.image);
+  all.bricks = tile.bricks;
+  all.ghost = tile.ghost;
+  all.bytes_read += tile.bytes_read;
+  all.largest_brick_bytes = std::max(all.largest_brick_bytes, tile.largest_brick_bytes);
+  all.read_ms += tile.read_ms;
+  all.render_ms += tile.render_ms;
+  all.beside_bytes = std::max(all.beside_bytes, tile.beside_bytes);
+  all.budget_too_small = all.budget_too_small || tile.budget_too_small;
 }
 
 SequenceResult render_sequence(render::Renderer& renderer, const std::string& path, const LoadOptions& base,
                                const SequenceStatistics& stats, const ResolvedScene& scene, int64_t budget_bytes,
                                const std::function<void(double)>& progress) {
-  SequenceRun run(path, base, std::make_shared<const SequenceStatistics>(stats), scene, budget_bytes);
-  while (!run.done()) {
-    run.step(renderer);
-    if (progress) progress(run.progress());
+  const int tiles = image_tiles(scene, budget_bytes);
+  const auto shared = std::make_shared<const SequenceStatistics>(stats);
+  SequenceResult all;
+  for (int t = 0; t < tiles; ++t) {
+    const render::PixelRect rect = image_tile(scene, t, tiles);
+    SequenceRun run(path, base, shared, scene, budget_bytes, rect);
+    while (!run.done()) {
+      run.step(renderer);
+      if (progress) progress((double(t) + run.progress()) / double(tiles));
+    }
+    add_tile(all, run.take(), rect, scene);
   }
-  return run.take();
+  all.tiles = tiles;
+  return all;
 }
 
 }  // namespace peakcast::distributed

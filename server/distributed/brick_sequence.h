@@ -12,6 +12,7 @@
 #include <future>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -82,6 +83,7 @@ SequenceStatistics sequence_statistics(const std::string& path, const LoadOption
 struct SequenceResult {
   Image image;
   int bricks = 0, ghost = 0;
+  int tiles = 1;  // bands of rows drawn one after another, each over every brick (image_tiles)
   int64_t bytes_read = 0;
   int64_t largest_brick_bytes = 0;
   double read_ms = 0.0, render_ms = 0.0;  // reading overlaps rendering: the two add up to more than the wall time
@@ -91,8 +93,24 @@ struct SequenceResult {
   bool budget_too_small = false;
 };
 
+// The bands of rows a still by bricks is drawn in: the fewest whose image buffers (eight RGBA
+// float images of a band: the layers, the composite, the renderer's) take at most a quarter of
+// the budget, so that the bricks keep most of it (a 1024² still under 256 MiB: 2 bands; each band
+// reads every brick again). A budget that would need more than kMaxImageTiles bands (a 512² still
+// under 1 MiB: 128) is drawn in one, and says it held more than the budget (budget_too_small),
+// rather than read its bricks a hundred times: banding is for images whose buffers are up to
+// the budget itself.
+inline constexpr int kMaxImageTiles = 4;
+int image_tiles(const ResolvedScene& scene, int64_t budget_bytes);
+// Band t of `tiles`: rows [t h / tiles, (t + 1) h / tiles).
+render::PixelRect image_tile(const ResolvedScene& scene, int t, int tiles);
+
+// One band's result into the whole still's (its image placed at `rect`, the counts added).
+void add_tile(SequenceResult& all, SequenceResult tile, const render::PixelRect& rect, const ResolvedScene& scene);
+
 // `scene` (resolved against stats.box) drawn by bricks with `renderer`, holding at most two
-// bricks (90% of budget_bytes in all). progress: the share of bricks composited.
+// bricks (90% of budget_bytes in all), in image_tiles bands. progress: the share of bricks
+// composited.
 SequenceResult render_sequence(render::Renderer& renderer, const std::string& path, const LoadOptions& base,
                                const SequenceStatistics& stats, const ResolvedScene& scene, int64_t budget_bytes,
                                const std::function<void(double)>& progress = {});
@@ -101,8 +119,10 @@ SequenceResult render_sequence(render::Renderer& renderer, const std::string& pa
 // meanwhile). A server's render thread steps it between viewers' frames.
 class SequenceRun {
  public:
+  // `rect`: the pixels drawn (a band of image_tiles); default the whole image. take()'s image is
+  // the rect's.
   SequenceRun(std::string path, LoadOptions base, std::shared_ptr<const SequenceStatistics> stats, ResolvedScene scene,
-              int64_t budget_bytes);
+              int64_t budget_bytes, std::optional<render::PixelRect> rect = std::nullopt);
   ~SequenceRun();  // waits for a read in flight
   SequenceRun(const SequenceRun&) = delete;
   SequenceRun& operator=(const SequenceRun&) = delete;
@@ -122,6 +142,7 @@ class SequenceRun {
   LoadOptions base_;
   std::shared_ptr<const SequenceStatistics> stats_;
   ResolvedScene scene_;
+  render::PixelRect rect_;
   KdSplit split_;
   std::vector<int> order_;
   size_t next_brick_ = 0;

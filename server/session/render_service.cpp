@@ -264,22 +264,31 @@ void RenderService::render_brick(Scheduler::Work& w) {
   const FullResolution& full = *sw.job.volume->full;
   try {
     // The first turn opens the sequence (and starts reading its first brick): a still waiting in
-    // the queue holds no voxels.
-    if (!sw.bricks) render::check_bricks_draw(sw.job.scene);  // before the first brick is read
+    // the queue holds no voxels. A band of rows at a time (image_tiles), each over every brick.
+    const int64_t budget = full.brick_budget(int64_t(sw.job.volume->volume->byte_size()));
+    if (!sw.bricks && sw.tile == 0) {
+      render::check_bricks_draw(sw.job.scene);  // before the first brick is read
+      sw.tiles = distributed::image_tiles(sw.job.scene, budget);
+      sw.drawn = std::make_shared<distributed::SequenceResult>();
+    }
+    const render::PixelRect rect = distributed::image_tile(sw.job.scene, sw.tile, sw.tiles);
     if (!sw.bricks)
-      sw.bricks = std::make_shared<distributed::SequenceRun>(
-          full.path.string(), full.options, sw.job.full_statistics, sw.job.scene,
-          full.brick_budget(int64_t(sw.job.volume->volume->byte_size())));
+      sw.bricks = std::make_shared<distributed::SequenceRun>(full.path.string(), full.options, sw.job.full_statistics,
+                                                             sw.job.scene, budget, rect);
     const auto t0 = Clock::now();
     sw.bricks->step(*impl_->backend.renderer);
     const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
     sw.render_ms += ms;
     sw.bands++;
-    still_progress_ = sw.bricks->progress();
-    if (sw.job.progress) sw.job.progress(sw.bricks->progress(), sw.bricks->bricks());
+    still_progress_ = (double(sw.tile) + sw.bricks->progress()) / double(sw.tiles);
+    if (sw.job.progress) sw.job.progress(still_progress_, sw.bricks->bricks());
     metrics_.observe("peakcast_render_ms", "kind=\"still_brick\"", ms);
     if (sw.bricks->done()) {
-      distributed::SequenceResult r = sw.bricks->take();
+      distributed::add_tile(*sw.drawn, sw.bricks->take(), rect, sw.job.scene);
+      sw.bricks.reset();  // no voxels held between bands, nor while the still is encoded
+      if (++sw.tile < sw.tiles) return still_turn_done(w);
+      distributed::SequenceResult& r = *sw.drawn;
+      r.tiles = sw.tiles;
       if (r.budget_too_small) {  // the bricks got half their share: the still held more than the budget
         log::warn("memory budget too small for a full-resolution still's image buffers beside its bricks",
                   {{"width", r.image.width},
@@ -290,7 +299,7 @@ void RenderService::render_brick(Scheduler::Work& w) {
       }
       sw.image = std::move(r.image);
       sw.variant = "bricks";
-      sw.bricks.reset();  // no voxels held while the still is encoded
+      sw.drawn.reset();
       sw.bricks_done = true;
     }
   } catch (const std::exception& e) {

@@ -23,6 +23,7 @@ namespace peakcast {
 namespace distributed {
 struct SequenceStatistics;
 class SequenceRun;
+struct SequenceResult;
 }  // namespace distributed
 
 struct StillResult {
@@ -83,6 +84,10 @@ struct StillWork {
   std::vector<std::string> warnings;  // StillResult::warnings
   // A still of the finest level: one brick per turn instead of a band (job.full_statistics).
   std::shared_ptr<distributed::SequenceRun> bricks;
+  // Its bands of rows (distributed::image_tiles: the image buffers stay within a share of the
+  // budget), the band being drawn and the bands drawn so far.
+  int tile = 0, tiles = 1;
+  std::shared_ptr<distributed::SequenceResult> drawn;
   bool bricks_done = false;
   bool by_bricks() const { return job.full_statistics != nullptr; }
   bool complete() const { return by_bricks() ? bricks_done : next_row >= job.scene.scene.height; }
