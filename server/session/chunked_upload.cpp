@@ -147,13 +147,17 @@ nlohmann::json ChunkedUploads::put(const std::string& id, const std::optional<st
     if (u->state != "receiving")
       throw UploadRefusal(409, "upload_finished", "'" + id + "' is " + u->state + ": it takes no more chunks");
   }
-  const char* src = bytes.data();
-  for (int64_t z = 0; z < box[2]; ++z)
-    for (int64_t y = 0; y < box[1]; ++y, src += row) {
-      const int64_t at = (((lo[2] + z) * s.dims[1] + lo[1] + y) * s.dims[0] + lo[0]) * bpv;
-      if (::pwrite(u->fd, src, size_t(row), off_t(at)) != row)
-        throw UploadRefusal(507, "upload_failed", "a chunk could not be written on the server (disk full?)");
-    }
+  {
+    std::lock_guard io(u->io);
+    if (u->fd < 0) throw UploadRefusal(409, "upload_finished", "'" + id + "' takes no more chunks");
+    const char* src = bytes.data();
+    for (int64_t z = 0; z < box[2]; ++z)
+      for (int64_t y = 0; y < box[1]; ++y, src += row) {
+        const int64_t at = (((lo[2] + z) * s.dims[1] + lo[1] + y) * s.dims[0] + lo[0]) * bpv;
+        if (::pwrite(u->fd, src, size_t(row), off_t(at)) != row)
+          throw UploadRefusal(507, "upload_failed", "a chunk could not be written on the server (disk full?)");
+      }
+  }
   std::lock_guard lock(m_);
   const size_t flat = size_t(index[0] + u->grid[0] * (index[1] + u->grid[1] * index[2]));
   if (!u->received[flat]) ++u->received_count;
@@ -200,8 +204,11 @@ void ChunkedUploads::finish(const std::string& id) {
   std::shared_ptr<Upload> u = find(id, std::nullopt);
   const fs::path zarr = store_.incoming(id + ".zarr");
   try {
-    ::close(u->fd);
-    u->fd = -1;
+    {
+      std::lock_guard io(u->io);  // a chunk being written ends first; none after
+      ::close(u->fd);
+      u->fd = -1;
+    }
     chunked::ZarrWriteOptions options;
     options.pyramid = true;
     options.chunk = 64;
@@ -233,8 +240,11 @@ void ChunkedUploads::remove(const std::string& id, const std::optional<std::stri
 }
 
 void ChunkedUploads::drop(const std::string& id, Upload& u) {
-  if (u.fd >= 0) ::close(u.fd);
-  u.fd = -1;
+  {
+    std::lock_guard io(u.io);
+    if (u.fd >= 0) ::close(u.fd);
+    u.fd = -1;
+  }
   std::error_code ec;
   for (const char* ext : {".raw", ".json"}) fs::remove(store_.incoming(id + ext), ec);
   fs::remove_all(store_.incoming(id + ".zarr"), ec);

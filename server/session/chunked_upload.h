@@ -74,6 +74,9 @@ class ChunkedUploads {
     std::string state = "receiving";  // receiving, building, done, failed
     std::string volume, error;
     std::chrono::steady_clock::time_point last = std::chrono::steady_clock::now();
+    // The chunks' file: written under `io`, closed under it (a chunk racing a finish or a
+    // removal is refused, never written to a closed or reused descriptor). m_ before io.
+    std::mutex io;
     int fd = -1;
   };
   std::shared_ptr<Upload> find(const std::string& id, const std::optional<std::string>& as_owner);
