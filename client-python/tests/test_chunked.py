@@ -171,3 +171,13 @@ def test_another_web_page_cannot_begin_one(small):
         urllib.request.urlopen(req)
     assert e.value.code == 403 and b"forbidden_origin" in e.value.read()
     assert small.files() == []
+
+
+def test_a_finished_upload_takes_no_more_chunks(small):
+    c = peakcast.Client(small.url)
+    vid = c.upload_chunked(np.arange(64, dtype=np.uint8).reshape(4, 4, 4))
+    status, answer = post(small, f"/api/uploads/{vid}/chunks/0/0/0", bytes(64), "PUT")
+    assert status == 409 and answer["error"] == "upload_finished", answer
+    status, answer = post(small, f"/api/uploads/{vid}/finish")
+    assert status == 409 and answer["error"] == "upload_finished", answer
+    c.delete(vid)

@@ -11,43 +11,35 @@
 
 namespace peakcast::encode {
 
+namespace {
+
+// Each format's name, content type and file extension, in one place.
+struct FormatNames {
+  MovieFormat format;
+  const char *name, *content_type, *extension;
+};
+constexpr FormatNames kFormats[] = {{MovieFormat::Mp4, "mp4", "video/mp4", "mp4"},
+                                    {MovieFormat::Webm, "webm", "video/webm", "webm"},
+                                    {MovieFormat::PngZip, "png-zip", "application/zip", "zip"},
+                                    {MovieFormat::Rgb, "rgb", "application/octet-stream", "rgb"}};
+
+const FormatNames& names_of(MovieFormat f) {
+  for (const FormatNames& n : kFormats)
+    if (n.format == f) return n;
+  return kFormats[0];
+}
+
+}  // namespace
+
 std::optional<MovieFormat> movie_format_from_name(std::string_view name) {
-  if (name == "mp4") return MovieFormat::Mp4;
-  if (name == "webm") return MovieFormat::Webm;
-  if (name == "png-zip") return MovieFormat::PngZip;
-  if (name == "rgb") return MovieFormat::Rgb;
+  for (const FormatNames& n : kFormats)
+    if (name == n.name) return n.format;
   return std::nullopt;
 }
 
-const char* to_string(MovieFormat f) {
-  switch (f) {
-    case MovieFormat::Mp4: return "mp4";
-    case MovieFormat::Webm: return "webm";
-    case MovieFormat::PngZip: return "png-zip";
-    case MovieFormat::Rgb: return "rgb";
-  }
-  return "?";
-}
-
-const char* content_type(MovieFormat f) {
-  switch (f) {
-    case MovieFormat::Mp4: return "video/mp4";
-    case MovieFormat::Webm: return "video/webm";
-    case MovieFormat::PngZip: return "application/zip";
-    case MovieFormat::Rgb: return "application/octet-stream";
-  }
-  return "application/octet-stream";
-}
-
-const char* file_extension(MovieFormat f) {
-  switch (f) {
-    case MovieFormat::Mp4: return "mp4";
-    case MovieFormat::Webm: return "webm";
-    case MovieFormat::PngZip: return "zip";
-    case MovieFormat::Rgb: return "rgb";
-  }
-  return "bin";
-}
+const char* to_string(MovieFormat f) { return names_of(f).name; }
+const char* content_type(MovieFormat f) { return names_of(f).content_type; }
+const char* file_extension(MovieFormat f) { return names_of(f).extension; }
 
 std::unique_ptr<MovieWriter> open_movie_writer(const MovieSettings& s) {
   if (s.width < 1 || s.height < 1 || s.fps < 1) throw std::runtime_error("movie: empty frames or no frame rate");

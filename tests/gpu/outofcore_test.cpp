@@ -225,7 +225,7 @@ TEST(OutOfCore, PeakMemoryStaysWithinTheBudget) {
 // against 16 MiB) is drawn in bands of rows, so the budget still holds: the peak stays within
 // the budget as above plus the finished image itself (2.5 MiB with its sample counts), which no
 // band structure avoids. Drawn whole, the buffers left the bricks half their share and the still
-// held more than the budget (issue 47: 1.34x at 1024²): measured 27.9 MiB over the process before,
+// held more than the budget (a 1024² still held 1.34x): measured 27.9 MiB over the process before,
 // against 11.9 MiB in 4 bands.
 TEST(OutOfCore, ALargeImageIsDrawnInBandsWithinTheBudget) {
   if (test::gpu().gl) GTEST_SKIP() << "llvmpipe's textures are host memory";

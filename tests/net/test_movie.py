@@ -131,6 +131,7 @@ def test_refusals_are_clear_and_cost_nothing():
         (dict(SCENE, path={"keys": [{"camera": CAMERA}, {"camera": dict(CAMERA, projection="orthographic",
                                                                       height=100)}]}), 400, "one projection"),
         (dict(SCENE, image={"width": 4096, "height": 4096}, render={"step": 0.01}), 422, "max_still_samples"),
+        (dict(SCENE, image={"width": 2048, "height": 2048}, frames=400, format="png-zip"), 422, "stays under 4 GB"),
     ]
     for body, code, words in cases:
         status, _, answer = post_movie(body)
