@@ -52,7 +52,47 @@ double otsu_threshold(const std::vector<uint64_t>& h, double lo, double hi) {
   return lo + (hi - lo) * double(split) / double(h.size());
 }
 
+namespace {
+
+// The share of the faces' voxels in the bins at and above the one holding t.
+double border_share_above(const std::vector<uint64_t>& border, double lo, double hi, double t) {
+  const size_t split =
+      size_t(std::clamp(std::lround((t - lo) / (hi - lo) * double(border.size())), 0L, long(border.size())));
+  double above = 0, all = 0;
+  for (size_t b = 0; b < border.size(); ++b) {
+    all += double(border[b]);
+    if (b >= split) above += double(border[b]);
+  }
+  return all > 0 ? above / all : 0.0;
+}
+
+TransferFunction derive_upward(const AutoTfInput& in);
+
+}  // namespace
+
 TransferFunction derive_transfer_function(const AutoTfInput& in) {
+  const std::vector<uint64_t>* h = in.histogram;
+  const std::vector<uint64_t>* border = in.border_histogram;
+  if (!h || h->empty() || !border || border->size() != h->size() || !(in.hi > in.lo)) return derive_upward(in);
+  if (border_share_above(*border, in.lo, in.hi, otsu_threshold(*h, in.lo, in.hi)) < kBackgroundAbove)
+    return derive_upward(in);
+  // The background is the upper class: derive the TF of the mirrored values (v -> -v) and mirror
+  // it back, so the opacity rises as the value falls below the threshold.
+  const std::vector<uint64_t> mirrored(h->rbegin(), h->rend());
+  AutoTfInput m = in;
+  m.histogram = &mirrored;
+  m.border_histogram = nullptr;
+  m.lo = -in.hi;
+  m.hi = -in.lo;
+  TransferFunction tf = derive_upward(m);
+  std::reverse(tf.points.begin(), tf.points.end());
+  for (auto& p : tf.points) p.value = -p.value;
+  return tf;
+}
+
+namespace {
+
+TransferFunction derive_upward(const AutoTfInput& in) {
   const double lo = in.lo, hi = in.hi;
   const std::vector<uint64_t>* h = in.histogram;
   double total = 0;
@@ -101,4 +141,5 @@ TransferFunction derive_transfer_function(const AutoTfInput& in) {
   return tf;
 }
 
+}  // namespace
 }  // namespace peakcast

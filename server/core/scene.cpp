@@ -268,7 +268,8 @@ void check_peaks(ResolvedScene& r, double lo, double hi) {
                        std::to_string(lo) + ", " + std::to_string(hi) + "], so no ray crosses one");
 }
 
-ResolvedScene resolve(const Scene& s, const VolumeBox& v, const std::vector<uint64_t>* histogram) {
+ResolvedScene resolve(const Scene& s, const VolumeBox& v, const std::vector<uint64_t>* histogram,
+                      const std::vector<uint64_t>* border) {
   ResolvedScene r;
   r.scene = s;
   for (int a = 0; a < 3; ++a)
@@ -289,6 +290,7 @@ ResolvedScene resolve(const Scene& s, const VolumeBox& v, const std::vector<uint
   } else {
     AutoTfInput in;
     in.histogram = histogram && !histogram->empty() ? histogram : nullptr;
+    in.border_histogram = border && !border->empty() ? border : nullptr;
     in.lo = v.min_value;
     in.hi = v.max_value;
     const glm::dvec3 extent = r.box_max - r.box_min;
@@ -325,10 +327,12 @@ ResolvedScene resolve_scene(const Scene& s, const Volume& v) {
   if (s.time != v.time_point)  // a caller's slip: the scene asks for another time point than it was given
     throw SceneError("time: time point " + std::to_string(s.time) + " asked, " + std::to_string(v.time_point) +
                      " held");
-  return resolve(s, VolumeBox{v.dims(), v.spacing, v.origin, v.min_value, v.max_value, {}, v.full_spacing},
-                 &v.histogram);
+  return resolve(s, VolumeBox{v.dims(), v.spacing, v.origin, v.min_value, v.max_value, {}, {}, v.full_spacing},
+                 &v.histogram, &v.border_histogram);
 }
 
-ResolvedScene resolve_scene(const Scene& s, const VolumeBox& v) { return resolve(s, v, &v.histogram); }
+ResolvedScene resolve_scene(const Scene& s, const VolumeBox& v) {
+  return resolve(s, v, &v.histogram, &v.border_histogram);
+}
 
 }  // namespace peakcast

@@ -104,7 +104,8 @@ struct VolumeBox {
   std::array<int64_t, 3> dims{0, 0, 0};
   glm::dvec3 spacing{1.0}, origin{0.0};
   double min_value = 0.0, max_value = 0.0;
-  std::vector<uint64_t> histogram;  // Volume::kHistogramBins bins over the range, or empty
+  std::vector<uint64_t> histogram;         // Volume::kHistogramBins bins over the range, or empty
+  std::vector<uint64_t> border_histogram;  // Volume::border_histogram: the faces' voxels, or empty
   // A coarser pyramid level: level 0's spacing (Volume::full_spacing), which the default opacity
   // unit and the automatic TF follow; {0, 0, 0}: `spacing`.
   glm::dvec3 full_spacing{0.0};

@@ -152,6 +152,7 @@ void Volume::finalize_statistics() {
       integer_statistics(reinterpret_cast<const uint16_t*>(data_.get()), n, lo, hi, histogram, kHistogramBins);
     min_value = lo + value_offset;
     max_value = hi + value_offset;
+    border_histogram = whole_border_histogram(lo, hi);
     return;
   }
   struct Partial {
@@ -188,6 +189,13 @@ void Volume::finalize_statistics() {
   histogram.assign(kHistogramBins, 0);
   for (auto& h : hist)
     for (int b = 0; b < kHistogramBins; ++b) histogram[b] += h[b];
+  border_histogram = whole_border_histogram(all.lo, all.hi);
+}
+
+std::vector<uint64_t> Volume::whole_border_histogram(double stored_lo, double stored_hi) const {
+  if (voxel_count() == 0) return {};
+  return box_border_histogram({0, 0, 0}, dims_, {0, 0, 0}, {dims_[0] - 1, dims_[1] - 1, dims_[2] - 1}, stored_lo,
+                              stored_hi);
 }
 
 std::vector<uint64_t> Volume::box_value_counts(const Dims& lo, const Dims& hi) const {
@@ -253,6 +261,35 @@ std::vector<uint64_t> Volume::box_histogram(const Dims& lo, const Dims& hi, doub
   std::vector<uint64_t> h(kHistogramBins, 0);
   for (const auto& p : parts)
     for (int b = 0; b < kHistogramBins; ++b) h[size_t(b)] += p[size_t(b)];
+  return h;
+}
+
+void Volume::for_each_border_voxel(const Dims& lo, const Dims& hi, const Dims& face_lo, const Dims& face_hi,
+                                   const std::function<void(double)>& count) const {
+  for (int a = 0; a < 3; ++a)
+    if (lo[a] < 0 || hi[a] > dims_[a] || lo[a] > hi[a])
+      throw std::invalid_argument("for_each_border_voxel: box outside the volume");
+  if (!has_voxels()) throw std::logic_error("for_each_border_voxel: the voxels were dropped");
+  const auto on_x = [&](int64_t i) { return i >= lo[0] && i < hi[0]; };
+  for (int64_t k = lo[2]; k < hi[2]; ++k)
+    for (int64_t j = lo[1]; j < hi[1]; ++j) {
+      const size_t row = size_t(dims_[0] * (j + dims_[1] * k));
+      if (k == face_lo[2] || k == face_hi[2] || j == face_lo[1] || j == face_hi[1]) {
+        for (int64_t i = lo[0]; i < hi[0]; ++i) count(stored(row + size_t(i)));
+        continue;
+      }
+      if (on_x(face_lo[0])) count(stored(row + size_t(face_lo[0])));
+      if (face_hi[0] != face_lo[0] && on_x(face_hi[0])) count(stored(row + size_t(face_hi[0])));
+    }
+}
+
+std::vector<uint64_t> Volume::box_border_histogram(const Dims& lo, const Dims& hi, const Dims& face_lo,
+                                                   const Dims& face_hi, double stored_lo, double stored_hi) const {
+  const double span = stored_hi - stored_lo;
+  const double scale = span > 0 ? kHistogramBins / span : 0.0;
+  std::vector<uint64_t> h(kHistogramBins, 0);
+  for_each_border_voxel(lo, hi, face_lo, face_hi,
+                        [&](double v) { h[size_t(histogram_bin(v, stored_lo, scale, kHistogramBins))]++; });
   return h;
 }
 

@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -102,6 +103,9 @@ class Volume {
   // Computed by finalize(): physical value range, histogram, non-finite count.
   double min_value = 0.0, max_value = 0.0;
   std::vector<uint64_t> histogram;  // kHistogramBins bins over [min_value, max_value]
+  // The voxels on the box's six faces, in the histogram's bins: which values the data's
+  // background has (the automatic TF, core/auto_tf.h). Empty where not counted.
+  std::vector<uint64_t> border_histogram;
   int64_t nonfinite_replaced = 0;
   // A region read (LoadOptions::region): the file's whole dims and where the region starts in
   // them; for a whole read source_dims is {0, 0, 0}.
@@ -126,6 +130,14 @@ class Volume {
   // the stored range [stored_lo, stored_hi], binned as finalize_statistics bins: a distributed
   // volume's histogram is the sum of its bricks' own boxes (distributed/).
   std::vector<uint64_t> box_histogram(const Dims& lo, const Dims& hi, double stored_lo, double stored_hi) const;
+  // The voxels of the box [lo, hi) that lie on a face of the whole volume, whose first and last
+  // planes along axis a are face_lo[a] and face_hi[a] of this grid (a brick's: the whole volume's
+  // planes in the brick's coordinates, which may lie outside it), each passed to count(stored)
+  // once. box_border_histogram bins them as box_histogram does.
+  void for_each_border_voxel(const Dims& lo, const Dims& hi, const Dims& face_lo, const Dims& face_hi,
+                             const std::function<void(double)>& count) const;
+  std::vector<uint64_t> box_border_histogram(const Dims& lo, const Dims& hi, const Dims& face_lo, const Dims& face_hi,
+                                             double stored_lo, double stored_hi) const;
   // Integer volumes: how many voxels of the box hold each stored value (256 or 65536 counts),
   // from which range and histogram follow exactly (histogram_of_counts), one pass over the voxels.
   // std::logic_error for float volumes.
@@ -136,6 +148,7 @@ class Volume {
   std::string to_string() const;
 
  private:
+  std::vector<uint64_t> whole_border_histogram(double stored_lo, double stored_hi) const;
   Dims dims_{0, 0, 0};
   VoxelType type_ = VoxelType::U8;
   SourceType source_ = SourceType::U8;

@@ -69,6 +69,23 @@ Volume read_head(const std::string& path, int64_t time_point) {
   return load_volume(path, one);
 }
 
+namespace {
+
+// The whole volume's histogram and its faces' histogram (the automatic TF's background), each
+// rank counting its own box and the sums going to every rank.
+void reduce_histograms(Volume& v, const Brick& mine, const Index3& dims, double lo, double hi) {
+  const auto [own_lo, own_hi] = counted_box(mine, dims);
+  v.histogram = v.box_histogram(own_lo, own_hi, lo - v.value_offset, hi - v.value_offset);
+  MPI_Allreduce(MPI_IN_PLACE, v.histogram.data(), int(v.histogram.size()), MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD);
+  const auto [face_lo, face_hi] = whole_faces(mine, dims);
+  v.border_histogram =
+      v.box_border_histogram(own_lo, own_hi, face_lo, face_hi, lo - v.value_offset, hi - v.value_offset);
+  MPI_Allreduce(MPI_IN_PLACE, v.border_histogram.data(), int(v.border_histogram.size()), MPI_UINT64_T, MPI_SUM,
+                MPI_COMM_WORLD);
+}
+
+}  // namespace
+
 BrickRead read_brick(const BrickLoadRequest& req) {
   int rank = 0, size = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
@@ -134,14 +151,13 @@ BrickRead read_brick(const BrickLoadRequest& req) {
   v->max_value = hi;
   // Every rank's brick carries the whole volume's histogram (adaptive sampling's volume
   // standard deviation) and macrocell grids.
-  const auto [own_lo, own_hi] = counted_box(b.mine, b.dims);
-  v->histogram = v->box_histogram(own_lo, own_hi, lo - v->value_offset, hi - v->value_offset);
-  MPI_Allreduce(MPI_IN_PLACE, v->histogram.data(), int(v->histogram.size()), MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD);
+  reduce_histograms(*v, b.mine, b.dims, lo, hi);
   if (!req.have_range) b.histogram = v->histogram;
+  if (!req.have_range) b.border_histogram = v->border_histogram;
   b.cells.trilinear = reduce_grid(*v, b.mine, b.dims, FilterSupport::Trilinear);
   b.cells.tricubic = reduce_grid(*v, b.mine, b.dims, FilterSupport::Tricubic);
   b.statistics_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t_stats).count();
-  b.box = VolumeBox{b.dims, spacing, origin, lo, hi, v->histogram};
+  b.box = VolumeBox{b.dims, spacing, origin, lo, hi, v->histogram, v->border_histogram};
   b.voxels = std::move(v);
   return b;
 }

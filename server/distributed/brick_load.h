@@ -43,7 +43,7 @@ struct BrickRead {
   VolumeMacrocells cells;          // the whole volume's grids, reduced from the bricks
   // The whole volume's (first reads only): histogram, non-finite count, the largest brick's
   // bytes. refused: a NaN/Inf voxel under refuse_nonfinite (every rank knows).
-  std::vector<uint64_t> histogram;
+  std::vector<uint64_t> histogram, border_histogram;  // (border: Volume::border_histogram)
   int64_t nonfinite = 0;
   int64_t max_brick_bytes = 0;
   bool refused = false;

@@ -125,6 +125,7 @@ StatisticsRun::StatisticsRun(std::string path, LoadOptions base, int64_t budget_
   s_.bricks = bricks_for_budget(dims_, 0, voxel_bytes(head.type()), share, 1);
   split_ = kd_split(dims_, s_.bricks, 0);
   if (floats_) histogram_.assign(Volume::kHistogramBins, 0);
+  if (floats_) border_histogram_.assign(Volume::kHistogramBins, 0);
 }
 
 StatisticsRun::~StatisticsRun() = default;
@@ -155,6 +156,9 @@ void StatisticsRun::step() {
     const auto c = v->box_value_counts(lo, hi);
     if (counts_.empty()) counts_.assign(c.size(), 0);
     for (size_t i = 0; i < c.size(); ++i) counts_[i] += c[i];
+    if (border_counts_.empty()) border_counts_.assign(c.size(), 0);
+    const auto [face_lo, face_hi] = whole_faces(split_.bricks[k], dims_);
+    v->for_each_border_voxel(lo, hi, face_lo, face_hi, [&](double x) { ++border_counts_[size_t(x)]; });
     add_shares(*v, k);
   } else if (!second_pass) {
     // Floats, pass 1: the finite range and the non-finite count.
@@ -169,6 +173,9 @@ void StatisticsRun::step() {
     replace_with(*v, s_);
     const auto h = v->box_histogram(lo, hi, s_.box.min_value, s_.box.max_value);
     for (size_t i = 0; i < h.size(); ++i) histogram_[i] += h[i];
+    const auto [face_lo, face_hi] = whole_faces(split_.bricks[k], dims_);
+    const auto e = v->box_border_histogram(lo, hi, face_lo, face_hi, s_.box.min_value, s_.box.max_value);
+    for (size_t i = 0; i < e.size(); ++i) border_histogram_[i] += e[i];
     add_shares(*v, k);
   }
   steps_++;
@@ -190,8 +197,10 @@ void StatisticsRun::finish() {
     s_.box.min_value = double(lo) + offset_;
     s_.box.max_value = double(hi) + offset_;
     s_.box.histogram = Volume::histogram_of_counts(counts_, double(lo), double(hi));
+    s_.box.border_histogram = Volume::histogram_of_counts(border_counts_, double(lo), double(hi));
   } else {
     s_.box.histogram = std::move(histogram_);
+    s_.box.border_histogram = std::move(border_histogram_);
   }
   s_.cells.trilinear = std::make_shared<const MacrocellGrid>(grid_from_share(shares_[0]));
   s_.cells.tricubic = std::make_shared<const MacrocellGrid>(grid_from_share(shares_[1]));
@@ -199,6 +208,7 @@ void StatisticsRun::finish() {
   // arena that the bricks drawn next, read on other threads, would not take them from.
   shares_[0] = shares_[1] = MacrocellShare{};
   std::vector<uint64_t>().swap(counts_);
+  std::vector<uint64_t>().swap(border_counts_);
   std::vector<uint64_t>().swap(histogram_);
   malloc_trim(0);
   s_.ms = ms_since(t0_);
@@ -272,6 +282,7 @@ std::future<SequenceRun::Read> SequenceRun::read_ahead(int k) {
     v->min_value = stats_->box.min_value;  // the whole volume's range and histogram, as a rank's brick
     v->max_value = stats_->box.max_value;
     v->histogram = stats_->box.histogram;
+    v->border_histogram = stats_->box.border_histogram;
     return Read{std::move(v), ms_since(t)};
   });
 }

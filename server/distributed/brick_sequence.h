@@ -73,7 +73,7 @@ class StatisticsRun {
   double offset_ = 0.0;
   int steps_ = 0;
   MacrocellShare shares_[2];
-  std::vector<uint64_t> counts_, histogram_;
+  std::vector<uint64_t> counts_, histogram_, border_counts_, border_histogram_;  // (border_: the faces' voxels)
   double lo_ = std::numeric_limits<double>::infinity(), hi_ = -std::numeric_limits<double>::infinity();
 };
 

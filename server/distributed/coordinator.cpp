@@ -128,6 +128,7 @@ LoadedVolume Coordinator::load(const std::filesystem::path& path, const LoadOpti
   whole->min_value = b.box.min_value;
   whole->max_value = b.box.max_value;
   whole->histogram = std::move(b.histogram);
+  whole->border_histogram = std::move(b.border_histogram);
   whole->nonfinite_replaced = b.nonfinite;
   whole->name = head.name;
   whole->source_path = head.source_path;

@@ -93,4 +93,13 @@ std::pair<Index3, Index3> counted_box(const Brick& b, const Index3& dims) {
   return {lo, hi};
 }
 
+std::pair<Index3, Index3> whole_faces(const Brick& b, const Index3& dims) {
+  Index3 lo{}, hi{};
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = -b.read_lo[a];
+    hi[a] = dims[a] - 1 - b.read_lo[a];
+  }
+  return {lo, hi};
+}
+
 }  // namespace peakcast::distributed

@@ -60,6 +60,10 @@ KdSplit kd_split(const Index3& dims, int ranks, int ghost);
 // tile the volume's voxels exactly once.
 std::pair<Index3, Index3> counted_box(const Brick& brick, const Index3& dims);
 
+// The whole volume's first and last voxel planes along each axis, in the coordinates of the
+// brick's read voxels (Volume::for_each_border_voxel: the faces a brick's statistics count).
+std::pair<Index3, Index3> whole_faces(const Brick& brick, const Index3& dims);
+
 // The ranks front to back as seen from the camera, in voxel coordinates: the eye's position
 // for a perspective camera, the view direction for an orthographic one.
 std::vector<int> visibility_order(const KdSplit& split, const glm::dvec3& eye_voxel, const glm::dvec3& view_dir,

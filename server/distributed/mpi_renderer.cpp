@@ -212,8 +212,8 @@ std::unique_ptr<render::ResidentVolume> MpiRenderer::make_resident(std::shared_p
   if (head.source_dims != volume->dims())
     throw std::runtime_error(volume->source_path + ": the file changed since it was read (its dims differ)");
   c.check_split(volume->source_path, head.source_dims, default_ghost());
-  const VolumeBox box{volume->dims(),    volume->spacing,   volume->origin,
-                      volume->min_value, volume->max_value, volume->histogram};
+  const VolumeBox box{volume->dims(),    volume->spacing,   volume->origin,          volume->min_value,
+                      volume->max_value, volume->histogram, volume->border_histogram};
   const int64_t id = c.new_id();
   BrickRead r = c.read_bricks(held, id, reread(*volume, box, default_ghost()));
   try {

@@ -58,6 +58,8 @@ void expect_same_statistics(const Volume& whole, const distributed::SequenceStat
   EXPECT_EQ(s.box.min_value, whole.min_value);
   EXPECT_EQ(s.box.max_value, whole.max_value);
   EXPECT_EQ(s.box.histogram, whole.histogram);
+  EXPECT_EQ(s.box.border_histogram, whole.border_histogram);
+  EXPECT_FALSE(whole.border_histogram.empty());
   const VolumeMacrocells cells = build_volume_macrocells(whole);
   for (auto [a, b] : {std::pair{cells.trilinear, s.cells.trilinear}, {cells.tricubic, s.cells.tricubic}}) {
     EXPECT_EQ(a->grid, b->grid);

@@ -55,6 +55,7 @@ void expect_same_statistics(const fs::path& path) {
   EXPECT_EQ(got.volume->min_value, want.min_value);
   EXPECT_EQ(got.volume->max_value, want.max_value);
   EXPECT_EQ(got.volume->histogram, want.histogram);
+  EXPECT_EQ(got.volume->border_histogram, want.border_histogram);
   EXPECT_EQ(got.volume->nonfinite_replaced, want.nonfinite_replaced);
   EXPECT_EQ(got.resident_bytes, int64_t(want.byte_size())) << "one rank's brick is the whole volume";
   auto held = c.lock();

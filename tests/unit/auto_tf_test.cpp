@@ -110,6 +110,66 @@ TEST(AutoTf, NoHistogramGivesARampOverTheRange) {
   EXPECT_NO_THROW(derive_transfer_function(in));
 }
 
+TEST(AutoTf, FacesAboveTheSplitMirrorTheRamp) {
+  const auto h = bimodal(41000, 410000);  // the upper class the larger, as a distance field's outside
+  AutoTfInput in;
+  in.histogram = &h;
+  in.lo = 0;
+  in.hi = 1024;
+  in.ray_length = 200;
+  const double t = otsu_threshold(h, 0, 1024);
+  std::vector<uint64_t> border(1024, 0);
+  border[700] = 80;  // faces: 80% above the split
+  border[100] = 20;
+  in.border_histogram = &border;
+  const TransferFunction tf = derive_transfer_function(in);
+  for (double v = 680; v <= 1024; v += 4) EXPECT_EQ(tf.eval(v).a, 0.0) << v;  // the background class
+  EXPECT_GT(tf.eval(100).a, 0.0);                                             // the structure below
+  double last = 0;
+  for (double v = 680; v >= 0; v -= 8) {  // rising as the value falls
+    EXPECT_GE(tf.eval(v).a, last);
+    last = tf.eval(v).a;
+  }
+  border[700] = 70;  // below kBackgroundAbove: the usual ramp
+  border[100] = 30;
+  const TransferFunction up = derive_transfer_function(in);
+  EXPECT_EQ(up.eval(100).a, 0.0);
+  EXPECT_GT(up.eval(720).a, 0.0);
+  in.with_peak = true;  // a peak at the mirrored split
+  border[700] = 90;
+  border[100] = 10;
+  const auto peaks = find_peaks(derive_transfer_function(in));
+  ASSERT_EQ(peaks.size(), 1u);  // between the classes, at the background's edge
+  EXPECT_GT(peaks[0].value, t);
+  EXPECT_LE(peaks[0].value, 680.0);
+}
+
+// A float signed distance field of a sphere (negative inside): the faces are all background, at
+// the top of the range, so the derived TF draws the sphere, not the box around it.
+TEST(FirstView, ADistanceFieldDrawsItsInside) {
+  VolumeHeader head;
+  head.dims = {24, 24, 24};
+  head.source = SourceType::F32;
+  Volume v(head);
+  float* p = reinterpret_cast<float*>(v.data());
+  for (int64_t k = 0; k < 24; ++k)
+    for (int64_t j = 0; j < 24; ++j)
+      for (int64_t i = 0; i < 24; ++i)
+        p[i + 24 * (j + 24 * k)] =
+            float(std::sqrt(double((i - 11.5) * (i - 11.5) + (j - 11.5) * (j - 11.5) + (k - 11.5) * (k - 11.5))) - 6.0);
+  v.finalize_statistics();
+  ASSERT_EQ(v.border_histogram.size(), v.histogram.size());
+  uint64_t faces = 0;
+  for (uint64_t c : v.border_histogram) faces += c;
+  EXPECT_EQ(faces, uint64_t(24 * 24 * 24 - 22 * 22 * 22));
+  const ResolvedScene r = resolve_scene(parse_scene_text(R"({"volume": "sdf"})"), v);
+  const double t = otsu_threshold(v.histogram, v.min_value, v.max_value), bin = (v.max_value - v.min_value) / 1024;
+  EXPECT_EQ(r.tf.eval(v.max_value).a, 0.0);   // the corners
+  EXPECT_EQ(r.tf.eval(t + 10 * bin).a, 0.0);  // the outside, from the split on (the mirror's ties: a few bins)
+  EXPECT_GT(r.tf.eval(-3.0).a, 0.0);          // inside
+  EXPECT_GT(r.tf.eval(-3.0).a, r.tf.eval(0.0).a);
+}
+
 TEST(FirstView, ThreeQuarterViewAtResetCameraDistance) {
   const glm::dvec3 lo(0, 0, 0), hi(10, 20, 30);
   const Camera c = default_camera(lo, hi);
