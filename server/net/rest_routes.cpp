@@ -49,19 +49,22 @@ Response static_file(AppContext& app, const Request& req, const std::string& pat
 void probe(AppContext& app, const Request& req, std::function<void(Response)> send) {
   Scene scene;
   int x = 0, y = 0;
+  reference::ProbePick pick = reference::ProbePick::Surface;
   try {
     nlohmann::json body = nlohmann::json::parse(req.body());
     if (!body.is_object()) throw SceneError("the body must be a JSON object: a scene plus \"pixel\": [x, y]");
     if (!body.contains("pixel")) throw SceneError("pixel: required, [x, y] counted from the image's top left");
     std::tie(x, y) = protocol::parse_pixel(body["pixel"], "pixel");
     body.erase("pixel");
+    pick = reference::parse_probe_pick(protocol::parse_pick(body, "pick"));
+    body.erase("pick");
     scene = parse_scene(body);
   } catch (const std::exception& e) {  // not JSON, a bad pixel, a bad scene
     count(app, "probe", http::status::bad_request);
     return send(error_response(req, http::status::bad_request, "bad_scene", e.what()));
   }
   // Loading the volume, reading a PNG and the ray itself: on the loader pool, never this io thread.
-  asio::post(app.loader, [&app, req, scene, x, y, send = std::move(send)]() mutable {
+  asio::post(app.loader, [&app, req, scene, x, y, pick, send = std::move(send)]() mutable {
     auto refuse = [&](http::status status, const char* code, const std::string& message) {
       count(app, "probe", status);
       send(error_response(req, status, code, message));
@@ -82,10 +85,11 @@ void probe(AppContext& app, const Request& req, std::function<void(Response)> se
       if (app.config.ranks > 1 || !vol->volume->has_voxels())  // rank 0 holds no voxels (checked before any read)
         return refuse(http::status::unprocessable_entity, "not_supported",
                       "probing needs the volume's voxels; under mpirun they live in the ranks' bricks");
-      const auto p = reference::probe_reference(*vol->volume, resolved, x, y);
+      const auto p = reference::probe_reference(*vol->volume, resolved, x, y, pick);
       count(app, "probe", http::status::ok);
       send(json_response(req, http::status::ok,
-                         json_text(protocol::probe_json(p.hit, p.position, p.value, p.distance, p.opacity))));
+                         json_text(protocol::probe_json(p.hit, p.position, p.value, p.distance, p.opacity,
+                                                        reference::to_string(p.pick)))));
     } catch (const SceneError& e) {
       refuse(http::status::bad_request, "bad_scene", e.what());
     } catch (const std::invalid_argument& e) {  // the pixel is outside the image

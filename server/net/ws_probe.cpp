@@ -22,8 +22,9 @@ void WsSession::probe(const protocol::ProbeMsg& m) {
     try {
       if (self->app_.config.ranks > 1)  // rank 0 holds no voxels (checked before any read)
         throw std::invalid_argument("probing needs the volume's voxels; under mpirun they live in the ranks' bricks");
-      const auto p = reference::probe_reference(*volume->volume, scene, m.x, m.y);
-      answer = protocol::probe_message(m.id, protocol::probe_json(p.hit, p.position, p.value, p.distance, p.opacity));
+      const auto p = reference::probe_reference(*volume->volume, scene, m.x, m.y, reference::parse_probe_pick(m.pick));
+      answer = protocol::probe_message(
+          m.id, protocol::probe_json(p.hit, p.position, p.value, p.distance, p.opacity, reference::to_string(p.pick)));
     } catch (const std::exception& e) {
       error = std::string("probe: ") + e.what();
     }

@@ -65,9 +65,16 @@ struct Accum {
   // the first add that takes alpha past one half (probe.h).
   double at_t = 0.0, at_value = 0.0;
   double half_t = std::nan(""), half_value = 0.0;
+  // A probe's first visible surface: the first add whose value the TF gives an opacity of at
+  // least pick_opacity (probes only: null while rendering).
+  const TransferFunction* pick_tf = nullptr;
+  double pick_opacity = 0.0;
+  double first_t = std::nan(""), first_value = 0.0;
   void add(const glm::dvec3& c, double a) {
     const double w = (1.0 - alpha) * a;
     if (alpha < 0.5 && alpha + w >= 0.5 && std::isnan(half_t)) half_t = at_t, half_value = at_value;
+    if (pick_tf && a > 0.0 && std::isnan(first_t) && pick_tf->eval(at_value).a >= pick_opacity)
+      first_t = at_t, first_value = at_value;
     rgb += w * c;
     alpha += w;
   }

@@ -29,14 +29,24 @@ Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceO
 // the data value drawn there (a peak's value at a peak surface). Adaptive sampling is replaced
 // by the uniform step. Throws std::invalid_argument for a pixel outside the image or a volume
 // without voxels (a distributed volume on the serving rank).
+// Which point along a probe's ray is its answer. Surface (the default): the first sample whose
+// value the TF gives at least kPickOpacity (VTK's vtkVolumePicker and its opacity isovalue,
+// 0.05), so a click on a translucent edge lands on its front; where no sample is that opaque,
+// the half-opacity point. Half: where the ray's accumulated opacity first passes one half.
+enum class ProbePick { Surface, Half };
+constexpr double kPickOpacity = 0.05;
+const char* to_string(ProbePick p);
+ProbePick parse_probe_pick(const std::string& name);  // "surface" | "half"; std::invalid_argument
+
 struct ProbeResult {
   bool hit = false;
-  glm::dvec3 position{0.0};  // world units (docs/scenes.md)
+  ProbePick pick = ProbePick::Half;  // which point was answered (a surface pick without one: Half)
+  glm::dvec3 position{0.0};          // world units (docs/scenes.md)
   double value = 0.0;
   double distance = 0.0;  // from the eye (the image plane for orthographic views) along the ray
   double opacity = 0.0;   // the ray's whole accumulated opacity
 };
-ProbeResult probe_reference(const Volume& v, const ResolvedScene& s, int x, int y);
+ProbeResult probe_reference(const Volume& v, const ResolvedScene& s, int x, int y, ProbePick pick = ProbePick::Surface);
 // The probe's answer for every pixel (REST ?format=depth): `distance` where the ray's opacity
 // passes one half, NaN where it never does; width * height floats, row 0 at the top.
 std::vector<float> depth_reference(const Volume& v, const ResolvedScene& s);

@@ -216,7 +216,7 @@ ClientMessage ping_message(const json& j) {
 }
 
 ClientMessage probe_message(const json& j) {
-  only_keys(j, "probe", {"id", "pixel"});
+  only_keys(j, "probe", {"id", "pixel", "pick"});
   ProbeMsg m;
   if (j.contains("id")) {
     if (!j["id"].is_number_unsigned() || j["id"].get<uint64_t>() > 0xffffffffull)
@@ -225,6 +225,7 @@ ClientMessage probe_message(const json& j) {
   }
   if (!j.contains("pixel")) bad("probe.pixel: required");
   std::tie(m.x, m.y) = parse_pixel(j["pixel"], "probe.pixel");
+  m.pick = parse_pick(j, "probe.pick");
   return m;
 }
 
@@ -288,8 +289,19 @@ std::pair<int, int> parse_pixel(const json& p, const std::string& where) {
   return {p[0].get<int>(), p[1].get<int>()};
 }
 
-json probe_json(bool hit, const glm::dvec3& position, double value, double distance, double opacity) {
-  json j = {{"hit", hit}, {"position", nullptr}, {"value", nullptr}, {"distance", nullptr}, {"opacity", opacity}};
+std::string parse_pick(const json& j, const std::string& where) {
+  if (!j.contains("pick")) return "surface";
+  const json& p = j["pick"];
+  if (!p.is_string() || (p != "surface" && p != "half"))
+    bad(where +
+        ": must be \"surface\" (the first sample the TF gives opacity >= 0.05) or \"half\" (where the ray's "
+        "opacity passes one half)");
+  return p.get<std::string>();
+}
+
+json probe_json(bool hit, const glm::dvec3& position, double value, double distance, double opacity, const char* pick) {
+  json j = {{"hit", hit},          {"position", nullptr}, {"value", nullptr},
+            {"distance", nullptr}, {"opacity", opacity},  {"pick", pick}};
   if (hit) {
     j["position"] = {position.x, position.y, position.z};
     j["value"] = value;

@@ -94,6 +94,7 @@ struct StrokeMsg {
 struct ProbeMsg {
   uint32_t id = 0;
   int x = 0, y = 0;
+  std::string pick = "surface";  // "surface" | "half" (reference::ProbePick)
 };
 using ClientMessage = std::variant<Hello, CameraMsg, TfMsg, RenderMsg, QualityMsg, ViewportMsg, VolumeMsg, AckMsg,
                                    PingMsg, StrokeMsg, ProbeMsg, KeyframeMsg, TimeMsg>;
@@ -106,9 +107,13 @@ std::string error_message(const std::string& code, const std::string& message);
 std::string pong_message(const std::string& id);
 // A stroke is in the session's ray texture, which now holds `strokes` strokes.
 std::string stroke_ack_message(uint32_t seq, size_t strokes);
-// A probe's answer: {"hit", "position", "value", "distance", "opacity"} (position and value
-// null without a hit), the body of POST /api/probe too; the message adds type and id.
-nlohmann::json probe_json(bool hit, const glm::dvec3& position, double value, double distance, double opacity);
+// A probe's answer: {"hit", "position", "value", "distance", "opacity", "pick"} (position and
+// value null without a hit; pick: which point answered, "surface" or "half"), the body of POST /api/probe too; the
+// message adds type and id.
+nlohmann::json probe_json(bool hit, const glm::dvec3& position, double value, double distance, double opacity,
+                          const char* pick);
+// Reads a probe's optional "pick": "surface" (the default) or "half"; ProtocolError naming `where`.
+std::string parse_pick(const nlohmann::json& j, const std::string& where);
 std::string probe_message(uint32_t id, const nlohmann::json& answer);
 // Reads "pixel": [x, y] (non-negative integers) of a probe message or REST body.
 std::pair<int, int> parse_pixel(const nlohmann::json& j, const std::string& where);

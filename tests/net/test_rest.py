@@ -175,7 +175,20 @@ def test_probe_over_rest_and_websocket():
     status, _, body = probe(wide, [0, 0])
     miss = json.loads(body)
     assert status == 200 and miss == {"hit": False, "position": None, "value": None, "distance": None,
-                                      "opacity": 0.0}, miss
+                                      "opacity": 0.0, "pick": "half"}, miss
+    # This ray crosses only haze the TF gives opacity below 0.05 (at most 0.04): no visible
+    # surface, so the default pick falls back to the half-opacity point and says so.
+    assert answer["pick"] == "half" and answer["value"] < 90, answer
+    status, _, body = probe(dict(SCENE, pick="half"), [100, 80])
+    half = json.loads(body)
+    assert status == 200 and half == answer, (half, answer)
+    # With denser haze (0.2 at 90) the default pick is the first surface, nearer the eye than the
+    # half-opacity point, at a value the TF gives at least 0.05.
+    dense = dict(SCENE, tf={"points": [[0, 0, 0, 0, 0], [90, 0.2, 0.5, 1.0, 0.2]] + SCENE["tf"]["points"][2:]})
+    surface = json.loads(probe(dense, [100, 80])[2])
+    dense_half = json.loads(probe(dict(dense, pick="half"), [100, 80])[2])
+    assert surface["pick"] == "surface" and surface["value"] >= 90 * 0.05 / 0.2, surface
+    assert dense_half["pick"] == "half" and dense_half["distance"] > surface["distance"], (dense_half, surface)
     # The viewer's probe message in the same state answers the same.
     async def run():
         c = await Client.connect(SERVER)
@@ -184,6 +197,12 @@ def test_probe_over_rest_and_websocket():
         await c.send({"type": "probe", "id": 7, "pixel": [100, 80]})
         m = await c.next_text("probe")
         assert m["id"] == 7 and {k: m[k] for k in answer} == answer, (m, answer)
+        await c.send({"type": "probe", "id": 9, "pixel": [100, 80], "pick": "half"})
+        m = await c.next_text("probe")
+        assert {k: m[k] for k in half} == half, (m, half)
+        await c.send({"type": "probe", "id": 10, "pixel": [100, 80], "pick": "middle"})
+        e = await c.next_text("error")
+        assert e["code"] == "bad_message" and "probe.pick" in e["message"], e
         await c.send({"type": "probe", "id": 8, "pixel": [200, 0]})  # one past the right edge
         e = await c.next_text("error")
         assert e["code"] == "bad_message" and "outside the 200 x 160 image" in e["message"], e
@@ -203,6 +222,7 @@ def test_probe_refusals():
                               (json.dumps(dict(SCENE, pixel=[-1, 0])).encode(), 400, b"pixel: must be [x, y]"),
                               (json.dumps(dict(SCENE, pixel=[0, 160])).encode(), 400, b"outside the 200 x 160 image"),
                               (json.dumps(dict(SCENE, pixel=[0, 0], render={"s_k": -1})).encode(), 400, b"render.s_k"),
+                              (json.dumps(dict(SCENE, pixel=[0, 0], pick="front")).encode(), 400, b"pick: must be"),
                               (json.dumps(dict(SCENE, pixel=[0, 0], volume="nope")).encode(), 404, b"nope")):
         status, _, answer = http(SERVER, "/api/probe", "POST", body)
         assert status == code and words in answer, (body[:60], status, answer)

@@ -1,6 +1,9 @@
-// The probe (reference/reference_renderer.h probe_reference): where along a pixel's ray the
-// accumulated opacity passes one half, on a ramp whose answers are known in closed form.
+// The probe (reference/reference_renderer.h probe_reference): the ray's first visible surface, or
+// where along a pixel's ray the accumulated opacity passes one half, on a ramp whose answers are
+// known in closed form.
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "core/generators.h"
 #include "reference/reference_renderer.h"
@@ -33,12 +36,14 @@ ResolvedScene scene(const Volume& v, const nlohmann::json& tf, const nlohmann::j
   return resolve_scene(parse_scene(j), v);
 }
 
+constexpr auto kHalf = reference::ProbePick::Half;
+
 const nlohmann::json kOpaqueFromHalf = {
     {"points", {{0.0, 1, 1, 1, 0}, {0.49, 1, 1, 1, 0}, {0.5, 1, 1, 1, 1}, {1.0, 1, 1, 1, 1}}}};
 
 TEST(Probe, PostClassificationFindsTheOpaqueSide) {
   Volume v = ramp();
-  const auto p = reference::probe_reference(v, scene(v, kOpaqueFromHalf, {{"step", 0.25}}), 4, 4);
+  const auto p = reference::probe_reference(v, scene(v, kOpaqueFromHalf, {{"step", 0.25}}), 4, 4, kHalf);
   ASSERT_TRUE(p.hit);
   EXPECT_NEAR(p.position.x, 16.0, 1e-9);  // the first sample at 0.5 is at x = 16 (lattice from x = 0)
   EXPECT_NEAR(p.position.y, 8.0, 1e-9);
@@ -51,7 +56,7 @@ TEST(Probe, PostClassificationFindsTheOpaqueSide) {
 TEST(Probe, PixelsCountFromTheTopLeft) {
   Volume v = ramp();
   // Right is -y and up is +z: pixel (1, 2) lies at y = 8 + 4 * (1 - 2 * 1.5 / 9), z = 8 + 4 * (1 - 2 * 2.5 / 9).
-  const auto p = reference::probe_reference(v, scene(v, kOpaqueFromHalf, {{"step", 0.25}}), 1, 2);
+  const auto p = reference::probe_reference(v, scene(v, kOpaqueFromHalf, {{"step", 0.25}}), 1, 2, kHalf);
   ASSERT_TRUE(p.hit);
   EXPECT_NEAR(p.position.y, 8.0 + 4.0 * (1.0 - 3.0 / 9.0), 1e-9);
   EXPECT_NEAR(p.position.z, 8.0 + 4.0 * (1.0 - 5.0 / 9.0), 1e-9);
@@ -80,6 +85,36 @@ TEST(Probe, NoHitWhereTheRayStaysBelowOneHalf) {
   const auto miss = reference::probe_reference(v, scene(v, kOpaqueFromHalf, {{"step", 1.0}}, 40), 0, 0);
   EXPECT_FALSE(miss.hit);
   EXPECT_EQ(miss.opacity, 0.0);
+}
+
+// A translucent TF (opacity 0.1 per unit from value 0.25, x = 8, on): the eye sees the front, where
+// the first surface pick lands; the ray gets half opaque only about 6.6 units deeper.
+TEST(Probe, TheFirstSurfaceIsTheFrontOfATranslucentTf) {
+  Volume v = ramp();
+  const nlohmann::json haze = {
+      {"points", {{0.0, 1, 1, 1, 0}, {0.24, 1, 1, 1, 0}, {0.25, 1, 1, 1, 0.1}, {1.0, 1, 1, 1, 0.1}}}};
+  const ResolvedScene s = scene(v, haze, {{"step", 0.25}});
+  const auto surface = reference::probe_reference(v, s, 4, 4);  // the default pick
+  ASSERT_TRUE(surface.hit);
+  EXPECT_EQ(surface.pick, reference::ProbePick::Surface);
+  EXPECT_NEAR(surface.position.x, 8.0, 1e-9);  // the first sample with TF opacity >= 0.05: value 0.25
+  EXPECT_NEAR(surface.value, 0.25, 1e-6);
+  const auto half = reference::probe_reference(v, s, 4, 4, kHalf);
+  ASSERT_TRUE(half.hit);
+  EXPECT_EQ(half.pick, reference::ProbePick::Half);
+  // 1 - 0.9^d = 0.5 at d = 6.58 units past x = 8 (samples every 0.25)
+  EXPECT_NEAR(half.position.x, 8.0 + std::log(0.5) / std::log(0.9), 0.3);
+  EXPECT_EQ(surface.opacity, half.opacity);
+  // A TF never that opaque (0.04 per unit) but half opaque after 17 units: the half point answers.
+  const nlohmann::json faint = {{"points", {{0.0, 1, 1, 1, 0.04}, {1.0, 1, 1, 1, 0.04}}}};
+  const ResolvedScene f = scene(v, faint, {{"step", 0.25}});
+  const auto fallback = reference::probe_reference(v, f, 4, 4);
+  ASSERT_TRUE(fallback.hit);
+  EXPECT_EQ(fallback.pick, reference::ProbePick::Half);
+  EXPECT_EQ(fallback.position, reference::probe_reference(v, f, 4, 4, kHalf).position);
+  EXPECT_STREQ(reference::to_string(reference::ProbePick::Surface), "surface");
+  EXPECT_EQ(reference::parse_probe_pick("half"), kHalf);
+  EXPECT_THROW(reference::parse_probe_pick("middle"), std::invalid_argument);
 }
 
 TEST(Probe, Refusals) {
