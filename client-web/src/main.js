@@ -329,7 +329,7 @@ disposer.listen(tfEditor, 'preset', (e) => {
 });
 // The keyboard in the 3D view, the help overlay, the stats toggle, the collapsible panel.
 const showStats = (show) => { toggle($('stats'), show); $('show-stats').checked = show; };
-const probe = new Probe({ canvas, readout: $('probe-readout'), measure: $('measure'), stream }, disposer);
+const probe = new Probe({ canvas, readout: $('probe-readout'), measure: $('measure'), pick: $('pick'), stream }, disposer);
 disposer.listen(probe, 'points', (e) => annotations.update({ marks: e.detail }));
 probe.picking = () => slices.shown;  // a click in the 3D view moves the slices' point to what it hit
 disposer.listen(probe, 'pick', (e) => slices.setPoint(e.detail));

@@ -2,11 +2,14 @@
 // asked of the server as the pointer rests or moves (one question per animation frame; only the
 // newest answer is shown), and a two-point distance: with "measure" on, a click fixes a point, a
 // second click the other, and the distance between them is shown (and drawn by the annotations).
-// The server answers where the pixel's ray gets half opaque: what a scientist sees there.
+// The server answers at the ray's first visible surface (the first sample its TF makes at least
+// 5% opaque: a click on a translucent edge lands on its front), or with `pick` 'half' where the
+// ray gets half opaque; the readout says which point it is.
 import { formatLength } from './units.js';
 import { length, sub } from './vec.js';
 
 const CLICK_PX = 4;  // a press that moves less than this is a click, not a drag
+const PICKS = { surface: 'first surface', half: 'half opacity' };  // the answer's pick, as the readout says it
 
 export class Probe extends EventTarget {
   #id = 0;
@@ -22,10 +25,12 @@ export class Probe extends EventTarget {
   points = [];          // measure points (world), at most two
   unit = 'units';       // lengths' unit (units.js)
   measuring = false;
+  pick = 'surface';     // 'surface' | 'half': the point along the ray that answers
 
-  constructor({ canvas, readout, measure, stream }, disposer) {
+  constructor({ canvas, readout, measure, pick, stream }, disposer) {
     super();
     Object.assign(this, { canvas, readout, measureButton: measure, stream });
+    if (pick) disposer.listen(pick, 'change', () => { this.pick = pick.value; this.points = []; this.#changed(); });
     disposer.listen(canvas, 'pointermove', (e) => { if (e.buttons === 0 && e.pointerType !== 'touch') this.#schedule(e); });
     disposer.listen(canvas, 'pointerleave', () => { this.#at = null; this.#show(); });
     disposer.listen(canvas, 'pointerdown', (e) => { this.#down = { x: e.clientX, y: e.clientY }; });
@@ -69,7 +74,7 @@ export class Probe extends EventTarget {
   #ask(pixel) {
     if (this.#unavailable) return 0;
     const id = ++this.#id;
-    this.stream.send({ type: 'probe', id, pixel });
+    this.stream.send({ type: 'probe', id, pixel, pick: this.pick });
     return id;
   }
 
@@ -99,6 +104,7 @@ export class Probe extends EventTarget {
     if (this.#clicks.delete(a.id)) {
       if (!a.hit) return this.#note('nothing opaque there to measure from');
       this.points = this.points.length >= 2 ? [a.position] : [...this.points, a.position];
+      this.picks = this.points.length === 1 ? [a.pick] : [...(this.picks ?? []), a.pick];
       return this.#changed();
     }
     if (a.id !== this.#hover) return;  // an older answer: the cursor moved on
@@ -123,13 +129,14 @@ export class Probe extends EventTarget {
     if (this.#unavailable) parts.push(`probing unavailable: ${this.#unavailable}`);
     else if (this.#at && this.last) {
       const a = this.last;
-      parts.push(a.hit ? `value ${fmt(a.value)} at (${a.position.map(fmt).join(', ')}) ${this.unit}` : 'nothing opaque under the cursor');
+      parts.push(a.hit ? `value ${fmt(a.value)} at (${a.position.map(fmt).join(', ')}) ${this.unit} (${PICKS[a.pick] ?? a.pick})`
+        : 'nothing opaque under the cursor');
     }
     if (this.measuring) {
       const [p, q] = this.points;
       if (!p) parts.push('measure: click a first point');
       else if (!q) parts.push(`measure: from (${p.map(fmt).join(', ')}) ${this.unit}, click a second point`);
-      else parts.push(`distance ${formatLength(this.distance, this.unit)}`);
+      else parts.push(`distance ${formatLength(this.distance, this.unit)} (${[...new Set(this.picks)].map((k) => PICKS[k] ?? k).join(', ')})`);
     }
     this.readout.textContent = parts.join(' · ');
     this.readout.hidden = parts.length === 0;

@@ -15,13 +15,13 @@ before(async () => { server = await startServer(); browser = await launch(); });
 after(async () => { await browser?.close(); await server?.stop(); });
 
 // What POST /api/probe answers for the page's current scene at a device pixel.
-const restProbe = (page, pixel) => page.evaluate(async (pixel) => {
+const restProbe = (page, pixel, pick = 'surface') => page.evaluate(async ([pixel, pick]) => {
   const { app } = window.peakcast, r = document.querySelector('#frame').getBoundingClientRect();
   const scene = { volume: app.volume, camera: app.camera, tf: { points: app.tf }, render: app.render,
-    image: { width: Math.round(r.width), height: Math.round(r.height) }, pixel };
+    image: { width: Math.round(r.width), height: Math.round(r.height) }, pixel, pick };
   const res = await fetch('/api/probe', { method: 'POST', body: JSON.stringify(scene) });
   return res.json();
-}, pixel);
+}, [pixel, pick]);
 
 test('the value and world position under the cursor show as it moves, as the server probes them', async () => {
   const page = await openClient(browser, server.url, { width: 1200, height: 700 });
@@ -33,10 +33,23 @@ test('the value and world position under the cursor show as it moves, as the ser
   const shown = await page.evaluate(() => window.peakcast.probe.last);
   const rest = await restProbe(page, px);
   assert.ok(rest.hit, JSON.stringify(rest));
-  for (const k of ['hit', 'value', 'distance', 'opacity']) assert.equal(shown[k], rest[k], k);
+  for (const k of ['hit', 'value', 'distance', 'opacity', 'pick']) assert.equal(shown[k], rest[k], k);
   assert.deepEqual(shown.position, rest.position);
   const text = await page.textContent('#probe-readout');
   assert.ok(text.includes(String(+rest.value.toPrecision(4))), text);
+  // The default pick is the first visible surface, and the readout says so; "half opacity" asks
+  // for the point where the ray gets half opaque, which lies no nearer (and here deeper: the
+  // demo's TF is translucent).
+  assert.equal(rest.pick, 'surface');
+  assert.match(text, /\(first surface\)/);
+  await page.selectOption('#pick', 'half');
+  await page.mouse.move(box.x + px[0] + 1.5, box.y + px[1] + 0.5);
+  await page.mouse.move(box.x + px[0] + 0.5, box.y + px[1] + 0.5);
+  await page.waitForFunction(() => /\(half opacity\)/.test(document.querySelector('#probe-readout').textContent));
+  const half = await restProbe(page, px, 'half');
+  await page.waitForFunction((d) => window.peakcast.probe.last?.distance === d, half.distance);
+  assert.ok(half.distance > rest.distance, JSON.stringify([half, rest]));
+  await page.selectOption('#pick', 'surface');
   // The top left corner looks past the volume: said so.
   await page.mouse.move(box.x + 3, box.y + 3);
   await page.waitForFunction(() => /nothing opaque/.test(document.querySelector('#probe-readout').textContent));
