@@ -66,7 +66,7 @@ export class TfEditor extends EventTarget {
   // The preset stays shown in its menu until the TF is edited by hand. A preset that needs a
   // classification says so ('preset' event: {classification, shading}).
   applyPreset(name) {
-    const p = preset(name, this.lo, this.hi, parseFloat(this.ui.iso.value), this.inHu);
+    const p = preset(name, this.lo, this.hi, parseFloat(this.ui.iso.value), this.inHu, this.histogram);
     if (!p) {
       this.ui.preset.value = '';
       return;

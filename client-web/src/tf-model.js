@@ -53,12 +53,34 @@ export async function loadColormaps(fetchJson) {
   }
 }
 
-// A colour map over [lo, hi] with opacity rising from 0 to `top` (an opacity ramp, DVR).
-export function colormapTf(name, lo, hi, top = 0.6) {
+// Otsu's threshold of a histogram of equal bins over [lo, hi], as the server's automatic TF
+// finds it (core/auto_tf.cpp): the bin boundary with the largest between-class variance; lo
+// when there is nothing to split.
+export function otsuThreshold(histogram, lo, hi) {
+  const n = histogram?.length ?? 0;
+  let total = 0, sum = 0;
+  for (let b = 0; b < n; b++) { total += histogram[b]; sum += b * histogram[b]; }
+  if (!n || total <= 0 || !(hi > lo)) return lo;
+  let w0 = 0, sum0 = 0, best = -1, split = 0;
+  for (let k = 1; k < n; k++) {
+    w0 += histogram[k - 1];
+    sum0 += (k - 1) * histogram[k - 1];
+    const w1 = total - w0;
+    if (w0 <= 0 || w1 <= 0) continue;
+    const d = sum0 / w0 - (sum - sum0) / w1, between = w0 * w1 * d * d;
+    if (between > best) { best = between; split = k; }
+  }
+  return lo + ((hi - lo) * split) / n;
+}
+
+// A colour map over [lo, hi] with opacity rising from 0 at `start` (the background's end: below
+// it the map's colours stay clear) to `top` at hi (an opacity ramp, DVR).
+export function colormapTf(name, lo, hi, top = 0.6, start = lo) {
   const stops = COLORMAPS[name];
+  const from = start < hi ? Math.max(start, lo) : lo;
   return stops.map((c, k) => {
-    const t = k / (stops.length - 1);
-    return [lo + t * (hi - lo), c[0], c[1], c[2], top * t];
+    const v = lo + (k / (stops.length - 1)) * (hi - lo);
+    return [v, c[0], c[1], c[2], top * Math.max(0, (v - from) / (hi - from))];
   });
 }
 
@@ -70,9 +92,11 @@ export function windowLevel(points, window, level) {
   return points.map((p) => [lo + ((p[0] - a) / span) * window, ...p.slice(1)]);
 }
 
-export function preset(name, lo, hi, iso, inHu = false) {
+// `histogram` (equal bins over [lo, hi]) places a colour map's opacity ramp above the data's
+// background (Otsu's threshold), as the automatic TF's: a CT's air and its noise stay clear.
+export function preset(name, lo, hi, iso, inHu = false, histogram = null) {
   const at = (r) => lo + r * (hi - lo);
-  if (COLORMAPS[name]) return colormapTf(name, lo, hi);
+  if (COLORMAPS[name]) return colormapTf(name, lo, hi, 0.6, otsuThreshold(histogram, lo, hi));
   switch (name) {
     case 'ct-bone': {  // CT in Hounsfield units: bone above ~300 HU, soft tissue faint
       const [s0, s1, b0] = hu(lo, hi, [-100, 200, 300], inHu);

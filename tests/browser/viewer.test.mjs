@@ -390,6 +390,7 @@ test('the first view has contrast, an axes triad, the box, a scale bar and a col
 test('the TF toolkit: colour maps, modality presets, window/level, histogram axis, save and load', async () => {
   const page = await openClient(browser, server.url);
   await waitFinal(page);
+  const derived = await tf(page);  // the server's automatic TF: clear up to its threshold
   await page.selectOption('#tf-preset', 'viridis');
   let p = await tf(page);
   assert.equal(p.length, 11);
@@ -404,6 +405,14 @@ test('the TF toolkit: colour maps, modality presets, window/level, histogram axi
   await page.waitForFunction(() => window.peakcast.app.render.classification === 'peaks');
   await page.selectOption('#tf-preset', 'magma');
   assert.equal(await page.inputValue('select[name=classification]'), 'preint');
+  // A colour map's opacity starts where the automatic TF's does (the histogram's background split,
+  // found alike): the values below it (a CT's air and noise) stay clear; the colours still span
+  // the whole range.
+  const magma = await tf(page), split = derived[derived.findIndex((q) => q[4] > 0) - 1][0];
+  assert.ok(magma.filter((q) => q[0] < split - 1e-9 * Math.abs(split)).length >= 2, JSON.stringify([split, magma]));
+  for (const q of magma) if (q[0] < split) assert.equal(q[4], 0, JSON.stringify([split, q]));
+  assert.ok(magma.at(-1)[4] > 0.5);
+  assert.deepEqual(magma.map((q) => q.slice(1, 4)), maps.magma);
   await page.selectOption('select[name=classification]', 'post');
   await page.selectOption('#tf-preset', 'grey');
   assert.equal(await page.inputValue('select[name=classification]'), 'post', 'other classifications stay');
