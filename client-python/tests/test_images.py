@@ -63,7 +63,7 @@ def test_depth_is_the_probe_distance_of_every_pixel(server):
         assert np.isnan(depth[0, 0]) and np.isfinite(depth).mean() > 0.05, np.isfinite(depth).mean()
         for x, y in [(0, 0), (32, 24), (20, 30), (40, 15), (63, 47)]:
             req = urllib.request.Request(server.url + "/api/probe", method="POST",
-                                         data=json.dumps(dict(scene, pixel=[x, y])).encode())
+                                         data=json.dumps(dict(scene, pixel=[x, y], pick="half")).encode())
             probe = json.loads(urllib.request.urlopen(req).read())
             if probe["hit"]:
                 assert depth[y, x] == pytest.approx(probe["distance"], rel=1e-6), (x, y, depth[y, x], probe)
