@@ -23,6 +23,7 @@ export class Probe extends EventTarget {
   #unavailable = '';
   last = null;          // the newest hover answer
   points = [];          // measure points (world), at most two
+  picks = [];           // the pick that answered each of them
   unit = 'units';       // lengths' unit (units.js)
   measuring = false;
   pick = 'surface';     // 'surface' | 'half': the point along the ray that answers
@@ -30,7 +31,7 @@ export class Probe extends EventTarget {
   constructor({ canvas, readout, measure, pick, stream }, disposer) {
     super();
     Object.assign(this, { canvas, readout, measureButton: measure, stream });
-    if (pick) disposer.listen(pick, 'change', () => { this.pick = pick.value; this.points = []; this.#changed(); });
+    if (pick) disposer.listen(pick, 'change', () => { this.pick = pick.value; this.points = []; this.picks = []; this.#changed(); });
     disposer.listen(canvas, 'pointermove', (e) => { if (e.buttons === 0 && e.pointerType !== 'touch') this.#schedule(e); });
     disposer.listen(canvas, 'pointerleave', () => { this.#at = null; this.#show(); });
     disposer.listen(canvas, 'pointerdown', (e) => { this.#down = { x: e.clientX, y: e.clientY }; });
@@ -104,7 +105,7 @@ export class Probe extends EventTarget {
     if (this.#clicks.delete(a.id)) {
       if (!a.hit) return this.#note('nothing opaque there to measure from');
       this.points = this.points.length >= 2 ? [a.position] : [...this.points, a.position];
-      this.picks = this.points.length === 1 ? [a.pick] : [...(this.picks ?? []), a.pick];
+      this.picks = this.points.length === 1 ? [a.pick] : [...this.picks, a.pick];
       return this.#changed();
     }
     if (a.id !== this.#hover) return;  // an older answer: the cursor moved on

@@ -24,11 +24,6 @@ struct ReferenceOptions {
 
 Image render_reference(const Volume& v, const ResolvedScene& s, const ReferenceOptions& options = {});
 
-// What lies under one pixel (the viewer's probe, POST /api/probe): the reference ray of the
-// scene's method, and the first place where its accumulated opacity passes one half. `value` is
-// the data value drawn there (a peak's value at a peak surface). Adaptive sampling is replaced
-// by the uniform step. Throws std::invalid_argument for a pixel outside the image or a volume
-// without voxels (a distributed volume on the serving rank).
 // Which point along a probe's ray is its answer. Surface (the default): the first sample whose
 // value the TF gives at least kPickOpacity (VTK's vtkVolumePicker and its opacity isovalue,
 // 0.05), so a click on a translucent edge lands on its front; where no sample is that opaque,
@@ -38,6 +33,11 @@ constexpr double kPickOpacity = 0.05;
 const char* to_string(ProbePick p);
 ProbePick parse_probe_pick(const std::string& name);  // "surface" | "half"; std::invalid_argument
 
+// What lies under one pixel (the viewer's probe, POST /api/probe): the reference ray of the
+// scene's method, and the point `pick` names along it. `value` is the data value drawn there (a
+// peak's value at a peak surface). Adaptive sampling is replaced by the uniform step. Throws
+// std::invalid_argument for a pixel outside the image or a volume without voxels (a distributed
+// volume on the serving rank).
 struct ProbeResult {
   bool hit = false;
   ProbePick pick = ProbePick::Half;  // which point was answered (a surface pick without one: Half)
